@@ -1,0 +1,54 @@
+"""The ``groundstation`` command: one subcommand per module, imported only when it runs.
+
+Each command module provides ``add_arguments(parser)`` and ``run(args) -> int``. Keeping the
+imports lazy keeps ``groundstation --help`` fast and keeps Qt out of every headless command.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from groundstation import __version__
+from groundstation.errors import UserError
+
+# name -> (module, one-line help). Later issues add their commands here.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "app": ("groundstation.commands.app", "start the desktop app (--demo: on the simulated radio bridge)"),
+    "protocol": ("groundstation.commands.protocol", "show the wire protocol or decode a raw byte file"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="groundstation",
+        description="Ground station for small quadrotors (MPU-6050 + nRF24L01 telemetry).",
+    )
+    parser.add_argument("--version", action="version", version=f"groundstation {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (module_name, help_text) in COMMANDS.items():
+        # add_help=False: '--help' after a command reaches that command's own parser.
+        sub.add_parser(name, help=help_text, add_help=False)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser()
+    top, rest = parser.parse_known_args(argv)
+    if top.command is None:
+        parser.print_help()
+        return 0
+    module_name, help_text = COMMANDS[top.command]
+    module = importlib.import_module(module_name)
+    command_parser = argparse.ArgumentParser(prog=f"groundstation {top.command}", description=help_text)
+    module.add_arguments(command_parser)
+    args = command_parser.parse_args(rest)
+    try:
+        return int(module.run(args) or 0)
+    except UserError as error:
+        print(f"groundstation {top.command}: {error}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130

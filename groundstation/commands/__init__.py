@@ -1,0 +1,1 @@
+"""One module per ``groundstation`` subcommand (see ``groundstation.cli``)."""

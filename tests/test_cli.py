@@ -1,0 +1,30 @@
+"""The console script as a user runs it: a real process, its exit status and its output."""
+
+import subprocess
+import sys
+
+from groundstation.cli import COMMANDS
+
+
+def run_cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "groundstation", *args], capture_output=True, text=True, timeout=120)
+
+
+def test_help_lists_every_subcommand():
+    result = run_cli("--help")
+    assert result.returncode == 0
+    for name in COMMANDS:
+        assert name in result.stdout
+
+
+def test_each_subcommand_has_its_own_help():
+    for name in COMMANDS:
+        result = run_cli(name, "--help")
+        assert result.returncode == 0, result.stderr
+        assert f"groundstation {name}" in result.stdout
+
+
+def test_unknown_option_is_a_usage_error_not_a_traceback():
+    result = run_cli("protocol", "--no-such-option")
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
