@@ -1,0 +1,183 @@
+"""The protocol spec (``spec.toml``) loaded and checked: frame types, fields, enums, fingerprint.
+
+Everything else in the package (codec, decoder, C and document generators) reads the spec through
+this module, so a field added to ``spec.toml`` reaches every output at once.
+"""
+
+from __future__ import annotations
+
+import struct
+import tomllib
+import zlib
+from dataclasses import dataclass
+from pathlib import Path
+
+# C type -> (struct format character, size in bytes, smallest raw value, largest raw value)
+C_TYPES: dict[str, tuple[str, int, float, float]] = {
+    "uint8_t": ("B", 1, 0, 2**8 - 1),
+    "int8_t": ("b", 1, -(2**7), 2**7 - 1),
+    "uint16_t": ("H", 2, 0, 2**16 - 1),
+    "int16_t": ("h", 2, -(2**15), 2**15 - 1),
+    "uint32_t": ("I", 4, 0, 2**32 - 1),
+    "int32_t": ("i", 4, -(2**31), 2**31 - 1),
+    "float": ("f", 4, -3.4028234663852886e38, 3.4028234663852886e38),
+}
+
+TIMESTAMP_FIELD = "t_us"
+SPEC_PATH = Path(__file__).with_name("spec.toml")
+
+
+class SpecError(ValueError):
+    """The spec file contradicts itself or the framing limits."""
+
+
+@dataclass(frozen=True)
+class Field:
+    name: str
+    c_type: str
+    unit: str
+    description: str
+    scale: float = 1.0
+    enum: str | None = None
+
+    @property
+    def size(self) -> int:
+        return C_TYPES[self.c_type][1]
+
+    @property
+    def raw_range(self) -> tuple[float, float]:
+        return C_TYPES[self.c_type][2], C_TYPES[self.c_type][3]
+
+
+@dataclass(frozen=True)
+class FrameType:
+    name: str
+    id: int
+    direction: str  # "down": aircraft -> ground; "up": ground -> aircraft
+    description: str
+    fields: tuple[Field, ...]
+
+    @property
+    def field_names(self) -> tuple[str, ...]:
+        return tuple(f.name for f in self.fields)
+
+    @property
+    def struct(self) -> struct.Struct:
+        return struct.Struct("<" + "".join(C_TYPES[f.c_type][0] for f in self.fields))
+
+    @property
+    def payload_size(self) -> int:
+        return sum(f.size for f in self.fields)
+
+    @property
+    def has_timestamp(self) -> bool:
+        return bool(self.fields) and self.fields[0].name == TIMESTAMP_FIELD
+
+
+@dataclass(frozen=True)
+class Enum:
+    name: str
+    description: str
+    values: dict[str, int]
+
+
+@dataclass(frozen=True)
+class Spec:
+    protocol_version: int
+    sync: int
+    max_frame_bytes: int
+    header_bytes: int
+    crc_bytes: int
+    enums: dict[str, Enum]
+    frames: tuple[FrameType, ...]
+
+    @property
+    def max_payload_bytes(self) -> int:
+        return self.max_frame_bytes - self.header_bytes - self.crc_bytes
+
+    def frame(self, name: str) -> FrameType:
+        for frame_type in self.frames:
+            if frame_type.name == name:
+                return frame_type
+        raise KeyError(f"no frame type {name!r} in the protocol spec")
+
+    @property
+    def fingerprint(self) -> int:
+        """CRC-32 of everything that decides how bytes decode (like MAVLink's crc_extra).
+
+        Names, ids, types, scales and enum values count; units and descriptions do not, so
+        a documentation change does not make old firmware incompatible.
+        """
+        parts = [f"v{self.protocol_version} sync{self.sync}"]
+        for enum in self.enums.values():
+            parts.append(f"enum {enum.name} " + " ".join(f"{k}={v}" for k, v in enum.values.items()))
+        for frame_type in self.frames:
+            parts.append(f"frame {frame_type.name} {frame_type.id}")
+            parts += [f"  {f.c_type} {f.name} {f.scale!r} {f.enum}" for f in frame_type.fields]
+        return zlib.crc32("\n".join(parts).encode())
+
+
+def _parse(document: dict) -> Spec:
+    framing = document["framing"]
+    enums = {
+        name: Enum(name, table.get("description", ""), {k: v for k, v in table.items() if k != "description"})
+        for name, table in document.get("enums", {}).items()
+    }
+    frames = tuple(
+        FrameType(
+            name=entry["name"],
+            id=entry["id"],
+            direction=entry["direction"],
+            description=entry["description"],
+            fields=tuple(
+                Field(f["name"], f["type"], f["unit"], f["description"], float(f.get("scale", 1.0)), f.get("enum"))
+                for f in entry["fields"]
+            ),
+        )
+        for entry in document["frames"]
+    )
+    spec = Spec(
+        protocol_version=framing["protocol_version"],
+        sync=framing["sync"],
+        max_frame_bytes=framing["max_frame_bytes"],
+        header_bytes=framing["header_bytes"],
+        crc_bytes=framing["crc_bytes"],
+        enums=enums,
+        frames=frames,
+    )
+    _check(spec)
+    return spec
+
+
+def _check(spec: Spec) -> None:
+    seen_ids: set[int] = set()
+    seen_names: set[str] = set()
+    for frame_type in spec.frames:
+        if frame_type.id in seen_ids or frame_type.name in seen_names:
+            raise SpecError(f"frame {frame_type.name}: duplicate name or id {frame_type.id}")
+        if not 0 <= frame_type.id <= 255:
+            raise SpecError(f"frame {frame_type.name}: id {frame_type.id} does not fit one byte")
+        if frame_type.direction not in ("up", "down"):
+            raise SpecError(f"frame {frame_type.name}: direction must be 'up' or 'down'")
+        seen_ids.add(frame_type.id)
+        seen_names.add(frame_type.name)
+        if frame_type.payload_size > spec.max_payload_bytes:
+            raise SpecError(
+                f"frame {frame_type.name}: payload of {frame_type.payload_size} bytes exceeds "
+                f"{spec.max_payload_bytes} (a {spec.max_frame_bytes}-byte radio payload)"
+            )
+        for field in frame_type.fields:
+            if field.c_type not in C_TYPES:
+                raise SpecError(f"{frame_type.name}.{field.name}: unknown C type {field.c_type}")
+            if field.enum is not None and field.enum not in spec.enums:
+                raise SpecError(f"{frame_type.name}.{field.name}: unknown enum {field.enum}")
+
+
+def load_spec(text: str | None = None) -> Spec:
+    """Parse the packaged ``spec.toml`` (or ``text``, for tests of the checks)."""
+    if text is None:
+        text = SPEC_PATH.read_text(encoding="utf-8")
+    return _parse(tomllib.loads(text))
+
+
+SPEC = load_spec()
