@@ -1,0 +1,48 @@
+"""Attitude estimators behind one interface (see ``base``), by the names used everywhere.
+
+``ahf`` adaptive hybrid filter (seed 000), ``hf`` the same with λ fixed (Madgwick IMU), ``ecf`` Mahony's
+explicit complementary filter, ``cf1`` first-order complementary filter, ``kf`` per-axis Kalman filter,
+``ekf`` quaternion extended Kalman filter. ``create("hf", {"beta": 0.033})`` builds one with overrides.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+from groundstation.estimation.ahf import Ahf, Hf
+from groundstation.estimation.base import Estimator
+from groundstation.estimation.cf1 import Cf1
+from groundstation.estimation.ecf import Ecf
+from groundstation.estimation.ekf import Ekf
+from groundstation.estimation.kf import Kf
+
+ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Hf, Ecf, Cf1, Kf, Ekf)}
+
+
+def create(name: str, overrides: dict[str, float] | None = None) -> Estimator:
+    """An estimator by name with some settings replaced; ValueError names what is wrong."""
+    try:
+        cls = ESTIMATORS[name]
+    except KeyError:
+        raise ValueError(f"unknown estimator {name!r}; choose from {', '.join(ESTIMATORS)}") from None
+    fields = {f.name for f in dataclasses.fields(cls.Settings)}
+    for param in overrides or {}:
+        if param not in fields:
+            raise ValueError(f"{name} has no setting {param!r}; its settings: {', '.join(sorted(fields))}")
+    return cls(dataclasses.replace(cls.Settings(), **(overrides or {})))
+
+
+def parse_overrides(items: list[str]) -> dict[str, dict[str, float]]:
+    """``["hf.beta=0.033", ...]`` -> ``{"hf": {"beta": 0.033}}``; ValueError on a malformed item."""
+    result: dict[str, dict[str, float]] = {}
+    for item in items:
+        target, sep, value = item.partition("=")
+        name, dot, param = target.strip().partition(".")
+        if not sep or not dot or not name or not param:
+            raise ValueError(f"--set expects NAME.PARAM=VALUE (e.g. hf.beta=0.033), got {item!r}")
+        try:
+            number = float(value)
+        except ValueError:
+            raise ValueError(f"--set {target}: {value!r} is not a number") from None
+        result.setdefault(name, {})[param] = number
+    return result

@@ -1,0 +1,170 @@
+"""AHF, the adaptive hybrid filter of seed 000 (Fu et al. 2014), and HF, the same filter with λ fixed.
+
+Equations as restated in docs/seeds-digest.md §2 (numbers are the paper's):
+
+- (eq. 6)     ``q̇_ω = ½ q ⊗ [0, ω]``                       gyro rate of change of the attitude
+- (eq. 8-9)   ``f = ĝ(q) - â``                              gravity error; ĝ the estimated gravity
+  direction in the sensor frame (third row of the rotation), â the measured one, normalised
+- (eq. 10)    ``J = [[-2q3, 2q4, -2q1, 2q2], [2q2, 2q1, 2q4, 2q3], [0, -4q2, -4q3, 0]]``
+- (eq. 12)    ``∇f = Jᵀ f``
+- (eq. 18)    ``q̇ = q̇_ω - λ ∇f / ‖∇f‖``
+- (eq. 19)    ``q(k) = q(k-1) + q̇ Δt``, then normalised
+- (eq. 20)    ``e = ĝ ⊗ â`` (vector part ĝ × â); ``e_a(k) = 0.9 e_a(k-1) + 0.1 · 10 (|ex| + |ey| + |ez|)``;
+  ``λ = clamp(2 - e_a(k), 0.2, 2)`` (the digest's reading: the bracket is a first-order low-pass)
+
+Frames: the paper's q is Madgwick's, with earth z up and â the specific force. Here the earth frame is
+NED and the body frame FRD (docs/conventions.md), so the reference direction is earth +z = down and the
+measured direction is the *down* direction in the body, ``â = -acc_g / ‖acc_g‖``. With that one sign the
+paper's equations hold letter for letter and q rotates body vectors into NED.
+
+λ (and HF's β) is in rad/s: the rate at which the gradient step turns the estimate toward gravity.
+
+Gyro over-range (the paper, in words only: "when the attitude changes so fast that the gyro exceeds its
+range, the accelerometer is the more accurate, so λ takes a large value"): with
+``gyro_overrange_rad_s`` set (e.g. 0.95 × the configured full scale), any axis at or above it forces
+λ = λ_max for that sample. Off by default (``inf``) so that the default filter is eq. 20 exactly.
+
+float32 (the simulated firmware): the per-sample core uses arithmetic operators only (``** -0.5``, no
+``math`` calls), so it computes in whatever type its numbers have. ``Ahf(settings, dtype=np.float32)``
+casts the settings, the state and every input to ``numpy.float32``; NumPy 2's promotion rules (NEP 50)
+keep float32 ⊕ Python-float literals in float32, so the whole update runs in single precision, as on
+the STM32. ``step`` then returns float32 numbers; ``run`` returns them widened to float64 (exactly).
+The default (``dtype=None``) is plain Python floats, the fast path::
+
+    onboard = Ahf(AhfSettings(), dtype=np.float32)
+    onboard.reset()
+    q, diag = onboard.step(gyr_rad_s, acc_g, dt_s)     # q: four numpy.float32
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from groundstation.estimation.base import GYRO_OVERRANGE, CommonSettings, Estimator
+
+
+@dataclasses.dataclass(frozen=True)
+class AhfSettings(CommonSettings):
+    lambda_max: float = 2.0  # rad/s; upper clamp of λ, and λ when the error is zero (eq. 20)
+    lambda_min: float = 0.2  # rad/s; lower clamp of λ (eq. 20)
+    lowpass: float = 0.9  # weight of e_a(k-1) in the error low-pass (eq. 20)
+    error_gain: float = 10.0  # scale of |ex| + |ey| + |ez| (eq. 20)
+    gyro_overrange_rad_s: float = math.inf  # any |ω_i| >= this forces λ = λ_max; inf = off
+
+
+@dataclasses.dataclass(frozen=True)
+class HfSettings(CommonSettings):
+    # rad/s; fixed λ = Madgwick's β. 0.1 is the default of Madgwick's reference implementation.
+    beta: float = 0.1
+
+
+class AhfDiagnostics(NamedTuple):
+    status: int  # bits, see groundstation.estimation.base
+    lam: float  # λ used on this sample, rad/s (eq. 20; HF: β)
+    e_a: float  # low-passed, scaled gravity error (eq. 20; HF: 0)
+    gravity_error: float  # |ex| + |ey| + |ez| of e = ĝ × â on this sample (eq. 20), ≈ sin of the angle
+
+
+_new_tuple = tuple.__new__
+
+
+class Ahf(Estimator):
+    """Adaptive hybrid filter (eq. 6-20). ``dtype=np.float32`` runs it in single precision."""
+
+    name = "ahf"
+    Settings = AhfSettings
+    Diagnostics = AhfDiagnostics
+    adaptive = True
+
+    def __init__(self, settings=None, dtype=None):
+        self._cast = None if dtype is None else np.dtype(dtype).type  # read by Estimator.step
+        s = self.Settings() if settings is None else settings
+        c = self._num
+        if self.adaptive:
+            if not 0.0 <= s.lambda_min <= s.lambda_max:
+                raise ValueError("need 0 <= lambda_min <= lambda_max")
+            self._lam_max, self._lam_min = c(s.lambda_max), c(s.lambda_min)
+            self._lp, self._gain = c(s.lowpass), c((1.0 - s.lowpass) * s.error_gain)
+            self._overrange = c(s.gyro_overrange_rad_s)
+            self._overrange_on = s.gyro_overrange_rad_s != math.inf
+        else:
+            if s.beta < 0.0:
+                raise ValueError("beta must be >= 0")
+            self._lam_max = c(s.beta)
+        super().__init__(s)
+
+    def _num(self, x):
+        return x if self._cast is None else self._cast(x)
+
+    def _reset_state(self):
+        self._e_a = self._num(0.0)
+        self._lam = self._lam_max
+        self._err = self._num(0.0)
+
+    def _set_attitude(self, q):
+        self._q = tuple(self._num(v) for v in q)
+
+    def _diagnostics(self, status):
+        return AhfDiagnostics(status, self._lam, self._e_a, self._err)
+
+    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
+        q1, q2, q3, q4 = self._q
+        # (eq. 6) q̇_ω = ½ q ⊗ [0, ω]
+        d1 = 0.5 * (-q2 * gx - q3 * gy - q4 * gz)
+        d2 = 0.5 * (q1 * gx + q3 * gz - q4 * gy)
+        d3 = 0.5 * (q1 * gy - q2 * gz + q4 * gx)
+        d4 = 0.5 * (q1 * gz + q2 * gy - q3 * gx)
+        if acc_ok:
+            # â: measured down direction, -acc normalised (see the module docstring on frames)
+            r = -((ax * ax + ay * ay + az * az) ** -0.5)
+            ax, ay, az = ax * r, ay * r, az * r
+            # (eq. 8) ĝ: estimated down direction in the body frame
+            vx = 2.0 * (q2 * q4 - q1 * q3)
+            vy = 2.0 * (q1 * q2 + q3 * q4)
+            vz = q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4
+            # (eq. 9) f = ĝ - â
+            fx, fy, fz = vx - ax, vy - ay, vz - az
+            # (eq. 10, 12) ∇f = Jᵀ f
+            s1 = -2.0 * q3 * fx + 2.0 * q2 * fy
+            s2 = 2.0 * q4 * fx + 2.0 * q1 * fy - 4.0 * q2 * fz
+            s3 = -2.0 * q1 * fx + 2.0 * q4 * fy - 4.0 * q3 * fz
+            s4 = 2.0 * q2 * fx + 2.0 * q3 * fy
+            # (eq. 20) e = ĝ ⊗ â, vector part ĝ × â
+            err = abs(vy * az - vz * ay) + abs(vz * ax - vx * az) + abs(vx * ay - vy * ax)
+            lam = self._lam_max
+            if self.adaptive:
+                e_a = self._lp * self._e_a + self._gain * err  # (eq. 20) low-pass
+                self._e_a = e_a
+                lam = lam - e_a
+                if lam < self._lam_min:
+                    lam = self._lam_min
+                elif lam > self._lam_max:  # only for a negative e_a, i.e. a negative error_gain
+                    lam = self._lam_max
+                if self._overrange_on and (abs(gx) >= self._overrange or abs(gy) >= self._overrange or abs(gz) >= self._overrange):
+                    lam = self._lam_max  # gyro over-range rule (module docstring)
+                    status |= GYRO_OVERRANGE
+            self._lam, self._err = lam, err
+            n2 = s1 * s1 + s2 * s2 + s3 * s3 + s4 * s4
+            if n2 > 0.0:  # ∇f = 0 when the estimate already matches: nothing to correct
+                k = lam * n2**-0.5
+                # (eq. 18) q̇ = q̇_ω - λ ∇f/‖∇f‖
+                d1, d2, d3, d4 = d1 - k * s1, d2 - k * s2, d3 - k * s3, d4 - k * s4
+        # (eq. 19) q(k) = q(k-1) + q̇ Δt, normalised
+        q1, q2, q3, q4 = q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s
+        r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
+        q = (q1 * r, q2 * r, q3 * r, q4 * r)
+        self._q = q
+        # tuple.__new__ skips NamedTuple's Python-level __new__: 0.2 µs of a 2 µs step.
+        return q, _new_tuple(AhfDiagnostics, (status, self._lam, self._e_a, self._err))
+
+
+class Hf(Ahf):
+    """Hybrid filter with λ fixed at ``beta`` (eq. 6-19): Madgwick's IMU filter. β = 0 is gyro-only."""
+
+    name = "hf"
+    Settings = HfSettings
+    adaptive = False

@@ -1,0 +1,174 @@
+"""What every estimator shares: settings, the robust per-sample ``step``, the batch ``run``.
+
+Interface (the same for ``ahf``, ``hf``, ``ecf``, ``cf1``, ``kf`` and ``ekf``)::
+
+    est = Ahf(AhfSettings(beta=...))          # settings: a frozen dataclass, defaults = the papers'
+    est.reset(q0=None)                        # q0 None: initialise from the first accelerometer sample
+    q, diag = est.step(gyr_rad_s, acc_g, dt_s)   # q = (w, x, y, z) body -> NED; diag a NamedTuple
+    q_n4, diag_arrays = est.run(gyr_rad_s_n3, acc_g_n3, dt_s_n)   # exactly the numbers of step
+
+``gyr_rad_s`` is the body-frame rate (x forward, y right, z down) in rad/s; ``acc_g`` the body-frame
+specific force in g (standard gravity), so a level craft at rest reads about (0, 0, -1);
+``dt_s`` is the time since the previous sample in seconds. ``mag`` is accepted so callers can pass
+what they have; none of these six estimators uses a magnetometer, so their yaw is gyro-only and drifts.
+
+Robust stepping (every estimator, decided here once):
+
+- The first sample whose accelerometer is usable sets pitch and roll from gravity (yaw 0), so no filter
+  starts upside down; until then the output is the identity with ``WAITING`` set.
+- NaN/Inf in the gyro or in ``dt_s``, or ``dt_s <= 0``: the sample is ignored, the previous estimate is
+  returned unchanged (``HELD``).
+- Accelerometer NaN/Inf, or its norm outside ``[acc_min_g, acc_max_g]`` (free fall, shocks): the gyro
+  is integrated and the accelerometer correction skipped (``ACC_SKIPPED``).
+- ``dt_s > max_gap_s`` (seconds of lost frames): integrating one stale rate over the gap would be
+  wrong, so pitch and roll are re-initialised from the accelerometer, keeping yaw (``REINITIALISED``);
+  if the accelerometer is unusable too, the estimate is held.
+- A gyro at its full-scale limit is a finite number and is integrated like any other (``ahf`` can
+  also raise λ then; see its ``gyro_overrange_rad_s``).
+
+Status flags are bits of ``diag.status`` (plain ints, cheap per sample).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import ClassVar, NamedTuple
+
+import numpy as np
+
+from groundstation import quaternion
+from groundstation.estimation.tilt import acc_pitch_roll
+
+# diag.status bits
+WAITING = 1  # no usable accelerometer sample yet; output is the identity
+INITIALISED = 2  # attitude set from the accelerometer on this sample
+HELD = 4  # bad gyro or dt: previous estimate returned unchanged
+ACC_SKIPPED = 8  # accelerometer unusable: gyro-only on this sample
+REINITIALISED = 16  # gap longer than max_gap_s: pitch/roll re-set from the accelerometer
+GYRO_OVERRANGE = 32  # ahf only: gyro at or above gyro_overrange_rad_s, λ forced to λ_max
+
+STATUS_NAMES = {
+    WAITING: "waiting",
+    INITIALISED: "initialised",
+    HELD: "held",
+    ACC_SKIPPED: "acc_skipped",
+    REINITIALISED: "reinitialised",
+    GYRO_OVERRANGE: "gyro_overrange",
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class CommonSettings:
+    """Input guards shared by every estimator (see the module docstring)."""
+
+    acc_min_g: float = 0.2  # below: free fall, the accelerometer says nothing about gravity
+    acc_max_g: float = 3.0  # above: a shock or crash; a quadrotor in flight stays well under 3 g
+    max_gap_s: float = 1.0  # longer dt: re-initialise from the accelerometer instead of integrating
+
+
+class Estimator:
+    """Base class; subclasses set ``name``, ``Settings``, ``Diagnostics`` and implement the hooks.
+
+    Hooks: ``_reset_state()``, ``_set_attitude(q)`` (q a unit quaternion tuple), ``_update(gx, gy, gz,
+    ax, ay, az, acc_ok, dt_s, status) -> (q, diag)``, ``_diagnostics(status) -> diag`` (for held
+    samples), and the ``_q`` attribute holding the current output tuple.
+    """
+
+    name: ClassVar[str]
+    _cast = None  # a numpy scalar type to run in (ahf/hf: dtype=np.float32); None = Python floats
+    Settings: ClassVar[type]
+    Diagnostics: ClassVar[type[NamedTuple]]
+
+    def __init__(self, settings=None):
+        self.settings = self.Settings() if settings is None else settings
+        s = self.settings
+        if not 0.0 <= s.acc_min_g < s.acc_max_g:
+            raise ValueError("need 0 <= acc_min_g < acc_max_g")
+        self._acc_min2 = s.acc_min_g * s.acc_min_g
+        self._acc_max2 = s.acc_max_g * s.acc_max_g
+        self._max_gap_s = s.max_gap_s
+        self.reset()
+
+    # -- public interface -------------------------------------------------------------------
+
+    def reset(self, q0=None) -> None:
+        """Forget the past. ``q0`` (w, x, y, z) starts from that attitude instead of waiting for gravity."""
+        self._reset_state()
+        if q0 is None:
+            self._q = (1.0, 0.0, 0.0, 0.0)
+            self._waiting = True
+        else:
+            self._set_attitude(tuple(quaternion.normalise(q0).tolist()))
+            self._waiting = False
+
+    def step(self, gyr_rad_s, acc_g, dt_s, mag=None):
+        """One sample: returns ``(q, diag)``, q = (w, x, y, z) rotating body vectors into NED."""
+        gx, gy, gz = gyr_rad_s
+        ax, ay, az = acc_g
+        if self._cast is not None:
+            c = self._cast
+            gx, gy, gz, ax, ay, az, dt_s = c(gx), c(gy), c(gz), c(ax), c(ay), c(az), c(dt_s)
+        n2 = ax * ax + ay * ay + az * az
+        # NaN fails every comparison and Inf exceeds acc_max, so this one test rejects both.
+        acc_ok = self._acc_min2 <= n2 <= self._acc_max2
+        status = 0
+        if self._waiting:
+            if not acc_ok:
+                return self._q, self._diagnostics(WAITING)
+            self._set_attitude(self._attitude_from_acc(ax, ay, az, 0.0))
+            self._waiting = False
+            status = INITIALISED
+        total = gx + gy + gz + dt_s
+        if not dt_s > 0.0 or total - total != 0.0:  # dt <= 0, or a NaN/Inf anywhere in gyro or dt
+            return self._q, self._diagnostics(status | HELD)
+        if dt_s > self._max_gap_s:
+            if not acc_ok:
+                return self._q, self._diagnostics(status | HELD)
+            yaw = float(quaternion.to_euler_zyx(np.array(self._q, dtype=float))[0])
+            self._set_attitude(self._attitude_from_acc(ax, ay, az, yaw))
+            return self._q, self._diagnostics(status | REINITIALISED)
+        if not acc_ok:
+            status |= ACC_SKIPPED
+        return self._update(gx, gy, gz, ax, ay, az, acc_ok, dt_s, status)
+
+    def run(self, gyr_rad_s, acc_g, dt_s, mag=None):
+        """Step through arrays: gyr_rad_s and acc_g (N, 3), dt_s (N,) or a scalar.
+
+        Continues from the current state (call ``reset()`` first for a fresh start). Returns
+        ``(q, diag)``: q an (N, 4) float64 array, diag a dict of (N,) arrays, one per diagnostics field;
+        row k is exactly what ``step`` returns for sample k.
+        """
+        gyr = np.asarray(gyr_rad_s, dtype=float).reshape(-1, 3)
+        acc = np.asarray(acc_g, dtype=float).reshape(-1, 3)
+        dt = np.broadcast_to(np.asarray(dt_s, dtype=float), (len(gyr),))
+        if len(acc) != len(gyr):
+            raise ValueError(f"gyr_rad_s has {len(gyr)} rows but acc_g has {len(acc)}")
+        step = self.step
+        # tolist(): plain Python floats, the fast path of step.
+        results = [step(g, a, d) for g, a, d in zip(gyr.tolist(), acc.tolist(), dt.tolist())]
+        q = np.array([r[0] for r in results], dtype=float).reshape(-1, 4)
+        columns = zip(*(r[1] for r in results)) if results else [()] * len(self.Diagnostics._fields)
+        diag = {name: np.array(col) for name, col in zip(self.Diagnostics._fields, columns)}
+        return q, diag
+
+    # -- shared helpers ---------------------------------------------------------------------
+
+    @staticmethod
+    def _attitude_from_acc(ax, ay, az, yaw_rad):
+        """Quaternion with the given yaw whose pitch and roll put gravity where the accelerometer says."""
+        pitch, roll = acc_pitch_roll(float(ax), float(ay), float(az))
+        return tuple(quaternion.from_euler_zyx(yaw_rad, pitch, roll).tolist())
+
+
+def integrate_rate(q, wx, wy, wz, dt_s):
+    """``q + ½ q ⊗ [0, ω] dt``, normalised: one Euler step of the attitude kinematics (seed 000 eq. 6, 19)."""
+    q1, q2, q3, q4 = q
+    h = 0.5 * dt_s
+    q1, q2, q3, q4 = (
+        q1 - h * (q2 * wx + q3 * wy + q4 * wz),
+        q2 + h * (q1 * wx + q3 * wz - q4 * wy),
+        q3 + h * (q1 * wy - q2 * wz + q4 * wx),
+        q4 + h * (q1 * wz + q2 * wy - q3 * wx),
+    )
+    r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
+    return (q1 * r, q2 * r, q3 * r, q4 * r)

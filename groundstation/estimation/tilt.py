@@ -1,0 +1,35 @@
+"""Scalar helpers for the Euler-angle filters (cf1, kf) and for initialisation from gravity.
+
+Body axes FRD, earth NED, ZYX Euler angles (docs/conventions.md). Per-sample code, so plain ``math``.
+"""
+
+from __future__ import annotations
+
+import math
+
+# cos θ floor in the Euler kinematics: at ±90° pitch yaw and roll rates are undefined (gimbal lock);
+# the floor keeps them finite (the per-angle filters are not meant for vertical flight).
+_COS_PITCH_MIN = 1e-6
+
+
+def acc_pitch_roll(ax, ay, az):
+    """Pitch θ and roll φ (rad) from the specific force in body axes, any unit.
+
+    At rest the accelerometer reads g·(sin θ, -sin φ cos θ, -cos φ cos θ), hence these two lines.
+    """
+    return math.atan2(ax, math.sqrt(ay * ay + az * az)), math.atan2(-ay, -az)
+
+
+def euler_rates(roll_rad, pitch_rad, gx, gy, gz):
+    """ZYX Euler angle rates (yaw, pitch, roll) in rad/s from body rates (rad/s)."""
+    s, c = math.sin(roll_rad), math.cos(roll_rad)
+    cos_pitch = math.cos(pitch_rad)
+    if abs(cos_pitch) < _COS_PITCH_MIN:
+        cos_pitch = math.copysign(_COS_PITCH_MIN, cos_pitch)
+    turn = gy * s + gz * c
+    return turn / cos_pitch, gy * c - gz * s, gx + turn * math.sin(pitch_rad) / cos_pitch
+
+
+def wrap_pi(angle_rad):
+    """Angle wrapped into [-π, π)."""
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
