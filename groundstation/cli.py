@@ -17,6 +17,7 @@ from groundstation.errors import UserError
 COMMANDS: dict[str, tuple[str, str]] = {
     "app": ("groundstation.commands.app", "start the desktop app (--demo: on the simulated radio bridge)"),
     "protocol": ("groundstation.commands.protocol", "show the wire protocol or decode a raw byte file"),
+    "evaluate": ("groundstation.commands.evaluate", "score the attitude estimators against truth (inclination RMSE)"),
 }
 
 
