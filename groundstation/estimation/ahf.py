@@ -29,7 +29,11 @@ float32 (the simulated firmware): the per-sample core uses arithmetic operators 
 casts the settings, the state and every input to ``numpy.float32``; NumPy 2's promotion rules (NEP 50)
 keep float32 ⊕ Python-float literals in float32, so the whole update runs in single precision, as on
 the STM32. ``step`` then returns float32 numbers; ``run`` returns them widened to float64 (exactly).
-The default (``dtype=None``) is plain Python floats, the fast path::
+Each float32 step agrees with a float64 step from the same state to float32 precision, but whole runs
+drift apart: eq. 18 normalises the gradient, so when the error is near zero its direction is set by
+rounding and still gets a full λ Δt step. To reproduce the onboard float32 estimate bit for bit, run
+the host copy with ``dtype=np.float32`` too. The default (``dtype=None``) is plain Python floats, the
+fast path::
 
     onboard = Ahf(AhfSettings(), dtype=np.float32)
     onboard.reset()
