@@ -3,8 +3,8 @@
 It never raises on input bytes. It resynchronises on the sync byte; a candidate whose length is
 impossible for its type, or whose CRC fails, gives up only its sync byte, so a corrupted or
 truncated frame never swallows the intact frame that follows it. Every byte fed ends up in an
-accepted frame, in ``bytes_skipped``, or still pending (at most one frame's worth):
-``bytes_in == accepted frame bytes + bytes_skipped + pending``.
+CRC-valid frame (``frame_bytes``), in ``bytes_skipped``, or still pending (less than one frame):
+``bytes_in == frame_bytes + bytes_skipped + pending_bytes``.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ class DecoderStats:
     frames: int = 0  # known-type frames returned
     crc_errors: int = 0  # candidates with a plausible header whose CRC failed
     bytes_skipped: int = 0  # bytes not part of any CRC-valid frame
+    frame_bytes: int = 0  # bytes of CRC-valid frames (duplicates and unknown types included)
     frames_lost: int = 0  # gaps in the sender's sequence counter
     duplicates: int = 0  # a frame repeated byte for byte (same type, seq and values); dropped
     unknown_types: int = 0  # CRC-valid frames of a type this spec lacks; skipped
@@ -72,7 +73,7 @@ class StreamDecoder:
         # Locals, not globals, in the loop that runs a million times a second.
         sync, header, overhead, max_payload, crc_init = SYNC, HEADER_BYTES, _OVERHEAD, _MAX_PAYLOAD, CRC_INIT
         sizes, unpackers, types, timestamped, crc, new, frame_class = _SIZE, _UNPACK, _TYPE, _TIMESTAMPED, crc_hqx, _new, Frame
-        skipped = crc_errors = bad_lengths = lost = duplicates = unknown = 0
+        skipped = crc_errors = bad_lengths = lost = duplicates = unknown = accepted = 0
         last_seq, last_raw = self._last_seq, self._last_raw
         last_t32, last_t64 = self._last_t32, self._last_t64
         pos = 0
@@ -104,6 +105,7 @@ class StreamDecoder:
                 skipped += 1
                 pos = start + 1
                 continue
+            accepted += end - start
             pos = end
             seq = data[start + 3]
             # Encoding is a function of (type, seq, values): equal values mean equal bytes.
@@ -134,6 +136,7 @@ class StreamDecoder:
         self._last_t32, self._last_t64 = last_t32, last_t64
         stats.frames += len(out)
         stats.bytes_skipped += skipped
+        stats.frame_bytes += accepted
         stats.crc_errors += crc_errors
         stats.bad_lengths += bad_lengths
         stats.frames_lost += lost

@@ -1,0 +1,52 @@
+"""``groundstation protocol``: the frame types of the wire protocol, or the frames in a raw byte capture."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from firmware_protocol import SPEC, StreamDecoder
+from groundstation.errors import UserError
+
+CHUNK_BYTES = 1 << 16
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--decode", metavar="FILE", type=Path, help="decode a raw byte capture (e.g. from a serial terminal)")
+    parser.add_argument("--limit", type=int, default=50, help="frames to print with --decode (default 50; 0: none, just the counts)")
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.decode is None:
+        print_spec()
+    else:
+        decode_file(args.decode, args.limit)
+    return 0
+
+
+def print_spec() -> None:
+    print(f"protocol version {SPEC.protocol_version}, schema fingerprint 0x{SPEC.fingerprint:08X}, sync 0x{SPEC.sync:02X}")
+    for frame_type in SPEC.frames:
+        arrow = "aircraft->ground" if frame_type.direction == "down" else "ground->aircraft"
+        size = frame_type.payload_size + SPEC.header_bytes + SPEC.crc_bytes
+        print(f"  0x{frame_type.id:02X} {frame_type.name:<9} {size:2d} bytes  {arrow}  {', '.join(frame_type.field_names)}")
+    print("Full layout: docs/protocol.md")
+
+
+def decode_file(path: Path, limit: int) -> None:
+    try:
+        handle = path.open("rb")
+    except OSError as error:
+        raise UserError(f"cannot read {path}: {error.strerror}") from None
+    decoder = StreamDecoder()
+    shown = 0
+    with handle:
+        while chunk := handle.read(CHUNK_BYTES):
+            for frame in decoder.feed(chunk):
+                if shown < limit:
+                    print(f"{frame.seq:3d} {frame.name:<9} " + " ".join(f"{k}={v:g}" for k, v in frame.scaled().items()))
+                    shown += 1
+    counts = ", ".join(f"{k} {v}" for k, v in decoder.stats.as_dict().items())
+    print(f"{path}: {counts}; {decoder.pending_bytes} bytes of an incomplete frame at the end")
+    if decoder.schema_matches is False:
+        print(f"warning: the firmware was built from another protocol spec (fingerprint 0x{decoder.remote_fingerprint:08X})")
