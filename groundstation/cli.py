@@ -18,6 +18,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "app": ("groundstation.commands.app", "start the desktop app (--demo: on the simulated radio bridge)"),
     "protocol": ("groundstation.commands.protocol", "show the wire protocol or decode a raw byte file"),
     "evaluate": ("groundstation.commands.evaluate", "score the attitude estimators against truth (inclination RMSE)"),
+    "bridge-sim": ("groundstation.commands.bridge_sim", "the simulated aircraft on a pseudo-terminal, streaming in real time"),
+    "simulate": ("groundstation.commands.simulate", "write a simulated session (raw bytes + truth CSV) as fast as possible"),
 }
 
 

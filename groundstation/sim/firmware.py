@@ -124,8 +124,9 @@ class Firmware:
         return k * self._period_s / self._drift
 
     @property
-    def streaming_since_s(self) -> float:
-        return self.true_time_s(round(self.settings.boot_calibration_s * self.settings.rate_hz))
+    def next_sample(self) -> int:
+        """Index of the next sample the board will take."""
+        return self._k
 
     def run_until(self, t_s: float) -> list[SentFrame]:
         """Every frame the board sends up to true time ``t_s`` (samples whose nominal time < t_s)."""

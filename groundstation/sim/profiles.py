@@ -145,9 +145,6 @@ class Profile:
             pos_ned_m=np.stack(pos, axis=-1),
         )
 
-    def moving(self, t_s) -> np.ndarray:
-        """1 for the part of the profile an evaluation scores (everything after the initial rest)."""
-        return (np.asarray(t_s) >= REST_S).astype(np.int8)
 
 
 def _moves(rng, duration_s, hold_s, step) -> Moves:

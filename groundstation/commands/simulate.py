@@ -1,0 +1,61 @@
+"""``groundstation simulate``: a simulated session as fast as possible, with its truth.
+
+Writes ``--out FILE``: the raw bytes the bridge would have sent for the same options (until the
+recording format exists), and beside it ``STEM.truth.csv.gz``: the truth and the sensor values in
+the dataset CSV layout, which ``groundstation evaluate`` scores (see groundstation/sim/truth_file.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from groundstation.errors import UserError
+from groundstation.sim.options import add_scenario_arguments, scenario_from_args
+
+BLOCK_S = 60.0  # simulated seconds per step: large enough for numpy, small enough for progress
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_scenario_arguments(parser)
+    parser.add_argument("--duration", type=float, default=None, metavar="S", help="simulated seconds (default: per scenario, below)")
+    parser.add_argument("--out", required=True, metavar="FILE", help="raw byte file to write")
+    parser.add_argument("--truth", default=None, metavar="FILE",
+                        help="truth CSV (.csv or .csv.gz) to write (default: STEM.truth.csv.gz beside --out)")
+
+
+def truth_path_for(out: Path) -> Path:
+    return out.with_name(out.name.split(".")[0] + ".truth.csv.gz")
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundstation.sim.stream import SimStream
+    from groundstation.sim.truth_file import TruthTable
+
+    scenario = scenario_from_args(args, args.duration)
+    out = Path(args.out)
+    truth_path = Path(args.truth) if args.truth else truth_path_for(out)
+    fw = scenario.firmware
+    table = TruthTable(fw.accel_fs_g, fw.gyro_fs_dps, fw.mounting)
+    stream = SimStream(scenario, on_samples=table)
+    started = time.monotonic()
+    try:
+        with open(out, "wb") as sink:
+            t = 0.0
+            while t < stream.end_s:
+                t = min(t + BLOCK_S, stream.end_s)
+                sink.write(b"".join(chunk.data for chunk in stream.advance(t)))
+                if time.monotonic() - started > 1.0:
+                    print(f"\rsimulate: {100.0 * t / stream.end_s:5.1f} %", end="", file=sys.stderr, flush=True)
+            sink.write(b"".join(chunk.data for chunk in stream.flush()))
+        table.write(truth_path)
+    except OSError as error:
+        raise UserError(f"cannot write {error.filename}: {error.strerror}") from None
+    elapsed = time.monotonic() - started
+    report = stream.link.report
+    print(f"\rsimulate: {stream.end_s:g} s of '{scenario.profile}' in {elapsed:.1f} s: {report.bytes_delivered} bytes -> {out}, "
+          f"truth -> {truth_path}; link lost {report.lost} of {report.frames_in} frames, damaged "
+          f"{report.truncated + report.corrupted}", file=sys.stderr)
+    return 0

@@ -1,0 +1,71 @@
+"""Firmware + link in simulated time: the bytes a serial port would deliver, and the uplink.
+
+The pty bridge, the in-process port and ``groundstation simulate`` all drive this one object, so
+what a recording holds is byte for byte what the bridge would have sent for the same seed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import firmware_protocol as fp
+from groundstation.estimation.ahf import AhfSettings
+from groundstation.sim.extra_sensors import AuxSettings
+from groundstation.sim.firmware import Firmware, FirmwareSettings
+from groundstation.sim.imu import MPU6050Settings
+from groundstation.sim.link import Chunk, Link, LinkSettings
+from groundstation.sim.profiles import make_profile
+
+
+@dataclasses.dataclass(frozen=True)
+class Scenario:
+    """Everything that decides a simulated session; equal scenarios give identical bytes."""
+
+    profile: str = "flight"
+    duration_s: float | None = None  # None: the profile's default
+    seed: int = 0
+    firmware: FirmwareSettings = FirmwareSettings()
+    link: LinkSettings = LinkSettings()
+    imu: MPU6050Settings = MPU6050Settings()
+    ahf: AhfSettings = AhfSettings()
+    extra: AuxSettings = AuxSettings()
+
+
+class SimStream:
+    def __init__(self, scenario: Scenario, on_samples=None):
+        self.scenario = scenario
+        self.profile = make_profile(scenario.profile, scenario.duration_s, scenario.seed)
+        self.firmware = Firmware(self.profile, scenario.firmware, scenario.imu, scenario.ahf, scenario.extra,
+                                 scenario.seed, on_samples)
+        self.link = Link(scenario.link, scenario.seed)
+        self.uplink = fp.StreamDecoder()
+        self._pending: list[Chunk] = []
+
+    @property
+    def end_s(self) -> float:
+        """True time at which the profile's duration has been streamed."""
+        return self.profile.duration_s
+
+    def advance(self, t_s: float) -> list[Chunk]:
+        """Chunks due at the host's port by simulated time ``t_s``, in order."""
+        self._pending += self.link.carry(self.firmware.run_until(t_s))
+        n = 0
+        while n < len(self._pending) and self._pending[n].t_s <= t_s:
+            n += 1
+        due, self._pending = self._pending[:n], self._pending[n:]
+        return due
+
+    def flush(self) -> list[Chunk]:
+        """The chunks still in flight (for the end of a recording: everything sent arrives)."""
+        due, self._pending = self._pending, []
+        return due
+
+    def next_event_s(self) -> float:
+        """When something next happens: a sample is taken or a chunk falls due."""
+        next_sample = self.firmware.true_time_s(self.firmware.next_sample)
+        return min(next_sample, self._pending[0].t_s) if self._pending else next_sample
+
+    def receive(self, data: bytes) -> None:
+        """Uplink bytes from the host: COMMAND frames reach the firmware (before its next sample)."""
+        for frame in self.uplink.feed(data):
+            self.firmware.command(frame)
