@@ -1,0 +1,47 @@
+"""Gyro bias from rest, rest detection and stored accelerometer calibration on synthetic data."""
+
+import numpy as np
+import pytest
+
+from groundstation.estimation.calibration import AccelCalibration, detect_rest, gyro_bias_rad_s
+
+
+def synthetic(seed=21):
+    """2 s rest, 2 s of motion, 2 s rest at 100 Hz, with a known gyro bias and MPU-6050-size noise."""
+    rng = np.random.default_rng(seed)
+    n = 600
+    bias = np.array([0.02, -0.015, 0.008])
+    gyr = bias + rng.normal(0.0, 0.001, (n, 3))
+    acc = np.array([0.0, 0.0, -1.0]) + rng.normal(0.0, 0.003, (n, 3))
+    moving = slice(200, 400)
+    gyr[moving] += np.column_stack([np.sin(np.arange(200) / 10.0)] * 3)
+    acc[moving] += rng.normal(0.0, 0.2, (200, 3))
+    return gyr, acc, bias
+
+
+def test_rest_is_found_where_it_is_and_bias_recovered():
+    gyr, acc, bias = synthetic()
+    rest = detect_rest(gyr, acc, window=50, gyro_max_rad_s=0.05)
+    assert rest[:150].all() and rest[450:].all()
+    assert not rest[205:400].any()  # sin(0) = 0: the first motion samples are still still
+    np.testing.assert_allclose(gyro_bias_rad_s(gyr, rest), bias, atol=3e-4)
+    # Using every sample would be badly wrong: the motion does not average out.
+    assert np.abs(gyro_bias_rad_s(gyr) - bias).max() > 0.01
+
+
+def test_nan_and_short_inputs():
+    gyr, acc, _ = synthetic()
+    gyr[100] = np.nan
+    rest = detect_rest(gyr, acc, window=50, gyro_max_rad_s=0.05)
+    assert not rest[100]
+    assert np.isfinite(gyro_bias_rad_s(gyr, rest)).all()
+    assert not detect_rest(gyr[:10], acc[:10], window=50).any()
+    with pytest.raises(ValueError, match="no finite samples"):
+        gyro_bias_rad_s(gyr, np.zeros(len(gyr), dtype=bool))
+
+
+def test_accel_calibration_undoes_bias_and_scale():
+    true = np.array([[0.0, 0.0, -1.0], [0.5, -0.5, -0.7]])
+    cal = AccelCalibration(bias_g=(0.02, -0.01, 0.03), scale=(1.0 / 1.02, 1.0 / 0.99, 1.0 / 1.01))
+    raw = true * [1.02, 0.99, 1.01] + [0.02, -0.01, 0.03]
+    np.testing.assert_allclose(cal.apply(raw), true, atol=1e-12)

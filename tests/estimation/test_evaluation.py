@@ -1,0 +1,113 @@
+"""Evaluation on BROAD slices against ahrs's Madgwick, the dataset reader, and the evaluate command."""
+
+import gzip
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from ahrs.filters import Madgwick
+
+from groundstation.datasets import DatasetError, read_csv
+from groundstation.estimation.evaluation import evaluate_trial, inclination_error_rad, sample_periods_s, score
+
+TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
+SLICE = 12_000  # about 42 s at 285.7 Hz: enough to include rest and motion, quick to run
+
+
+@pytest.fixture
+def trial_slice(broad_dir, tmp_path):
+    """The first SLICE rows of a BROAD trial, written as a plain CSV and read back."""
+    with gzip.open(broad_dir / TRIAL, "rt") as f:
+        lines = [next(f) for _ in range(SLICE + 1)]
+    path = tmp_path / "slice.csv"
+    path.write_text("".join(lines))
+    return path
+
+
+def test_inclination_error_matches_the_definition():
+    # Truth IMU->ENU at identity (sensor z up); estimate body->NED rolled 180 deg (sensor z up too): 0 error.
+    est = np.array([[0.0, 1.0, 0.0, 0.0]])
+    assert inclination_error_rad(est, np.array([[1.0, 0.0, 0.0, 0.0]]))[0] == pytest.approx(0.0)
+    # Heading does not matter: a yaw of the truth leaves the error at 0; a 10 deg tilt gives 10 deg.
+    yaw = np.array([[np.cos(0.4), 0.0, 0.0, np.sin(0.4)]])
+    assert inclination_error_rad(est, yaw)[0] == pytest.approx(0.0, abs=1e-12)
+    tilt = np.array([[np.cos(np.radians(5)), np.sin(np.radians(5)), 0.0, 0.0]])
+    assert np.degrees(inclination_error_rad(est, tilt)[0]) == pytest.approx(10.0)
+    assert score([0.0, np.nan, np.radians(3.0), np.radians(4.0)], [True, True, True, True]) == {
+        "incl_rmse_deg": pytest.approx(np.sqrt(25 / 3)),
+        "incl_max_deg": pytest.approx(4.0),
+    }
+
+
+def test_hf_on_broad_equals_ahrs_madgwick(trial_slice):
+    trial = read_csv(trial_slice)
+    ours = evaluate_trial(trial, ["hf"], {"hf": {"beta": 0.033}})["hf"]
+    # The same run through ahrs, started where ours starts (gravity on the first sample, yaw 0).
+    acc, gyr, dt = trial.acc_m_s2, trial.gyr_rad_s, sample_periods_s(trial.time_s)
+    pitch, roll = np.arctan2(acc[0, 0], np.hypot(acc[0, 1], acc[0, 2])), np.arctan2(-acc[0, 1], -acc[0, 2])
+    q = np.array([np.cos(pitch / 2) * np.cos(roll / 2), np.cos(pitch / 2) * np.sin(roll / 2), np.sin(pitch / 2) * np.cos(roll / 2), -np.sin(pitch / 2) * np.sin(roll / 2)])
+    filt, out = Madgwick(gain=0.033), []
+    for g, a, d in zip(gyr, acc, dt):
+        q = filt.updateIMU(q, g, -a, dt=d)
+        out.append(q)
+    theirs = score(inclination_error_rad(np.array(out), trial.true_q), trial.moving)
+    assert ours["incl_rmse_deg"] == pytest.approx(theirs["incl_rmse_deg"], abs=1e-6)
+    assert 0.2 < ours["incl_rmse_deg"] < 2.0  # the README's ~0.6 deg for the full trial
+
+
+def test_gyro_only_and_accelerometer_only_are_worse_than_fusion(trial_slice):
+    trial = read_csv(trial_slice)
+    fused = evaluate_trial(trial, ["hf"], {"hf": {"beta": 0.033}})["hf"]["incl_rmse_deg"]
+    gyro_only = evaluate_trial(trial, ["hf"], {"hf": {"beta": 0.0}})["hf"]["incl_rmse_deg"]
+    acc_only = evaluate_trial(trial, ["cf1"], {"cf1": {"time_constant_s": 0.0}})["cf1"]["incl_rmse_deg"]
+    assert fused < acc_only and fused < gyro_only
+
+
+def test_reader_plain_and_gz_agree_and_bad_files_are_refused(trial_slice, tmp_path):
+    plain = read_csv(trial_slice)
+    gz = tmp_path / "slice.csv.gz"
+    gz.write_bytes(gzip.compress(trial_slice.read_bytes()))
+    packed = read_csv(gz)
+    np.testing.assert_array_equal(plain.gyr_rad_s, packed.gyr_rad_s)
+    np.testing.assert_array_equal(plain.true_q, packed.true_q)
+    assert plain.moving.dtype == bool and np.isnan(plain.true_q[0]).all()  # empty truth cells -> NaN
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n")
+    with pytest.raises(DatasetError, match="missing columns"):
+        read_csv(bad)
+    with pytest.raises(DatasetError, match="no such file"):
+        read_csv(tmp_path / "absent.csv")
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "groundstation", "evaluate", *args], capture_output=True, text=True, timeout=300)
+
+
+def test_evaluate_command_json(trial_slice):
+    result = run_cli(str(trial_slice), "--filters", "hf,ecf", "--set", "hf.beta=0.033", "--json")
+    assert result.returncode == 0, result.stderr
+    figures = json.loads(result.stdout)
+    assert list(figures) == ["hf", "ecf"]
+    expected = evaluate_trial(read_csv(trial_slice), ["hf"], {"hf": {"beta": 0.033}})["hf"]
+    assert figures["hf"] == pytest.approx(expected)
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["/no/such/file.csv"], "no such file"),
+        (["{garbage}"], "not a readable CSV"),
+        (["{slice}", "--filters", "madgwick"], "unknown estimator"),
+        (["{slice}", "--set", "hf.beta"], "NAME.PARAM=VALUE"),
+        (["{slice}", "--set", "hf.gain=1"], "no setting 'gain'"),
+    ],
+)
+def test_evaluate_command_errors_are_messages_not_tracebacks(trial_slice, tmp_path, args, message):
+    garbage = tmp_path / "garbage.csv.gz"
+    garbage.write_bytes(bytes(range(256)) * 10)
+    args = [a.format(garbage=garbage, slice=trial_slice) for a in args]
+    result = run_cli(*args)
+    assert result.returncode == 2
+    assert message in result.stderr and "Traceback" not in result.stderr
