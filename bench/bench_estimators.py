@@ -1,0 +1,187 @@
+"""Estimator figures (printed, not asserted): per-sample cost, batch throughput, BROAD accuracy.
+
+    python bench/bench_estimators.py            # everything (a few minutes on 2 cores)
+    python bench/bench_estimators.py --no-broad # timing only
+
+1. µs per ``step`` for each estimator, beside imufusion (the C Fusion AHRS; update + get_quaternion,
+   since our step returns the quaternion) and ``ahrs.filters.Madgwick.updateIMU``, measured interleaved
+   in the same run; the median of several rounds. Our inputs are tuples of Python floats (what the
+   pipeline passes), imufusion's and ahrs's numpy arrays (what they need).
+2. ``run`` throughput in samples/s.
+3. Inclination RMSE (deg) over the moving samples of every BROAD trial in ../shared/datasets/broad for
+   every estimator at its defaults, accelerometer-only (cf1 τ = 0), gyro-only (hf β = 0), ahrs Madgwick
+   β = 0.033 and 0.1, and imufusion (gain 0.5, 10° acceleration rejection, 5 s rejection timeout).
+   All start from the first accelerometer sample (imufusion from its own start-up).
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import imufusion
+import numpy as np
+from ahrs.filters import Madgwick
+
+from groundstation import quaternion
+from groundstation.datasets import read_csv
+from groundstation.estimation import ESTIMATORS, create
+from groundstation.estimation.base import Estimator
+from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
+from groundstation.units import STANDARD_GRAVITY_M_S2
+
+BROAD = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets" / "broad"
+ROUNDS, CALLS = 7, 20_000
+
+
+def timing_inputs(n, seed=0):
+    rng = np.random.default_rng(seed)
+    gyr = rng.normal(0.0, 0.5, (n, 3))
+    acc = np.array([0.0, 0.0, -1.0]) + rng.normal(0.0, 0.1, (n, 3))
+    return gyr, acc
+
+
+def time_per_call_us(fn, args_list):
+    start = time.perf_counter()
+    for args in args_list:
+        fn(*args)
+    return (time.perf_counter() - start) / len(args_list) * 1e6
+
+
+def bench_step():
+    gyr, acc = timing_inputs(CALLS)
+    ours_args = [(tuple(g), tuple(a), 0.01) for g, a in zip(gyr.tolist(), acc.tolist())]
+    fusion = imufusion.Ahrs()
+    fusion.set_sample_period(0.01)
+
+    def fusion_step(g, a):
+        fusion.update_no_magnetometer(g, a)
+        return fusion.get_quaternion()
+
+    fusion_args = [(g, -a) for g, a in zip(np.degrees(gyr), acc)]  # °/s and g, z up
+    madgwick = Madgwick(gain=0.033)
+    state = {"q": np.array([1.0, 0.0, 0.0, 0.0])}
+
+    def ahrs_step(g, a):
+        state["q"] = madgwick.updateIMU(state["q"], g, a, dt=0.01)
+
+    ahrs_args = [(g, -a) for g, a in zip(gyr, acc)][: CALLS // 10]  # 38 µs a call: fewer calls
+    rows = {name: [] for name in ["imufusion", "ahrs Madgwick", *ESTIMATORS]}
+    for _ in range(ROUNDS):
+        rows["imufusion"].append(time_per_call_us(fusion_step, fusion_args))
+        rows["ahrs Madgwick"].append(time_per_call_us(ahrs_step, ahrs_args))
+        for name in ESTIMATORS:
+            est = create(name)
+            calls = ours_args if name != "ekf" else ours_args[: CALLS // 10]
+            rows[name].append(time_per_call_us(est.step, calls))
+    base = statistics.median(rows["imufusion"])
+    print(f"\n## step cost (median of {ROUNDS} interleaved rounds)\n")
+    print("| estimator | µs/sample | × imufusion |")
+    print("|---|---:|---:|")
+    for name, values in rows.items():
+        med = statistics.median(values)
+        print(f"| {name} | {med:.2f} | {med / base:.1f} |")
+    ahf32 = create("ahf").__class__(dtype=np.float32)
+    f32 = statistics.median(time_per_call_us(ahf32.step, ours_args[: CALLS // 4]) for _ in range(3))
+    print(f"| ahf dtype=float32 | {f32:.2f} | {f32 / base:.1f} |")
+
+
+def bench_run():
+    gyr, acc = timing_inputs(50_000, seed=1)
+    print("\n## batch run throughput (50,000 samples)\n")
+    print("| estimator | samples/s |")
+    print("|---|---:|")
+    for name in ESTIMATORS:
+        n = len(gyr) if name != "ekf" else 5_000
+        best = min(_run_seconds(name, gyr[:n], acc[:n]) for _ in range(3))
+        print(f"| {name} | {n / best:,.0f} |")
+
+
+def _run_seconds(name, gyr, acc):
+    est = create(name)
+    start = time.perf_counter()
+    est.run(gyr, acc, 0.01)
+    return time.perf_counter() - start
+
+
+COLUMNS = ["ahf", "hf", "ecf", "cf1", "kf", "ekf", "acc-only", "gyro-only", "ahrs β=0.033", "ahrs β=0.1", "imufusion"]
+OURS = {name: (name, None) for name in ESTIMATORS} | {
+    "acc-only": ("cf1", {"time_constant_s": 0.0}),
+    "gyro-only": ("hf", {"beta": 0.0}),
+}
+
+
+def broad_trial(path):
+    trial = read_csv(path)
+    acc_g = trial.acc_m_s2 / STANDARD_GRAVITY_M_S2
+    dt = sample_periods_s(trial.time_s)
+
+    def rmse(q):
+        return score(inclination_error_rad(q, trial.true_q), trial.moving)["incl_rmse_deg"]
+
+    row = {}
+    for column, (name, overrides) in OURS.items():
+        row[column] = rmse(create(name, overrides).run(trial.gyr_rad_s, acc_g, dt)[0])
+    q0 = np.array(Estimator._attitude_from_acc(*acc_g[0], 0.0))
+    for beta in (0.033, 0.1):
+        filt, q, out = Madgwick(gain=beta), q0, []
+        for g, a, d in zip(trial.gyr_rad_s, -acc_g, dt):  # -acc: its z-up reference becomes our down
+            q = filt.updateIMU(q, g, a, dt=d)
+            out.append(q)
+        row[f"ahrs β={beta}"] = rmse(np.array(out))
+    rate = 1.0 / float(np.median(dt))
+    fusion = imufusion.Ahrs()
+    fusion.set_settings(
+        imufusion.AhrsSettings(
+            sample_rate=rate,
+            convention=imufusion.CONVENTION_NWU,
+            gain=0.5,
+            gyroscope_range=2000.0,
+            acceleration_rejection=10.0,
+            magnetic_rejection=0.0,
+            rejection_timeout=5.0 * rate,  # in samples, as in Fusion's own examples: 5 s
+        )
+    )
+    out = []
+    for g, a, d in zip(np.degrees(trial.gyr_rad_s), acc_g, dt):
+        fusion.set_sample_period(float(d))
+        fusion.update_no_magnetometer(g, a)
+        out.append(fusion.get_quaternion())
+    # imufusion's earth z is up (NWU); a half turn about earth x makes it z-down like ours.
+    row["imufusion"] = rmse(quaternion.multiply([0.0, 1.0, 0.0, 0.0], np.array(out)))
+    return path.name.split(".")[0], row
+
+
+def bench_broad():
+    paths = sorted(BROAD.glob("*.csv*"))
+    if not paths:
+        print(f"\n(no BROAD trials at {BROAD}; skipped)")
+        return
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        rows = dict(pool.map(broad_trial, paths))
+    print("\n## BROAD inclination RMSE (deg), moving samples, every estimator at its defaults\n")
+    print("| trial | " + " | ".join(COLUMNS) + " |")
+    print("|---|" + "---:|" * len(COLUMNS))
+    for trial, row in rows.items():
+        print(f"| {trial} | " + " | ".join(f"{row[c]:.2f}" for c in COLUMNS) + " |")
+    print("| **mean** | " + " | ".join(f"**{np.mean([r[c] for r in rows.values()]):.2f}**" for c in COLUMNS) + " |")
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--no-broad", action="store_true", help="timing only")
+    args = parser.parse_args()
+    print(f"python {sys.version.split()[0]}, numpy {np.__version__}")
+    bench_step()
+    bench_run()
+    if not args.no_broad:
+        bench_broad()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
