@@ -106,7 +106,7 @@ static inline size_t gs_finish_frame(uint8_t *out, uint8_t type, uint8_t seq, ui
     return (size_t)GS_HEADER_BYTES + payload_len + GS_CRC_BYTES;
 }
 
-/* IMU_RAW (0x01, down): One MPU-6050 sample in sensor axes at the output rate. Counts convert to g and deg/s with CONFIG's full scales: value = count * full_scale / 32768. */
+/* IMU_RAW (0x01, down): One MPU-6050 sample in sensor axes at the output rate. Counts convert to g and deg/s with the datasheet sensitivity of CONFIG's full scales (e.g. 16384 LSB/g at 2 g, 131 LSB/(deg/s) at 250 deg/s; groundstation/units.py). */
 typedef struct {
     uint32_t t_us; /* us: device time of the sample; wraps every 71.6 min */
     int16_t acc_x; /* count: accelerometer x (specific force), sensor axes */
