@@ -60,7 +60,7 @@ class FirmwareSettings:
     mounting: int = mountings.DEFAULT_MOUNTING
     clock_drift_ppm: float = 20.0  # device crystal error (an STM32 HSE crystal: ±20-50 ppm)
     sample_jitter_us: float = 20.0  # σ of the sample-read latency after the timer tick
-    boot_calibration_s: float = 1.0  # gyro averaging at power-up, before streaming
+    boot_calibration_s: float = 1.0  # gyro averaging at power-up, before streaming; 0 = none
     accel_calibrated: bool = True  # stored bench calibration cancels the turn-on zero-g bias
     mag_rate_hz: int = 0  # 0 = no magnetometer
     baro_rate_hz: int = 0  # 0 = no barometer
@@ -115,7 +115,10 @@ class Firmware:
         self._queued: list[tuple[str, dict]] = []  # frames to send before the next sample
         self._booting = True
         self._calibration: tuple[int, int, list] | None = None  # (first k, end k, sums of gyro dps)
-        self._start_calibration(settings.boot_calibration_s)
+        if settings.boot_calibration_s > 0:
+            self._start_calibration(settings.boot_calibration_s)
+        else:  # a board that skips it streams its turn-on gyro bias
+            self._end_boot()
 
     # -- time --------------------------------------------------------------------------------
 
@@ -197,8 +200,11 @@ class Firmware:
         self.imu.gyro_offset_dps = self.imu.gyro_offset_dps + sum_dps / (end - first)
         self._calibration = None
         if self._booting:
-            self._booting = False
-            self._queued.append(("CONFIG", self._config_values()))
+            self._end_boot()
+
+    def _end_boot(self) -> None:
+        self._booting = False
+        self._queued.append(("CONFIG", self._config_values()))
 
     # -- frames ------------------------------------------------------------------------------
 
@@ -229,12 +235,13 @@ class Firmware:
         if self._calibration is not None:
             self._calibration[2][0] += gyr_dps.sum(axis=0)
         if self._booting:
-            self._last_t_dev_us = int(t_dev_us[-1])
             return
         if self._on_samples is not None:
             self._on_samples(t_dev_us, truth, raw)
-        gyr_body = (np.radians(gyr_dps) @ self._body_from_sensor.T).tolist()
+        # Exactly the host's conversions (the normalised-gradient AHF amplifies even 1-ulp differences).
+        gyr_body = (units.gyro_counts_to_rad_s(raw.gyr_counts, s.gyro_fs_dps) @ self._body_from_sensor.T).tolist()
         acc_body = (units.accel_counts_to_g(raw.acc_counts, s.accel_fs_g) @ self._body_from_sensor.T).tolist()
+        # The filter starts with the stream: its first dt is the nominal period, as a host assumes.
         prev = self._last_t_dev_us if self._last_t_dev_us is not None else int(t_dev_us[0]) - round(self._period_s * 1e6)
         dt_s = (np.diff(t_dev_us, prepend=prev) * 1e-6).tolist()
         self._last_t_dev_us = int(t_dev_us[-1])
