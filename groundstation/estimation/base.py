@@ -32,6 +32,7 @@ Status flags are bits of ``diag.status`` (plain ints, cheap per sample).
 from __future__ import annotations
 
 import dataclasses
+from itertools import chain
 from typing import ClassVar, NamedTuple
 
 import numpy as np
@@ -144,11 +145,19 @@ class Estimator:
         if len(acc) != len(gyr):
             raise ValueError(f"gyr_rad_s has {len(gyr)} rows but acc_g has {len(acc)}")
         step = self.step
+        qs, diags = [], []
         # tolist(): plain Python floats, the fast path of step.
-        results = [step(g, a, d) for g, a, d in zip(gyr.tolist(), acc.tolist(), dt.tolist())]
-        q = np.array([r[0] for r in results], dtype=float).reshape(-1, 4)
-        columns = zip(*(r[1] for r in results)) if results else [()] * len(self.Diagnostics._fields)
-        diag = {name: np.array(col) for name, col in zip(self.Diagnostics._fields, columns)}
+        for g, a, d in zip(gyr.tolist(), acc.tolist(), dt.tolist()):
+            q, diag = step(g, a, d)
+            qs.append(q)
+            diags.append(diag)
+        fields = self.Diagnostics._fields
+        # fromiter over the flattened rows: ~10x faster than np.array on a list of NamedTuples.
+        q = np.fromiter(chain.from_iterable(qs), float, count=4 * len(qs)).reshape(-1, 4)
+        table = np.fromiter(chain.from_iterable(diags), float, count=len(fields) * len(diags))
+        table = table.reshape(-1, len(fields))
+        diag = {name: table[:, i] for i, name in enumerate(fields)}
+        diag["status"] = diag["status"].astype(np.int64)  # exact: flags < 2**53
         return q, diag
 
     # -- shared helpers ---------------------------------------------------------------------
