@@ -1,0 +1,151 @@
+"""A live session: a reader thread takes chunks from a source, records them, and feeds the pipeline.
+
+Consumers (the UI, the CLI's one-line summary) pull from ``pipeline``'s tables whenever they like;
+the reader never waits for them. Each chunk is written to the recording before it is decoded, so
+a crash of the decoder or the estimators loses nothing of the flight.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from datetime import datetime, timezone
+from pathlib import Path
+
+from firmware_protocol import SPEC, encode, make_frame
+from groundstation.recording import RecordingWriter, default_recordings_dir, new_recording_path
+from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
+from groundstation.session.replay import SettingsSchedule
+from groundstation.sources.base import Source, SourceClosed, SourceError
+
+RECONNECT_INTERVAL_S = 0.5
+COMMANDS = SPEC.enums["command"].values
+
+
+class LiveSession:
+    """``record``: write a recording into ``recordings_dir`` (default: ``default_recordings_dir()``).
+
+    Replays are not re-recorded, and their recorded settings changes are re-applied as they pass.
+    """
+
+    def __init__(self, source: Source, filters=DEFAULT_FILTERS, settings=None, record: bool = True,
+                 recordings_dir: Path | None = None, metadata: dict | None = None):
+        self.source = source
+        self.pipeline = Pipeline(filters, settings)
+        self.lock = threading.Lock()
+        self.error: str | None = None  # why the reader stopped, when it was not asked to
+        self.connected = True
+        self._schedule = SettingsSchedule(source.recording) if hasattr(source, "recording") else None
+        self._stop = threading.Event()
+        self._last_chunk_ns = 0
+        self._uplink_seq = 0
+        self.recording_path: Path | None = None
+        self._writer = None
+        if record and self._schedule is None:
+            folder = Path(recordings_dir) if recordings_dir is not None else default_recordings_dir()
+            folder.mkdir(parents=True, exist_ok=True)
+            self.recording_path = new_recording_path(folder, datetime.now(timezone.utc))
+            self._writer = RecordingWriter(self.recording_path, {
+                "source": source.description,
+                **(metadata or {}),
+                "filters": list(self.pipeline.filters),
+                "estimator_settings": self.pipeline.settings_json(),
+            })
+        self._thread = threading.Thread(target=self._read_loop, name="groundstation-reader", daemon=True)
+
+    def start(self) -> LiveSession:
+        self._thread.start()
+        self.send_command("request_config")  # the full scales, in case the start-up CONFIG was missed
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)
+        self.source.close()
+        if self._writer is not None:
+            self._writer.close()
+
+    def __enter__(self) -> LiveSession:
+        return self.start()
+
+    def __exit__(self, *exc_info) -> None:
+        self.stop()
+
+    @property
+    def running(self) -> bool:
+        return self._thread.is_alive()
+
+    # -- the reader thread ------------------------------------------------------------------------
+
+    def _read_loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                chunk = self.source.read()
+            except SourceClosed:
+                return
+            except SourceError as error:
+                if not self._reconnect(str(error)):
+                    return
+                continue
+            if chunk is not None:
+                self._take(chunk.t_host_ns, chunk.data)
+
+    def _take(self, t_host_ns: int, data: bytes) -> None:
+        with self.lock:
+            if self._writer is not None:
+                self._writer.write_chunk(t_host_ns, data)
+            if self._schedule is not None:
+                self._schedule.apply_before(self.pipeline, t_host_ns)
+            self.pipeline.feed(t_host_ns, data)
+            self._last_chunk_ns = t_host_ns
+
+    def _reconnect(self, reason: str) -> bool:
+        """Keep trying to reopen a port that went away; False when it cannot be reopened at all."""
+        reopen = getattr(self.source, "reopen", None)
+        self._note({"kind": "disconnected", "message": reason})
+        if reopen is None:
+            self.error = reason
+            return False
+        self.connected = False
+        while not self._stop.wait(RECONNECT_INTERVAL_S):
+            try:
+                reopen()
+            except SourceError:
+                continue
+            self.connected = True
+            self._note({"kind": "reconnected"})
+            self.send_command("request_config")
+            return True
+        return False
+
+    # -- from other threads -----------------------------------------------------------------------
+
+    def change_settings(self, name: str, overrides: dict[str, float]) -> None:
+        """Change a host estimator's settings now; recorded, so a replay changes them at the same point."""
+        with self.lock:
+            self.pipeline.change_settings(name, overrides, self._last_chunk_ns)
+            if self._writer is not None:
+                self._writer.write_event(self._last_chunk_ns, self.pipeline.events[-1])
+
+    def send_command(self, command: str, param: int = 0, value: float = 0.0) -> int:
+        """Send a COMMAND to the aircraft; returns its seq (the ACK carries it back)."""
+        with self.lock:
+            seq = self._uplink_seq
+            self._uplink_seq = (seq + 1) & 0xFF
+            frame = make_frame("COMMAND", seq, command=COMMANDS[command], param=param, value=value)
+            self._note_locked({"kind": "command", "command": command, "param": param, "value": value, "seq": seq})
+        try:
+            self.source.write(encode(frame))
+        except SourceError as error:
+            self._note({"kind": "warning", "message": str(error)})
+        return seq
+
+    def _note(self, event: dict) -> None:
+        with self.lock:
+            self._note_locked(event)
+
+    def _note_locked(self, event: dict) -> None:
+        event = {"t_host_ns": self._last_chunk_ns, **event, "wall_time": time.time()}
+        self.pipeline.events.append(event)
+        if self._writer is not None:
+            self._writer.write_event(self._last_chunk_ns, event)

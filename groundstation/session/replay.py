@@ -1,0 +1,63 @@
+"""Headless replay: a recording through a fresh pipeline, as fast as possible."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from groundstation.recording import Recording
+from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
+
+
+def recorded_settings(recording: Recording) -> dict[str, dict[str, float]]:
+    """The estimator settings in the header (``Pipeline.settings_json``), as numbers again."""
+    recorded = recording.metadata.get("estimator_settings", {})
+    return {name: {k: float(v) for k, v in settings.items()} for name, settings in recorded.items()}
+
+
+def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
+    """A pipeline set up as the recorded session was (estimators and settings), plus ``forced``."""
+    if filters is None:
+        filters = recording.metadata.get("filters", DEFAULT_FILTERS)
+    return Pipeline(filters, recorded_settings(recording), forced)
+
+
+def apply_event(pipeline: Pipeline, event: dict) -> None:
+    """Re-apply a recorded settings change (other events are informational)."""
+    if event.get("kind") == "settings" and event.get("name") in pipeline.estimators:
+        pipeline.change_settings(event["name"], event.get("settings", {}), event.get("t_host_ns", 0))
+
+
+class SettingsSchedule:
+    """A recording's settings changes, handed out where they happened in the chunk stream.
+
+    A change recorded at ``t`` applies after every chunk that arrived at or before ``t`` (the live
+    session stamps it with the last chunk it had fed), so a replay repeats the live session exactly.
+    """
+
+    def __init__(self, recording: Recording):
+        self._events = sorted(
+            ((t, i, e) for i, (t, e) in enumerate(recording.events) if e.get("kind") == "settings"), key=lambda x: x[:2]
+        )
+        self._next = 0
+
+    def apply_before(self, pipeline: Pipeline, t_host_ns: float) -> None:
+        """Apply every change recorded before a chunk that arrived at ``t_host_ns``."""
+        while self._next < len(self._events) and self._events[self._next][0] < t_host_ns:
+            apply_event(pipeline, self._events[self._next][2])
+            self._next += 1
+
+
+def replay(recording: Recording, filters=None, forced=None, progress: Callable[[int, int], None] | None = None) -> Pipeline:
+    """Feed every chunk, re-applying settings changes where they happened; returns the pipeline."""
+    pipeline = pipeline_for(recording, filters, forced)
+    schedule = SettingsSchedule(recording)
+    total = recording.chunk_count
+    for i, (t_host_ns, data) in enumerate(recording.chunks()):
+        schedule.apply_before(pipeline, t_host_ns)
+        pipeline.feed(t_host_ns, data)
+        if progress is not None and i % 4096 == 0:
+            progress(i, total)
+    schedule.apply_before(pipeline, float("inf"))
+    if progress is not None:
+        progress(total, total)
+    return pipeline
