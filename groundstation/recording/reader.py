@@ -101,20 +101,50 @@ def _read_preamble(path: Path, buffer: bytes, damage: list[str]) -> tuple[int, i
         if len(buffer) <= PREAMBLE.size:
             raise RecordingError(f"{path} ends inside its header ({len(buffer)} bytes): nothing was recorded")
         _, version = PREAMBLE.unpack_from(buffer)
+        if 1 <= version <= FORMAT_VERSION:
+            return version, PREAMBLE.size
+        # The version field has no CRC of its own; the metadata record repeats it under its CRC.
+        recorded = _recorded_format_version(buffer)
+        if recorded is not None and 1 <= recorded <= FORMAT_VERSION:
+            damage.append(f"format version field damaged (reads {version}); the metadata record says {recorded}")
+            return recorded, PREAMBLE.size
         if version > FORMAT_VERSION:
-            raise RecordingError(
-                f"{path} was written by a newer groundstation (recording format version {version}; "
-                f"this version reads versions 1 to {FORMAT_VERSION}): update groundstation to open it"
-            )
-        if version < 1:
-            raise RecordingError(f"{path}: unreadable header (recording format version {version} does not exist)")
-        return version, PREAMBLE.size
+            raise _newer_version_error(path, version)
+        raise RecordingError(f"{path}: unreadable header (recording format version {version} does not exist)")
     # Not our identification. Recover the records if there are any (a damaged first block);
     # otherwise this is some other kind of file.
-    if _Walk(buffer).next_valid(0) is None:
+    first = _Walk(buffer).next_valid(0)
+    if first is None:
         raise RecordingError(f"{path} is not a groundstation recording: it looks like {sniff.describe(buffer[:512])}")
-    damage.append(f"file identification (bytes 0–{PREAMBLE.size - 1}) damaged; read as format version {FORMAT_VERSION}")
-    return FORMAT_VERSION, 0
+    recorded = _recorded_format_version(buffer)
+    if recorded is not None and recorded > FORMAT_VERSION:
+        raise _newer_version_error(path, recorded)
+    damage.append(
+        f"file identification damaged (bytes 0–{first} before the first intact record);"
+        f" read as format version {FORMAT_VERSION}"
+    )
+    return FORMAT_VERSION, first
+
+
+def _newer_version_error(path: Path, version: int) -> RecordingError:
+    return RecordingError(
+        f"{path} was written by a newer groundstation (recording format version {version}; "
+        f"this version reads versions 1 to {FORMAT_VERSION}): update groundstation to open it"
+    )
+
+
+def _recorded_format_version(buffer: bytes) -> int | None:
+    """``format_version`` from an intact metadata record right after the preamble, if there is one."""
+    walk = _Walk(buffer)
+    if not walk.is_valid_at(PREAMBLE.size):
+        return None
+    _, kind, length, _ = RECORD_HEADER.unpack_from(buffer, PREAMBLE.size)
+    start = PREAMBLE.size + HEADER_BYTES
+    if kind != Kind.METADATA:
+        return None
+    metadata = _json_object(walk.view[start:start + length], "metadata record", [])
+    version = metadata.get("format_version") if metadata else None
+    return version if isinstance(version, int) else None
 
 
 class _Walk:

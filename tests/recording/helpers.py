@@ -1,0 +1,38 @@
+"""A small recording whose record boundaries are known, for the damage tests."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from groundstation.recording import RecordingWriter
+
+PREAMBLE_BYTES = 12
+
+
+@dataclass
+class Small:
+    data: bytes
+    chunks: list[tuple[int, bytes]]
+    # (start, end) byte spans: spans[0] is the metadata record, then one per chunk, then the event
+    # record, then the END record.
+    spans: list[tuple[int, int]]
+
+    def chunk_span(self, index: int) -> tuple[int, int]:
+        return self.spans[1 + index]
+
+
+def write_small(path: Path, n_chunks: int = 6) -> Small:
+    chunks = [(1_000_000 * (i + 1), bytes([0xA5, i, 255 - i]) * (i + 1)) for i in range(n_chunks)]
+    ends = []
+    with RecordingWriter(path, {"port": "t"}) as writer:
+        ends.append(writer.bytes_written)
+        for t_host_ns, data in chunks:
+            writer.write_chunk(t_host_ns, data)
+            ends.append(writer.bytes_written)
+        writer.write_event(9_000_000, {"note": "end"})
+        ends.append(writer.bytes_written)
+    data = path.read_bytes()
+    ends.append(len(data))
+    starts = [PREAMBLE_BYTES] + ends[:-1]
+    return Small(data, chunks, list(zip(starts, ends)))
