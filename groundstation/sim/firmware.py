@@ -38,8 +38,8 @@ from groundstation import units
 from groundstation.estimation.ahf import Ahf, AhfSettings
 from groundstation.estimation.base import ACC_SKIPPED, GYRO_OVERRANGE, INITIALISED, WAITING
 from groundstation.sim import extra_sensors
-from groundstation.sim.imu import MPU6050, MPU6050Settings
-from groundstation.sim.profiles import Profile
+from groundstation.sim.imu import MPU6050, ImuSamples, MPU6050Settings
+from groundstation.sim.profiles import Profile, Truth
 from groundstation.sim.seeds import stream
 
 MODES = {name: value for name, value in fp.SPEC.enums["mode"].values.items()}
@@ -49,6 +49,7 @@ _FILTER_PARAMS = {value: name for name, value in fp.SPEC.enums["filter_param"].v
 _RESULT = fp.SPEC.enums["ack_result"].values
 _Q14 = 1.0 / fp.SPEC.frame("ATTITUDE").fields[1].scale
 FIRMWARE_VERSION = (0, 1, 0)
+PREFETCH_SAMPLES = 50
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,6 +111,8 @@ class Firmware:
         self._drift = 1.0 + settings.clock_drift_ppm * 1e-6
         self._body_from_sensor = mountings.matrix(settings.mounting)
         self._k = 0  # next sample index
+        self._ahead: dict[str, np.ndarray] = {}  # samples computed ahead (see _sampled), up to _ahead_end
+        self._ahead_end = 0
         self._seq = 0
         self._last_t_dev_us: int | None = None
         self._queued: list[tuple[str, dict]] = []  # frames to send before the next sample
@@ -222,15 +225,35 @@ class Firmware:
         out.append(SentFrame(t_s, fp.encode(make(name, seq=self._seq, **values)), values.get("t_us")))
         self._seq = (self._seq + 1) & 0xFF
 
+    def _sample(self, k0: int, k1: int) -> dict[str, np.ndarray]:
+        """Sampling instants, truth and analog readings of samples k0..k1-1 (nothing a command changes)."""
+        s = self.settings
+        jitter_s = np.clip(self._jitter.normal(0.0, s.sample_jitter_us * 1e-6, k1 - k0), -0.25 * self._period_s, 0.25 * self._period_s)
+        t_dev_s = np.arange(k0, k1) * self._period_s + jitter_s
+        truth = self.profile.truth(t_dev_s / self._drift)
+        gyr_dps, acc_g, temp_c = self.imu.analog(truth)
+        block = {"t_dev_us": np.rint(t_dev_s * 1e6).astype(np.int64), "gyr_dps": gyr_dps, "acc_g": acc_g, "temp_c": temp_c}
+        block.update({f.name: getattr(truth, f.name) for f in dataclasses.fields(Truth)})
+        return block
+
+    def _sampled(self, k0: int, k1: int) -> tuple[np.ndarray, Truth, ImuSamples]:
+        """Samples k0..k1-1 (consecutive calls), computed ahead in blocks of at least PREFETCH_SAMPLES:
+        numpy costs the same for one sample as for fifty, and the bridge steps one at a time."""
+        if self._ahead_end < k1:
+            new = self._sample(self._ahead_end, self._ahead_end + max(PREFETCH_SAMPLES, k1 - self._ahead_end))
+            self._ahead = {key: np.concatenate([self._ahead[key], new[key]]) for key in new} if self._ahead else new
+            self._ahead_end += len(new["t_dev_us"])
+        start = len(self._ahead["t_dev_us"]) - (self._ahead_end - k0)
+        now = {key: value[start : start + k1 - k0] for key, value in self._ahead.items()}
+        self._ahead = {key: value[start + k1 - k0 :] for key, value in self._ahead.items()}
+        truth = Truth(**{f.name: now[f.name] for f in dataclasses.fields(Truth)})
+        return now["t_dev_us"], truth, self.imu.registers(now["gyr_dps"], now["acc_g"], now["temp_c"])
+
     def _run_block(self, k0: int, k1: int, out: list) -> None:
         s = self.settings
         n = k1 - k0
-        jitter_s = np.clip(self._jitter.normal(0.0, s.sample_jitter_us * 1e-6, n), -0.25 * self._period_s, 0.25 * self._period_s)
-        t_dev_s = np.arange(k0, k1) * self._period_s + jitter_s
-        t_dev_us = np.rint(t_dev_s * 1e6).astype(np.int64)
-        t_true = t_dev_s / self._drift
-        truth = self.profile.truth(t_true)
-        raw = self.imu.sample(truth)
+        t_dev_us, truth, raw = self._sampled(k0, k1)
+        t_true = truth.t_s
         gyr_dps = units.gyro_counts_to_dps(raw.gyr_counts, s.gyro_fs_dps)
         if self._calibration is not None:
             self._calibration[2][0] += gyr_dps.sum(axis=0)

@@ -133,10 +133,13 @@ class MPU6050:
 
     def sample(self, truth: Truth) -> ImuSamples:
         """The registers for the truth at consecutive sample instants (one call per block, in order)."""
-        gyr_dps, acc_g, temp_c = self.analog(truth)
+        return self.registers(*self.analog(truth))
+
+    def registers(self, gyr_dps: np.ndarray, acc_g: np.ndarray, temperature_c: np.ndarray) -> ImuSamples:
+        """Analog readings to counts with the current offset registers."""
         # units' conversions round to the nearest count and saturate at the int16 limits, as the ADC does.
         return ImuSamples(
             acc_counts=units.accel_g_to_counts(acc_g - self.accel_offset_g, self.accel_fs_g),
             gyr_counts=units.gyro_dps_to_counts(gyr_dps - self.gyro_offset_dps, self.gyro_fs_dps),
-            temperature_c=temp_c,
+            temperature_c=temperature_c,
         )
