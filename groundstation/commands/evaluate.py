@@ -1,7 +1,7 @@
 """``groundstation evaluate``: inclination accuracy of the estimators on a file with truth.
 
-For now the file is in the dataset CSV layout (plain or .gz; ../shared/datasets/README.md); the sessions
-issue extends it to recordings. Output: a table, or with ``--json`` an object mapping each estimator
+The file is a recording with truth (a simulated flight, an imported dataset trial) or a dataset CSV
+(plain or .gz; ../shared/datasets/README.md); an imported trial scores exactly as its CSV. Output: a table, or with ``--json`` an object mapping each estimator
 name to ``{"incl_rmse_deg": ..., "incl_max_deg": ...}``.
 """
 
@@ -14,7 +14,7 @@ from groundstation.errors import UserError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", metavar="FILE", help="dataset CSV (.csv or .csv.gz) with truth columns")
+    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec) with truth, or a dataset CSV (.csv or .csv.gz)")
     parser.add_argument("--filters", default="ahf,hf,ecf,cf1,kf,ekf", help="comma-separated estimators (default: all)")
     parser.add_argument(
         "--set",
@@ -29,9 +29,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     # Imported here so that 'groundstation evaluate --help' stays fast.
-    from groundstation.datasets import DatasetError, read_csv
     from groundstation.estimation import create, parse_overrides
-    from groundstation.estimation.evaluation import evaluate_trial
+    from groundstation.session.data import load_session
 
     names = [n.strip() for n in args.filters.split(",") if n.strip()]
     try:
@@ -41,10 +40,9 @@ def run(args: argparse.Namespace) -> int:
         unused = set(overrides) - set(names)
         if unused:
             raise ValueError(f"--set names {', '.join(sorted(unused))}, which is not in --filters")
-        trial = read_csv(args.file)
-        results = evaluate_trial(trial, names, overrides)
-    except (DatasetError, ValueError) as error:
+    except ValueError as error:
         raise UserError(str(error)) from None
+    results = load_session(args.file, names, overrides).evaluate()
     if args.json:
         print(json.dumps(results, indent=2))
     else:

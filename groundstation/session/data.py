@@ -1,0 +1,154 @@
+"""A whole session as columns, whatever it came from: a recording of the link, an imported dataset
+CSV (a recording holding sample columns), or a dataset CSV read directly.
+
+Exports and evaluation read ``SessionData``; they never know the source.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from groundstation import mounting, quaternion
+from groundstation.datasets import ACC, GYR, TRUE_Q, DatasetError, Trial, read_csv
+from groundstation.errors import UserError
+from groundstation.estimation import create
+from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
+from groundstation.recording import Recording, open_recording
+from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
+from groundstation.session.replay import recorded_settings, replay
+from groundstation.units import STANDARD_GRAVITY_M_S2
+
+DATASET_SUFFIXES = (".csv", ".csv.gz", ".gz")
+
+
+@dataclasses.dataclass
+class SessionData:
+    metadata: dict
+    time_s: np.ndarray  # (N,) seconds from the first sample (device clock)
+    estimates: dict[str, np.ndarray]  # name -> (N, 4) quaternions w-first, body -> NED
+    diagnostics: dict[str, dict[str, np.ndarray]]  # name -> field -> (N,)
+    sensors: dict[str, np.ndarray]  # acc_*_g, gyr_*_dps (body axes), temperature_c, each (N,)
+    onboard: np.ndarray | None = None  # (N, 4) the aircraft's estimate at the same samples (NaN if none)
+    true_q: np.ndarray | None = None  # (N, 4) truth rotating body vectors into true_frame
+    true_frame: str = "ENU"
+    moving: np.ndarray | None = None  # (N,) bool: the samples an evaluation scores
+    pipeline: Pipeline | None = None  # for link statistics and events, when decoded from the link
+    damage: list[str] = dataclasses.field(default_factory=list)  # what the recording lost
+
+    def __len__(self) -> int:
+        return len(self.time_s)
+
+    def evaluate(self) -> dict[str, dict[str, float]]:
+        """Inclination RMSE / max of every estimator against the truth (BROAD's metric)."""
+        if self.true_q is None:
+            raise UserError("this session has no truth to evaluate against (true_qw ... true_qz)")
+        mask = self.moving if self.moving is not None else np.ones(len(self), dtype=bool)
+        try:
+            return {n: score(inclination_error_rad(q, self.true_q, self.true_frame), mask) for n, q in self.estimates.items()}
+        except ValueError as error:
+            raise UserError(str(error)) from None
+
+
+def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
+    """Decode, import or read ``path`` and run the estimators; UserError with a clear message on bad input."""
+    path = Path(path)
+    if path.name.lower().endswith(DATASET_SUFFIXES):
+        try:
+            trial = read_csv(path)
+        except DatasetError as error:
+            raise UserError(str(error)) from None
+        return from_trial(trial, filters or DEFAULT_FILTERS, forced, {"source": f"dataset CSV {path.name}"})
+    recording = open_recording(path)
+    if recording.samples:
+        trial = trial_from_samples(recording.samples, path)
+        settings = {**recorded_settings(recording)}
+        for name, values in (forced or {}).items():
+            settings[name] = {**settings.get(name, {}), **values}
+        data = from_trial(trial, filters or recording.metadata.get("filters", DEFAULT_FILTERS), settings, recording.metadata)
+        data.damage = recording.damage
+        return data
+    if recording.chunk_count == 0:
+        raise UserError(f"{path}: the recording holds no data")
+    return from_pipeline(recording, replay(recording, filters, forced, progress))
+
+
+def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
+    missing = [c for c in ["time_s", *GYR, *ACC] if c not in samples]
+    if missing:
+        raise UserError(f"{path}: the imported samples lack {', '.join(missing)}")
+
+    def optional(columns):
+        return np.column_stack([samples[c] for c in columns]) if all(c in samples for c in columns) else None
+
+    return Trial(
+        time_s=samples["time_s"],
+        gyr_rad_s=np.column_stack([samples[c] for c in GYR]),
+        acc_m_s2=np.column_stack([samples[c] for c in ACC]),
+        mag_uT=optional(["mag_x_uT", "mag_y_uT", "mag_z_uT"]),
+        true_q=optional(TRUE_Q),
+        moving=None if "moving" not in samples else samples["moving"] == 1.0,
+    )
+
+
+def from_trial(trial: Trial, filters, settings, metadata: dict) -> SessionData:
+    """A dataset trial: sensor axes taken as body axes, as ``evaluate_trial`` does (same numbers)."""
+    acc_g = trial.acc_m_s2 / STANDARD_GRAVITY_M_S2
+    dt_s = sample_periods_s(trial.time_s)
+    estimates, diagnostics = {}, {}
+    for name in dict.fromkeys(filters):
+        try:
+            estimator = create(name, (settings or {}).get(name))
+        except ValueError as error:
+            raise UserError(str(error)) from None
+        estimates[name], diagnostics[name] = estimator.run(trial.gyr_rad_s, acc_g, dt_s)
+    sensors = {f"acc_{a}_g": acc_g[:, i] for i, a in enumerate("xyz")}
+    sensors.update({f"gyr_{a}_dps": np.degrees(trial.gyr_rad_s[:, i]) for i, a in enumerate("xyz")})
+    return SessionData(
+        metadata=dict(metadata), time_s=trial.time_s - trial.time_s[0], estimates=estimates, diagnostics=diagnostics,
+        sensors=sensors, true_q=trial.true_q, true_frame="ENU", moving=trial.moving,
+    )
+
+
+def from_pipeline(recording: Recording, pipeline: Pipeline) -> SessionData:
+    imu = pipeline.imu.to_dict()
+    estimates = {n: np.column_stack([imu[f"{n}_q{c}"] for c in "wxyz"]) for n in pipeline.filters}
+    diagnostics = {n: {d: imu[f"{n}_{d}"] for d in est.Diagnostics._fields} for n, est in pipeline.estimators.items()}
+    sensors = {f"acc_{a}_g": imu[f"acc_{a}_g"] for a in "xyz"}
+    sensors.update({f"gyr_{a}_dps": np.degrees(imu[f"gyr_{a}_rad_s"]) for a in "xyz"})
+    sensors["temperature_c"] = imu["temperature_c"]
+    device_us = imu["device_time_us"]
+    onboard = None
+    if len(pipeline.onboard):
+        board = pipeline.onboard.to_dict()
+        onboard = aligned(device_us, board["device_time_us"], np.column_stack([board[f"q{c}"] for c in "wxyz"]))
+    data = SessionData(
+        metadata=dict(recording.metadata), time_s=imu["time_s"], estimates=estimates, diagnostics=diagnostics,
+        sensors=sensors, onboard=onboard, pipeline=pipeline, damage=list(recording.damage),
+    )
+    if "true_qw" in recording.samples:
+        attach_sensor_truth(data, recording.samples, device_us, pipeline)
+    return data
+
+
+def aligned(device_us: np.ndarray, other_us: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``values`` (rows at ``other_us``) at the rows of ``device_us``; NaN where no row has that time."""
+    out = np.full((len(device_us), values.shape[1]), np.nan)
+    index = np.searchsorted(other_us, device_us)
+    index = np.clip(index, 0, max(len(other_us) - 1, 0))
+    hit = other_us[index] == device_us if len(other_us) else np.zeros(len(device_us), dtype=bool)
+    out[hit] = values[index[hit]]
+    return out
+
+
+def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], device_us: np.ndarray, pipeline: Pipeline) -> None:
+    """Truth stored with a simulated recording (sensor axes -> ENU, at device times) onto the body axes."""
+    truth_us = np.rint(samples["time_s"] * 1e6)
+    q_sensor = aligned(device_us, truth_us, np.column_stack([samples[c] for c in TRUE_Q]))
+    q_body_from_sensor = quaternion.from_matrix(mounting.matrix(pipeline.sensor.mounting))
+    data.true_q = quaternion.multiply(q_sensor, quaternion.conjugate(q_body_from_sensor))
+    data.true_frame = "ENU"
+    if "moving" in samples:
+        data.moving = aligned(device_us, truth_us, samples["moving"][:, None])[:, 0] == 1.0
