@@ -20,6 +20,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "evaluate": ("groundstation.commands.evaluate", "score the attitude estimators against truth (inclination RMSE)"),
     "bridge-sim": ("groundstation.commands.bridge_sim", "the simulated aircraft on a pseudo-terminal, streaming in real time"),
     "simulate": ("groundstation.commands.simulate", "write a simulated session (raw bytes + truth CSV) as fast as possible"),
+    "ports": ("groundstation.commands.ports", "list the serial ports with description and VID:PID"),
+    "replay": ("groundstation.commands.replay", "replay a recording headless, with a live one-line summary"),
+    "import": ("groundstation.commands.import_csv", "turn a dataset CSV (raw IMU layout, plain or .gz) into a recording"),
+    "export": ("groundstation.commands.export", "export a recording or dataset CSV to CSV or Parquet"),
 }
 
 

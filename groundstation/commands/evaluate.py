@@ -10,38 +10,21 @@ from __future__ import annotations
 import argparse
 import json
 
-from groundstation.errors import UserError
+from groundstation.commands.options import add_estimator_options, estimator_options
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("file", metavar="FILE", help="a recording (.gsrec) with truth, or a dataset CSV (.csv or .csv.gz)")
-    parser.add_argument("--filters", default="ahf,hf,ecf,cf1,kf,ekf", help="comma-separated estimators (default: all)")
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="NAME.PARAM=VALUE",
-        help="override an estimator setting, e.g. hf.beta=0.033 (repeatable)",
-    )
+    from groundstation.estimation import ESTIMATORS
+
+    add_estimator_options(parser, ",".join(ESTIMATORS))
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 
 def run(args: argparse.Namespace) -> int:
-    # Imported here so that 'groundstation evaluate --help' stays fast.
-    from groundstation.estimation import create, parse_overrides
     from groundstation.session.data import load_session
 
-    names = [n.strip() for n in args.filters.split(",") if n.strip()]
-    try:
-        overrides = parse_overrides(args.overrides)
-        for name in set(names) | set(overrides):
-            create(name, overrides.get(name))  # validates names and parameters before the long run
-        unused = set(overrides) - set(names)
-        if unused:
-            raise ValueError(f"--set names {', '.join(sorted(unused))}, which is not in --filters")
-    except ValueError as error:
-        raise UserError(str(error)) from None
+    names, overrides = estimator_options(args)
     results = load_session(args.file, names, overrides).evaluate()
     if args.json:
         print(json.dumps(results, indent=2))

@@ -1,0 +1,33 @@
+"""Options shared by the commands that run estimators: ``--filters`` and the what-if ``--set``."""
+
+from __future__ import annotations
+
+import argparse
+
+from groundstation.errors import UserError
+
+
+def add_estimator_options(parser: argparse.ArgumentParser, default_filters: str | None) -> None:
+    help_filters = "comma-separated estimators: ahf, hf, ecf, cf1, kf, ekf"
+    help_filters += f" (default: {default_filters})" if default_filters else " (default: those recorded)"
+    parser.add_argument("--filters", default=default_filters, help=help_filters)
+    parser.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar="NAME.PARAM=VALUE",
+        help="re-run an estimator with another setting, e.g. hf.beta=0.033 (repeatable)",
+    )
+
+
+def estimator_options(args: argparse.Namespace) -> tuple[list[str] | None, dict[str, dict[str, float]]]:
+    """``(filters or None, overrides)``, checked before any long run; UserError says what is wrong."""
+    from groundstation.estimation import create, parse_overrides
+
+    names = None if args.filters is None else [n.strip() for n in args.filters.split(",") if n.strip()]
+    try:
+        overrides = parse_overrides(args.overrides)
+        for name in set(names or []) | set(overrides):
+            create(name, overrides.get(name))
+        if names is not None and set(overrides) - set(names):
+            raise ValueError(f"--set names {', '.join(sorted(set(overrides) - set(names)))}, which is not in --filters")
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    return names, overrides

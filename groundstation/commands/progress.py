@@ -1,0 +1,32 @@
+"""A one-line progress bar with ETA on stderr, for anything that takes more than a second."""
+
+from __future__ import annotations
+
+import sys
+import time
+
+
+class ProgressBar:
+    WIDTH = 30
+
+    def __init__(self, label: str, stream=sys.stderr, delay_s: float = 1.0):
+        self.label, self.stream = label, stream
+        self._start = time.monotonic()
+        self._delay_s = delay_s
+        self._shown = False
+
+    def __call__(self, done: float, total: float) -> None:
+        elapsed = time.monotonic() - self._start
+        if elapsed < self._delay_s or total <= 0:
+            return
+        fraction = min(done / total, 1.0)
+        eta = elapsed * (1 - fraction) / fraction if fraction > 0 else float("nan")
+        bar = "#" * int(fraction * self.WIDTH)
+        self.stream.write(f"\r{self.label} [{bar:<{self.WIDTH}}] {fraction:4.0%} ETA {eta:4.0f} s")
+        self.stream.flush()
+        self._shown = True
+
+    def done(self) -> None:
+        if self._shown:
+            self.stream.write("\n")
+            self.stream.flush()

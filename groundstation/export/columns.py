@@ -1,0 +1,53 @@
+"""The exported columns of a session, the same for CSV, Parquet and Excel.
+
+``time_s``; per estimator ``<name>_qw .. _qz`` (body to NED) and ``<name>_pitch_deg, _roll_deg,
+_yaw_deg`` (ZYX, docs/conventions.md); ``onboard_*`` for the aircraft's own estimate; the sensors
+in physical units; the truth quaternion when the session has one.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from groundstation import quaternion
+from groundstation.errors import UserError
+from groundstation.session.data import SessionData
+
+
+def select_rows(time_s: np.ndarray, t_from: float | None = None, t_to: float | None = None, rate_hz: float | None = None) -> np.ndarray:
+    """Indices of the rows in [t_from, t_to], decimated to about ``rate_hz`` (every k-th sample)."""
+    keep = np.ones(len(time_s), dtype=bool)
+    if t_from is not None:
+        keep &= time_s >= t_from
+    if t_to is not None:
+        keep &= time_s <= t_to
+    rows = np.flatnonzero(keep)
+    if len(rows) == 0:
+        raise UserError(f"no samples between {t_from} s and {t_to} s (the session lasts {time_s[-1] if len(time_s) else 0:.1f} s)")
+    if rate_hz is not None:
+        if rate_hz <= 0:
+            raise UserError("--rate must be positive")
+        period = np.median(np.diff(time_s)) if len(time_s) > 1 else 1.0
+        step = max(1, int(round(1.0 / (rate_hz * period))))
+        rows = rows[::step]
+    return rows
+
+
+def attitude_columns(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:
+    yaw, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
+    out = {f"{prefix}_q{c}": q[:, i] for i, c in enumerate("wxyz")}
+    out.update({f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll, f"{prefix}_yaw_deg": yaw})
+    return out
+
+
+def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    rows = np.arange(len(data)) if rows is None else rows
+    out = {"time_s": data.time_s[rows]}
+    for name, q in data.estimates.items():
+        out.update(attitude_columns(name, q[rows]))
+    if data.onboard is not None:
+        out.update(attitude_columns("onboard", data.onboard[rows]))
+    out.update({name: values[rows] for name, values in data.sensors.items()})
+    if data.true_q is not None:
+        out.update({f"true_q{c}": data.true_q[rows, i] for i, c in enumerate("wxyz")})
+    return out
