@@ -30,6 +30,8 @@ IMU_COLUMNS = (
 ONBOARD_COLUMNS = ("time_s", "device_time_us", "qw", "qx", "qy", "qz", "lambda", "flags")
 _UNIT_SUFFIX = {"1": "", "enum": "", "bits": "", "index": "", "%": "_pct", "deg/s": "_deg_s", "m/s": "_m_s"}
 _IMU_ID, _ATTITUDE_ID, _CONFIG_ID = (SPEC.frame(n).id for n in ("IMU_RAW", "ATTITUDE", "CONFIG"))
+_Q_SCALE = SPEC.frame("ATTITUDE").fields[1].scale
+_LAMBDA_SCALE = SPEC.frame("ATTITUDE").fields[5].scale
 _OTHER_TABLES = {SPEC.frame(n).id: n.lower() for n in ("STATUS", "MAG_RAW", "BARO", "GPS")}
 
 
@@ -94,17 +96,18 @@ class Pipeline:
         self.link.on_chunk(t_host_ns, self.decoder.stats, len(frames))
         before = len(self.imu)
         for frame in frames:
-            type_id = frame.type.id
-            if self._t0_us is None and frame.device_time_us is not None:
-                self._t0_us = frame.device_time_us
+            frame_type, _, raw, t_us = frame  # unpacking a Frame is C-speed; its properties are not
+            type_id = frame_type.id
+            if self._t0_us is None and t_us is not None:
+                self._t0_us = t_us
             if type_id == _IMU_ID:
                 self._imu(t_host_ns, frame)
             elif type_id == _ATTITUDE_ID:
-                self._attitude(frame)
+                self._attitude(raw, t_us)
             elif type_id == _CONFIG_ID:
                 self._config(t_host_ns, frame)
             elif type_id in _OTHER_TABLES:
-                row = [(frame.device_time_us - self._t0_us) / 1e6] + list(frame.scaled().values())
+                row = [(t_us - self._t0_us) / 1e6] + list(frame.scaled().values())
                 self.tables[_OTHER_TABLES[type_id]].append(row)
         return len(self.imu) - before
 
@@ -165,7 +168,7 @@ class Pipeline:
             self._imu_sample(t_host_ns, frame)
             return
         self._held.append((t_host_ns, frame))
-        if frame.device_time_us - self._held[0][1].device_time_us >= HOLD_FOR_CONFIG_US:
+        if frame[3] - self._held[0][1][3] >= HOLD_FOR_CONFIG_US:
             s = self.assumed_sensor
             self._warn(t_host_ns, f"no CONFIG frame: converting with assumed full scales ±{s.accel_fs_g} g, "
                        f"±{s.gyro_fs_dps} °/s, mounting {s.mounting}")
@@ -173,12 +176,11 @@ class Pipeline:
             self._release_held()
 
     def _imu_sample(self, t_host_ns: int, frame: Frame) -> None:
-        t_us, cx, cy, cz, rx, ry, rz, temperature = frame.raw
+        _, _, (_, cx, cy, cz, rx, ry, rz, temperature), t_us = frame  # t_us: the unwrapped device time
         (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = self._acc_m
         (g0, g1, g2), (g3, g4, g5), (g6, g7, g8) = self._gyr_m
         acc = (a0 * cx + a1 * cy + a2 * cz, a3 * cx + a4 * cy + a5 * cz, a6 * cx + a7 * cy + a8 * cz)
         gyr = (g0 * rx + g1 * ry + g2 * rz, g3 * rx + g4 * ry + g5 * rz, g6 * rx + g7 * ry + g8 * rz)
-        t_us = frame.device_time_us
         dt_s = 1.0 / self.sensor.rate_hz if self._last_us is None else (t_us - self._last_us) * 1e-6
         self._last_us = t_us
         row = [(t_us - self._t0_us) * 1e-6, t_us, (t_host_ns - self._t0_host_ns) * 1e-9, *acc, *gyr, temperature * 0.01]
@@ -190,10 +192,10 @@ class Pipeline:
         self.imu.append(row)
         self.link.on_sample(t_host_ns, t_us)
 
-    def _attitude(self, frame: Frame) -> None:
-        t_us, qw, qx, qy, qz, lam, flags = frame.raw
-        s = SPEC.frame("ATTITUDE").fields[1].scale
-        self.onboard.append(((frame.device_time_us - self._t0_us) * 1e-6, frame.device_time_us, qw * s, qx * s, qy * s, qz * s, lam * 0.001, flags))
+    def _attitude(self, raw: tuple, t_us: int) -> None:
+        _, qw, qx, qy, qz, lam, flags = raw
+        s = _Q_SCALE
+        self.onboard.append(((t_us - self._t0_us) * 1e-6, t_us, qw * s, qx * s, qy * s, qz * s, lam * _LAMBDA_SCALE, flags))
 
     def _warn(self, t_host_ns: int, message: str) -> None:
         self.events.append({"t_host_ns": t_host_ns, "kind": "warning", "message": message})
