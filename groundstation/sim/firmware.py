@@ -130,6 +130,11 @@ class Firmware:
         return k * self._period_s / self._drift
 
     @property
+    def last_seq(self) -> int:
+        """Sequence number of the last frame sent (255 before the first)."""
+        return (self._seq - 1) & 0xFF
+
+    @property
     def next_sample(self) -> int:
         """Index of the next sample the board will take."""
         return self._k

@@ -96,5 +96,5 @@ class PtyBridge:
             if readable:
                 try:
                     stream.receive(os.read(self._master, 4096))
-                except (BlockingIOError, OSError):
-                    pass  # no reader attached: nothing to read
+                except OSError:
+                    pass  # EAGAIN, or EIO while no reader is attached: nothing to read

@@ -23,7 +23,7 @@ def assert_decoder_agrees_with_link(decoder: fp.StreamDecoder, frames: list, str
     report, stats = stream.link.report, decoder.stats
     assert stats.frames == report.delivered_intact
     # Frames the link lost after the last frame that arrived are invisible to any decoder.
-    trailing = (stream.firmware._seq - 1 - frames[-1].seq) & 0xFF
+    trailing = (stream.firmware.last_seq - frames[-1].seq) & 0xFF
     assert stats.frames_lost == report.lost + report.truncated + report.corrupted - trailing
     assert stats.bytes_in == report.bytes_delivered
     assert stats.bytes_skipped + decoder.pending_bytes == report.damaged_bytes

@@ -101,3 +101,24 @@ def test_timestamps_carry_the_configured_jitter_and_one_frame_sequence():
     assert abs(gaps.mean() - 10_000) < 1.0
     assert abs(gaps.std() - 50.0 * np.sqrt(2)) < 5.0  # difference of two independent jitters
     assert [f.seq for f in frames[:300]] == [k & 0xFF for k in range(300)]
+
+
+def test_extra_sensors_report_the_truth_at_their_rates():
+    fw = FirmwareSettings(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5, mode="raw")
+    scenario = Scenario("flight", 40.0, seed=8, firmware=fw)
+    stream = SimStream(scenario)
+    frames = decode(b"".join(c.data for c in stream.advance(40.0)))
+    counts = {name: sum(f.name == name for f in frames) for name in ("IMU_RAW", "MAG_RAW", "BARO", "GPS")}
+    for name, every in (("MAG_RAW", 2), ("BARO", 4), ("GPS", 20)):
+        assert abs(counts[name] * every - counts["IMU_RAW"]) < every, counts
+    mag = np.array([[f.scaled()[k] for k in ("mag_x", "mag_y", "mag_z")] for f in frames if f.name == "MAG_RAW"])
+    field_ut = np.linalg.norm(scenario.extra.mag_field_ned_ut)
+    assert abs(np.median(np.linalg.norm(mag, axis=1)) - field_ut) < 10.0  # the hard-iron offset is a few µT
+    gps = [f.scaled() for f in frames if f.name == "GPS"]
+    baro = [f for f in frames if f.name == "BARO"]
+    truth = stream.profile.truth(np.array([f.device_time_us for f in baro]) * 1e-6)
+    altitude_m = -truth.pos_ned_m[:, 2]
+    pressure = np.array([f.scaled()["pressure"] for f in baro])
+    # ISA near the ground: about -12 Pa per metre.
+    assert abs(np.polyfit(altitude_m, pressure, 1)[0] + 12.0) < 0.5
+    assert np.std([g["alt"] - scenario.extra.origin_alt_m for g in gps]) > 1.0  # it climbs
