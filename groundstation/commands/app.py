@@ -1,4 +1,8 @@
-"""``groundstation app``: the desktop window (live monitoring, replay, export)."""
+"""``groundstation app``: the desktop window (live monitoring, replay, export).
+
+Without a port or a recording it opens on the built-in simulated bridge, as ``--demo`` does, so the
+first command of the README shows a live flight on a machine with no hardware.
+"""
 
 from __future__ import annotations
 
@@ -8,8 +12,16 @@ from groundstation.errors import UserError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--demo", action="store_true", help="stream from the built-in simulated radio bridge")
+    parser.add_argument("recording", nargs="?", metavar="RECORDING", help="open this recording (.gsrec) for replay")
+    parser.add_argument("--demo", action="store_true",
+                        help="stream from the built-in simulated radio bridge (also the default without --port or RECORDING)")
+    parser.add_argument("--port", metavar="PORT", help="connect to this serial port (COM3, /dev/ttyUSB0, a pyserial URL)")
+    parser.add_argument("--baud", type=int, default=115200, metavar="N", help="baud rate (default: 115200)")
 
 
 def run(args: argparse.Namespace) -> int:
-    raise UserError("the desktop app is not built yet; 'groundstation --help' lists what exists")
+    if args.demo and (args.port or args.recording):
+        raise UserError("--demo opens the simulated bridge; leave out --port and RECORDING, or --demo")
+    from groundstation.ui.app import run as run_app  # Qt is imported only here
+
+    return run_app(args.port, args.baud, args.recording)

@@ -1,0 +1,40 @@
+"""Starting the Qt application with the main window on a source."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+from groundstation.errors import UserError
+
+ORGANIZATION = APPLICATION = "groundstation"
+
+
+def check_display() -> None:
+    """Qt aborts the process when it finds no display; say so first, plainly."""
+    if sys.platform.startswith("linux") and not any(os.environ.get(v) for v in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")):
+        raise UserError("no display found (DISPLAY and WAYLAND_DISPLAY are unset); run it in a desktop session, "
+                        "or under Xvfb (xvfb-run groundstation app)")
+
+
+def run(port: str | None, baud: int, recording: str | None) -> int:
+    """Open the window on ``recording``, else ``port``, else the simulated bridge."""
+    check_display()
+    import pyqtgraph as pg
+    from PySide6 import QtCore, QtWidgets
+
+    from groundstation.ui.main_window import MainWindow
+
+    app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
+    app.setOrganizationName(ORGANIZATION)
+    app.setApplicationName(APPLICATION)
+    pg.setConfigOptions(antialias=False)  # antialiased lines cost several times more per frame
+    window = MainWindow(QtCore.QSettings())
+    window.show()
+    if recording:
+        window.open_recording(recording)
+    elif port:
+        window.connect_serial(port, baud)
+    else:
+        window.start_demo("no port given: streaming from the simulated bridge")
+    return app.exec()

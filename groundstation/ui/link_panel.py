@@ -1,0 +1,95 @@
+"""Link health: frames/s, loss, CRC failures, bytes/s, time since the last frame, latency.
+
+The headline turns amber when the link degrades (losses, CRC failures, a late frame) and red when
+frames stop or the port is gone. Figures of the last complete second, from the pipeline's
+``LinkStats`` and the decoder's counters.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+from PySide6 import QtWidgets
+
+from groundstation.session.live import LiveSession
+
+LATE_FRAME_S = 0.25  # 25 samples missing at 100 Hz
+NO_DATA_S = 1.0
+DEGRADED_LOSS_PCT = 2.0
+STYLES = {
+    "ok": "background:#2e7d32; color:white; padding:4px; font-weight:bold",
+    "degraded": "background:#f0a000; color:black; padding:4px; font-weight:bold",
+    "down": "background:#c62828; color:white; padding:4px; font-weight:bold",
+    "idle": "background:#9e9e9e; color:white; padding:4px; font-weight:bold",
+}
+FIELDS = ("frames/s", "loss", "CRC failures", "bytes/s", "since last frame", "latency p50 / p99")
+
+
+def link_figures(session: LiveSession, now_ns: int) -> dict[str, float]:
+    link = session.pipeline.link
+    stats = session.pipeline.decoder.stats
+    with session.lock:
+        last = link.per_second.tail(1)
+        clock = link.clock()
+    frames, lost, crc = (last[0][1], last[0][4], last[0][3]) if len(last) else (math.nan, math.nan, math.nan)
+    return {
+        "frames_per_s": frames,
+        "bytes_per_s": last[0][2] if len(last) else math.nan,
+        "loss_pct": 100.0 * lost / (frames + lost) if frames + lost > 0 else math.nan,
+        "crc_per_s": crc,
+        "crc_total": stats.crc_errors,
+        "lost_total": stats.frames_lost,
+        "since_last_frame_s": link.since_last_frame_s(now_ns),
+        **clock,
+    }
+
+
+def link_state(session: LiveSession, figures: dict[str, float]) -> tuple[str, str]:
+    """(style key, headline)."""
+    if not session.connected:
+        return "down", "PORT GONE — reconnecting…"
+    if not session.running:
+        return "idle", "STOPPED"
+    since = figures["since_last_frame_s"]
+    if since >= NO_DATA_S:
+        return "down", "NO DATA" if math.isinf(since) else f"NO DATA for {since:.0f} s"
+    if since >= LATE_FRAME_S or figures["loss_pct"] >= DEGRADED_LOSS_PCT or figures["crc_per_s"] > 0:
+        return "degraded", "DEGRADED"
+    return "ok", "LINK OK"
+
+
+def _number(value: float, fmt: str) -> str:
+    return "—" if value is None or math.isnan(value) or math.isinf(value) else format(value, fmt)
+
+
+class LinkPanel(QtWidgets.QGroupBox):
+    def __init__(self, parent=None):
+        super().__init__("Link", parent)
+        self.headline = QtWidgets.QLabel("no source")
+        self.headline.setStyleSheet(STYLES["idle"])
+        self.values = {name: QtWidgets.QLabel("—") for name in FIELDS}
+        layout = QtWidgets.QFormLayout(self)
+        layout.addRow(self.headline)
+        for name, label in self.values.items():
+            layout.addRow(name, label)
+
+    def refresh(self, session: LiveSession | None) -> None:
+        if session is None:
+            self.headline.setText("no source")
+            self.headline.setStyleSheet(STYLES["idle"])
+            return
+        # A replay's link times are the recorded ones: measure "since" against the newest chunk.
+        replay = hasattr(session.source, "recording")
+        now_ns = (session.pipeline.link.last_chunk_ns or 0) if replay else time.monotonic_ns()
+        f = link_figures(session, now_ns)
+        state, text = link_state(session, f)
+        self.headline.setText(text)
+        self.headline.setStyleSheet(STYLES[state])
+        self.values["frames/s"].setText(_number(f["frames_per_s"], ".0f"))
+        self.values["loss"].setText(f"{_number(f['loss_pct'], '.1f')} %  ({f['lost_total']} in all)")
+        self.values["CRC failures"].setText(f"{_number(f['crc_per_s'], '.0f')}/s  ({f['crc_total']} in all)")
+        self.values["bytes/s"].setText(_number(f["bytes_per_s"], ".0f"))
+        self.values["since last frame"].setText(f"{_number(f['since_last_frame_s'] * 1e3, '.0f')} ms")
+        self.values["latency p50 / p99"].setText(
+            f"{_number(f['latency_p50_ms'], '.1f')} / {_number(f['latency_p99_ms'], '.1f')} ms")

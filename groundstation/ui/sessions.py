@@ -1,0 +1,63 @@
+"""Starting the app's sessions: the simulated bridge, a serial port, a recording.
+
+Each returns a started ``LiveSession`` or raises ``UserError`` with a message fit for the window
+(a busy port, a missing permission with the Linux ``dialout`` hint, an unreadable recording).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from groundstation.errors import UserError
+from groundstation.recording import open_recording
+from groundstation.session.live import LiveSession
+from groundstation.session.replay import pipeline_for
+from groundstation.sim.port import SimulatedPort
+from groundstation.sim.stream import Scenario, SimStream
+from groundstation.sources import ReplaySource, SerialSource
+
+# The comparison estimators run on every live session (a few µs per sample each at 100 Hz), so
+# showing one is a legend click, not a restart.
+LIVE_FILTERS = ("ahf", "hf", "ecf", "cf1", "kf")
+DEMO_DESCRIPTION = "simulated bridge (demo)"
+DEMO_PROFILE_S = 3600.0  # after an hour of flight the simulated craft holds still
+PORT_TIMEOUT_S = 0.05  # the reader's longest wait: it notices a stop request this quickly
+DIALOUT_HINT = ("on Linux, add yourself to the 'dialout' group (sudo usermod -aG dialout $USER), "
+                "then log out and back in")
+
+
+def start_demo(recordings_dir: Path | None = None, seed: int = 1) -> LiveSession:
+    port = SimulatedPort(SimStream(Scenario("flight", DEMO_PROFILE_S, seed=seed)), timeout=PORT_TIMEOUT_S)
+    source = SerialSource(port)
+    source.description = DEMO_DESCRIPTION
+    return LiveSession(source, LIVE_FILTERS, recordings_dir=recordings_dir, metadata={"demo": True}).start()
+
+
+def start_serial(port: str, baud: int, recordings_dir: Path | None = None) -> LiveSession:
+    try:
+        source = SerialSource(port, baud)
+    except UserError as error:
+        raise UserError(explain_port_error(str(error))) from None
+    return LiveSession(source, LIVE_FILTERS, recordings_dir=recordings_dir).start()
+
+
+def explain_port_error(message: str) -> str:
+    lowered = message.lower()
+    if "permission denied" in lowered or "errno 13" in lowered:
+        return f"{message}. Permission denied: " + (DIALOUT_HINT if sys.platform.startswith("linux") else
+                                                     "another user or program may own the port")
+    if "busy" in lowered or "errno 16" in lowered or "access is denied" in lowered:
+        return f"{message}. The port is in use by another program (a serial terminal, another ground station?)"
+    return message
+
+
+def start_replay(path, speed: float | None = 1.0) -> LiveSession:
+    """A recording played at ``speed`` times real time, through the recorded estimators and settings."""
+    recording = open_recording(path)  # RecordingError (a UserError) when nothing can be read
+    if recording.chunk_count == 0:
+        raise UserError(f"{Path(path).name}: no link data to replay (an imported dataset? export it instead)")
+    source = ReplaySource(recording, speed)
+    session = LiveSession(source, record=False)
+    session.pipeline = pipeline_for(recording)
+    return session.start()

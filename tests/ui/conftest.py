@@ -1,0 +1,15 @@
+"""A real main window per test, with its settings and recordings in the test's temporary folder."""
+
+import pytest
+from PySide6 import QtCore
+
+from groundstation.ui.main_window import MainWindow
+
+
+@pytest.fixture
+def window(qtbot, tmp_path):
+    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
+    main = MainWindow(settings, recordings_dir=tmp_path / "recordings")
+    qtbot.addWidget(main)  # closed (and its session stopped) after the test
+    main.show()
+    return main

@@ -1,0 +1,42 @@
+"""``groundstation app`` as the README's first command runs it: a real process on the simulated bridge."""
+
+import os
+import subprocess
+import sys
+import time
+
+import pytest
+
+
+def app_process(tmp_path, *args, **env):
+    environment = {**os.environ, "GROUNDSTATION_RECORDINGS": str(tmp_path / "recordings"),
+                   "XDG_CONFIG_HOME": str(tmp_path / "config"), **env}  # QSettings' folder on Linux
+    environment = {k: v for k, v in environment.items() if v is not None}
+    return subprocess.Popen([sys.executable, "-m", "groundstation", "app", *args], env=environment,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def test_app_demo_streams_and_records(tmp_path):
+    process = app_process(tmp_path, "--demo")
+    try:
+        time.sleep(5.0)
+        assert process.poll() is None, process.communicate()
+        recordings = list((tmp_path / "recordings").glob("*.gsrec"))
+        assert len(recordings) == 1 and recordings[0].stat().st_size > 10_000  # 3+ s of a 100 Hz link
+    finally:
+        process.terminate()
+        _, stderr = process.communicate(timeout=10)
+    assert "Traceback" not in stderr
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="only X11/Wayland need a display variable")
+def test_without_a_display_it_says_so(tmp_path):
+    process = app_process(tmp_path, DISPLAY=None, WAYLAND_DISPLAY=None, QT_QPA_PLATFORM=None)
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 2 and "no display" in stderr and "Traceback" not in stderr
+
+
+def test_demo_with_a_port_is_a_usage_error(tmp_path):
+    process = app_process(tmp_path, "--demo", "--port", "COM3")
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 2 and "--demo" in stderr
