@@ -1,8 +1,10 @@
 """``groundstation simulate``: a simulated session as fast as possible, with its truth.
 
-Writes ``--out FILE``: the raw bytes the bridge would have sent for the same options (until the
-recording format exists), and beside it ``STEM.truth.csv.gz``: the truth and the sensor values in
-the dataset CSV layout, which ``groundstation evaluate`` scores (see groundstation/sim/truth_file.py).
+``--out FILE.gsrec`` writes a recording (docs/recording-format.md): the bytes the bridge would have
+sent for the same options, stamped with their simulated arrival times, and the truth as sample
+columns in the dataset CSV layout, so that replay, export and ``evaluate`` work on it directly.
+Any other name writes the raw bytes alone and, beside them, ``STEM.truth.csv.gz`` with the truth
+and the sensor values in the dataset CSV layout (see groundstation/sim/truth_file.py).
 """
 
 from __future__ import annotations
@@ -21,9 +23,20 @@ BLOCK_S = 60.0  # simulated seconds per step: large enough for numpy, small enou
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_scenario_arguments(parser)
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="simulated seconds (default: per scenario, below)")
-    parser.add_argument("--out", required=True, metavar="FILE", help="raw byte file to write")
+    parser.add_argument("--out", required=True, metavar="FILE", help="FILE.gsrec: a recording with its truth; other names: raw bytes")
     parser.add_argument("--truth", default=None, metavar="FILE",
-                        help="truth CSV (.csv or .csv.gz) to write (default: STEM.truth.csv.gz beside --out)")
+                        help="for raw byte output: truth CSV (.csv or .csv.gz) to write (default: STEM.truth.csv.gz beside --out)")
+
+
+def chunks(stream, started: float):
+    """Every chunk of the scenario, block by block, with a progress line after the first second."""
+    t = 0.0
+    while t < stream.end_s:
+        t = min(t + BLOCK_S, stream.end_s)
+        yield from stream.advance(t)
+        if time.monotonic() - started > 1.0:
+            print(f"\rsimulate: {100.0 * t / stream.end_s:5.1f} %", end="", file=sys.stderr, flush=True)
+    yield from stream.flush()
 
 
 def truth_path_for(out: Path) -> Path:
@@ -31,6 +44,7 @@ def truth_path_for(out: Path) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
+    from groundstation.recording import EXTENSION, RecordingWriter
     from groundstation.sim.stream import SimStream
     from groundstation.sim.truth_file import TruthTable
 
@@ -41,16 +55,22 @@ def run(args: argparse.Namespace) -> int:
     table = TruthTable(fw.accel_fs_g, fw.gyro_fs_dps, fw.mounting)
     stream = SimStream(scenario, on_samples=table)
     started = time.monotonic()
+    as_recording = out.suffix == EXTENSION
+    if as_recording and out.exists():
+        raise UserError(f"{out} exists; choose another name")
     try:
-        with open(out, "wb") as sink:
-            t = 0.0
-            while t < stream.end_s:
-                t = min(t + BLOCK_S, stream.end_s)
-                sink.write(b"".join(chunk.data for chunk in stream.advance(t)))
-                if time.monotonic() - started > 1.0:
-                    print(f"\rsimulate: {100.0 * t / stream.end_s:5.1f} %", end="", file=sys.stderr, flush=True)
-            sink.write(b"".join(chunk.data for chunk in stream.flush()))
-        table.write(truth_path)
+        if as_recording:
+            with RecordingWriter(out, {"source": f"simulated '{scenario.profile}' flight, seed {scenario.seed}",
+                                       "scenario": vars(args).get("scenario"), "seed": scenario.seed}) as writer:
+                for chunk in chunks(stream, started):
+                    writer.write_chunk(round(chunk.t_s * 1e9), chunk.data)
+                writer.write_samples({name: column.to_numpy(dtype=float) for name, column in table.frame().items()})
+            truth_path = out
+        else:
+            with open(out, "wb") as sink:
+                for chunk in chunks(stream, started):
+                    sink.write(chunk.data)
+            table.write(truth_path)
     except OSError as error:
         raise UserError(f"cannot write {error.filename}: {error.strerror}") from None
     elapsed = time.monotonic() - started

@@ -46,8 +46,11 @@ class SessionData:
         if self.true_q is None:
             raise UserError("this session has no truth to evaluate against (true_qw ... true_qz)")
         mask = self.moving if self.moving is not None else np.ones(len(self), dtype=bool)
+        estimates = dict(self.estimates)
+        if self.onboard is not None and np.isfinite(self.onboard).any():
+            estimates["onboard"] = self.onboard  # the aircraft's own AHF, scored the same way
         try:
-            return {n: score(inclination_error_rad(q, self.true_q, self.true_frame), mask) for n, q in self.estimates.items()}
+            return {n: score(inclination_error_rad(q, self.true_q, self.true_frame), mask) for n, q in estimates.items()}
         except ValueError as error:
             raise UserError(str(error)) from None
 
@@ -62,7 +65,7 @@ def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
             raise UserError(str(error)) from None
         return from_trial(trial, filters or DEFAULT_FILTERS, forced, {"source": f"dataset CSV {path.name}"})
     recording = open_recording(path)
-    if recording.samples:
+    if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
         settings = {**recorded_settings(recording)}
         for name, values in (forced or {}).items():
@@ -113,6 +116,8 @@ def from_trial(trial: Trial, filters, settings, metadata: dict) -> SessionData:
 
 
 def from_pipeline(recording: Recording, pipeline: Pipeline) -> SessionData:
+    if not len(pipeline.imu) and len(pipeline.onboard):
+        return onboard_only(recording, pipeline)
     imu = pipeline.imu.to_dict()
     estimates = {n: np.column_stack([imu[f"{n}_q{c}"] for c in "wxyz"]) for n in pipeline.filters}
     diagnostics = {n: {d: imu[f"{n}_{d}"] for d in est.Diagnostics._fields} for n, est in pipeline.estimators.items()}
@@ -130,6 +135,18 @@ def from_pipeline(recording: Recording, pipeline: Pipeline) -> SessionData:
     )
     if "true_qw" in recording.samples:
         attach_sensor_truth(data, recording.samples, device_us, pipeline)
+    return data
+
+
+def onboard_only(recording: Recording, pipeline: Pipeline) -> SessionData:
+    """A flight in "estimated" mode: the aircraft sent its attitude but no raw IMU samples."""
+    board = pipeline.onboard.to_dict()
+    data = SessionData(
+        metadata=dict(recording.metadata), time_s=board["time_s"], estimates={}, diagnostics={}, sensors={},
+        onboard=np.column_stack([board[f"q{c}"] for c in "wxyz"]), pipeline=pipeline, damage=list(recording.damage),
+    )
+    if "true_qw" in recording.samples:
+        attach_sensor_truth(data, recording.samples, board["device_time_us"], pipeline)
     return data
 
 
