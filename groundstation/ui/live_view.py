@@ -45,7 +45,9 @@ def diagnostic_plots() -> tuple[Plot, ...]:
 
 
 class LiveView(QtWidgets.QWidget):
-    def __init__(self, parent=None):
+    """``hidden``: legend labels switched off at first (the comparison estimators, say)."""
+
+    def __init__(self, hidden: frozenset[str] = frozenset(), parent=None):
         super().__init__(parent)
         self.session: LiveSession | None = None
         self.series: dict[str, Series] = {}
@@ -66,7 +68,8 @@ class LiveView(QtWidgets.QWidget):
         controls.addStretch(1)
         self.tabs = QtWidgets.QTabWidget()
         self.tabs.currentChanged.connect(lambda _: self.redraw())
-        self.attitude: StackedPlots | None = None
+        self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
+        self._filters = ("ahf",)
         self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
         self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
         layout = QtWidgets.QVBoxLayout(self)
@@ -87,20 +90,25 @@ class LiveView(QtWidgets.QWidget):
     def paused(self) -> bool:
         return self.pause_button.isChecked()
 
-    def set_session(self, session: LiveSession | None, hidden: frozenset[str] = frozenset()) -> None:
-        """Show ``session`` (its estimators decide the attitude curves); ``hidden``: legend labels off."""
+    def set_session(self, session: LiveSession | None) -> None:
+        """Show ``session``; its estimators decide the attitude curves."""
         self.session = session
         self._pipeline = None
         self.series = {}
-        filters = session.pipeline.filters if session is not None else ("ahf",)
-        if self.attitude is not None:
-            hidden = frozenset(LABELS.values()) - self.attitude.visible_labels()  # keep the user's choice
+        filters = session.pipeline.filters if session is not None else self._filters
+        if filters != self._filters:
+            current = self.tabs.currentIndex()
             self.tabs.removeTab(0)
             self.attitude.deleteLater()
-        self.attitude = self._add_tab(StackedPlots(attitude_plots(filters), hidden), "Attitude", 0)
-        self.tabs.setCurrentIndex(0)
-        for plots in (self.sensors, self.diagnostics):
+            self.attitude = self._add_tab(StackedPlots(attitude_plots(filters), self.hidden_labels()), "Attitude", 0)
+            self.tabs.setCurrentIndex(current)
+            self._filters = filters
+        for plots in (self.attitude, self.sensors, self.diagnostics):
             plots.clear_data()
+
+    def hidden_labels(self) -> frozenset[str]:
+        """The attitude legend entries switched off (kept for labels a new session lacks)."""
+        return frozenset(LABELS.values()) - self.attitude.visible_labels()
 
     def _paused_changed(self, paused: bool) -> None:
         self.pause_button.setText("Resume view" if paused else "Pause view")

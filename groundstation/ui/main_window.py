@@ -17,6 +17,7 @@ from groundstation.ui import sessions
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
+from groundstation.ui.replay_bar import ReplayBar
 
 REDRAW_HZ = 30
 DEFAULT_HIDDEN = frozenset({"HF", "ECF", "CF1", "KF", "EKF"})  # comparison estimators start switched off
@@ -29,6 +30,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings = settings
         self.recordings_dir = recordings_dir
         self.session: LiveSession | None = None
+        self.seeking: sessions.ReplaySeek | None = None
         self.bar = ConnectionBar()
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
         self.bar.connectRequested.connect(self.connect_serial)
@@ -40,7 +42,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.banner.setStyleSheet("background:#fde0e0; color:#8b0000; padding:6px; border:1px solid #e0a0a0")
         self.banner.setTextInteractionFlags(QtCore.Qt.TextSelectableByMouse)
         self.banner.hide()
-        self.live_view = LiveView()
+        self.replay_bar = ReplayBar()
+        self.replay_bar.seekRequested.connect(self.seek)
+        self.replay_bar.hide()
+        self.live_view = LiveView(self._stored_hidden_curves())
         self.link_panel = LinkPanel()
         side = QtWidgets.QWidget()
         side_layout = QtWidgets.QVBoxLayout(side)
@@ -56,6 +61,7 @@ class MainWindow(QtWidgets.QMainWindow):
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
         layout.addWidget(self.banner)
+        layout.addWidget(self.replay_bar)
         layout.addWidget(self.splitter, 1)
         self.setCentralWidget(central)
         self.source_label = QtWidgets.QLabel("no source")
@@ -87,6 +93,19 @@ class MainWindow(QtWidgets.QMainWindow):
             self.settings.setValue("recording_folder", str(Path(path).parent))
             self.open_recording(path)
 
+    def seek(self, t_s: float) -> None:
+        """Restart the replay at ``t_s``, keeping its pause and speed; the new session is adopted
+        by ``tick`` once the estimates before ``t_s`` are computed."""
+        if self.seeking is not None:
+            self.seeking.cancel()
+            source = self.seeking.session.source
+        elif self.session is not None:
+            source = self.session.source
+            self._stop_session()
+        else:
+            return
+        self.seeking = sessions.ReplaySeek(source.recording, self.replay_bar.speed, source.paused, t_s)
+
     def _start(self, start, note: str = "") -> None:
         """Stop the current session, then start another; a failure leaves none and says why."""
         self.disconnect()
@@ -96,19 +115,29 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_error(str(error))
             return
         self.show_error(None)
-        self.session = session
-        self.live_view.set_session(session, self._hidden_curves())
-        self.bar.set_connected(True)
+        self._adopt(session)
         self.source_label.setText(f"{session.source.description}{'  —  ' + note if note else ''}")
 
+    def _adopt(self, session: LiveSession) -> None:
+        self.session = session
+        self.live_view.set_session(session)
+        self.replay_bar.set_session(session)
+        self.bar.set_connected(True)
+
     def disconnect(self) -> None:
-        if self.session is None:
-            return
-        self.settings.setValue("hidden_curves", sorted(self._hidden_now()))
+        if self.seeking is not None:
+            self.seeking.cancel()
+            self.seeking = None
+        if self.session is not None:
+            description = self.session.source.description
+            self._stop_session()
+            self.source_label.setText(f"stopped: {description}")
+        self.replay_bar.set_session(None)
+        self.bar.set_connected(False)
+
+    def _stop_session(self) -> None:
         session, self.session = self.session, None
         session.stop()
-        self.bar.set_connected(False)
-        self.source_label.setText(f"stopped: {session.source.description}")
 
     def show_error(self, message: str | None) -> None:
         self.banner.setText(message or "")
@@ -117,11 +146,18 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- the redraw timer -----------------------------------------------------------------------
 
     def tick(self) -> None:
+        if self.seeking is not None:
+            if not self.seeking.done:
+                self.replay_bar.position.setText(f"seeking… {100 * self.seeking.fraction:.0f} %")
+                return
+            self._adopt(self.seeking.session.start())
+            self.seeking = None
         session = self.session
         self.link_panel.refresh(session)
         if session is None:
             return
         self.live_view.refresh()
+        self.replay_bar.refresh()
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")
         self.recording_label.setText(self._recording_text(session))
@@ -139,13 +175,11 @@ class MainWindow(QtWidgets.QMainWindow):
 
     # -- settings -------------------------------------------------------------------------------
 
-    def _hidden_curves(self) -> frozenset[str]:
+    def _stored_hidden_curves(self) -> frozenset[str]:
         stored = self.settings.value("hidden_curves")
-        return DEFAULT_HIDDEN if stored is None else frozenset([stored] if isinstance(stored, str) else stored)
-
-    def _hidden_now(self) -> set[str]:
-        attitude = self.live_view.attitude
-        return set() if attitude is None else {s.label for s, c in attitude.curves} - attitude.visible_labels()
+        if stored is None:
+            return DEFAULT_HIDDEN
+        return frozenset([stored] if isinstance(stored, str) else stored)  # QSettings gives one item as a str
 
     def _restore_layout(self) -> None:
         for key, restore in (("geometry", self.restoreGeometry), ("splitter", self.splitter.restoreState)):
@@ -155,6 +189,8 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def closeEvent(self, event) -> None:
         self.disconnect()
+        # "" for none: QSettings reads an empty list back as None, which means "the defaults"
+        self.settings.setValue("hidden_curves", sorted(self.live_view.hidden_labels()) or "")
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("splitter", self.splitter.saveState())
         self.settings.sync()

@@ -7,10 +7,11 @@ Each returns a started ``LiveSession`` or raises ``UserError`` with a message fi
 from __future__ import annotations
 
 import sys
+import threading
 from pathlib import Path
 
 from groundstation.errors import UserError
-from groundstation.recording import open_recording
+from groundstation.recording import Recording, open_recording
 from groundstation.session.live import LiveSession
 from groundstation.session.replay import pipeline_for
 from groundstation.sim.port import SimulatedPort
@@ -57,7 +58,45 @@ def start_replay(path, speed: float | None = 1.0) -> LiveSession:
     recording = open_recording(path)  # RecordingError (a UserError) when nothing can be read
     if recording.chunk_count == 0:
         raise UserError(f"{Path(path).name}: no link data to replay (an imported dataset? export it instead)")
-    source = ReplaySource(recording, speed)
-    session = LiveSession(source, record=False)
+    return replay_session(recording, speed).start()
+
+
+def replay_session(recording: Recording, speed: float | None) -> LiveSession:
+    session = LiveSession(ReplaySource(recording, speed), record=False)
     session.pipeline = pipeline_for(recording)
-    return session.start()
+    return session
+
+
+class ReplaySeek:
+    """A replay restarted at ``t_s``, prepared in a worker thread: every chunk before ``t_s`` goes
+    through a fresh pipeline first (filters have memory, so the estimates there depend on all that
+    came before; a long recording takes seconds). ``session`` is ready, not started, once ``done``."""
+
+    def __init__(self, recording: Recording, speed: float | None, paused: bool, t_s: float):
+        self.session = replay_session(recording, speed)
+        self.session.source.pause(paused)
+        self.end = self.session.source.seek(t_s)
+        self.fed = 0
+        self._cancel = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="groundstation-seek", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        recording = self.session.source.recording
+        for index in range(self.end):
+            if self._cancel.is_set():
+                return
+            self.session.feed_chunk(*recording.chunk(index))
+            self.fed = index + 1
+
+    @property
+    def done(self) -> bool:
+        return self.fed == self.end
+
+    @property
+    def fraction(self) -> float:
+        return self.fed / self.end if self.end else 1.0
+
+    def cancel(self) -> None:
+        self._cancel.set()
+        self._thread.join()

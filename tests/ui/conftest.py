@@ -13,3 +13,13 @@ def window(qtbot, tmp_path):
     qtbot.addWidget(main)  # closed (and its session stopped) after the test
     main.show()
     return main
+
+
+@pytest.fixture(scope="session")
+def recording(tmp_path_factory):
+    """30 s of simulated flight, as the app would have recorded it from the bridge."""
+    from groundstation.cli import main
+
+    path = tmp_path_factory.mktemp("recordings") / "flight.gsrec"
+    assert main(["simulate", "--scenario", "flight", "--duration", "30", "--seed", "3", "--out", str(path)]) == 0
+    return path

@@ -1,0 +1,99 @@
+"""The replay transport: play/pause, step, speed, a seek slider and the position.
+
+It drives the ``ReplaySource`` directly for pause, speed and step; a seek restarts the replay (see
+``ReplaySeek``), which the window does, so the bar only emits ``seekRequested``.
+"""
+
+from __future__ import annotations
+
+from PySide6 import QtCore, QtWidgets
+
+from groundstation.session.live import LiveSession
+from groundstation.sources import ReplaySource
+
+SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+SLIDER_STEPS_PER_S = 10
+
+
+class ReplayBar(QtWidgets.QWidget):
+    seekRequested = QtCore.Signal(float)  # seconds from the start of the recording
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.session: LiveSession | None = None
+        self.play_button = QtWidgets.QPushButton("Pause")
+        self.play_button.clicked.connect(self._toggle)
+        self.step_button = QtWidgets.QPushButton("Step")
+        self.step_button.setToolTip("One more IMU sample (while paused)")
+        self.step_button.clicked.connect(self.step)
+        self.speed_box = QtWidgets.QComboBox()
+        for speed in SPEEDS:
+            self.speed_box.addItem(f"{speed:g}×", speed)
+        self.speed_box.setCurrentIndex(SPEEDS.index(1.0))
+        self.speed_box.currentIndexChanged.connect(self._speed_changed)
+        self.slider = QtWidgets.QSlider(QtCore.Qt.Horizontal)
+        self.slider.sliderReleased.connect(lambda: self.seekRequested.emit(self.slider.value() / SLIDER_STEPS_PER_S))
+        self.slider.actionTriggered.connect(self._clicked_track)
+        self.position = QtWidgets.QLabel("0.0 / 0.0 s")
+        self.position.setMinimumWidth(140)
+        layout = QtWidgets.QHBoxLayout(self)
+        layout.setContentsMargins(4, 0, 4, 0)
+        layout.addWidget(QtWidgets.QLabel("Replay"))
+        for widget in (self.play_button, self.step_button, QtWidgets.QLabel("Speed"), self.speed_box):
+            layout.addWidget(widget)
+        layout.addWidget(self.slider, 1)
+        layout.addWidget(self.position)
+
+    @property
+    def source(self) -> ReplaySource:
+        return self.session.source
+
+    def set_session(self, session: LiveSession | None) -> None:
+        """Show the bar for a replay (hidden otherwise); a restarted replay keeps the pause and speed."""
+        replay = session is not None and isinstance(session.source, ReplaySource)
+        self.session = session if replay else None
+        self.setVisible(replay)
+        if replay:
+            self.slider.setRange(0, int(self.source.duration_s * SLIDER_STEPS_PER_S))
+            self.source.speed = self.speed
+            self._show_paused(self.source.paused)
+
+    @property
+    def speed(self) -> float:
+        return self.speed_box.currentData()
+
+    def _toggle(self) -> None:
+        self.source.pause(not self.source.paused)
+        self._show_paused(self.source.paused)
+
+    def _show_paused(self, paused: bool) -> None:
+        self.play_button.setText("Play" if paused else "Pause")
+        self.step_button.setEnabled(paused)
+
+    def _speed_changed(self) -> None:
+        if self.session is not None:
+            self.source.speed = self.speed
+
+    def _clicked_track(self, action: int) -> None:
+        """A click on the track or a key press seeks at once (a drag seeks on release)."""
+        if action != QtWidgets.QAbstractSlider.SliderMove:
+            QtCore.QTimer.singleShot(0, lambda: self.seekRequested.emit(self.slider.value() / SLIDER_STEPS_PER_S))
+
+    def step(self) -> None:
+        """Feed chunks until one more IMU sample is in (the reader is idle while paused)."""
+        imu = self.session.pipeline.imu
+        before = len(imu)
+        while len(imu) == before:
+            chunk = self.source.step()
+            if chunk is None:
+                return
+            self.session.feed_chunk(*chunk)
+
+    def refresh(self) -> None:
+        if self.session is None:
+            return
+        position, duration = self.source.position_s, self.source.duration_s
+        if not self.slider.isSliderDown():
+            self.slider.setValue(int(position * SLIDER_STEPS_PER_S))
+        ended = "  (end)" if not self.session.running else ""
+        self.position.setText(f"{position:.1f} / {duration:.1f} s{ended}")
