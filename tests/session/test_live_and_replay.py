@@ -70,3 +70,31 @@ def test_live_link_statistics_match_the_decoder(bridge, tmp_path):
     assert 190 <= per_second[1, 1] <= 210
     clock = p.link.clock()
     assert clock["latency_p99_ms"] < 100
+
+
+def test_an_unplugged_port_is_reopened_when_it_comes_back(tmp_path):
+    link = tmp_path / "radio"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "hover", "--dropout-every", "2", "--dropout-s", "1",
+         "--link", str(link)],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )
+    try:
+        process.stdout.readline()
+        session = LiveSession(SerialSource(str(link)), recordings_dir=tmp_path)
+        with session:
+            deadline = time.monotonic() + 15
+            while time.monotonic() < deadline and not any(e["kind"] == "reconnected" for e in session.pipeline.events):
+                time.sleep(0.1)
+            rows_at_reconnect = len(session.pipeline.imu)
+            time.sleep(1.0)
+            rows_after = len(session.pipeline.imu)
+    finally:
+        process.terminate()
+        process.wait(timeout=10)
+    kinds = [e["kind"] for e in session.pipeline.events]
+    assert "disconnected" in kinds and "reconnected" in kinds
+    assert rows_after > rows_at_reconnect + 50  # data flows again after the port came back
+    assert session.error is None
+    recorded = [e["kind"] for _, e in open_recording(session.recording_path).events]
+    assert "disconnected" in recorded and "reconnected" in recorded  # the recording says what happened
