@@ -45,8 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     top, rest = parser.parse_known_args(argv)
     if top.command is None:
-        parser.print_help()
-        return 0
+        top.command = "app"  # plain 'groundstation' is the app (on the simulated bridge unless told otherwise)
     module_name, help_text = COMMANDS[top.command]
     module = importlib.import_module(module_name)
     command_parser = argparse.ArgumentParser(prog=f"groundstation {top.command}", description=help_text)
