@@ -1,5 +1,5 @@
 """The connection bar: serial port (refreshed as devices come and go), baud, Connect/Disconnect,
-the simulated bridge and "Open recording…". It only asks; the window starts and stops sessions.
+the simulated bridge, "Open recording…" and "Export…". It only asks; the window acts.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ class ConnectionBar(QtWidgets.QWidget):
     disconnectRequested = QtCore.Signal()
     demoRequested = QtCore.Signal()
     recordingRequested = QtCore.Signal()
+    exportRequested = QtCore.Signal()
 
     def __init__(self, parent=None):
         super().__init__(parent)
@@ -32,6 +33,9 @@ class ConnectionBar(QtWidgets.QWidget):
         self.disconnect_button = QtWidgets.QPushButton("Disconnect")
         self.demo_button = QtWidgets.QPushButton("Simulated bridge (demo)")
         self.open_button = QtWidgets.QPushButton("Open recording…")
+        self.export_button = QtWidgets.QPushButton("Export…")
+        self.export_button.setToolTip("The current or last session's recording to CSV or Parquet")
+        self.export_button.clicked.connect(self.exportRequested)
         self.connect_button.clicked.connect(self._connect)
         self.disconnect_button.clicked.connect(self.disconnectRequested)
         self.demo_button.clicked.connect(self.demoRequested)
@@ -44,6 +48,7 @@ class ConnectionBar(QtWidgets.QWidget):
         layout.addSpacing(16)
         layout.addWidget(self.demo_button)
         layout.addWidget(self.open_button)
+        layout.addWidget(self.export_button)
         layout.addStretch(1)
         self.set_connected(False)
         self.refresh_ports()

@@ -15,6 +15,7 @@ from groundstation.errors import UserError
 from groundstation.session.live import LiveSession
 from groundstation.ui import sessions
 from groundstation.ui.connection_bar import ConnectionBar
+from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
 from groundstation.ui.replay_bar import ReplayBar
@@ -31,12 +32,14 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recordings_dir = recordings_dir
         self.session: LiveSession | None = None
         self.seeking: sessions.ReplaySeek | None = None
+        self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
         self.bar = ConnectionBar()
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
         self.bar.connectRequested.connect(self.connect_serial)
         self.bar.disconnectRequested.connect(self.disconnect)
         self.bar.demoRequested.connect(self.start_demo)
         self.bar.recordingRequested.connect(self.choose_recording)
+        self.bar.exportRequested.connect(self.export)
         self.banner = QtWidgets.QLabel()
         self.banner.setWordWrap(True)
         self.banner.setStyleSheet("background:#fde0e0; color:#8b0000; padding:6px; border:1px solid #e0a0a0")
@@ -118,6 +121,26 @@ class MainWindow(QtWidgets.QMainWindow):
         self._adopt(session)
         self.source_label.setText(f"{session.source.description}{'  —  ' + note if note else ''}")
 
+    def export(self) -> ExportDialog | None:
+        """The export dialog on the current session's recording (or the last one's)."""
+        file = self._session_file(self.session) if self.session is not None else self.last_file
+        if file is None:
+            self.show_error("Nothing to export yet: connect, start the simulated bridge or open a recording first.")
+            return None
+        dialog = ExportDialog(*file, parent=self)
+        dialog.setModal(False)  # the live view goes on while it exports
+        dialog.show()
+        return dialog
+
+    @staticmethod
+    def _session_file(session: LiveSession) -> tuple[Path, float] | None:
+        if hasattr(session.source, "recording"):
+            return session.source.recording.path, session.source.duration_s
+        if session.recording_path is None:
+            return None
+        last = session.pipeline.imu.tail(1)
+        return session.recording_path, float(last[0][0]) if len(last) else 0.0
+
     def _adopt(self, session: LiveSession) -> None:
         self.session = session
         self.live_view.set_session(session)
@@ -138,6 +161,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _stop_session(self) -> None:
         session, self.session = self.session, None
         session.stop()
+        self.last_file = self._session_file(session)
 
     def show_error(self, message: str | None) -> None:
         self.banner.setText(message or "")

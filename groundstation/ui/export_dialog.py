@@ -1,0 +1,112 @@
+"""The export dialog: format, file, time range, rate; progress and Cancel while ``ExportJob`` runs."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6 import QtCore, QtWidgets
+
+from groundstation.errors import UserError
+from groundstation.ui.export_job import FORMATS, ExportJob
+
+POLL_MS = 100
+
+
+class ExportDialog(QtWidgets.QDialog):
+    def __init__(self, source: Path, duration_s: float, parent=None):
+        super().__init__(parent)
+        self.setWindowTitle(f"Export {source.name}")
+        self.source = Path(source)
+        self.job: ExportJob | None = None
+        self.format_box = QtWidgets.QComboBox()
+        for suffix, (label, _) in FORMATS.items():
+            self.format_box.addItem(f"{label} ({suffix})", suffix)
+        self.format_box.currentIndexChanged.connect(self._format_changed)
+        self.path_edit = QtWidgets.QLineEdit(str(self.source.with_suffix(self.format_box.currentData())))
+        browse = QtWidgets.QPushButton("Browse…")
+        browse.clicked.connect(self._browse)
+        self.t_from = self._seconds(0.0, duration_s)
+        self.t_to = self._seconds(duration_s, duration_s)
+        self.rate = QtWidgets.QSpinBox(minimum=0, maximum=1000, suffix=" Hz", specialValueText="every sample")
+        self.overwrite = QtWidgets.QCheckBox("replace an existing file")
+        self.progress = QtWidgets.QProgressBar(maximum=1000)
+        self.status = QtWidgets.QLabel()
+        self.status.setWordWrap(True)
+        self.export_button = QtWidgets.QPushButton("Export")
+        self.export_button.setDefault(True)
+        self.export_button.clicked.connect(self.start)
+        self.cancel_button = QtWidgets.QPushButton("Close")
+        self.cancel_button.clicked.connect(self._cancel_or_close)
+        file_row = QtWidgets.QHBoxLayout()
+        file_row.addWidget(self.path_edit, 1)
+        file_row.addWidget(browse)
+        range_row = QtWidgets.QHBoxLayout()
+        for widget in (self.t_from, QtWidgets.QLabel("to"), self.t_to):
+            range_row.addWidget(widget)
+        form = QtWidgets.QFormLayout()
+        form.addRow("Format", self.format_box)
+        form.addRow("File", file_row)
+        form.addRow("Time range", range_row)
+        form.addRow("Rate", self.rate)
+        form.addRow("", self.overwrite)
+        buttons = QtWidgets.QHBoxLayout()
+        buttons.addStretch(1)
+        buttons.addWidget(self.export_button)
+        buttons.addWidget(self.cancel_button)
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.addLayout(form)
+        layout.addWidget(self.progress)
+        layout.addWidget(self.status)
+        layout.addLayout(buttons)
+        self.timer = QtCore.QTimer(self, interval=POLL_MS, timeout=self._poll)
+
+    @staticmethod
+    def _seconds(value: float, maximum: float) -> QtWidgets.QDoubleSpinBox:
+        box = QtWidgets.QDoubleSpinBox(decimals=1, maximum=max(maximum, 0.1), suffix=" s")
+        box.setValue(value)
+        return box
+
+    def _format_changed(self) -> None:
+        self.path_edit.setText(str(Path(self.path_edit.text()).with_suffix(self.format_box.currentData())))
+
+    def _browse(self) -> None:
+        suffix = self.format_box.currentData()
+        path, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Export to", self.path_edit.text(), f"*{suffix}")
+        if path:
+            self.path_edit.setText(path if path.endswith(suffix) else path + suffix)
+
+    def start(self) -> None:
+        whole = self.t_from.value() == 0.0 and self.t_to.value() == self.t_to.maximum()
+        try:
+            self.job = ExportJob(self.source, Path(self.path_edit.text()), None if whole else self.t_from.value(),
+                                 None if whole else self.t_to.value(), self.rate.value() or None,
+                                 self.overwrite.isChecked()).start()
+        except UserError as error:
+            self.status.setText(str(error))
+            return
+        self.export_button.setEnabled(False)
+        self.cancel_button.setText("Cancel")
+        self.status.setText("exporting…")
+        self.timer.start()
+
+    def _poll(self) -> None:
+        job = self.job
+        self.progress.setValue(int(1000 * job.fraction))
+        if not job.done:
+            return
+        self.timer.stop()
+        self.status.setText(job.error or job.message)
+        self.export_button.setEnabled(True)
+        self.cancel_button.setText("Close")
+
+    def _cancel_or_close(self) -> None:
+        if self.job is not None and not self.job.done:
+            self.job.cancel()
+            self.status.setText("cancelling…")
+        else:
+            self.accept()
+
+    def closeEvent(self, event) -> None:
+        if self.job is not None:
+            self.job.cancel()  # the thread ends at its next progress report; its file is never half-written
+        super().closeEvent(event)

@@ -1,0 +1,34 @@
+"""The export dialog writes the file it names, from a worker thread, with progress; Cancel leaves nothing."""
+
+import pandas as pd
+
+from groundstation.ui.export_dialog import ExportDialog
+
+
+def test_export_dialog_writes_the_selected_range(window, qtbot, recording, tmp_path):
+    window.open_recording(recording)
+    dialog = window.export()
+    qtbot.addWidget(dialog)
+    out = tmp_path / "flight.csv"
+    dialog.path_edit.setText(str(out))
+    dialog.t_from.setValue(5.0)
+    dialog.t_to.setValue(10.0)
+    dialog.export_button.click()
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=20000)
+    assert dialog.status.text().startswith(f"wrote {out}") and dialog.progress.value() == 1000
+    table = pd.read_csv(out)
+    assert table["time_s"].min() >= 5.0 and table["time_s"].max() <= 10.0 and len(table) > 400
+    assert {"ahf_pitch_deg", "ahf_roll_deg", "onboard_pitch_deg"} <= set(table.columns)
+
+
+def test_cancel_leaves_no_file(qtbot, recording, tmp_path):
+    dialog = ExportDialog(recording, 30.0)
+    qtbot.addWidget(dialog)
+    out = tmp_path / "cancelled.parquet"
+    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".parquet"))
+    dialog.path_edit.setText(str(out))
+    dialog.export_button.click()
+    dialog.cancel_button.click()  # before the decoder's first progress report has passed
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=20000)
+    assert dialog.status.text() == "cancelled; nothing was written"
+    assert not out.exists() and not list(tmp_path.glob(".cancelled*"))
