@@ -14,6 +14,7 @@ from PySide6 import QtCore, QtWidgets
 from groundstation.errors import UserError
 from groundstation.session.live import LiveSession
 from groundstation.ui import sessions
+from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
@@ -50,9 +51,11 @@ class MainWindow(QtWidgets.QMainWindow):
         self.replay_bar.hide()
         self.live_view = LiveView(self._stored_hidden_curves())
         self.link_panel = LinkPanel()
+        self.attitude_panel = AttitudePanel()
         side = QtWidgets.QWidget()
         side_layout = QtWidgets.QVBoxLayout(side)
         side_layout.setContentsMargins(0, 0, 0, 0)
+        side_layout.addWidget(self.attitude_panel)
         side_layout.addWidget(self.link_panel)
         side_layout.addStretch(1)
         self.splitter = QtWidgets.QSplitter()
@@ -181,6 +184,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if session is None:
             return
         self.live_view.refresh()
+        imu = self.live_view.series["imu"]
+        self.attitude_panel.show_attitude(*(imu.last(f"ahf_{angle}_deg") for angle in ("yaw", "pitch", "roll")))
         self.replay_bar.refresh()
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")

@@ -1,0 +1,87 @@
+"""An artificial horizon with numeric pitch, roll and yaw (degrees, docs/conventions.md).
+
+The horizon turns by -roll (right wing down tilts the horizon the other way, as seen from the
+cockpit) and moves down by pitch (nose up shows more sky), ``VISIBLE_PITCH_DEG`` from the centre to
+the edge, with a pitch ladder every 10°.
+"""
+
+from __future__ import annotations
+
+import math
+
+from PySide6 import QtCore, QtGui, QtWidgets
+
+SKY, GROUND, LINE = QtGui.QColor("#3a7bd5"), QtGui.QColor("#8b5a2b"), QtGui.QColor("white")
+VISIBLE_PITCH_DEG = 30.0  # from the centre to the top edge
+
+
+class AttitudeIndicator(QtWidgets.QWidget):
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.pitch_deg = self.roll_deg = self.yaw_deg = math.nan
+        self.setMinimumSize(180, 180)
+        self.setSizePolicy(QtWidgets.QSizePolicy.Expanding, QtWidgets.QSizePolicy.Fixed)
+
+    def sizeHint(self) -> QtCore.QSize:
+        return QtCore.QSize(240, 240)
+
+    def set_attitude(self, yaw_deg: float, pitch_deg: float, roll_deg: float) -> None:
+        if (yaw_deg, pitch_deg, roll_deg) != (self.yaw_deg, self.pitch_deg, self.roll_deg):
+            self.yaw_deg, self.pitch_deg, self.roll_deg = yaw_deg, pitch_deg, roll_deg
+            self.update()
+
+    def paintEvent(self, event) -> None:
+        side = min(self.width(), self.height())
+        painter = QtGui.QPainter(self)
+        painter.setRenderHint(QtGui.QPainter.Antialiasing)
+        painter.translate(self.width() / 2, self.height() / 2)
+        clip = QtGui.QPainterPath()
+        clip.addEllipse(QtCore.QPointF(0, 0), side / 2 - 2, side / 2 - 2)
+        painter.setClipPath(clip)
+        known = not math.isnan(self.pitch_deg)
+        px_per_deg = side / 2 / VISIBLE_PITCH_DEG
+        painter.save()
+        if known:
+            painter.rotate(-self.roll_deg)
+            painter.translate(0, self.pitch_deg * px_per_deg)
+        big = side * 3
+        painter.fillRect(QtCore.QRectF(-big, -big, 2 * big, big), SKY if known else QtGui.QColor("#999"))
+        painter.fillRect(QtCore.QRectF(-big, 0, 2 * big, big), GROUND if known else QtGui.QColor("#777"))
+        painter.setPen(QtGui.QPen(LINE, 2))
+        painter.drawLine(QtCore.QPointF(-big, 0), QtCore.QPointF(big, 0))
+        painter.setPen(QtGui.QPen(LINE, 1))
+        for deg in range(-80, 90, 10):
+            if deg:
+                y, half = -deg * px_per_deg, side * (0.12 if deg % 20 == 0 else 0.06)
+                painter.drawLine(QtCore.QPointF(-half, y), QtCore.QPointF(half, y))
+                if deg % 20 == 0:
+                    painter.drawText(QtCore.QPointF(half + 4, y + 4), f"{abs(deg)}")
+        painter.restore()
+        painter.setPen(QtGui.QPen(QtGui.QColor("#ffd400"), 3))  # the fixed aircraft symbol
+        wing = side * 0.22
+        painter.drawLine(QtCore.QPointF(-wing, 0), QtCore.QPointF(-wing / 3, 0))
+        painter.drawLine(QtCore.QPointF(wing / 3, 0), QtCore.QPointF(wing, 0))
+        painter.drawEllipse(QtCore.QPointF(0, 0), 3, 3)
+        painter.end()
+
+
+class AttitudePanel(QtWidgets.QGroupBox):
+    """The indicator and the readouts of one estimate (AHF by default)."""
+
+    def __init__(self, parent=None):
+        super().__init__("Attitude (AHF)", parent)
+        self.indicator = AttitudeIndicator()
+        self.readouts = {name: QtWidgets.QLabel("—") for name in ("pitch", "roll", "yaw")}
+        numbers = QtWidgets.QFormLayout()
+        for name, label in self.readouts.items():
+            label.setAlignment(QtCore.Qt.AlignRight)
+            label.setStyleSheet("font-family: monospace; font-size: 14px")
+            numbers.addRow(name, label)
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.addWidget(self.indicator)
+        layout.addLayout(numbers)
+
+    def show_attitude(self, yaw_deg: float, pitch_deg: float, roll_deg: float) -> None:
+        self.indicator.set_attitude(yaw_deg, pitch_deg, roll_deg)
+        for name, value in (("pitch", pitch_deg), ("roll", roll_deg), ("yaw", yaw_deg)):
+            self.readouts[name].setText("—" if math.isnan(value) else f"{value:+7.1f}°")
