@@ -1,4 +1,4 @@
-"""``groundstation export``: a session (recording or dataset CSV) to CSV or Parquet."""
+"""``groundstation export``: a session (recording or dataset CSV) to CSV, Parquet or an Excel workbook."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ FORMATS = (".csv", ".parquet", ".xlsx")
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("file", metavar="FILE", help="a recording (.gsrec) or a dataset CSV")
-    parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv or OUT.parquet (by extension)")
+    parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv, OUT.parquet or OUT.xlsx (by extension)")
     add_estimator_options(parser, None)
     parser.add_argument("--from", dest="t_from", type=float, metavar="S", help="first second to export")
     parser.add_argument("--to", dest="t_to", type=float, metavar="S", help="last second to export")
@@ -30,17 +30,29 @@ def run(args: argparse.Namespace) -> int:
     suffix = args.out.suffix.lower()
     if suffix not in FORMATS:
         raise UserError(f"--out must end in {', '.join(FORMATS)}, not {args.out.name}")
-    if suffix == ".xlsx":
-        raise UserError("Excel export is not built yet; export to .csv or .parquet")
     if args.out.exists() and not args.overwrite:
         raise UserError(f"{args.out} exists; choose another name or pass --overwrite")
     filters, overrides = estimator_options(args)
     bar = ProgressBar("decoding")
     data = load_session(args.file, filters, overrides, bar)
     bar.done()
-    columns = export_columns(data, select_rows(data.time_s, args.t_from, args.t_to, args.rate))
-    (write_csv if suffix == ".csv" else write_parquet)(columns, args.out, args.overwrite)
+    if suffix == ".xlsx":
+        written = write_excel(args, data, overrides)
+    else:
+        columns = export_columns(data, select_rows(data.time_s, args.t_from, args.t_to, args.rate))
+        (write_csv if suffix == ".csv" else write_parquet)(columns, args.out, args.overwrite)
+        written = f"{len(columns['time_s'])} rows, {len(columns)} columns"
     for finding in data.damage:
         print(f"warning: {finding}")
-    print(f"wrote {args.out}: {len(columns['time_s'])} rows, {len(columns)} columns")
+    print(f"wrote {args.out}: {written}")
     return 0
+
+
+def write_excel(args: argparse.Namespace, data, overrides: dict) -> str:
+    from groundstation.export.excel import write_workbook
+
+    bar = ProgressBar("writing")
+    sheets = write_workbook(data, args.out, t_from=args.t_from, t_to=args.t_to, rate_hz=args.rate, forced=overrides,
+                            overwrite=args.overwrite, progress=bar)
+    bar.done()
+    return f"sheets {', '.join(sheets)}"

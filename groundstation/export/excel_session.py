@@ -1,0 +1,157 @@
+"""The workbook's ``Session`` sheet: what was flown, with what, how the link did, and how well the
+estimators did when the session has truth. A short sheet of labelled rows with a few small tables.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from datetime import datetime
+
+import numpy as np
+from openpyxl.cell import WriteOnlyCell
+from openpyxl.styles import Font
+
+from groundstation import mounting
+from groundstation.errors import UserError
+from groundstation.estimation import create
+from groundstation.export.excel_columns import DATE_TIME, start_time
+from groundstation.session.data import SessionData
+
+WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70}
+LINK_COUNTS = (
+    ("frames", "frames received (count)"), ("frames_lost", "frames lost (count)"),
+    ("crc_errors", "CRC failures (count)"), ("bytes_in", "bytes received (B)"),
+    ("bytes_skipped", "bytes skipped (B)"), ("duplicates", "duplicate frames (count)"),
+)  # fmt: skip
+SHOWN_METADATA = {"source", "port", "start_utc", "app_version", "protocol_version", "estimator_settings", "filters"}
+
+
+class Heading(str):
+    """A section title or a table's column header: written bold."""
+
+
+def session_rows(data: SessionData, rows: np.ndarray, forced: dict | None = None) -> list[list]:
+    """The sheet as rows of values; ``forced``: the caller's setting overrides (``--set``)."""
+    out = [[Heading("Session")], *facts(data, rows), []]
+    if data.pipeline is not None:
+        stats = data.pipeline.decoder.stats
+        out += [[Heading("Link")], *([label, getattr(stats, name)] for name, label in LINK_COUNTS), []]
+    out += settings_table(data, forced or {})
+    out += events_table(data)
+    if data.true_q is not None:
+        out += error_table(data)
+    return out
+
+
+def facts(data: SessionData, rows: np.ndarray) -> list[list]:
+    meta, time_s = data.metadata, data.time_s
+    out = [[key, meta[key]] for key in ("source", "port") if key in meta]
+    start = start_time(meta)
+    if start is not None:
+        out.append(["recording started (UTC)", start])
+    out += [
+        ["duration (s)", float(time_s[-1] - time_s[0]) if len(time_s) else 0.0],
+        ["samples (count)", len(data)],
+        ["exported rows (count)", len(rows)],
+        ["exported from (s)", float(time_s[rows[0]])],
+        ["exported to (s)", float(time_s[rows[-1]])],
+    ]
+    if len(rows) > 1:
+        out.append(["exported rate (Hz)", float(1.0 / np.median(np.diff(time_s[rows])))])
+    out += [[label, meta[key]] for key, label in (("app_version", "ground station version"),
+                                                  ("protocol_version", "protocol version (ground station)")) if key in meta]
+    out += firmware(data)
+    out += [[key, value] for key, value in meta.items()
+            if key not in SHOWN_METADATA and isinstance(value, (str, int, float)) and not isinstance(value, bool)]
+    return out
+
+
+def firmware(data: SessionData) -> list[list]:
+    """What the aircraft's last CONFIG frame said; a dataset has no aircraft."""
+    if data.pipeline is None:
+        return [["mounting", "dataset: the IMU axes are taken as the body axes"]]
+    config = data.pipeline.config
+    if config is None:
+        return [["firmware", "no CONFIG frame received"]]
+    return [
+        ["firmware version", f"{config['fw_major']}.{config['fw_minor']}.{config['fw_patch']}"],
+        ["protocol version (firmware)", config["protocol_version"]],
+        ["accelerometer full scale (±g)", config["accel_fs_g"]],
+        ["gyroscope full scale (±°/s)", config["gyro_fs_dps"]],
+        ["output rate (Hz)", config["rate_hz"]],
+        ["mounting (index)", config["mounting"]],
+        ["mounting", mounting.describe(config["mounting"]) if 0 <= config["mounting"] < 24 else "invalid index"],
+    ]
+
+
+def settings_table(data: SessionData, forced: dict) -> list[list]:
+    """Every estimator's settings at the start (recorded, then forced) and, from the link, at the end."""
+    recorded = data.metadata.get("estimator_settings", {})
+    at_end = data.pipeline.settings() if data.pipeline is not None else {}
+    out = [[Heading("Estimator settings"), Heading("at start"), *([Heading("at end")] if at_end else [])]]
+    for name in data.estimates:
+        start = {k: float(v) for k, v in recorded.get(name, {}).items()} | forced.get(name, {})
+        for param, value in dataclasses.asdict(create(name, start).settings).items():
+            out.append([f"{name}.{param}", cell_number(value), *([cell_number(at_end[name][param])] if name in at_end else [])])
+    if forced:
+        out.append([f"forced for this export (--set): {forced}"])
+    return out + [[]]
+
+
+def events_table(data: SessionData) -> list[list]:
+    """Settings changes, CONFIG frames and warnings in stream order, then what the recording lost."""
+    events = data.pipeline.events if data.pipeline is not None else []
+    if not events and not data.damage:
+        return []
+    out = [[Heading("Events"), Heading("time (s from first byte)"), Heading("kind"), Heading("what")]]
+    # Pipeline events carry the host clock; its origin (the first chunk) has no public accessor yet.
+    t0_ns = getattr(data.pipeline, "_t0_host_ns", None) or 0
+    for event in events:
+        out.append(["", (event["t_host_ns"] - t0_ns) / 1e9, event["kind"], describe_event(event)])
+    out += [["", None, "damage", finding] for finding in data.damage]
+    return out + [[]]
+
+
+def describe_event(event: dict) -> str:
+    if event["kind"] == "settings":
+        return ", ".join(f"{event['name']}.{k} = {v:g}" for k, v in event["settings"].items())
+    if event["kind"] == "config":
+        return (f"CONFIG: firmware {event['fw_major']}.{event['fw_minor']}.{event['fw_patch']}, ±{event['accel_fs_g']} g, "
+                f"±{event['gyro_fs_dps']} °/s, {event['rate_hz']} Hz, mounting {event['mounting']}")
+    return str(event.get("message", event))
+
+
+def error_table(data: SessionData) -> list[list]:
+    """BROAD's inclination error of each estimator against the truth, over the whole session."""
+    title = "Error against truth (whole session" + (", moving samples)" if data.moving is not None else ")")
+    try:
+        scores = data.evaluate()
+    except UserError as error:
+        return [[Heading(title)], [str(error)], []]
+    out = [[Heading(title), Heading("inclination RMSE (°)"), Heading("inclination max (°)")]]
+    return out + [[name, s["incl_rmse_deg"], s["incl_max_deg"]] for name, s in scores.items()] + [[]]
+
+
+def cell_number(value: float):
+    """Excel has no infinity or NaN: those are written as text."""
+    return value if math.isfinite(value) else str(value)
+
+
+def write_session_sheet(workbook, rows: list[list]) -> None:
+    sheet = workbook.create_sheet("Session")
+    for letter, width in WIDTHS.items():
+        sheet.column_dimensions[letter].width = width
+    bold = Font(bold=True)
+    for row in rows:
+        cells = []
+        for value in row:
+            cell = WriteOnlyCell(sheet, value=value)
+            if isinstance(value, Heading):
+                cell.font = bold
+            elif isinstance(value, datetime):
+                cell.number_format = DATE_TIME
+            elif isinstance(value, float):
+                cell.number_format = "0.000"
+            cells.append(cell)
+        sheet.append(cells)

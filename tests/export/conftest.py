@@ -1,0 +1,63 @@
+"""Small sessions for the export tests: a simulated link recording (every sheet has rows) and a
+slice of a BROAD trial (a session with truth)."""
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from groundstation.recording import RecordingWriter
+from groundstation.session.data import load_session
+from groundstation.sim.firmware import FirmwareSettings
+from groundstation.sim.link import LinkSettings
+from groundstation.sim.stream import Scenario, SimStream
+
+DATASETS = Path(__file__).resolve().parents[2].parent / "shared" / "datasets"
+TRIAL = DATASETS / "broad" / "02_undisturbed_slow_rotation_B.csv.gz"
+START_UTC = "2024-05-01T12:00:00.000Z"
+CHANGE_AT_S = 10.0  # hf.beta changes to 0.3 here
+
+
+def simulated_recording(path: Path, duration_s: float = 20.0) -> Path:
+    """A lossy, noisy hover with magnetometer, barometer and GPS, and one settings change."""
+    scenario = Scenario(
+        profile="hover", duration_s=duration_s, seed=4,
+        firmware=FirmwareSettings(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5),
+        link=LinkSettings(loss=0.01, ber=1e-5),
+    )
+    stream = SimStream(scenario)
+    metadata = {"start_utc": START_UTC, "source": "simulated bridge", "port": "/dev/ttySIM", "filters": ["ahf", "hf"]}
+    with RecordingWriter(path, metadata) as writer:
+        t = 0.0
+        while t < stream.end_s:
+            t = min(t + 1.0, stream.end_s)
+            for chunk in stream.advance(t):
+                writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)
+            if t == CHANGE_AT_S:  # as LiveSession.change_settings records it
+                event = {"t_host_ns": int(t * 1e9), "kind": "settings", "name": "hf", "settings": {"beta": 0.3}}
+                writer.write_event(event["t_host_ns"], event)
+        for chunk in stream.flush():
+            writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)
+    return path
+
+
+@pytest.fixture(scope="session")
+def sim_recording(tmp_path_factory) -> Path:
+    return simulated_recording(tmp_path_factory.mktemp("sim") / "hover.gsrec")
+
+
+@pytest.fixture(scope="session")
+def sim_session(sim_recording):
+    return load_session(sim_recording)
+
+
+@pytest.fixture(scope="session")
+def trial_session(tmp_path_factory):
+    """20 s of a real trial from the start of its motion, with truth."""
+    if not TRIAL.exists():
+        pytest.skip(f"dataset not found at {TRIAL}")
+    path = tmp_path_factory.mktemp("trial") / "trial.csv"
+    frame = pd.read_csv(TRIAL)
+    start = frame.time_s[frame.moving == 1].min() - 5
+    frame[(frame.time_s >= start) & (frame.time_s < start + 20)].to_csv(path, index=False)
+    return load_session(path, ["ahf", "hf"])
