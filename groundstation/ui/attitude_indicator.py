@@ -9,7 +9,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
+
+from groundstation import quaternion
+from groundstation.session.live import LiveSession
 
 SKY, GROUND, LINE = QtGui.QColor("#3a7bd5"), QtGui.QColor("#8b5a2b"), QtGui.QColor("white")
 VISIBLE_PITCH_DEG = 30.0  # from the centre to the top edge
@@ -66,7 +70,7 @@ class AttitudeIndicator(QtWidgets.QWidget):
 
 
 class AttitudePanel(QtWidgets.QGroupBox):
-    """The indicator and the readouts of one estimate (AHF by default)."""
+    """The indicator and the readouts of one estimate."""
 
     def __init__(self, parent=None):
         super().__init__("Attitude (AHF)", parent)
@@ -80,6 +84,17 @@ class AttitudePanel(QtWidgets.QGroupBox):
         layout = QtWidgets.QVBoxLayout(self)
         layout.addWidget(self.indicator)
         layout.addLayout(numbers)
+
+    def show_session(self, session: LiveSession) -> None:
+        """The newest estimate of ``session``'s first estimator (AHF, unless a recording says otherwise)."""
+        name = session.pipeline.filters[0]
+        self.setTitle(f"Attitude ({name.upper()})")
+        imu = session.pipeline.imu
+        last = imu.tail(1)
+        if not len(last):
+            return
+        q = last[0][[imu.columns.index(f"{name}_q{c}") for c in "wxyz"]]
+        self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
 
     def show_attitude(self, yaw_deg: float, pitch_deg: float, roll_deg: float) -> None:
         self.indicator.set_attitude(yaw_deg, pitch_deg, roll_deg)

@@ -184,8 +184,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if session is None:
             return
         self.live_view.refresh()
-        imu = self.live_view.series["imu"]
-        self.attitude_panel.show_attitude(*(imu.last(f"ahf_{angle}_deg") for angle in ("yaw", "pitch", "roll")))
+        self.attitude_panel.show_session(session)
         self.replay_bar.refresh()
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")

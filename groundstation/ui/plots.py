@@ -2,7 +2,8 @@
 
 Each curve is created once and updated with ``setData`` only when its series grew (or the window
 changed); peak downsampling and clipping to the view keep long windows cheap. The legend on the
-top plot toggles a curve on every plot that carries the same label.
+top plot toggles a curve on every plot that carries the same label. A crosshair follows the mouse
+and reads every visible curve at the nearest sample under it.
 """
 
 from __future__ import annotations
@@ -41,6 +42,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self.setBackground("w")
         self.items: list[pg.PlotItem] = []
         self._stale = True  # a curve was switched on: it needs its data even if nothing grew
+        self._series: dict[str, Series] = {}  # as last drawn, for the crosshair
+        self._specs = plots
         self.curves: list[tuple[Curve, pg.PlotDataItem]] = []
         for row, spec in enumerate(plots):
             item = self.addPlot(row=row, col=0)
@@ -61,6 +64,13 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 self.curves.append((spec_curve, curve))
             self.items.append(item)
         self.items[-1].setLabel("bottom", "time", units="s")
+        self.crosshair = [pg.InfiniteLine(angle=90, movable=False, pen=pg.mkPen("#555", style=QtCore.Qt.DotLine))
+                          for _ in self.items]
+        for item, line in zip(self.items, self.crosshair):
+            item.addItem(line, ignoreBounds=True)
+            line.hide()
+        self.readout = self.addLabel("", row=len(plots), col=0, justify="left", color="#222")
+        self.scene().sigMouseMoved.connect(self._mouse_moved)
         for spec_curve, curve in self.curves:  # the top plot's legend drives the others
             if curve.name() is not None:
                 curve.visibleChanged.connect(lambda c=curve, label=spec_curve.label: self._mirror(label, c.isVisible()))
@@ -92,6 +102,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 continue
             rows = s.window(window_s)
             curve.setData(s.time_s[rows], s.values[spec.quantity][rows])
+        self._series = series
         if follow:
             self.follow(series.get("imu"), window_s)
 
@@ -102,3 +113,28 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         end = imu.time_s[imu.count - 1]
         start = imu.time_s[0] if window_s is None else end - window_s
         self.items[0].setXRange(start, max(end, start + 1e-3), padding=0)
+
+    def _mouse_moved(self, position) -> None:
+        item = next((i for i in self.items if i.sceneBoundingRect().contains(position)), None)
+        if item is None:
+            return
+        t_s = item.getViewBox().mapSceneToView(position).x()
+        for line in self.crosshair:
+            line.setPos(t_s)
+            line.show()
+        self.readout.setText(self.read_at(t_s))
+
+    def read_at(self, t_s: float) -> str:
+        """The visible curves' values at the samples nearest ``t_s``."""
+        parts = [f"t {t_s:.2f} s"]
+        visible = self.visible_labels()
+        for spec in self._specs:
+            values = []
+            for curve in spec.curves:
+                s = self._series.get(curve.series)
+                row = None if s is None or curve.label not in visible or curve.quantity not in s.values else s.at(t_s)
+                if row is not None:
+                    values.append(f"{curve.label} {s.values[curve.quantity][row]:+.2f}")
+            if values:
+                parts.append(f"{spec.title} ({spec.unit}): " + ", ".join(values))
+        return "   |   ".join(parts)

@@ -1,9 +1,10 @@
 """The plotted quantities of a growing session table, kept as numpy arrays the plots slice.
 
 Each tick takes only the rows added since the last one (``Table.tail``), converts them once
-(quaternions to Euler angles in degrees, rad/s to °/s) and appends them to arrays grown by
-doubling. A 10-minute or whole-session window is then a slice, not a copy of the table. Values
-are float32 (plots need no more); time stays float64.
+(quaternions to pitch and roll in degrees, rad/s to °/s) and appends them to arrays grown by half
+their size. A 10-minute or whole-session window is then a slice, not a copy of the table. Values
+are float32 (plots need no more), time float64; only plotted quantities are kept (about 70 bytes
+per sample with three estimators, against some 300 in the session's table).
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ class Series:
         derived = self._derive(rows, self.table.columns)
         end = self.count + new
         if end > len(self.time_s):
-            size = max(2 * len(self.time_s), end)
+            size = max(len(self.time_s) * 3 // 2, end)
             self.time_s = np.resize(self.time_s, size)
             self.values = {k: np.resize(v, size) for k, v in self.values.items()}
         self.time_s[self.count : end] = rows[:, self.table.columns.index("time_s")]
@@ -59,9 +60,6 @@ class Series:
         start = np.searchsorted(self.time_s[: self.count], self.time_s[self.count - 1] - seconds)
         return slice(max(int(start) - 1, 0), self.count)  # one row before: the curve reaches the edge
 
-    def last(self, name: str) -> float:
-        return float(self.values[name][self.count - 1]) if self.count and name in self.values else float("nan")
-
     def at(self, t_s: float) -> int | None:
         """Index of the row nearest ``t_s`` (None when empty)."""
         if self.count == 0:
@@ -71,19 +69,19 @@ class Series:
         return i - 1 if i and abs(times[i - 1] - t_s) < abs(times[i] - t_s) else i
 
 
-def euler_deg(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:
-    yaw, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
-    return {f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll, f"{prefix}_yaw_deg": yaw}
+def pitch_roll_deg(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:
+    _, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
+    return {f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll}
 
 
 def imu_quantities(filters: tuple[str, ...]) -> Derive:
-    """Euler angles of every host estimator, the sensors in g and °/s, AHF's λ and e_a."""
+    """Pitch and roll of every host estimator, the sensors in g and °/s, AHF's λ and e_a."""
 
     def derive(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
         col = {name: rows[:, i] for i, name in enumerate(columns)}
         out = {}
         for name in filters:
-            out.update(euler_deg(name, np.column_stack([col[f"{name}_q{c}"] for c in "wxyz"])))
+            out.update(pitch_roll_deg(name, np.column_stack([col[f"{name}_q{c}"] for c in "wxyz"])))
         for axis in "xyz":
             out[f"acc_{axis}_g"] = col[f"acc_{axis}_g"]
             out[f"gyr_{axis}_dps"] = np.degrees(col[f"gyr_{axis}_rad_s"])
@@ -98,6 +96,6 @@ def imu_quantities(filters: tuple[str, ...]) -> Derive:
 def onboard_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
     """The aircraft's own estimate (ATTITUDE frames) in degrees, and its λ."""
     col = {name: rows[:, i] for i, name in enumerate(columns)}
-    out = euler_deg("onboard", np.column_stack([col[f"q{c}"] for c in "wxyz"]))
+    out = pitch_roll_deg("onboard", np.column_stack([col[f"q{c}"] for c in "wxyz"]))
     out["onboard_lam"] = col["lambda"]
     return out
