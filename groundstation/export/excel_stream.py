@@ -11,16 +11,19 @@ Excel holds at most 1,048,576 rows per sheet and openpyxl does not check it in w
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import itertools
 import os
 from collections.abc import Callable
+from zipfile import ZIP_DEFLATED, ZipFile
 
 import numpy as np
 from openpyxl.cell import Cell, WriteOnlyCell
 from openpyxl.styles import Alignment, Font
 from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
+from openpyxl.writer.excel import ExcelWriter
 
 EXCEL_MAX_ROWS = 1_048_576
 CHUNK_ROWS = 2048  # rows converted to Python values at a time: bounds memory and the cancel delay
@@ -126,11 +129,29 @@ def write_table(workbook, title: str, blocks: list[Block], max_rows: int, advanc
     return titles
 
 
+def save(workbook, path) -> None:
+    """``Workbook.save``, but the file is closed even when writing fails: openpyxl leaves that to the
+    garbage collector, and an open file cannot be deleted on Windows."""
+    archive = ZipFile(path, "w", ZIP_DEFLATED, allowZip64=True)
+    try:
+        ExcelWriter(workbook, archive).save()
+    except BaseException:
+        with contextlib.suppress(OSError, ValueError):  # closing writes the zip's directory: may fail again
+            archive.close()
+        raise
+
+
 def discard(workbook) -> None:
     """Removes the sheets' temporary files after a cancel or a failure (openpyxl removes them only
     when it saves, or when the process exits: a long-running app would pile them up)."""
     for sheet in workbook._sheets:
         writer = getattr(sheet, "_writer", None)
-        if writer is not None and os.path.exists(writer.out):
+        if writer is None or not os.path.exists(writer.out):
+            continue
+        # Closing writes the XML's closing tags, which fails on a full disk; the files go anyway.
+        with contextlib.suppress(OSError, ValueError):
+            if sheet._rows is not None:
+                sheet._rows.close()
             writer.close()
-            writer.cleanup()
+        sheet._rows = None  # else its generator, collected later, writes to the closed file
+        writer.cleanup()
