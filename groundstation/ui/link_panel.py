@@ -74,18 +74,21 @@ class LinkPanel(QtWidgets.QGroupBox):
         for name, label in self.values.items():
             layout.addRow(name, label)
 
+    def _show_state(self, state: str, text: str) -> None:
+        self.headline.setText(text)
+        if self.headline.property("state") != state:  # a style sheet change restyles the widget
+            self.headline.setProperty("state", state)
+            self.headline.setStyleSheet(STYLES[state])
+
     def refresh(self, session: LiveSession | None) -> None:
         if session is None:
-            self.headline.setText("no source")
-            self.headline.setStyleSheet(STYLES["idle"])
+            self._show_state("idle", "no source")
             return
         # A replay's link times are the recorded ones: measure "since" against the newest chunk.
         replay = hasattr(session.source, "recording")
         now_ns = (session.pipeline.link.last_chunk_ns or 0) if replay else time.monotonic_ns()
         f = link_figures(session, now_ns)
-        state, text = link_state(session, f)
-        self.headline.setText(text)
-        self.headline.setStyleSheet(STYLES[state])
+        self._show_state(*link_state(session, f))
         self.values["frames/s"].setText(_number(f["frames_per_s"], ".0f"))
         self.values["loss"].setText(f"{_number(f['loss_pct'], '.1f')} %  ({f['lost_total']} in all)")
         self.values["CRC failures"].setText(f"{_number(f['crc_per_s'], '.0f')}/s  ({f['crc_total']} in all)")

@@ -24,7 +24,7 @@ AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 def attitude_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
     def curves(angle: str) -> tuple[Curve, ...]:
         host = tuple(Curve("imu", f"{n}_{angle}_deg", LABELS.get(n, n), COLORS.get(n, "#444")) for n in filters)
-        return host[:1] + (Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"], dashed=True),) + host[1:]
+        return host[:1] + (Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"]),) + host[1:]
 
     return Plot("pitch", "°", curves("pitch")), Plot("roll", "°", curves("roll"))
 
@@ -39,7 +39,7 @@ def sensor_plots() -> tuple[Plot, ...]:
 def diagnostic_plots() -> tuple[Plot, ...]:
     return (
         Plot("λ", "rad/s", (Curve("imu", "ahf_lam", "AHF", COLORS["ahf"]),
-                            Curve("onboard", "onboard_lam", "onboard", COLORS["onboard"], dashed=True))),
+                            Curve("onboard", "onboard_lam", "onboard", COLORS["onboard"]))),
         Plot("acceleration error e_a", "1", (Curve("imu", "ahf_e_a", "AHF", COLORS["ahf"]),)),
     )
 
@@ -127,14 +127,14 @@ class LiveView(QtWidgets.QWidget):
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}
         if not grew or self.paused:
             return False
-        self.current_plots().draw(self.series, self.window_s, grew, follow=True)
+        self.current_plots().draw(self.series, self.window_s, grew)
         self.frames_drawn += 1
         return True
 
     def redraw(self) -> None:
         """Everything visible again (window, tab or visibility changed)."""
         if self.series and not self.paused:
-            self.current_plots().draw(self.series, self.window_s, None, follow=True)
+            self.current_plots().draw(self.series, self.window_s, None)
 
     def current_plots(self) -> StackedPlots:
         return self.tabs.currentWidget()

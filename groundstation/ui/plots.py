@@ -1,19 +1,29 @@
 """Stacked time plots on one shared time axis, fed from ``Series`` buffers.
 
 Each curve is created once and updated with ``setData`` only when its series grew (or the window
-changed); peak downsampling and clipping to the view keep long windows cheap. The legend on the
+changed); peak downsampling and clipping to the view keep long windows cheap. The axes move in
+steps, not every frame: under software rendering re-laying an axis costs more than drawing the
+curves, so the time axis advances by a fraction of the window and the value axes change only when
+the data leaves them or shrinks well inside them. The legend on the
 top plot toggles a curve on every plot that carries the same label. A crosshair follows the mouse
 and reads every visible curve at the nearest sample under it.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore
 
 from groundstation.ui.series import Series
+
+LEFT_AXIS_PX = 60
+FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a time
+Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
+Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
 
 
 @dataclass(frozen=True)
@@ -22,7 +32,6 @@ class Curve:
     quantity: str  # a key of that Series' values
     label: str  # legend entry; curves sharing it are toggled together
     color: str
-    dashed: bool = False
 
 
 @dataclass(frozen=True)
@@ -44,36 +53,40 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._stale = True  # a curve was switched on: it needs its data even if nothing grew
         self._series: dict[str, Series] = {}  # as last drawn, for the crosshair
         self._specs = plots
+        self._x_range: tuple[float, float] | None = None
         self.curves: list[tuple[Curve, pg.PlotDataItem]] = []
-        for row, spec in enumerate(plots):
+        # The legend sits above the plots, not over them: new data then never repaints it.
+        self.legend = pg.LegendItem(colCount=len(plots[0].curves), labelTextColor="#222")
+        self.addItem(self.legend, row=0, col=0)
+        for row, spec in enumerate(plots, start=1):
             item = self.addPlot(row=row, col=0)
             item.setLabel("left", f"{spec.title} ({spec.unit})")
-            item.showGrid(x=True, y=True, alpha=0.25)
+            item.hideAxis("bottom")  # one time axis, under the last plot
+            item.getAxis("left").setWidth(LEFT_AXIS_PX)  # equal widths keep the stacked time axes aligned
             item.setDownsampling(auto=True, mode="peak")
             item.setClipToView(True)
-            item.setAutoVisible(y=True)  # the y range follows what is in the time window
             item.getViewBox().sigRangeChangedManually.connect(self.userInteracted)
             if self.items:
                 item.setXLink(self.items[0])
-            if row == 0:
-                item.addLegend(offset=(-10, 10), colCount=len(spec.curves), labelTextColor="#222")
             for spec_curve in spec.curves:
-                pen = pg.mkPen(spec_curve.color, width=1.5, style=QtCore.Qt.DashLine if spec_curve.dashed else QtCore.Qt.SolidLine)
-                curve = item.plot(pen=pen, name=spec_curve.label if row == 0 else None)
+                # One-pixel solid pens: Qt's raster engine strokes them several times faster than wider or dashed ones.
+                curve = item.plot(pen=pg.mkPen(spec_curve.color, width=1))
                 curve.setVisible(spec_curve.label not in hidden)
+                if row == 1:
+                    self.legend.addItem(curve, spec_curve.label)
                 self.curves.append((spec_curve, curve))
             self.items.append(item)
+        self.items[-1].showAxis("bottom")
         self.items[-1].setLabel("bottom", "time", units="s")
         self.crosshair = [pg.InfiniteLine(angle=90, movable=False, pen=pg.mkPen("#555", style=QtCore.Qt.DotLine))
                           for _ in self.items]
         for item, line in zip(self.items, self.crosshair):
             item.addItem(line, ignoreBounds=True)
             line.hide()
-        self.readout = self.addLabel("", row=len(plots), col=0, justify="left", color="#222")
+        self.readout = self.addLabel("", row=len(plots) + 1, col=0, justify="left", color="#222")
         self.scene().sigMouseMoved.connect(self._mouse_moved)
-        for spec_curve, curve in self.curves:  # the top plot's legend drives the others
-            if curve.name() is not None:
-                curve.visibleChanged.connect(lambda c=curve, label=spec_curve.label: self._mirror(label, c.isVisible()))
+        for spec_curve, curve in self.curves[: len(plots[0].curves)]:  # the legend drives the others
+            curve.visibleChanged.connect(lambda c=curve, label=spec_curve.label: self._mirror(label, c.isVisible()))
 
     def _mirror(self, label: str, visible: bool) -> None:
         for spec, curve in self.curves:
@@ -91,8 +104,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         for _, curve in self.curves:
             curve.setData([], [])
 
-    def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None, follow: bool) -> None:
-        """Update the visible curves whose series grew (all of them when ``grew`` is None)."""
+    def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None) -> None:
+        """Update the visible curves whose series grew (all of them when ``grew`` is None) and
+        follow the newest ``window_s`` seconds (the whole session when None)."""
         everything, self._stale = grew is None or self._stale, False
         for spec, curve in self.curves:
             if not curve.isVisible() or not (everything or spec.series in grew):
@@ -103,16 +117,35 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             rows = s.window(window_s)
             curve.setData(s.time_s[rows], s.values[spec.quantity][rows])
         self._series = series
-        if follow:
-            self.follow(series.get("imu"), window_s)
+        imu = series.get("imu")
+        if imu is not None and imu.count:
+            self._follow_time(imu, window_s)
+            for item in self.items:
+                self._fit_values(item)
 
-    def follow(self, imu: Series | None, window_s: float | None) -> None:
-        """Show the newest ``window_s`` seconds (the whole session when None)."""
-        if imu is None or imu.count == 0:
+    def _follow_time(self, imu: Series, window_s: float | None) -> None:
+        first, end = imu.time_s[0], imu.time_s[imu.count - 1]
+        span = end - first if window_s is None else window_s
+        step = 2.0 ** math.ceil(math.log2(max(span, 1.0) / FOLLOW_STEPS))
+        right = math.ceil(end / step + 1e-9) * step
+        x_range = (first if window_s is None else right - window_s, right)
+        if x_range != self._x_range:
+            self._x_range = x_range
+            self.items[0].setXRange(*x_range, padding=0)
+
+    def _fit_values(self, item: pg.PlotItem) -> None:
+        lows, highs = [], []
+        for curve in item.listDataItems():
+            if curve.isVisible() and curve.yData is not None and len(curve.yData):
+                lows.append(float(np.nanmin(curve.yData)))  # float32 scalars would overflow in pyqtgraph
+                highs.append(float(np.nanmax(curve.yData)))
+        low, high = (min(lows), max(highs)) if lows else (math.nan, math.nan)
+        if not (math.isfinite(low) and math.isfinite(high)):
             return
-        end = imu.time_s[imu.count - 1]
-        start = imu.time_s[0] if window_s is None else end - window_s
-        self.items[0].setXRange(start, max(end, start + 1e-3), padding=0)
+        span = max(high - low, 1e-6)
+        y0, y1 = item.getViewBox().viewRange()[1]
+        if low < y0 or high > y1 or y1 - y0 > Y_SHRINK * span:
+            item.setYRange(low - Y_HEADROOM * span, high + Y_HEADROOM * span, padding=0)
 
     def _mouse_moved(self, position) -> None:
         item = next((i for i in self.items if i.sceneBoundingRect().contains(position)), None)
