@@ -99,9 +99,8 @@ def table_block(table, label: str, spec, window, rate_hz) -> Block:
 
 
 def sensor_blocks(data: SessionData, rows: np.ndarray, window, rate_hz) -> list[Block]:
-    imu = [Column("time (s)", data.time_s[rows], SECONDS, 10)]
-    imu += [Column(header, data.sensors[name][rows], fmt, 14) for name, header, fmt in SENSORS if name in data.sensors]
-    blocks = [imu]
+    imu = [Column(header, data.sensors[name][rows], fmt, 14) for name, header, fmt in SENSORS if name in data.sensors]
+    blocks = [[Column("time (s)", data.time_s[rows], SECONDS, 10), *imu]] if imu else []  # none: "estimated" mode
     if data.pipeline is not None:
         blocks += [table_block(data.pipeline.tables[t], label, spec, window, rate_hz) for t, label, spec in AUX_SENSORS
                    if len(data.pipeline.tables[t])]

@@ -37,7 +37,8 @@ def session_rows(data: SessionData, rows: np.ndarray, forced: dict | None = None
     if data.pipeline is not None:
         stats = data.pipeline.decoder.stats
         out += [[Heading("Link")], *([label, getattr(stats, name)] for name, label in LINK_COUNTS), []]
-    out += settings_table(data, forced or {})
+    if data.estimates:
+        out += settings_table(data, forced or {})
     out += events_table(data)
     if data.true_q is not None:
         out += error_table(data)

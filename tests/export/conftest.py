@@ -18,11 +18,11 @@ START_UTC = "2024-05-01T12:00:00.000Z"
 CHANGE_AT_S = 10.0  # hf.beta changes to 0.3 here
 
 
-def simulated_recording(path: Path, duration_s: float = 20.0) -> Path:
+def simulated_recording(path: Path, duration_s: float = 20.0, mode: str = "both") -> Path:
     """A lossy, noisy hover with magnetometer, barometer and GPS, and one settings change."""
     scenario = Scenario(
         profile="hover", duration_s=duration_s, seed=4,
-        firmware=FirmwareSettings(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5),
+        firmware=FirmwareSettings(mode=mode, mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5),
         link=LinkSettings(loss=0.01, ber=1e-5),
     )
     stream = SimStream(scenario)

@@ -11,7 +11,9 @@ from groundstation.export.columns import select_rows
 from groundstation.export.excel import write_workbook
 from groundstation.recording import open_recording
 
-from .conftest import CHANGE_AT_S
+from groundstation.session.data import load_session
+
+from .conftest import CHANGE_AT_S, simulated_recording
 
 ATTITUDE_HEADERS = [
     "time (s)", "time (UTC)",
@@ -177,3 +179,19 @@ def test_charts_of_pitch_and_roll_read_a_decimated_range(sim_session, tmp_path, 
     np.testing.assert_allclose(floats(data["time (s)"]), sim_session.time_s[::step], rtol=1e-15)
     pitch, _, _ = euler_deg(sim_session.estimates["ahf"][::step])
     np.testing.assert_allclose(floats(data["ahf pitch (°)"]), pitch, rtol=1e-12, atol=1e-12)
+
+
+def test_a_session_without_raw_imu_samples(tmp_path):
+    """"estimated" mode: the aircraft sends its attitude only; no estimator runs on the host."""
+    data = load_session(simulated_recording(tmp_path / "estimated.gsrec", duration_s=5, mode="estimated"))
+    assert data.estimates == {} and data.sensors == {}
+    path = tmp_path / "estimated.xlsx"
+    write_workbook(data, path)
+    book = load_workbook(path)
+    got = columns(book["Attitude"])
+    assert list(got) == ["time (s)", "time (UTC)", "onboard pitch (°)", "onboard roll (°)", "onboard yaw (°)"]
+    pitch, _, _ = euler_deg(data.onboard)
+    np.testing.assert_allclose(floats(got["onboard pitch (°)"]), pitch, rtol=1e-12, atol=1e-12)
+    assert book["Sensors"]["A1"].value == "mag time (s)"  # no IMU block; the other sensors still
+    assert all(len(chart.series) == 1 for chart in book["Chart"]._charts)
+    assert "Estimator settings" not in session_values(book["Session"])

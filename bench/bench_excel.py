@@ -1,0 +1,143 @@
+"""Excel export speed and memory: a simulated 100 Hz session (1 hour by default) to .xlsx, and in the
+same run bare openpyxl write-only writing the same cells, the CSV export and the Parquet export.
+
+    python bench/bench_excel.py [--minutes M] [--filters ahf,hf]
+
+The session is simulated, recorded and decoded once; each writer then runs in a forked child that
+shares it. In the child the kernel's peak-RSS mark is reset at the start (/proc/self/clear_refs, Linux),
+so "peak" is the child's high-water mark (the session included) and "writer" is the peak minus the
+RSS at the start. "bare openpyxl" appends the same values to the same sheets as plain lists: no number
+formats, no header styles, no Session sheet, no chart.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from openpyxl import Workbook
+
+from groundstation.export.columns import export_columns, select_rows
+from groundstation.export.excel import write_workbook
+from groundstation.export.excel_columns import attitude_block, chart_block, link_blocks, sensor_blocks
+from groundstation.export.excel_stream import CHUNK_ROWS, layout, table_rows
+from groundstation.export.tabular import write_csv, write_parquet
+from groundstation.recording import RecordingWriter
+from groundstation.session.data import load_session
+from groundstation.sim.stream import Scenario, SimStream
+
+
+def simulate(path: Path, minutes: float) -> None:
+    stream = SimStream(Scenario(profile="flight", duration_s=60.0 * minutes, seed=1))
+    with RecordingWriter(path, {"source": "bench_excel", "port": "simulated"}) as writer:
+        t = 0.0
+        while t < stream.end_s:
+            t = min(t + 60.0, stream.end_s)
+            for chunk in stream.advance(t):
+                writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)
+        for chunk in stream.flush():
+            writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)
+
+
+def tables(data) -> dict:
+    """The workbook's data sheets, as ``write_workbook`` builds them."""
+    rows = np.arange(len(data))
+    window = (data.time_s[0], data.time_s[-1])
+    return {"Attitude": [attitude_block(data, rows)], "Sensors": sensor_blocks(data, rows, window, None),
+            "Link": link_blocks(data, window), "Chart data": [chart_block(data, rows)]}
+
+
+def bare_openpyxl(data, path: Path) -> None:
+    """The same cells through openpyxl's documented write-only path: rows of plain values."""
+    workbook = Workbook(write_only=True)
+    for title, blocks in tables(data).items():
+        sheet = workbook.create_sheet(title)
+        columns = layout(blocks)
+        sheet.append([c.header if c else None for c in columns])
+        n = table_rows(blocks)
+        values = np.full((n, len(columns)), np.nan)
+        for j, column in enumerate(columns):
+            if column is not None:
+                values[: len(column.values), j] = column.values
+        for start in range(0, n, CHUNK_ROWS):
+            part = values[start : start + CHUNK_ROWS]
+            for row in np.where(np.isfinite(part), part, None).tolist():  # Excel has no NaN
+                sheet.append(row)
+    workbook.save(path)
+
+
+def cells(data) -> int:
+    return sum(sum(len(c.values) for c in layout(blocks) if c) for blocks in tables(data).values())
+
+
+def memory_kb(field: str) -> int:
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) for line in status if line.startswith(field))
+
+
+def measure(label: str, write) -> dict:
+    """Runs ``write()`` in a forked child; returns its seconds and memory figures."""
+    read_end, write_end = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read_end)
+        with open("/proc/self/clear_refs", "w") as clear:
+            clear.write("5")  # reset the peak-RSS mark to the current RSS
+        start_kb = memory_kb("VmRSS")
+        started = time.perf_counter()
+        write()
+        seconds = time.perf_counter() - started
+        result = {"label": label, "seconds": seconds, "peak_mb": memory_kb("VmHWM") / 1024,
+                  "writer_mb": (memory_kb("VmHWM") - start_kb) / 1024}
+        os.write(write_end, json.dumps(result).encode())
+        os._exit(0)
+    os.close(write_end)
+    with os.fdopen(read_end) as pipe:
+        text = pipe.read()
+    _, status = os.waitpid(pid, 0)
+    if status != 0 or not text:
+        raise SystemExit(f"{label}: the child failed (status {status})")
+    return json.loads(text)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=60.0, help="simulated minutes (default 60)")
+    parser.add_argument("--filters", default="ahf,hf", help="host estimators (default ahf,hf)")
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory(prefix="bench_excel.") as folder:
+        folder = Path(folder)
+        started = time.perf_counter()
+        simulate(folder / "session.gsrec", args.minutes)
+        data = load_session(folder / "session.gsrec", args.filters.split(","))
+        hours = (data.time_s[-1] - data.time_s[0]) / 3600.0
+        print(f"session: {len(data)} samples ({hours * 60:.1f} min at 100 Hz), filters {args.filters}, "
+              f"simulated and decoded in {time.perf_counter() - started:.0f} s; RSS {memory_kb('VmRSS') / 1024:.0f} MB")
+        columns = export_columns(data, select_rows(data.time_s))
+        runs = [
+            ("xlsx (write_workbook)", "a.xlsx", lambda p: write_workbook(data, p)),
+            ("bare openpyxl write-only", "b.xlsx", lambda p: bare_openpyxl(data, p)),
+            (f"CSV ({len(columns)} columns)", "c.csv", lambda p: write_csv(columns, p)),
+            (f"Parquet ({len(columns)} columns)", "d.parquet", lambda p: write_parquet(columns, p)),
+        ]
+        results = []
+        for label, name, write in runs:
+            result = measure(label, lambda: write(folder / name))
+            result["file_mb"] = (folder / name).stat().st_size / 1e6
+            results.append(result)
+        print(f"workbook data cells: {cells(data):,} (bare openpyxl writes the same)\n")
+        print("| writer | seconds | s per exported hour | peak RSS (MB) | writer's own (MB) | file (MB) |")
+        print("|---|---:|---:|---:|---:|---:|")
+        for r in results:
+            print(f"| {r['label']} | {r['seconds']:.1f} | {r['seconds'] / hours:.1f} | {r['peak_mb']:.0f} | "
+                  f"{r['writer_mb']:.0f} | {r['file_mb']:.1f} |")
+        print(f"\nxlsx / bare openpyxl: {results[0]['seconds'] / results[1]['seconds']:.2f}x the time")
+
+
+if __name__ == "__main__":
+    main()
