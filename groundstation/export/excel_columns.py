@@ -23,12 +23,14 @@ CHART_POINTS = 2000  # per series: enough for the eye, few enough for Excel to s
 
 SENSORS = (
     ("acc_x_g", "acc x (g)", "0.0000"), ("acc_y_g", "acc y (g)", "0.0000"), ("acc_z_g", "acc z (g)", "0.0000"),
-    ("gyr_x_dps", "gyro x (°/s)", TWO_PLACES), ("gyr_y_dps", "gyro y (°/s)", TWO_PLACES), ("gyr_z_dps", "gyro z (°/s)", TWO_PLACES),
+    ("gyr_x_dps", "gyro x (°/s)", TWO_PLACES), ("gyr_y_dps", "gyro y (°/s)", TWO_PLACES),
+    ("gyr_z_dps", "gyro z (°/s)", TWO_PLACES),
     ("temperature_c", "temperature (°C)", TWO_PLACES),
 )  # fmt: skip
 # The pipeline's tables of the other frames: (table, label, ((column, header, format), ...)).
 AUX_SENSORS = (
-    ("mag_raw", "mag", (("mag_x_uT", "mag x (µT, sensor axes)", TWO_PLACES), ("mag_y_uT", "mag y (µT, sensor axes)", TWO_PLACES),
+    ("mag_raw", "mag", (("mag_x_uT", "mag x (µT, sensor axes)", TWO_PLACES),
+                        ("mag_y_uT", "mag y (µT, sensor axes)", TWO_PLACES),
                         ("mag_z_uT", "mag z (µT, sensor axes)", TWO_PLACES))),
     ("baro", "baro", (("pressure_Pa", "pressure (Pa)", "0.0"), ("temperature_degC", "baro temperature (°C)", TWO_PLACES))),
     ("gps", "GPS", (("lat_deg", "latitude (°)", "0.0000000"), ("lon_deg", "longitude (°)", "0.0000000"),
@@ -73,11 +75,11 @@ def attitude_block(data: SessionData, rows: np.ndarray) -> Block:
     time_s = data.time_s[rows]
     block = [Column("time (s)", time_s, SECONDS, 10)]
     start = start_time(data.metadata)
-    if start is not None and data.pipeline is not None:  # from the link: start_utc is when the flight's recording began
+    if start is not None and data.pipeline is not None:  # from the link: start_utc is when its recording began
         block.append(Column("time (UTC)", excel_days(start) + time_s / 86400.0, DATE_TIME, 24))
     for name, q in estimates(data).items():
         angles = attitude_columns(name, q[rows])
-        block += [Column(f"{name} {angle} (°)", angles[f"{name}_{angle}_deg"], TWO_PLACES, 14) for angle in ("pitch", "roll", "yaw")]
+        block += [Column(f"{name} {a} (°)", angles[f"{name}_{a}_deg"], TWO_PLACES, 14) for a in ("pitch", "roll", "yaw")]
     if "lam" in data.diagnostics.get("ahf", {}):
         block.append(Column("ahf λ (rad/s)", data.diagnostics["ahf"]["lam"][rows], "0.0000", 13))
     return block

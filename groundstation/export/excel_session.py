@@ -52,7 +52,7 @@ def facts(data: SessionData, rows: np.ndarray) -> list[list]:
     if start is not None:
         out.append(["recording started (UTC)", start])
     out += [
-        ["duration (s)", float(time_s[-1] - time_s[0]) if len(time_s) else 0.0],
+        ["duration (s)", float(time_s[-1] - time_s[0])],
         ["samples (count)", len(data)],
         ["exported rows (count)", len(rows)],
         ["exported from (s)", float(time_s[rows[0]])],
@@ -120,7 +120,9 @@ def describe_event(event: dict) -> str:
     if event["kind"] == "config":
         return (f"CONFIG: firmware {event['fw_major']}.{event['fw_minor']}.{event['fw_patch']}, ±{event['accel_fs_g']} g, "
                 f"±{event['gyro_fs_dps']} °/s, {event['rate_hz']} Hz, mounting {event['mounting']}")
-    return str(event.get("message", event))
+    if "message" in event:
+        return str(event["message"])
+    return ", ".join(f"{k} = {v}" for k, v in event.items() if k not in ("t_host_ns", "kind"))  # e.g. an ACK
 
 
 def error_table(data: SessionData) -> list[list]:
