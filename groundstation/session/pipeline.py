@@ -29,7 +29,7 @@ IMU_COLUMNS = (
 )  # fmt: skip
 ONBOARD_COLUMNS = ("time_s", "device_time_us", "qw", "qx", "qy", "qz", "lambda", "flags")
 _UNIT_SUFFIX = {"1": "", "enum": "", "bits": "", "index": "", "%": "_pct", "deg/s": "_deg_s", "m/s": "_m_s"}
-_IMU_ID, _ATTITUDE_ID, _CONFIG_ID = (SPEC.frame(n).id for n in ("IMU_RAW", "ATTITUDE", "CONFIG"))
+_IMU_ID, _ATTITUDE_ID, _CONFIG_ID, _ACK_ID = (SPEC.frame(n).id for n in ("IMU_RAW", "ATTITUDE", "CONFIG", "ACK"))
 _Q_SCALE = SPEC.frame("ATTITUDE").fields[1].scale
 _LAMBDA_SCALE = SPEC.frame("ATTITUDE").fields[5].scale
 _OTHER_TABLES = {SPEC.frame(n).id: n.lower() for n in ("STATUS", "MAG_RAW", "BARO", "GPS")}
@@ -79,7 +79,7 @@ class Pipeline:
         }
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
-        self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings
+        self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
         self._held: list[tuple[int, Frame]] = []
         self._t0_us: int | None = None
         self._t0_host_ns: int | None = None
@@ -106,6 +106,8 @@ class Pipeline:
                 self._attitude(raw, t_us)
             elif type_id == _CONFIG_ID:
                 self._config(t_host_ns, frame)
+            elif type_id == _ACK_ID:  # the aircraft's answer to a COMMAND (``LiveSession.send_command``)
+                self.events.append({"t_host_ns": t_host_ns, "kind": "ack", **frame.values})
             elif type_id in _OTHER_TABLES:
                 row = [(t_us - self._t0_us) / 1e6] + list(frame.scaled().values())
                 self.tables[_OTHER_TABLES[type_id]].append(row)

@@ -16,10 +16,12 @@ from groundstation.session.live import LiveSession
 from groundstation.ui import sessions
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
+from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
 from groundstation.ui.replay_bar import ReplayBar
+from groundstation.ui.uplink_panel import UplinkPanel
 
 REDRAW_HZ = 30
 # Every how many ticks the side panels redraw: the horizon at 15 Hz, figures and labels at 5 Hz
@@ -55,11 +57,19 @@ class MainWindow(QtWidgets.QMainWindow):
         self.live_view = LiveView(self._stored_hidden_curves())
         self.link_panel = LinkPanel()
         self.attitude_panel = AttitudePanel()
+        self.estimator_panel = EstimatorPanel()
+        self.estimator_panel.visibilityChanged.connect(lambda label, on: self.live_view.attitude.set_visible(label, on))
+        self.uplink_panel = UplinkPanel()
+        self.estimator_panel.sendToAircraft.connect(self.uplink_panel.send_ahf)
+        controls = QtWidgets.QTabWidget()
+        controls.addTab(self.estimator_panel, "Estimators")
+        controls.addTab(self.uplink_panel, "Uplink")
         side = QtWidgets.QWidget()
         side_layout = QtWidgets.QVBoxLayout(side)
         side_layout.setContentsMargins(0, 0, 0, 0)
         side_layout.addWidget(self.attitude_panel)
         side_layout.addWidget(self.link_panel)
+        side_layout.addWidget(controls)
         side_layout.addStretch(1)
         self.splitter = QtWidgets.QSplitter()
         self.splitter.addWidget(self.live_view)
@@ -152,6 +162,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.session = session
         self.live_view.set_session(session)
         self.replay_bar.set_session(session)
+        self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels())
+        self.uplink_panel.set_session(session)
         self.bar.set_connected(True)
 
     def disconnect(self) -> None:
@@ -163,6 +175,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self._stop_session()
             self.source_label.setText(f"stopped: {description}")
         self.replay_bar.set_session(None)
+        self.estimator_panel.set_session(None, set())
+        self.uplink_panel.set_session(None)
         self.bar.set_connected(False)
 
     def _stop_session(self) -> None:
@@ -195,6 +209,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self.attitude_panel.show_session(session)
         if figures:
             self.replay_bar.refresh()
+            self.uplink_panel.refresh()
+            self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")

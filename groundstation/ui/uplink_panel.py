@@ -1,0 +1,110 @@
+"""The uplink: firmware mode (raw, estimated, both), AHF parameters, CONFIG request, gyro bias
+calibration at rest; each command's ACK (result and round trip) or its timeout, and the
+firmware's configuration as its last CONFIG frame gave it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+from PySide6 import QtWidgets
+
+from firmware_protocol import SPEC
+from groundstation.session.live import LiveSession
+
+ACK_TIMEOUT_S = 1.0
+HISTORY = 4  # commands listed
+MODES = SPEC.enums["mode"].values  # name -> value
+FILTER_PARAMS = SPEC.enums["filter_param"].values
+RESULTS = {value: name for name, value in SPEC.enums["ack_result"].values.items()}
+MODE_NAMES = {value: name for name, value in MODES.items()}
+
+
+@dataclass
+class Sent:
+    seq: int
+    text: str
+    sent_ns: int
+    answer: str = ""  # empty while waiting
+
+
+class UplinkPanel(QtWidgets.QGroupBox):
+    def __init__(self, parent=None):
+        super().__init__("Uplink", parent)
+        self.session: LiveSession | None = None
+        self.sent: list[Sent] = []
+        self._events_seen = 0
+        self.mode_box = QtWidgets.QComboBox()
+        self.mode_box.addItems(list(MODES))
+        self.mode_button = QtWidgets.QPushButton("Set mode")
+        self.mode_button.clicked.connect(
+            lambda: self.send("set_mode", MODES[self.mode_box.currentText()], text=f"set_mode {self.mode_box.currentText()}"))
+        self.config_button = QtWidgets.QPushButton("Request CONFIG")
+        self.config_button.clicked.connect(lambda: self.send("request_config"))
+        self.calibration_s = QtWidgets.QDoubleSpinBox(decimals=1, minimum=0.5, maximum=60.0, value=2.0, suffix=" s")
+        self.calibrate_button = QtWidgets.QPushButton("Calibrate gyro")
+        self.calibrate_button.setToolTip("Keep the aircraft still: the firmware averages the gyro to find its bias")
+        self.calibrate_button.clicked.connect(lambda: self.send("calibrate_gyro", 0, self.calibration_s.value()))
+        self.config_label = QtWidgets.QLabel("no CONFIG yet")
+        self.config_label.setWordWrap(True)
+        self.answers = QtWidgets.QLabel()
+        self.answers.setWordWrap(True)
+        layout = QtWidgets.QFormLayout(self)
+        layout.addRow(self._row(self.mode_box, self.mode_button, self.config_button))
+        layout.addRow(self._row(QtWidgets.QLabel("at rest for"), self.calibration_s, self.calibrate_button))
+        layout.addRow("firmware", self.config_label)
+        layout.addRow("answers", self.answers)
+        self.setEnabled(False)
+
+    @staticmethod
+    def _row(*widgets) -> QtWidgets.QHBoxLayout:
+        row = QtWidgets.QHBoxLayout()
+        for widget in widgets:
+            row.addWidget(widget)
+        return row
+
+    def set_session(self, session: LiveSession | None) -> None:
+        """A live link only: a replay has no aircraft to command."""
+        live = session is not None and not hasattr(session.source, "recording")
+        self.session = session if live else None
+        self.setEnabled(live)
+        self.sent = []
+        self._events_seen = 0
+        self.answers.setText("")
+        self.config_label.setText("no CONFIG yet" if live else "(replay: no uplink)")
+
+    def send(self, command: str, param: int = 0, value: float = 0.0, text: str | None = None) -> None:
+        seq = self.session.send_command(command, param, value)
+        self.sent = [*self.sent, Sent(seq, text or command, time.monotonic_ns())][-HISTORY:]
+        self._show_answers()
+
+    def send_ahf(self, values: dict[str, float]) -> None:
+        """AHF settings to the onboard filter, one set_filter_param each."""
+        for setting, value in values.items():
+            self.send("set_filter_param", FILTER_PARAMS[setting], value, f"{setting} = {value:g}")
+
+    def refresh(self) -> None:
+        if self.session is None:
+            return
+        events = self.session.pipeline.events
+        new, self._events_seen = events[self._events_seen :], len(events)
+        for event in new:
+            if event["kind"] == "ack":
+                for sent in self.sent:
+                    if sent.seq == event["command_seq"] and not sent.answer:
+                        ms = (event["t_host_ns"] - sent.sent_ns) / 1e6
+                        sent.answer = f"ACK {RESULTS.get(event['result'], event['result'])} ({ms:.0f} ms)"
+        config = self.session.pipeline.config
+        if config is not None:
+            self.config_label.setText(
+                f"mode {MODE_NAMES.get(config.get('mode'), '?')}, {config.get('rate_hz')} Hz, ±{config.get('accel_fs_g')} g, "
+                f"±{config.get('gyro_fs_dps')} °/s, mounting {config.get('mounting')}")
+        self._show_answers()
+
+    def _show_answers(self) -> None:
+        now = time.monotonic_ns()
+        for sent in self.sent:
+            if not sent.answer and now - sent.sent_ns > ACK_TIMEOUT_S * 1e9:
+                sent.answer = f"no ACK within {ACK_TIMEOUT_S:g} s"
+        self.answers.setText("\n".join(f"#{s.seq} {s.text}: {s.answer or 'waiting…'}" for s in reversed(self.sent)))

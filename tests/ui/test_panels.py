@@ -1,0 +1,42 @@
+"""Estimator and uplink panels on the simulated bridge: a comparison estimator's curve comes and
+goes, a tuned parameter reaches the estimator and the recording, the aircraft acknowledges commands."""
+
+from groundstation.recording import open_recording
+
+
+def curve(window, quantity):
+    return next(c for s, c in window.live_view.attitude.curves if s.quantity == quantity)
+
+
+def test_estimator_toggle_and_live_tuning(window, qtbot):
+    window.start_demo()
+    session, panel = window.session, window.estimator_panel
+    hf = curve(window, "hf_pitch_deg")
+    assert not hf.isVisible()
+    panel.shown["hf"].setChecked(True)
+    qtbot.waitUntil(lambda: hf.isVisible() and hf.xData is not None and len(hf.xData) > 50, timeout=5000)
+    assert curve(window, "hf_roll_deg").isVisible()  # both plots follow
+    panel.shown["hf"].setChecked(False)
+    assert not hf.isVisible() and not curve(window, "hf_roll_deg").isVisible()
+
+    panel.boxes["hf", "beta"].setValue(0.05)
+    panel.boxes["ecf", "kp"].setValue(2.5)
+    panel.apply()
+    assert session.pipeline.estimators["hf"].settings.beta == 0.05
+    assert session.pipeline.estimators["ecf"].settings.kp == 2.5
+    path = session.recording_path
+    window.disconnect()
+    recorded = [e for _, e in open_recording(path).events if e.get("kind") == "settings"]
+    assert {"name": "hf", "settings": {"beta": 0.05}}.items() <= recorded[0].items()
+
+
+def test_uplink_commands_are_acknowledged(window, qtbot):
+    window.start_demo()
+    uplink = window.uplink_panel
+    qtbot.waitUntil(lambda: "mode both" in uplink.config_label.text(), timeout=5000)
+    uplink.mode_box.setCurrentText("raw")
+    uplink.mode_button.click()
+    window.estimator_panel.boxes["ahf", "lambda_max"].setValue(1.5)
+    window.estimator_panel.sendToAircraft.emit(window.estimator_panel.values("ahf"))
+    qtbot.waitUntil(lambda: uplink.answers.text().count("ACK ok") == 3, timeout=5000)
+    qtbot.waitUntil(lambda: "mode raw" in uplink.config_label.text(), timeout=3000)  # CONFIG follows set_mode
