@@ -21,6 +21,7 @@ from PySide6 import QtCore
 from groundstation.ui.series import Series
 
 LEFT_AXIS_PX = 60
+GAP_BRUSH = (220, 60, 60, 50)
 FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a time
 Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
@@ -54,6 +55,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._series: dict[str, Series] = {}  # as last drawn, for the crosshair
         self._specs = plots
         self._x_range: tuple[float, float] | None = None
+        self._gaps_drawn = 0
         self.curves: list[tuple[Curve, pg.PlotDataItem]] = []
         # The legend sits above the plots, not over them: new data then never repaints it.
         self.legend = pg.LegendItem(colCount=len(plots[0].curves), labelTextColor="#222")
@@ -103,6 +105,19 @@ class StackedPlots(pg.GraphicsLayoutWidget):
     def clear_data(self) -> None:
         for _, curve in self.curves:
             curve.setData([], [])
+        for item in self.items:
+            for region in [i for i in item.items if isinstance(i, pg.LinearRegionItem)]:
+                item.removeItem(region)
+        self._gaps_drawn = 0
+
+    def _mark_gaps(self, gaps: list[tuple[float, float]]) -> None:
+        """Shade the time with no samples (port gone, radio lost), once per gap."""
+        for start, end in gaps[self._gaps_drawn :]:
+            for item in self.items:
+                region = pg.LinearRegionItem((start, end), movable=False, brush=GAP_BRUSH, pen=pg.mkPen(None))
+                region.setZValue(-10)
+                item.addItem(region, ignoreBounds=True)
+        self._gaps_drawn = len(gaps)
 
     def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None) -> None:
         """Update the visible curves whose series grew (all of them when ``grew`` is None) and
@@ -119,6 +134,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._series = series
         imu = series.get("imu")
         if imu is not None and imu.count:
+            self._mark_gaps(imu.gaps)
             self._follow_time(imu, window_s)
             for item in self.items:
                 self._fit_values(item)

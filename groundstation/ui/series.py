@@ -17,6 +17,7 @@ from groundstation import quaternion
 from groundstation.session.table import Table
 
 INITIAL_ROWS = 8192
+GAP_S = 0.25  # samples further apart than this mark a gap (port gone, radio lost): 25 at 100 Hz
 
 Derive = Callable[[np.ndarray, tuple[str, ...]], dict[str, np.ndarray]]
 
@@ -30,6 +31,7 @@ class Series:
         self.count = 0
         self.time_s = np.empty(INITIAL_ROWS)
         self.values: dict[str, np.ndarray] = {}
+        self.gaps: list[tuple[float, float]] = []  # (last sample before, first sample after), seconds
 
     def take(self, lock) -> int:
         """Append the rows added since the last call; returns how many. ``lock`` keeps the
@@ -46,6 +48,8 @@ class Series:
             self.time_s = np.resize(self.time_s, size)
             self.values = {k: np.resize(v, size) for k, v in self.values.items()}
         self.time_s[self.count : end] = rows[:, self.table.columns.index("time_s")]
+        times = self.time_s[max(self.count - 1, 0) : end]
+        self.gaps += [(times[i], times[i + 1]) for i in np.flatnonzero(np.diff(times) > GAP_S)]
         for name, column in derived.items():
             if name not in self.values:
                 self.values[name] = np.full(len(self.time_s), np.nan, dtype=np.float32)

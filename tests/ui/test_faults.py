@@ -1,4 +1,13 @@
-"""Bad inputs show a message in the window, never an exception."""
+"""Bad inputs and lost ports show a message in the window, never an exception."""
+
+import os
+import subprocess
+import sys
+
+import pyqtgraph as pg
+import pytest
+
+from groundstation.ui.sessions import explain_port_error
 
 
 def test_missing_or_damaged_recording_shows_a_message(window, tmp_path):
@@ -15,3 +24,36 @@ def test_a_port_that_cannot_be_opened_shows_why(window):
     window.connect_serial("/dev/no-such-serial-port", 115200)
     assert window.banner.isVisible() and "/dev/no-such-serial-port" in window.banner.text()
     assert window.session is None
+
+
+@pytest.mark.skipif(os.name != "posix", reason="the simulated bridge's pseudo-terminal is POSIX")
+def test_unplugged_port_is_shown_reopened_and_the_gap_marked(window, qtbot, tmp_path):
+    link = tmp_path / "radio"
+    bridge = subprocess.Popen(
+        [sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "hover", "--dropout-every", "3",
+         "--dropout-s", "1", "--link", str(link)], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        bridge.stdout.readline()  # the pty is up
+        window.connect_serial(str(link), 115200)
+        session = window.session
+        recording = session.recording_path
+        qtbot.waitUntil(lambda: window.link_panel.headline.text().startswith("PORT GONE"), timeout=8000)
+        qtbot.waitUntil(lambda: window.link_panel.headline.text() == "LINK OK", timeout=5000)
+        qtbot.waitUntil(lambda: bool(window.live_view.series["imu"].gaps), timeout=3000)
+    finally:
+        bridge.terminate()
+        bridge.wait(timeout=10)
+    start, end = window.live_view.series["imu"].gaps[0]
+    assert 0.9 < end - start < 1.6  # the second the port was away
+    shaded = [i for i in window.live_view.attitude.items[0].items if isinstance(i, pg.LinearRegionItem)]
+    assert [tuple(region.getRegion()) for region in shaded] == [(start, end)]
+    assert window.session is session and session.recording_path == recording  # same session, same file
+    assert window.banner.isHidden()
+
+
+def test_port_errors_say_what_to_do():
+    denied = explain_port_error("cannot open serial port /dev/ttyUSB0: [Errno 13] could not open port: Permission denied")
+    busy = explain_port_error("cannot open serial port /dev/ttyUSB0: [Errno 16] Device or resource busy")
+    if sys.platform.startswith("linux"):
+        assert "dialout" in denied
+    assert "in use by another program" in busy
