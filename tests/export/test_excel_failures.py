@@ -20,16 +20,14 @@ from groundstation.export.excel import ExportCancelled, write_workbook
 posix_only = pytest.mark.skipif(os.name != "posix", reason="POSIX permissions and resource limits")
 
 
-def openpyxl_temporaries() -> set[str]:
-    return {p for p in os.listdir(tempfile.gettempdir()) if p.startswith("openpyxl.")}
-
-
 @pytest.fixture
-def no_leftovers():
-    """Fails the test if it leaves openpyxl's temporary sheet files behind."""
-    before = openpyxl_temporaries()
+def no_leftovers(tmp_path_factory, monkeypatch):
+    """openpyxl's temporary sheet files go to a folder of this test's own (other processes share
+    the system's), which must be empty afterwards."""
+    folder = tmp_path_factory.mktemp("openpyxl_temporaries")
+    monkeypatch.setattr(tempfile, "tempdir", str(folder))
     yield
-    assert openpyxl_temporaries() <= before
+    assert list(folder.iterdir()) == []
 
 
 def test_an_existing_file_is_kept_unless_overwrite(sim_session, tmp_path):
@@ -98,21 +96,22 @@ def test_a_file_size_limit_gets_a_message_and_leaves_nothing(sim_recording, tmp_
     EFBIG, "File too large", where a full disk gives ENOSPC; the path through the code is the same)."""
     out = tmp_path / "out" / "out.xlsx"
     out.parent.mkdir()
+    temporaries = tmp_path / "temporaries"  # openpyxl's sheet files: the limit hits them first
+    temporaries.mkdir()
     script = textwrap.dedent(f"""
         import os, resource, signal, tempfile
         from groundstation.errors import UserError
         from groundstation.export.excel import write_workbook
         from groundstation.session.data import load_session
         data = load_session({str(sim_recording)!r})
-        before = {{p for p in os.listdir(tempfile.gettempdir()) if p.startswith("openpyxl.")}}
+        tempfile.tempdir = {str(temporaries)!r}
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a failing write, not a killed process
         resource.setrlimit(resource.RLIMIT_FSIZE, (64 * 1024, 64 * 1024))
         try:
             write_workbook(data, {str(out)!r})
         except UserError as error:
             print("UserError:", error)
-        after = {{p for p in os.listdir(tempfile.gettempdir()) if p.startswith("openpyxl.")}}
-        print("leftovers:", sorted(after - before))
+        print("leftovers:", os.listdir(tempfile.tempdir))  # before exiting: openpyxl removes its files at exit
     """)
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
