@@ -9,15 +9,17 @@
 2. Live: the main window on the simulated bridge for S s (default 60): whole-process CPU % (reader,
    pipeline with ahf+hf+ecf, recorder, UI), UI frames/s drawn, median ms per redraw tick.
 3. Memory: an H-hour (default 2) simulated flight, recorded as the app records (ahf, hf, ecf), is
-   replayed as fast as possible into the window on its "whole session" window; RSS growth minus the
-   session's own tables is what the UI costs.
+   replayed as fast as possible, in fresh processes: headless, and into the window on its "whole
+   session" window. The difference in RSS growth is what the UI costs beyond the session's data.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import threading
@@ -26,10 +28,12 @@ from pathlib import Path
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
-from PySide6 import QtCore, QtWidgets  # noqa: E402
+import numpy as np  # noqa: E402
+from PySide6 import QtCore, QtTest, QtWidgets  # noqa: E402
 
 from groundstation.recording import open_recording  # noqa: E402
 from groundstation.session.pipeline import Pipeline  # noqa: E402
+from groundstation.session.table import Table  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
 from groundstation.ui import sessions  # noqa: E402
 from groundstation.ui.live_view import attitude_plots  # noqa: E402
@@ -50,34 +54,49 @@ def table_mb(pipeline: Pipeline) -> float:
     return sum(len(t) * len(t.columns) * 8 for t in tables) / 1e6
 
 
-def simulated_series(seconds: float) -> dict[str, Series]:
+def simulated_table(seconds: float) -> Pipeline:
     pipeline = Pipeline(("ahf",))
     stream = SimStream(Scenario("flight", seconds + 5, seed=1))
     for chunk in stream.advance(seconds + 1.5):
         pipeline.feed(int(chunk.t_s * 1e9), chunk.data)
-    series = {"imu": Series(pipeline.imu, imu_quantities(pipeline.filters)), "onboard": Series(pipeline.onboard, onboard_quantities)}
-    for s in series.values():
-        s.take(threading.Lock())
-    return series
+    return pipeline
+
+
+def growing(table: Table, rows: np.ndarray) -> Table:
+    copy = Table(table.columns)
+    copy.append(rows.ravel().tolist())
+    return copy
 
 
 def bench_redraw() -> None:
-    series = simulated_series(610.0)
+    """Per frame, as in the app: 1/30 s of new 100 Hz rows, taken into the Series, drawn, painted."""
+    pipeline = simulated_table(610.0)
+    imu_rows, onboard_rows = pipeline.imu.array(), pipeline.onboard.array()
     plots = StackedPlots(attitude_plots(("ahf",)))
     plots.resize(1000, 700)
     plots.show()
+    QtTest.QTest.qWaitForWindowExposed(plots)  # an unexposed widget does not paint at all
+    lock = threading.Lock()
     for window_s in (60.0, 600.0):
         for mode in ("peak", None):
             for item in plots.items:
                 item.setDownsampling(auto=mode is not None, mode=mode or "peak", ds=1)
+            start = int(np.searchsorted(imu_rows[:, 0], window_s + 2.0))
+            imu, onboard = growing(pipeline.imu, imu_rows[:start]), growing(pipeline.onboard, onboard_rows[:start])
+            series = {"imu": Series(imu, imu_quantities(("ahf",))), "onboard": Series(onboard, onboard_quantities)}
             times = []
-            for _ in range(FRAMES):
+            for frame in range(FRAMES):
+                rows = slice(start + 3 * frame, start + 3 * frame + 3)
+                imu.append(imu_rows[rows].ravel().tolist())
+                onboard.append(onboard_rows[rows].ravel().tolist())
                 t0 = time.perf_counter()
+                for s in series.values():
+                    s.take(lock)
                 plots.draw(series, window_s, None)
-                plots.repaint()
+                plots.viewport().repaint()  # the paint, synchronously
                 times.append(time.perf_counter() - t0)
             ms = 1e3 * statistics.median(times)
-            points = series["imu"].window(window_s).stop - series["imu"].window(window_s).start
+            points = len(series["imu"].data("ahf_pitch_deg", window_s)[0])
             print(f"redraw 4 curves x {points:6d} points ({window_s:4.0f} s window), "
                   f"{'peak downsampling' if mode else 'plain            '}: {ms:5.1f} ms/frame  ({1e3 / ms:4.0f} frames/s possible)")
     plots.close()
@@ -132,35 +151,49 @@ def make_recording(path: Path, hours: float) -> None:
                 writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)
 
 
-def bench_memory(app: QtWidgets.QApplication, hours: float) -> None:
+def bench_memory(hours: float) -> None:
+    """Each replay in a fresh process, headless and into the window: the difference is the UI's."""
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "long.gsrec"
         t0 = time.monotonic()
         make_recording(path, hours)
         print(f"memory: simulated a {hours:g} h recording ({path.stat().st_size / 1e6:.0f} MB) in {time.monotonic() - t0:.0f} s")
-        settings = QtCore.QSettings(str(Path(folder) / "settings.ini"), QtCore.QSettings.Format.IniFormat)
+        runs = {}
+        for kind in ("headless", "window"):
+            result = subprocess.run([sys.executable, __file__, "--memory-child", kind, str(path)],
+                                    capture_output=True, text=True, check=True)
+            runs[kind] = json.loads(result.stdout.splitlines()[-1])
+        h, w = runs["headless"], runs["window"]
+        print(f"memory: replay of {w['samples']} samples as fast as possible ({w['seconds']:.0f} s): RSS growth headless "
+              f"{h['growth_mb']:.0f} MB (session tables {h['tables_mb']:.0f} MB), into the window on 'whole session' "
+              f"{w['growth_mb']:.0f} MB; the UI's share {w['growth_mb'] - h['growth_mb']:.0f} MB (plot buffers {w['buffers_mb']:.0f} MB)")
+
+
+def memory_child(kind: str, path: str) -> None:
+    app = QtWidgets.QApplication(sys.argv[:1])
+    recording = open_recording(path)
+    window = None
+    if kind == "window":
+        settings = QtCore.QSettings(str(Path(path).with_suffix(".ini")), QtCore.QSettings.Format.IniFormat)
         window = MainWindow(settings)
         window.resize(1280, 800)
         window.show()
         window.live_view.window_box.setCurrentText("whole session")
         wait(app, 0.5)
-        before = rss_mb()
-        session = sessions.replay_session(open_recording(path), None).start()
+    before = rss_mb()
+    t0 = time.monotonic()
+    session = sessions.replay_session(recording, None).start()
+    if window is not None:
         window._adopt(session)
         session.source.speed = None  # the transport set its 1x: as fast as possible instead
-        t0 = time.monotonic()
-        while session.running:
-            wait(app, 1.0)
+    while session.running:
         wait(app, 0.5)
-        elapsed = time.monotonic() - t0
-        growth = rss_mb() - before
-        own = table_mb(session.pipeline)
-        buffers = sum(s.time_s.nbytes + sum(v.nbytes for v in s.values.values()) for s in window.live_view.series.values()) / 1e6
-        recording_mb = path.stat().st_size / 1e6  # the replay source holds the file in memory
-        print(f"memory: replayed {len(session.pipeline.imu)} samples in {elapsed:.0f} s into the window: RSS +{growth:.0f} MB; "
-              f"session tables {own:.0f} MB, recording bytes {recording_mb:.0f} MB; UI beyond them "
-              f"{growth - own - recording_mb:.0f} MB (plot buffers {buffers:.0f} MB)")
-        window.close()
+    wait(app, 0.5)
+    print(json.dumps({
+        "growth_mb": rss_mb() - before, "tables_mb": table_mb(session.pipeline), "samples": len(session.pipeline.imu),
+        "seconds": time.monotonic() - t0,
+        "buffers_mb": sum(s.nbytes() for s in window.live_view.series.values()) / 1e6 if window else 0.0,
+    }))
 
 
 def main() -> None:
@@ -168,13 +201,17 @@ def main() -> None:
     parser.add_argument("--live-seconds", type=float, default=60.0)
     parser.add_argument("--hours", type=float, default=2.0)
     parser.add_argument("--skip-memory", action="store_true")
+    parser.add_argument("--memory-child", nargs=2, metavar=("KIND", "RECORDING"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.memory_child:
+        memory_child(*args.memory_child)
+        return
     app = QtWidgets.QApplication(sys.argv[:1])
     print(f"{os.cpu_count()} cores, Python {sys.version.split()[0]}, Qt platform {app.platformName()}")
     bench_redraw()
     bench_live(app, args.live_seconds)
     if not args.skip_memory:
-        bench_memory(app, args.hours)
+        bench_memory(args.hours)
 
 
 if __name__ == "__main__":

@@ -127,20 +127,18 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             if not curve.isVisible() or not (everything or spec.series in grew):
                 continue
             s = series.get(spec.series)
-            if s is None or spec.quantity not in s.values:
-                continue
-            rows = s.window(window_s)
-            curve.setData(s.time_s[rows], s.values[spec.quantity][rows])
+            if s is not None and s.has(spec.quantity):
+                curve.setData(*s.data(spec.quantity, window_s))
         self._series = series
         imu = series.get("imu")
-        if imu is not None and imu.count:
+        if imu is not None and imu.end_s is not None:
             self._mark_gaps(imu.gaps)
             self._follow_time(imu, window_s)
             for item in self.items:
                 self._fit_values(item)
 
     def _follow_time(self, imu: Series, window_s: float | None) -> None:
-        first, end = imu.time_s[0], imu.time_s[imu.count - 1]
+        first, end = imu.start_s, imu.end_s
         span = end - first if window_s is None else window_s
         step = 2.0 ** math.ceil(math.log2(max(span, 1.0) / FOLLOW_STEPS))
         right = math.ceil(end / step + 1e-9) * step
@@ -181,9 +179,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             values = []
             for curve in spec.curves:
                 s = self._series.get(curve.series)
-                row = None if s is None or curve.label not in visible or curve.quantity not in s.values else s.at(t_s)
-                if row is not None:
-                    values.append(f"{curve.label} {s.values[curve.quantity][row]:+.2f}")
+                value = None if s is None or curve.label not in visible else s.value_at(curve.quantity, t_s)
+                if value is not None:
+                    values.append(f"{curve.label} {value:+.2f}")
             if values:
                 parts.append(f"{spec.title} ({spec.unit}): " + ", ".join(values))
         return "   |   ".join(parts)

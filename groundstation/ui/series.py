@@ -1,10 +1,11 @@
 """The plotted quantities of a growing session table, kept as numpy arrays the plots slice.
 
 Each tick takes only the rows added since the last one (``Table.tail``), converts them once
-(quaternions to pitch and roll in degrees, rad/s to °/s) and appends them to arrays grown by half
-their size. A 10-minute or whole-session window is then a slice, not a copy of the table. Values
-are float32 (plots need no more), time float64; only plotted quantities are kept (about 70 bytes
-per sample with three estimators, against some 300 in the session's table).
+(quaternions to pitch and roll in degrees, rad/s to °/s) and appends them. Only plotted quantities
+are kept, as float32 (time float64). The last ``RECENT_S`` seconds stay at full resolution, so
+windows up to 10 minutes are slices, not copies; older samples are kept as the minimum and maximum
+of every ``BIN_ROWS`` (what peak downsampling would draw of them anyway), which holds a 2-hour
+session in some 20 MB instead of 100.
 """
 
 from __future__ import annotations
@@ -18,8 +19,45 @@ from groundstation.session.table import Table
 
 INITIAL_ROWS = 8192
 GAP_S = 0.25  # samples further apart than this mark a gap (port gone, radio lost): 25 at 100 Hz
+RECENT_S = 660.0  # kept at full resolution: the 10-minute window and a margin
+BIN_ROWS = 10  # older samples: min and max of each 10 (0.1 s at 100 Hz)
 
 Derive = Callable[[np.ndarray, tuple[str, ...]], dict[str, np.ndarray]]
+
+
+class Columns:
+    """A time column (float64) and named float32 columns, appended at the end, dropped at the front."""
+
+    def __init__(self):
+        self.count = 0
+        self.time_s = np.empty(INITIAL_ROWS)
+        self.values: dict[str, np.ndarray] = {}
+
+    @property
+    def capacity(self) -> int:
+        return len(self.time_s)
+
+    def append(self, time_s: np.ndarray, values: dict[str, np.ndarray]) -> None:
+        end = self.count + len(time_s)
+        if end > self.capacity:
+            size = max(self.capacity * 3 // 2, end)
+            self.time_s = np.resize(self.time_s, size)
+            self.values = {k: np.resize(v, size) for k, v in self.values.items()}
+        self.time_s[self.count : end] = time_s
+        for name, column in values.items():
+            if name not in self.values:
+                self.values[name] = np.full(self.capacity, np.nan, dtype=np.float32)
+            self.values[name][self.count : end] = column
+        self.count = end
+
+    def drop_front(self, rows: int) -> None:
+        for column in (self.time_s, *self.values.values()):
+            column[: self.count - rows] = column[rows : self.count]
+        self.count -= rows
+
+    def since(self, t_s: float) -> int:
+        """Index of the first row at or after ``t_s``."""
+        return int(np.searchsorted(self.time_s[: self.count], t_s))
 
 
 class Series:
@@ -28,49 +66,82 @@ class Series:
     def __init__(self, table: Table, derive: Derive):
         self.table = table
         self._derive = derive
-        self.count = 0
-        self.time_s = np.empty(INITIAL_ROWS)
-        self.values: dict[str, np.ndarray] = {}
+        self.taken = 0  # table rows taken so far
+        self.recent = Columns()
+        self.history = Columns()  # two rows per bin of older samples: (first time, min), (last time, max)
         self.gaps: list[tuple[float, float]] = []  # (last sample before, first sample after), seconds
 
     def take(self, lock) -> int:
         """Append the rows added since the last call; returns how many. ``lock`` keeps the
         table from growing between measuring it and slicing it."""
         with lock:
-            new = len(self.table) - self.count
+            new = len(self.table) - self.taken
             rows = self.table.tail(new) if new > 0 else None
         if rows is None:
             return 0
-        derived = self._derive(rows, self.table.columns)
-        end = self.count + new
-        if end > len(self.time_s):
-            size = max(len(self.time_s) * 3 // 2, end)
-            self.time_s = np.resize(self.time_s, size)
-            self.values = {k: np.resize(v, size) for k, v in self.values.items()}
-        self.time_s[self.count : end] = rows[:, self.table.columns.index("time_s")]
-        times = self.time_s[max(self.count - 1, 0) : end]
-        self.gaps += [(times[i], times[i + 1]) for i in np.flatnonzero(np.diff(times) > GAP_S)]
-        for name, column in derived.items():
-            if name not in self.values:
-                self.values[name] = np.full(len(self.time_s), np.nan, dtype=np.float32)
-            self.values[name][self.count : end] = column
-        self.count = end
+        time_s = rows[:, self.table.columns.index("time_s")]
+        edges = time_s if self.end_s is None else np.concatenate(([self.end_s], time_s))
+        self.gaps += [(float(edges[i]), float(edges[i + 1])) for i in np.flatnonzero(np.diff(edges) > GAP_S)]
+        if self.recent.count + new > self.recent.capacity:
+            self._bin_old_rows()
+        self.recent.append(time_s, self._derive(rows, self.table.columns))
+        self.taken += new
         return new
 
-    def window(self, seconds: float | None) -> slice:
-        """The rows of the last ``seconds`` of data (None: all)."""
-        if seconds is None or self.count == 0:
-            return slice(0, self.count)
-        start = np.searchsorted(self.time_s[: self.count], self.time_s[self.count - 1] - seconds)
-        return slice(max(int(start) - 1, 0), self.count)  # one row before: the curve reaches the edge
+    def _bin_old_rows(self) -> None:
+        """Move whole bins of rows older than ``RECENT_S`` into the history as min/max pairs."""
+        r = self.recent
+        old = r.since(r.time_s[r.count - 1] - RECENT_S) // BIN_ROWS * BIN_ROWS
+        if old == 0:
+            return  # all recent: the buffer grows instead
+        times = r.time_s[:old].reshape(-1, BIN_ROWS)
+        binned = {}
+        for name, column in r.values.items():
+            bins = column[:old].reshape(-1, BIN_ROWS)
+            binned[name] = np.column_stack([np.fmin.reduce(bins, axis=1), np.fmax.reduce(bins, axis=1)]).ravel()
+        self.history.append(np.column_stack([times[:, 0], times[:, -1]]).ravel(), binned)
+        r.drop_front(old)
 
-    def at(self, t_s: float) -> int | None:
-        """Index of the row nearest ``t_s`` (None when empty)."""
-        if self.count == 0:
+    @property
+    def end_s(self) -> float | None:
+        """Time of the newest sample."""
+        return float(self.recent.time_s[self.recent.count - 1]) if self.recent.count else None
+
+    @property
+    def start_s(self) -> float | None:
+        part = self.history if self.history.count else self.recent
+        return float(part.time_s[0]) if part.count else None
+
+    def has(self, quantity: str) -> bool:
+        return quantity in self.recent.values
+
+    def data(self, quantity: str, seconds: float | None) -> tuple[np.ndarray, np.ndarray]:
+        """(time, values) of the last ``seconds`` (None: all); views when the window is recent."""
+        r, h = self.recent, self.history
+        if not r.count:
+            return np.empty(0), np.empty(0, dtype=np.float32)
+        t0 = -np.inf if seconds is None else self.end_s - seconds
+        start = r.since(t0)
+        if start > 0 or not h.count:
+            start = max(start - 1, 0)  # one row before: the curve reaches the window's edge
+            return r.time_s[start : r.count], r.values[quantity][start : r.count]
+        first = max(h.since(t0) - 1, 0)
+        older = h.values.get(quantity, np.full(h.capacity, np.nan, dtype=np.float32))
+        return (np.concatenate([h.time_s[first : h.count], r.time_s[: r.count]]),
+                np.concatenate([older[first : h.count], r.values[quantity][: r.count]]))
+
+    def value_at(self, quantity: str, t_s: float) -> float | None:
+        """The value at the sample (or history point) nearest ``t_s``."""
+        part = self.recent if not self.history.count or t_s >= self.recent.time_s[0] else self.history
+        if not part.count or quantity not in part.values:
             return None
-        times = self.time_s[: self.count]
-        i = int(np.clip(np.searchsorted(times, t_s), 1, self.count - 1)) if self.count > 1 else 0
-        return i - 1 if i and abs(times[i - 1] - t_s) < abs(times[i] - t_s) else i
+        times = part.time_s[: part.count]
+        i = int(np.clip(np.searchsorted(times, t_s), 1, part.count - 1)) if part.count > 1 else 0
+        i = i - 1 if i and abs(times[i - 1] - t_s) < abs(times[i] - t_s) else i
+        return float(part.values[quantity][i])
+
+    def nbytes(self) -> int:
+        return sum(c.time_s.nbytes + sum(v.nbytes for v in c.values.values()) for c in (self.recent, self.history))
 
 
 def pitch_roll_deg(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:

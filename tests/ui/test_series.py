@@ -1,0 +1,31 @@
+"""The plot buffers: full resolution for the recent window, min/max bins for older samples, gaps."""
+
+import threading
+
+import numpy as np
+
+from groundstation.session.table import Table
+from groundstation.ui.series import BIN_ROWS, RECENT_S, Series
+
+
+def test_old_samples_become_min_max_bins_and_recent_ones_stay_exact():
+    table = Table(("time_s", "v"))
+    series = Series(table, lambda rows, columns: {"v": rows[:, 1]})
+    t = np.arange(0, 1500.0, 0.01)
+    t[t > 700.0] += 2.0  # the port was away for 2 s
+    v = np.sin(t) + np.random.default_rng(1).normal(0, 0.1, len(t))
+    for part in np.array_split(np.column_stack([t, v]), 40):
+        table.append(part.ravel().tolist())
+        series.take(threading.Lock())
+    recent_t, recent_v = series.data("v", 600.0)
+    window = t >= t[-1] - 600.0
+    assert np.array_equal(recent_t[1:], t[window]) and np.array_equal(recent_v[1:], v[window].astype(np.float32))
+    all_t, all_v = series.data("v", None)
+    assert all_t[0] == 0.0 and all_t[-1] == t[-1]
+    old = all_t < series.recent.time_s[0]
+    assert old.sum() == 2 * np.sum(t < series.recent.time_s[0]) // BIN_ROWS  # 10 samples -> 2 points
+    bins = v[: old.sum() // 2 * BIN_ROWS].reshape(-1, BIN_ROWS).astype(np.float32)
+    assert np.array_equal(all_v[old][0::2], bins.min(axis=1)) and np.array_equal(all_v[old][1::2], bins.max(axis=1))
+    assert series.recent.time_s[0] >= t[-1] - 2 * RECENT_S  # binned as it went, not at the end
+    assert series.gaps == [(t[t <= 702.0][-1], t[t > 702.0][0])]
+    assert series.value_at("v", t[-1]) == np.float32(v[-1])
