@@ -9,7 +9,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-import tempfile
+import secrets
 from pathlib import Path
 
 from groundstation.errors import UserError
@@ -23,12 +23,12 @@ def atomic_output(path, overwrite: bool = False):
         raise UserError(f"{path} exists; choose another name or pass --overwrite")
     if not path.parent.is_dir():
         raise UserError(f"cannot write {path}: the folder {path.parent} does not exist")
+    temporary = path.with_name(f".{path.name}.{secrets.token_hex(4)}.part")
     try:
-        handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
-        os.close(handle)
+        # os.open with 0o666, not mkstemp (0o600): the export gets the user's usual permissions (umask).
+        os.close(os.open(temporary, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o666))
     except OSError as error:
         raise UserError(f"cannot write in {path.parent}: {error.strerror}") from None
-    temporary = Path(temporary)
     try:
         yield temporary
         os.replace(temporary, path)
