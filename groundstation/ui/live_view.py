@@ -68,6 +68,7 @@ class LiveView(QtWidgets.QWidget):
         controls.addStretch(1)
         self.tabs = QtWidgets.QTabWidget()
         self.tabs.currentChanged.connect(lambda _: self.redraw())
+        self._hidden = hidden  # remembered also for labels the current session lacks
         self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
         self._filters = ("ahf",)
         self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
@@ -97,18 +98,20 @@ class LiveView(QtWidgets.QWidget):
         self.series = {}
         filters = session.pipeline.filters if session is not None else self._filters
         if filters != self._filters:
+            self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
             self.tabs.removeTab(0)
             self.attitude.deleteLater()
-            self.attitude = self._add_tab(StackedPlots(attitude_plots(filters), self.hidden_labels()), "Attitude", 0)
+            self.attitude = self._add_tab(StackedPlots(attitude_plots(filters), self._hidden), "Attitude", 0)
             self.tabs.setCurrentIndex(current)
             self._filters = filters
         for plots in (self.attitude, self.sensors, self.diagnostics):
             plots.clear_data()
 
     def hidden_labels(self) -> frozenset[str]:
-        """The attitude legend entries switched off (kept for labels a new session lacks)."""
-        return frozenset(LABELS.values()) - self.attitude.visible_labels()
+        """The attitude legend entries switched off, with those remembered from earlier sessions."""
+        present = {spec.label for spec, _ in self.attitude.curves}
+        return frozenset((self._hidden - present) | (present - self.attitude.visible_labels()))
 
     def _paused_changed(self, paused: bool) -> None:
         self.pause_button.setText("Resume view" if paused else "Pause view")

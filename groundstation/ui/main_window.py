@@ -7,6 +7,7 @@ in the red banner under the connection bar, never as a traceback.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from PySide6 import QtCore, QtWidgets
@@ -16,7 +17,7 @@ from groundstation.session.live import LiveSession
 from groundstation.ui import sessions
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
-from groundstation.ui.estimator_panel import EstimatorPanel
+from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
@@ -96,12 +97,12 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- sessions -------------------------------------------------------------------------------
 
     def start_demo(self, note: str = "") -> None:
-        self._start(lambda: sessions.start_demo(self.recordings_dir), note)
+        self._start(lambda: sessions.start_demo(self.recordings_dir, self._stored_estimator_settings()), note)
 
     def connect_serial(self, port: str, baud: int) -> None:
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
-        self._start(lambda: sessions.start_serial(port, baud, self.recordings_dir))
+        self._start(lambda: sessions.start_serial(port, baud, self.recordings_dir, self._stored_estimator_settings()))
 
     def open_recording(self, path) -> None:
         self._start(lambda: sessions.start_replay(path))
@@ -183,6 +184,10 @@ class MainWindow(QtWidgets.QMainWindow):
         session, self.session = self.session, None
         session.stop()
         self.last_file = self._session_file(session)
+        if not hasattr(session.source, "recording"):  # a replay's settings are the recording's, not the user's
+            tuned = session.pipeline.settings()
+            self.settings.setValue("estimator_settings", json.dumps(
+                {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in TUNABLE.items() if name in tuned}))
 
     def show_error(self, message: str | None) -> None:
         self.banner.setText(message or "")
@@ -233,6 +238,14 @@ class MainWindow(QtWidgets.QMainWindow):
         if stored is None:
             return DEFAULT_HIDDEN
         return frozenset([stored] if isinstance(stored, str) else stored)  # QSettings gives one item as a str
+
+    def _stored_estimator_settings(self) -> dict | None:
+        """The tuned settings of the last live session (QSettings), for the next one."""
+        stored = self.settings.value("estimator_settings")
+        try:
+            return json.loads(stored) if stored else None
+        except ValueError:
+            return None  # a damaged settings file must not keep the app from starting
 
     def _restore_layout(self) -> None:
         for key, restore in (("geometry", self.restoreGeometry), ("splitter", self.splitter.restoreState)):

@@ -28,19 +28,19 @@ DIALOUT_HINT = ("on Linux, add yourself to the 'dialout' group (sudo usermod -aG
                 "then log out and back in")
 
 
-def start_demo(recordings_dir: Path | None = None, seed: int = 1) -> LiveSession:
+def start_demo(recordings_dir: Path | None = None, settings: dict | None = None, seed: int = 1) -> LiveSession:
     port = SimulatedPort(SimStream(Scenario("flight", DEMO_PROFILE_S, seed=seed)), timeout=PORT_TIMEOUT_S)
     source = SerialSource(port)
     source.description = DEMO_DESCRIPTION
-    return LiveSession(source, LIVE_FILTERS, recordings_dir=recordings_dir, metadata={"demo": True}).start()
+    return LiveSession(source, LIVE_FILTERS, settings, recordings_dir=recordings_dir, metadata={"demo": True}).start()
 
 
-def start_serial(port: str, baud: int, recordings_dir: Path | None = None) -> LiveSession:
+def start_serial(port: str, baud: int, recordings_dir: Path | None = None, settings: dict | None = None) -> LiveSession:
     try:
         source = SerialSource(port, baud)
     except UserError as error:
         raise UserError(explain_port_error(str(error))) from None
-    return LiveSession(source, LIVE_FILTERS, recordings_dir=recordings_dir).start()
+    return LiveSession(source, LIVE_FILTERS, settings, recordings_dir=recordings_dir).start()
 
 
 def explain_port_error(message: str) -> str:

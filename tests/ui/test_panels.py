@@ -40,3 +40,18 @@ def test_uplink_commands_are_acknowledged(window, qtbot):
     window.estimator_panel.sendToAircraft.emit(window.estimator_panel.values("ahf"))
     qtbot.waitUntil(lambda: uplink.answers.text().count("ACK ok") == 3, timeout=5000)
     qtbot.waitUntil(lambda: "mode raw" in uplink.config_label.text(), timeout=3000)  # CONFIG follows set_mode
+
+
+def test_tuned_settings_and_shown_estimators_are_remembered(window, qtbot, tmp_path):
+    from groundstation.ui.main_window import MainWindow
+
+    window.start_demo()
+    window.estimator_panel.boxes["ahf", "lambda_min"].setValue(0.3)
+    window.estimator_panel.apply()
+    window.estimator_panel.shown["ecf"].setChecked(True)
+    window.close()
+    again = MainWindow(window.settings, recordings_dir=tmp_path / "recordings")
+    qtbot.addWidget(again)
+    again.start_demo()
+    assert again.session.pipeline.estimators["ahf"].settings.lambda_min == 0.3
+    assert again.estimator_panel.shown["ecf"].isChecked() and not again.estimator_panel.shown["hf"].isChecked()
