@@ -32,7 +32,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
     sendToAircraft = QtCore.Signal(dict)  # AHF setting -> value, for set_filter_param
 
     def __init__(self, parent=None):
-        super().__init__("Estimators", parent)
+        super().__init__(parent)  # titled by its tab
         self.session: LiveSession | None = None
         self.shown: dict[str, QtWidgets.QCheckBox] = {}
         self.boxes: dict[tuple[str, str], QtWidgets.QDoubleSpinBox] = {}

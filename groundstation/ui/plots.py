@@ -78,6 +78,11 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                     self.legend.addItem(curve, spec_curve.label)
                 self.curves.append((spec_curve, curve))
             self.items.append(item)
+        for row, item in enumerate(self.items, start=1):
+            # Equal preferred heights and stretch: the plots share the height (the time axis' plot
+            # would otherwise get less, its larger size hint taken as a fixed part).
+            item.setPreferredHeight(100)
+            self.ci.layout.setRowStretchFactor(row, 1)
         self.items[-1].showAxis("bottom")
         self.items[-1].setLabel("bottom", "time", units="s")
         self.crosshair = [pg.InfiniteLine(angle=90, movable=False, pen=pg.mkPen("#555", style=QtCore.Qt.DotLine))

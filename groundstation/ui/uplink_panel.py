@@ -31,7 +31,7 @@ class Sent:
 
 class UplinkPanel(QtWidgets.QGroupBox):
     def __init__(self, parent=None):
-        super().__init__("Uplink", parent)
+        super().__init__(parent)  # titled by its tab
         self.session: LiveSession | None = None
         self.sent: list[Sent] = []
         self._events_seen = 0
