@@ -57,6 +57,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._x_range: tuple[float, float] | None = None
         self._gaps_drawn = 0
         self.curves: list[tuple[Curve, pg.PlotDataItem]] = []
+        self.older: list[pg.PlotDataItem] = []  # each curve's binned history (``Series.older``)
+        self._older_drawn: list[tuple | None] = []
         # The legend sits above the plots, not over them: new data then never repaints it.
         self.legend = pg.LegendItem(colCount=len(plots[0].curves), labelTextColor="#222")
         self.addItem(self.legend, row=0, col=0)
@@ -74,6 +76,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 # One-pixel solid pens: Qt's raster engine strokes them several times faster than wider or dashed ones.
                 curve = item.plot(pen=pg.mkPen(spec_curve.color, width=1))
                 curve.setVisible(spec_curve.label not in hidden)
+                self.older.append(item.plot(pen=pg.mkPen(spec_curve.color, width=1)))
+                self._older_drawn.append(None)
                 if row == 1:
                     self.legend.addItem(curve, spec_curve.label)
                 self.curves.append((spec_curve, curve))
@@ -96,9 +100,11 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             curve.visibleChanged.connect(lambda c=curve, label=spec_curve.label: self._mirror(label, c.isVisible()))
 
     def _mirror(self, label: str, visible: bool) -> None:
-        for spec, curve in self.curves:
-            if spec.label == label and curve.isVisible() != visible:
-                curve.setVisible(visible)
+        for (spec, curve), older in zip(self.curves, self.older):
+            if spec.label == label:
+                older.setVisible(visible)
+                if curve.isVisible() != visible:
+                    curve.setVisible(visible)
         self._stale = True
 
     def visible_labels(self) -> set[str]:
@@ -108,8 +114,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._mirror(label, visible)
 
     def clear_data(self) -> None:
-        for _, curve in self.curves:
+        for curve in [c for _, c in self.curves] + self.older:
             curve.setData([], [])
+        self._older_drawn = [None] * len(self.older)
         for item in self.items:
             for region in [i for i in item.items if isinstance(i, pg.LinearRegionItem)]:
                 item.removeItem(region)
@@ -128,12 +135,18 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         """Update the visible curves whose series grew (all of them when ``grew`` is None) and
         follow the newest ``window_s`` seconds (the whole session when None)."""
         everything, self._stale = grew is None or self._stale, False
-        for spec, curve in self.curves:
+        for i, (spec, curve) in enumerate(self.curves):
             if not curve.isVisible() or not (everything or spec.series in grew):
                 continue
             s = series.get(spec.series)
-            if s is not None and s.has(spec.quantity):
-                curve.setData(*s.data(spec.quantity, window_s))
+            if s is None or not s.has(spec.quantity):
+                continue
+            curve.setData(*s.data(spec.quantity, window_s))
+            t, older = s.older(spec.quantity, window_s)
+            key = (len(t), t[0] if len(t) else None)
+            if key != self._older_drawn[i]:  # changes only when rows are binned or the window moves past them
+                self.older[i].setData(t, older)
+                self._older_drawn[i] = key
         self._series = series
         imu = series.get("imu")
         if imu is not None and imu.end_s is not None:

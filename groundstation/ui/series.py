@@ -5,7 +5,7 @@ Each tick takes only the rows added since the last one (``Table.tail``), convert
 are kept, as float32 (time float64). The last ``RECENT_S`` seconds stay at full resolution, so
 windows up to 10 minutes are slices, not copies; older samples are kept as the minimum and maximum
 of every ``BIN_ROWS`` (what peak downsampling would draw of them anyway), which holds a 2-hour
-session in some 20 MB instead of 100.
+session in some 20 MB instead of 100, drawn as a second curve (``older``).
 """
 
 from __future__ import annotations
@@ -116,19 +116,22 @@ class Series:
         return quantity in self.recent.values
 
     def data(self, quantity: str, seconds: float | None) -> tuple[np.ndarray, np.ndarray]:
-        """(time, values) of the last ``seconds`` (None: all); views when the window is recent."""
-        r, h = self.recent, self.history
+        """(time, values) of the full-resolution samples in the last ``seconds`` (None: all): views."""
+        r = self.recent
         if not r.count:
             return np.empty(0), np.empty(0, dtype=np.float32)
-        t0 = -np.inf if seconds is None else self.end_s - seconds
-        start = r.since(t0)
-        if start > 0 or not h.count:
-            start = max(start - 1, 0)  # one row before: the curve reaches the window's edge
-            return r.time_s[start : r.count], r.values[quantity][start : r.count]
-        first = max(h.since(t0) - 1, 0)
-        older = h.values.get(quantity, np.full(h.capacity, np.nan, dtype=np.float32))
-        return (np.concatenate([h.time_s[first : h.count], r.time_s[: r.count]]),
-                np.concatenate([older[first : h.count], r.values[quantity][: r.count]]))
+        start = 0 if seconds is None else max(r.since(self.end_s - seconds) - 1, 0)  # from one row before the edge
+        return r.time_s[start : r.count], r.values[quantity][start : r.count]
+
+    def older(self, quantity: str, seconds: float | None) -> tuple[np.ndarray, np.ndarray]:
+        """(time, min/max pairs) of the binned samples in the last ``seconds`` (None: all): views,
+        which change only when rows are binned (every few minutes), so they are drawn as a curve of
+        their own rather than copied together with the recent samples every frame."""
+        h = self.history
+        if not h.count or quantity not in h.values:
+            return np.empty(0), np.empty(0, dtype=np.float32)
+        start = 0 if seconds is None else max(h.since(self.end_s - seconds) - 1, 0)
+        return h.time_s[start : h.count], h.values[quantity][start : h.count]
 
     def value_at(self, quantity: str, t_s: float) -> float | None:
         """The value at the sample (or history point) nearest ``t_s``."""

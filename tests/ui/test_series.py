@@ -20,12 +20,12 @@ def test_old_samples_become_min_max_bins_and_recent_ones_stay_exact():
     recent_t, recent_v = series.data("v", 600.0)
     window = t >= t[-1] - 600.0
     assert np.array_equal(recent_t[1:], t[window]) and np.array_equal(recent_v[1:], v[window].astype(np.float32))
-    all_t, all_v = series.data("v", None)
-    assert all_t[0] == 0.0 and all_t[-1] == t[-1]
-    old = all_t < series.recent.time_s[0]
-    assert old.sum() == 2 * np.sum(t < series.recent.time_s[0]) // BIN_ROWS  # 10 samples -> 2 points
-    bins = v[: old.sum() // 2 * BIN_ROWS].reshape(-1, BIN_ROWS).astype(np.float32)
-    assert np.array_equal(all_v[old][0::2], bins.min(axis=1)) and np.array_equal(all_v[old][1::2], bins.max(axis=1))
+    older_t, older_v = series.older("v", None)
+    newer_t, _ = series.data("v", None)
+    assert older_t[0] == 0.0 and newer_t[-1] == t[-1] and older_t[-1] < newer_t[0]
+    assert len(older_t) == 2 * np.sum(t < newer_t[0]) // BIN_ROWS  # 10 samples -> 2 points
+    bins = v[: len(older_t) // 2 * BIN_ROWS].reshape(-1, BIN_ROWS).astype(np.float32)
+    assert np.array_equal(older_v[0::2], bins.min(axis=1)) and np.array_equal(older_v[1::2], bins.max(axis=1))
     assert series.recent.time_s[0] >= t[-1] - 2 * RECENT_S  # binned as it went, not at the end
     assert series.gaps == [(t[t <= 702.0][-1], t[t > 702.0][0])]
     assert series.value_at("v", t[-1]) == np.float32(v[-1])
