@@ -1,13 +1,14 @@
 """UI figures (offscreen Qt, software rendering): redraw cost, live CPU, memory over a long replay.
 
-    python bench/bench_ui.py [--live-seconds S] [--hours H] [--skip-memory]
+    python bench/bench_ui.py [--live-seconds S] [--hours H] [--skip-redraw] [--skip-memory]
 
 1. Redraw: the attitude plots (4 curves: AHF and onboard pitch and roll) over a 60 s and a 10 min
    window of 100 Hz data from the simulator; per frame: ``setData`` of every curve, the x range,
    and a synchronous repaint of a 1000x700 widget. Median ms per frame with peak downsampling (as
    the app) and plain, and the frames/s that leaves.
-2. Live: the main window on the simulated bridge for S s (default 60): whole-process CPU % (reader,
-   pipeline with ahf+hf+ecf, recorder, UI), UI frames/s drawn, median ms per redraw tick.
+2. Live: the main window for S s (default 60) on the in-process simulated bridge (the simulated
+   aircraft's CPU included), then on bridge-sim through a pty (as a real USB bridge): whole-process
+   CPU % (reader, pipeline with ahf+hf+ecf, recorder, UI), UI frames/s, median ms per redraw tick.
 3. Memory: an H-hour (default 2) simulated flight, recorded as the app records (ahf, hf, ecf), is
    replayed as fast as possible, in fresh processes: headless, and into the window on its "whole
    session" window. The difference in RSS growth is what the UI costs beyond the session's data.
@@ -16,6 +17,7 @@
 from __future__ import annotations
 
 import argparse
+import ctypes
 import json
 import os
 import statistics
@@ -45,6 +47,9 @@ FRAMES = 60
 
 
 def rss_mb() -> float:
+    """Resident memory after handing freed heap pages back to the OS (glibc keeps them otherwise,
+    so RSS would also count the holes left by the large temporary arrays of a fast replay)."""
+    ctypes.CDLL("libc.so.6").malloc_trim(0)
     with open("/proc/self/status") as status:
         return next(int(line.split()[1]) for line in status if line.startswith("VmRSS")) / 1024
 
@@ -102,13 +107,31 @@ def bench_redraw() -> None:
     plots.close()
 
 
-def bench_live(app: QtWidgets.QApplication, seconds: float) -> None:
+def bench_live(seconds: float) -> None:
+    """The window on the in-process demo, then on bridge-sim through a pty (the aircraft in another
+    process, as with a real USB bridge): whole-process CPU, UI frames/s, redraw tick."""
+    bridge = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "flight"],
+                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        pty = bridge.stdout.readline().split()[-1]
+        for label, start in (("simulated bridge in process (demo)", lambda w: w.start_demo()),
+                             ("bridge-sim on a pty (another process)", lambda w: w.connect_serial(pty, 115200))):
+            cpu, frames, ticks = live_run(start, seconds)
+            print(f"live 100 Hz, {label}, {seconds:.0f} s: CPU {cpu:.1f} % of one core (whole process), {frames:.1f} UI frames/s, "
+                  f"redraw tick median {1e3 * statistics.median(ticks):.1f} ms (p95 {1e3 * np.percentile(ticks, 95):.1f} ms; "
+                  "the paint follows the tick)")
+    finally:
+        bridge.terminate()
+        bridge.wait(timeout=10)
+
+
+def live_run(start, seconds: float) -> tuple[float, float, list[float]]:
     with tempfile.TemporaryDirectory() as folder:
         settings = QtCore.QSettings(str(Path(folder) / "settings.ini"), QtCore.QSettings.Format.IniFormat)
         window = MainWindow(settings, recordings_dir=Path(folder))
         window.resize(1280, 800)
         window.show()
-        window.start_demo()
+        start(window)
         tick_times = []
         tick = window.tick
 
@@ -119,23 +142,21 @@ def bench_live(app: QtWidgets.QApplication, seconds: float) -> None:
 
         window.timer.timeout.disconnect()
         window.timer.timeout.connect(timed_tick)
-        wait(app, 2.0)  # past the simulated board's boot second
+        wait(2.0)  # past the board's boot second
         tick_times.clear()
         cpu0, wall0, frames0 = time.process_time(), time.monotonic(), window.live_view.frames_drawn
-        wait(app, seconds)
+        wait(seconds)
         cpu, wall = time.process_time() - cpu0, time.monotonic() - wall0
         frames = window.live_view.frames_drawn - frames0
         window.close()
-    print(f"live 100 Hz on the simulated bridge, {wall:.0f} s: CPU {100 * cpu / wall:.1f} % of one core (whole process), "
-          f"{frames / wall:.1f} UI frames/s, redraw tick median {1e3 * statistics.median(tick_times):.1f} ms "
-          f"(p95 {1e3 * sorted(tick_times)[int(0.95 * len(tick_times))]:.1f} ms; the paint follows outside the tick)")
+    return 100 * cpu / wall, frames / wall, tick_times
 
 
-def wait(app: QtWidgets.QApplication, seconds: float) -> None:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        app.processEvents(QtCore.QEventLoop.ProcessEventsFlag.AllEvents, 50)
-        time.sleep(0.005)
+def wait(seconds: float) -> None:
+    """Run the event loop, as ``app.exec`` does, for ``seconds``."""
+    loop = QtCore.QEventLoop()
+    QtCore.QTimer.singleShot(int(seconds * 1000), loop.quit)
+    loop.exec()
 
 
 def make_recording(path: Path, hours: float) -> None:
@@ -170,7 +191,7 @@ def bench_memory(hours: float) -> None:
 
 
 def memory_child(kind: str, path: str) -> None:
-    app = QtWidgets.QApplication(sys.argv[:1])
+    app = QtWidgets.QApplication(sys.argv[:1])  # noqa: F841 (alive while the window lives)
     recording = open_recording(path)
     window = None
     if kind == "window":
@@ -179,7 +200,7 @@ def memory_child(kind: str, path: str) -> None:
         window.resize(1280, 800)
         window.show()
         window.live_view.window_box.setCurrentText("whole session")
-        wait(app, 0.5)
+        wait(0.5)
     before = rss_mb()
     t0 = time.monotonic()
     session = sessions.replay_session(recording, None).start()
@@ -187,8 +208,8 @@ def memory_child(kind: str, path: str) -> None:
         window._adopt(session)
         session.source.speed = None  # the transport set its 1x: as fast as possible instead
     while session.running:
-        wait(app, 0.5)
-    wait(app, 0.5)
+        wait(0.5)
+    wait(0.5)
     print(json.dumps({
         "growth_mb": rss_mb() - before, "tables_mb": table_mb(session.pipeline), "samples": len(session.pipeline.imu),
         "seconds": time.monotonic() - t0,
@@ -200,6 +221,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--live-seconds", type=float, default=60.0)
     parser.add_argument("--hours", type=float, default=2.0)
+    parser.add_argument("--skip-redraw", action="store_true")
     parser.add_argument("--skip-memory", action="store_true")
     parser.add_argument("--memory-child", nargs=2, metavar=("KIND", "RECORDING"), help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -208,8 +230,9 @@ def main() -> None:
         return
     app = QtWidgets.QApplication(sys.argv[:1])
     print(f"{os.cpu_count()} cores, Python {sys.version.split()[0]}, Qt platform {app.platformName()}")
-    bench_redraw()
-    bench_live(app, args.live_seconds)
+    if not args.skip_redraw:
+        bench_redraw()
+    bench_live(args.live_seconds)
     if not args.skip_memory:
         bench_memory(args.hours)
 

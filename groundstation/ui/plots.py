@@ -75,8 +75,10 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             for spec_curve in spec.curves:
                 # One-pixel solid pens: Qt's raster engine strokes them several times faster than wider or dashed ones.
                 curve = item.plot(pen=pg.mkPen(spec_curve.color, width=1))
-                curve.setVisible(spec_curve.label not in hidden)
-                self.older.append(item.plot(pen=pg.mkPen(spec_curve.color, width=1)))
+                older = item.plot(pen=pg.mkPen(spec_curve.color, width=1))
+                for c in (curve, older):
+                    c.setVisible(spec_curve.label not in hidden)
+                self.older.append(older)
                 self._older_drawn.append(None)
                 if row == 1:
                     self.legend.addItem(curve, spec_curve.label)
