@@ -21,6 +21,18 @@ def test_export_dialog_writes_the_selected_range(window, qtbot, recording, tmp_p
     assert {"ahf_pitch_deg", "ahf_roll_deg", "onboard_pitch_deg"} <= set(table.columns)
 
 
+def test_export_dialog_writes_a_workbook(qtbot, recording, tmp_path):
+    dialog = ExportDialog(recording, 30.0)
+    qtbot.addWidget(dialog)
+    assert dialog.format_box.currentData() == ".xlsx"  # the first choice
+    out = tmp_path / "flight.xlsx"
+    dialog.path_edit.setText(str(out))
+    dialog.rate.setValue(10)
+    dialog.export_button.click()
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=30000)
+    assert dialog.status.text().startswith(f"wrote {out}: sheets Session, Attitude") and out.stat().st_size > 10_000
+
+
 def test_cancel_leaves_no_file(qtbot, recording, tmp_path):
     dialog = ExportDialog(recording, 30.0)
     qtbot.addWidget(dialog)
