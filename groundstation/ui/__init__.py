@@ -1,11 +1,17 @@
 """The desktop app; the only package that imports Qt (PySide6, pyqtgraph).
 
-    app.py             QApplication and the main window on a source (``groundstation app``)
-    main_window.py     connection bar, live view, side panels, status bar; owns the session
-    sessions.py        starting the demo, serial and replay sessions, with readable errors
-    connection_bar.py  port list (refreshed), baud, connect, demo, open recording
-    live_view.py       attitude, sensor and diagnostic tabs over a time window; pause view
-    plots.py           stacked pyqtgraph plots on a shared time axis
-    series.py          the plotted quantities of a growing table, as numpy arrays (no Qt)
-    link_panel.py      link health with a colour warning
+    app.py                QApplication and the main window on a source (``groundstation app``)
+    main_window.py        connection bar, live view, side panels, status bar; owns the session
+    sessions.py           starting the demo, serial and replay sessions (readable errors); replay seeks
+    connection_bar.py     port list (refreshed), baud, connect, demo, open recording, export
+    replay_bar.py         play/pause, step, speed, seek slider
+    live_view.py          attitude, sensor and diagnostic tabs over a time window; pause view
+    plots.py              stacked pyqtgraph plots on a shared time axis, crosshair, gap shading
+    series.py             the plotted quantities of a growing table, as numpy arrays (no Qt)
+    attitude_indicator.py artificial horizon and pitch/roll/yaw readouts
+    link_panel.py         link health with a colour warning
+    estimator_panel.py    comparison estimators shown, live tuning, defaults
+    uplink_panel.py       firmware mode, AHF parameters, CONFIG, gyro calibration; ACK or timeout
+    export_dialog.py      format, file, range, rate; progress and Cancel
+    export_job.py         the export in a worker thread (no Qt)
 """

@@ -34,7 +34,7 @@ class ConnectionBar(QtWidgets.QWidget):
         self.demo_button = QtWidgets.QPushButton("Simulated bridge (demo)")
         self.open_button = QtWidgets.QPushButton("Open recording…")
         self.export_button = QtWidgets.QPushButton("Export…")
-        self.export_button.setToolTip("The current or last session's recording to CSV or Parquet")
+        self.export_button.setToolTip("The current or last session's recording to Excel, CSV or Parquet")
         self.export_button.clicked.connect(self.exportRequested)
         self.connect_button.clicked.connect(self._connect)
         self.disconnect_button.clicked.connect(self.disconnectRequested)
