@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import sys
 
 from groundstation.errors import UserError
@@ -30,6 +31,10 @@ def run(port: str | None, baud: int, recording: str | None) -> int:
     app.setApplicationName(APPLICATION)
     pg.setConfigOptions(antialias=False)  # antialiased lines cost several times more per frame
     window = MainWindow(QtCore.QSettings())
+    # Ctrl-C or a kill closes the window as its close button does: the session stops, the recording
+    # is closed and the settings saved. (Python runs the handler at the redraw timer's next tick.)
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: window.close())
     window.show()
     if recording:
         window.open_recording(recording)

@@ -7,6 +7,8 @@ import time
 
 import pytest
 
+from groundstation.recording import open_recording
+
 
 def app_process(tmp_path, *args, **env):
     environment = {**os.environ, "GROUNDSTATION_RECORDINGS": str(tmp_path / "recordings"),
@@ -30,9 +32,11 @@ def test_app_demo_streams_and_records(tmp_path):
             time.sleep(0.2)
         assert recorded(tmp_path, 20_000) and process.poll() is None
     finally:
-        process.terminate()
+        process.terminate()  # as Ctrl-C: the window closes, the session stops
         _, stderr = process.communicate(timeout=10)
-    assert "Traceback" not in stderr
+    assert process.returncode == 0 and "Traceback" not in stderr
+    recording = open_recording(next((tmp_path / "recordings").glob("*.gsrec")))
+    assert recording.closed_cleanly and recording.chunk_count > 100
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="only X11/Wayland need a display variable")
