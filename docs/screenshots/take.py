@@ -1,6 +1,6 @@
 """Screenshot of the real window on the simulated bridge, from the X server's framebuffer.
 
-    xvfb-run -s "-screen 0 1400x860x24" python docs/screenshots/take.py docs/screenshots/main-window.png
+    xvfb-run -s "-screen 0 1400x860x24" python docs/screenshots/take.py docs/screenshot.png
 """
 
 import os
