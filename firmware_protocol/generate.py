@@ -14,7 +14,7 @@ import struct
 from pathlib import Path
 
 from firmware_protocol.codec import encode, make_frame
-from firmware_protocol.spec import C_TYPES, SPEC, Field, FrameType, Spec
+from firmware_protocol.spec import SPEC, Field, FrameType, Spec
 
 PACKAGE_DIR = Path(__file__).parent
 HEADER_NAME = "gs_protocol.h"
@@ -176,7 +176,7 @@ def _c_frame_block(frame_type: FrameType) -> list[str]:
         lines.append(f"    {field.c_type} {field.name}; /* {field.unit}{scale}: {field.description} */")
     lines.append(f"}} gs_{name}_t;")
     lines.append("")
-    lines.append(f"/* Packs m into out (room for GS_MAX_FRAME_BYTES); returns the frame's length. */")
+    lines.append("/* Packs m into out (room for GS_MAX_FRAME_BYTES); returns the frame's length. */")
     lines.append(f"static inline size_t gs_pack_{name}(uint8_t *out, uint8_t seq, const gs_{name}_t *m)")
     lines.append("{")
     lines.append("    uint8_t *p = out + GS_HEADER_BYTES;")
@@ -187,7 +187,7 @@ def _c_frame_block(frame_type: FrameType) -> list[str]:
     lines.append(f"    return gs_finish_frame(out, GS_ID_{frame_type.name}, seq, GS_PAYLOAD_{frame_type.name});")
     lines.append("}")
     lines.append("")
-    lines.append(f"/* Reads the payload (out + GS_HEADER_BYTES of a checked frame) into m. */")
+    lines.append("/* Reads the payload (out + GS_HEADER_BYTES of a checked frame) into m. */")
     lines.append(f"static inline void gs_unpack_{name}(const uint8_t *p, gs_{name}_t *m)")
     lines.append("{")
     offset = 0

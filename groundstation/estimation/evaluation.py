@@ -48,20 +48,21 @@ def sample_periods_s(time_s) -> np.ndarray:
     return np.concatenate([[first], gaps])
 
 
-def evaluate_trial(trial, names, overrides=None) -> dict[str, dict[str, float]]:
-    """Run each named estimator (fresh, defaults + ``overrides[name]``) over a trial and score it.
+def run_on_trial(trial, names, overrides=None) -> dict[str, tuple[np.ndarray, dict[str, np.ndarray]]]:
+    """Each named estimator (fresh, defaults + ``overrides[name]``) run over a trial: name -> (q, diag).
 
     The IMU axes are taken as the body axes (identity mounting): the inclination error does not
-    depend on how the sensor is mounted.
+    depend on how the sensor is mounted. ValueError for an unknown name or setting.
     """
-    if trial.true_q is None:
-        raise ValueError("the file has no truth columns (true_qw ... true_qz) to evaluate against")
     overrides = overrides or {}
     acc_g = trial.acc_m_s2 / STANDARD_GRAVITY_M_S2
     dt_s = sample_periods_s(trial.time_s)
+    return {name: create(name, overrides.get(name)).run(trial.gyr_rad_s, acc_g, dt_s) for name in dict.fromkeys(names)}
+
+
+def evaluate_trial(trial, names, overrides=None) -> dict[str, dict[str, float]]:
+    """Run each named estimator over a trial (``run_on_trial``) and score it against the truth."""
+    if trial.true_q is None:
+        raise ValueError("the file has no truth columns (true_qw ... true_qz) to evaluate against")
     mask = trial.moving if trial.moving is not None else np.ones(len(trial), dtype=bool)
-    results = {}
-    for name in names:
-        q, _ = create(name, overrides.get(name)).run(trial.gyr_rad_s, acc_g, dt_s)
-        results[name] = score(inclination_error_rad(q, trial.true_q), mask)
-    return results
+    return {name: score(inclination_error_rad(q, trial.true_q), mask) for name, (q, _) in run_on_trial(trial, names, overrides).items()}

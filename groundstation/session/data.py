@@ -14,8 +14,7 @@ import numpy as np
 from groundstation import mounting, quaternion
 from groundstation.datasets import ACC, GYR, TRUE_Q, DatasetError, Trial, read_csv
 from groundstation.errors import UserError
-from groundstation.estimation import create
-from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
+from groundstation.estimation.evaluation import inclination_error_rad, run_on_trial, score
 from groundstation.recording import Recording, open_recording
 from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
 from groundstation.session.replay import recorded_settings, replay
@@ -97,16 +96,14 @@ def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
 
 
 def from_trial(trial: Trial, filters, settings, metadata: dict) -> SessionData:
-    """A dataset trial: sensor axes taken as body axes, as ``evaluate_trial`` does (same numbers)."""
+    """A dataset trial, run exactly as ``evaluate_trial`` runs it (the same numbers)."""
+    try:
+        runs = run_on_trial(trial, filters, settings)
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    estimates = {name: q for name, (q, _) in runs.items()}
+    diagnostics = {name: diag for name, (_, diag) in runs.items()}
     acc_g = trial.acc_m_s2 / STANDARD_GRAVITY_M_S2
-    dt_s = sample_periods_s(trial.time_s)
-    estimates, diagnostics = {}, {}
-    for name in dict.fromkeys(filters):
-        try:
-            estimator = create(name, (settings or {}).get(name))
-        except ValueError as error:
-            raise UserError(str(error)) from None
-        estimates[name], diagnostics[name] = estimator.run(trial.gyr_rad_s, acc_g, dt_s)
     sensors = {f"acc_{a}_g": acc_g[:, i] for i, a in enumerate("xyz")}
     sensors.update({f"gyr_{a}_dps": np.degrees(trial.gyr_rad_s[:, i]) for i, a in enumerate("xyz")})
     return SessionData(

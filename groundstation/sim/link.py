@@ -22,7 +22,6 @@ from __future__ import annotations
 import dataclasses
 import math
 
-import numpy as np
 
 from groundstation.sim.firmware import SentFrame
 from groundstation.sim.seeds import stream
