@@ -9,8 +9,17 @@ Interface (the same for ``ahf``, ``hf``, ``ecf``, ``cf1``, ``kf`` and ``ekf``)::
 
 ``gyr_rad_s`` is the body-frame rate (x forward, y right, z down) in rad/s; ``acc_g`` the body-frame
 specific force in g (standard gravity), so a level craft at rest reads about (0, 0, -1);
-``dt_s`` is the time since the previous sample in seconds. ``mag`` is accepted so callers can pass
-what they have; none of these six estimators uses a magnetometer, so their yaw is gyro-only and drifts.
+``dt_s`` is the time since the previous sample in seconds.
+
+Aiding inputs, passed by every caller that has them and ignored by the estimators that do not use them
+(the first six: their yaw is gyro-only and drifts):
+
+- ``mag``: the latest magnetometer reading on the body axes (x forward, y right, z down), µT, or None.
+- ``gps``: a ``GpsFix`` on the sample at which a new fix arrived, else None.
+
+In ``run`` they are arrays: ``mag`` (N, 3) and ``gps`` (N, 4) = (vel_n, vel_e, vel_d m/s, heading rad),
+a row of NaN meaning "none on this sample" (a NaN heading alone: a fix without heading).
+Aiding estimators read them in ``_update`` as ``self._mag`` and ``self._gps``.
 
 Robust stepping (every estimator, decided here once):
 
@@ -47,6 +56,17 @@ HELD = 4  # bad gyro or dt: previous estimate returned unchanged
 ACC_SKIPPED = 8  # accelerometer unusable: gyro-only on this sample
 REINITIALISED = 16  # gap longer than max_gap_s: pitch/roll re-set from the accelerometer
 GYRO_OVERRANGE = 32  # ahf only: gyro at or above gyro_overrange_rad_s, λ forced to λ_max
+
+
+
+class GpsFix(NamedTuple):
+    """One GPS solution as the attitude estimators use it: NED velocity and dual-antenna heading."""
+
+    vel_n_m_s: float
+    vel_e_m_s: float
+    vel_d_m_s: float
+    heading_rad: float  # true heading of the antenna baseline (yaw), NaN when the receiver gives none
+
 
 STATUS_NAMES = {
     WAITING: "waiting",
@@ -105,8 +125,10 @@ class Estimator:
             self._set_attitude(tuple(quaternion.normalise(q0).tolist()))
             self._waiting = False
 
-    def step(self, gyr_rad_s, acc_g, dt_s, mag=None):
+    def step(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
         """One sample: returns ``(q, diag)``, q = (w, x, y, z) rotating body vectors into NED."""
+        self._mag = mag
+        self._gps = gps
         gx, gy, gz = gyr_rad_s
         ax, ay, az = acc_g
         if self._cast is not None:
@@ -135,8 +157,9 @@ class Estimator:
             status |= ACC_SKIPPED
         return self._update(gx, gy, gz, ax, ay, az, acc_ok, dt_s, status)
 
-    def run(self, gyr_rad_s, acc_g, dt_s, mag=None):
-        """Step through arrays: gyr_rad_s and acc_g (N, 3), dt_s (N,) or a scalar.
+    def run(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
+        """Step through arrays: gyr_rad_s and acc_g (N, 3), dt_s (N,) or a scalar; mag (N, 3) and gps
+        (N, 4) optional, NaN rows for samples without a reading (see the module docstring).
 
         Continues from the current state (call ``reset()`` first for a fresh start). Returns
         ``(q, diag)``: q an (N, 4) float64 array, diag a dict of (N,) arrays, one per diagnostics field;
@@ -147,11 +170,13 @@ class Estimator:
         dt = np.broadcast_to(np.asarray(dt_s, dtype=float), (len(gyr),))
         if len(acc) != len(gyr):
             raise ValueError(f"gyr_rad_s has {len(gyr)} rows but acc_g has {len(acc)}")
+        mags = _optional_rows(mag, 3, len(gyr), "mag")
+        fixes = [None if r is None else GpsFix(*r) for r in _optional_rows(gps, 4, len(gyr), "gps")]
         step = self.step
         qs, diags = [], []
         # tolist(): plain Python floats, the fast path of step.
-        for g, a, d in zip(gyr.tolist(), acc.tolist(), dt.tolist()):
-            q, diag = step(g, a, d)
+        for g, a, d, m, f in zip(gyr.tolist(), acc.tolist(), dt.tolist(), mags, fixes):
+            q, diag = step(g, a, d, m, f)
             qs.append(q)
             diags.append(diag)
         fields = self.Diagnostics._fields
@@ -170,6 +195,17 @@ class Estimator:
         """Quaternion with the given yaw whose pitch and roll put gravity where the accelerometer says."""
         pitch, roll = acc_pitch_roll(float(ax), float(ay), float(az))
         return tuple(quaternion.from_euler_zyx(yaw_rad, pitch, roll).tolist())
+
+
+def _optional_rows(values, width: int, n: int, name: str) -> list:
+    """(N, width) array -> one tuple per row, None for a row of NaN; None -> N Nones."""
+    if values is None:
+        return [None] * n
+    rows = np.asarray(values, dtype=float).reshape(-1, width)
+    if len(rows) != n:
+        raise ValueError(f"{name} has {len(rows)} rows but gyr_rad_s has {n}")
+    missing = np.isnan(rows).all(axis=1).tolist()
+    return [None if gone else tuple(r) for r, gone in zip(rows.tolist(), missing)]
 
 
 def integrate_rate(q, wx, wy, wz, dt_s):
