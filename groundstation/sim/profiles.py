@@ -20,8 +20,9 @@ duration; evaluation is vectorised over a block of times, so hours of flight cos
 
 Profiles (``PROFILES``): ``static`` (at rest), ``hover`` (small attitude wander, motor vibration),
 ``flight`` (pitch/roll manoeuvres up to ±30°, yaw turns, climbs), ``slide`` (horizontal translation
-at zero attitude, accelerations up to ±3 m/s², the paper's sliding test) and ``fast`` (flips at
-550-900 °/s, beyond a ±500 °/s gyro range).
+at zero attitude, accelerations up to ±3 m/s², the paper's sliding test), ``fast`` (flips at
+550-900 °/s, beyond a ±500 °/s gyro range) and ``car`` (driving at up to
+15 m/s with speed changes and turns, yaw along the velocity: seed 001's test).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ _SMOOTHSTEP_PEAK_ACCEL = 10.0 / math.sqrt(3.0)
 # Largest ds/du of the same smoothstep (at u = 1/2).
 _SMOOTHSTEP_PEAK_RATE = 1.875
 
-DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "slide": 120.0, "fast": 120.0}
+DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "slide": 120.0, "fast": 120.0, "car": 120.0}
 PROFILES = tuple(DEFAULT_DURATION_S)
 
 
@@ -244,7 +245,90 @@ def _fast(rng, duration_s):
     }
 
 
-_BUILDERS = {"static": _static, "hover": _hover, "flight": _flight, "slide": _slide, "fast": _fast}
+class _Drive:
+    """Where a car is: the integral of its speed along its nose, ``v (cos θ cos ψ, cos θ sin ψ, -sin θ)``
+    with θ the road grade (the pitch channel) and ψ the heading (the yaw channel), so it always drives
+    where it points. Velocity and acceleration are closed form (product rule); the position is summed by
+    8-point Gauss-Legendre over pieces cut at every knot of the speed and yaw moves, where the integrand
+    is analytic, so it is exact to rounding."""
+
+    def __init__(self, speed: Moves, pitch: Sines, yaw: Moves, duration_s: float, piece_s: float = 0.05):
+        self.speed, self.pitch, self.yaw = speed, pitch, yaw
+        grid = np.arange(0.0, duration_s + 2.0 * piece_s, piece_s)
+        self._edges = np.unique(np.concatenate([grid, speed.times_s, yaw.times_s]))
+        self._nodes, self._weights = np.polynomial.legendre.leggauss(8)
+        pieces = self._integral(self._edges[:-1], self._edges[1:])
+        self._at_edges = np.vstack([np.zeros((1, 3)), np.cumsum(pieces, axis=0)])
+
+    def _motion(self, t_s):
+        """NED velocity and acceleration (..., 3) at ``t_s``."""
+        v, dv, _ = self.speed(t_s)
+        theta, dtheta, _ = self.pitch(t_s)
+        psi, dpsi, _ = self.yaw(t_s)
+        st, ct, sp, cp = np.sin(theta), np.cos(theta), np.sin(psi), np.cos(psi)
+        nose = np.stack([ct * cp, ct * sp, -st], axis=-1)
+        turn = np.stack([-st * dtheta * cp - ct * sp * dpsi, -st * dtheta * sp + ct * cp * dpsi, -ct * dtheta], axis=-1)
+        return v[..., None] * nose, dv[..., None] * nose + v[..., None] * turn
+
+    def _integral(self, a_s, b_s):
+        half = (b_s - a_s)[:, None] / 2.0
+        vel, _ = self._motion((a_s[:, None] + b_s[:, None]) / 2.0 + half * self._nodes)
+        return half * np.einsum("k,nkj->nj", self._weights, vel)
+
+    def axis(self, j: int):
+        """The component of NED axis ``j`` (0 north, 1 east, 2 down) for the profile's channels."""
+
+        def component(t_s):
+            i = np.clip(np.searchsorted(self._edges, t_s, side="right") - 1, 0, len(self._edges) - 1)
+            pos = self._at_edges[i] + self._integral(self._edges[i], t_s)
+            vel, acc = self._motion(t_s)
+            return pos[:, j], vel[:, j], acc[:, j]
+
+        return component
+
+
+def _car(rng, duration_s):
+    """Seed 001's test car (up to 15 m/s): speed up, cruise, brake, turn at the lower speed, again.
+
+    Longitudinal and peak lateral accelerations 0.8-1.5 m/s² (the paper's uncompensated tilt error of
+    up to ~7° is ~1.2 m/s²); body roll outwards in turns at 0.5°/(m/s²), plus road camber; pitch is
+    the road grade (±2°), which the car climbs.
+    """
+    deg = math.radians
+    t, v, psi = REST_S, 0.0, 0.0
+    speed_t, speed_v = [0.0, t], [0.0, 0.0]
+    yaw_t, yaw_v, roll_t, roll_v = [0.0, t], [0.0, 0.0], [0.0, t], [0.0, 0.0]
+    while t <= duration_s:
+        for target, hold_s in ((rng.uniform(8.0, 15.0), rng.uniform(3.0, 8.0)), (rng.uniform(4.0, 8.0), 0.0)):
+            t += _move_time_s(target - v, rng.uniform(0.8, 1.5)) + hold_s  # speed up and cruise; brake
+            v = target
+            speed_t.append(t)
+            speed_v.append(v)
+        turn = deg(rng.uniform(30.0, 120.0)) * rng.choice([-1.0, 1.0])
+        lateral_m_s2 = rng.uniform(0.8, 1.5)  # peak v ψ' of the smoothstep turn
+        span_s = _SMOOTHSTEP_PEAK_RATE * abs(turn) * v / lateral_m_s2
+        yaw_t += [t, t + span_s]
+        yaw_v += [psi, psi + turn]
+        psi += turn
+        roll_t += [t, t + span_s / 2.0, t + span_s]
+        roll_v += [0.0, -math.copysign(deg(0.5) * lateral_m_s2, turn), 0.0]
+        t += span_s
+        speed_t.append(t)
+        speed_v.append(v)
+    speed, yaw = Moves(speed_t, speed_v), Moves(yaw_t, yaw_v)
+    grade = _random_sines(rng, deg(2.0), rng.uniform(0.01, 0.05, 2))
+    drive = _Drive(speed, grade, yaw, duration_s)
+    return {
+        "roll": [Moves(roll_t, roll_v), _random_sines(rng, deg(1.0), rng.uniform(0.01, 0.05, 2))],
+        "pitch": [grade],
+        "yaw": [yaw],
+        "north": [drive.axis(0)],
+        "east": [drive.axis(1)],
+        "down": [drive.axis(2)],
+    }
+
+
+_BUILDERS = {"static": _static, "hover": _hover, "flight": _flight, "slide": _slide, "fast": _fast, "car": _car}
 
 
 def make_profile(name: str, duration_s: float | None = None, seed: int = 0) -> Profile:
