@@ -325,7 +325,7 @@ typedef struct {
     int16_t vel_n; /* m/s x 0.01: velocity north */
     int16_t vel_e; /* m/s x 0.01: velocity east */
     int16_t vel_d; /* m/s x 0.01: velocity down */
-    uint16_t heading; /* deg x 0.01: heading (dual-antenna or course over ground), 0..360 */
+    uint16_t heading; /* deg x 0.01: heading (dual-antenna or course over ground), 0..360; 0xFFFF: no heading */
     uint8_t fix_type; /* enum: fix type */
     uint8_t satellites; /* 1: satellites used */
 } gs_gps_t;

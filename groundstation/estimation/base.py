@@ -14,8 +14,9 @@ specific force in g (standard gravity), so a level craft at rest reads about (0,
 Aiding inputs, passed by every caller that has them and ignored by the estimators that do not use them
 (the first six: their yaw is gyro-only and drifts):
 
-- ``mag``: the latest magnetometer reading on the body axes (x forward, y right, z down), µT, or None.
-- ``gps``: a ``GpsFix`` on the sample at which a new fix arrived, else None.
+- ``mag``: the magnetometer reading that arrived since the previous sample, on the body axes (x forward,
+  y right, z down), µT; None when none did.
+- ``gps``: the ``GpsFix`` that arrived since the previous sample, else None.
 
 In ``run`` they are arrays: ``mag`` (N, 3) and ``gps`` (N, 4) = (vel_n, vel_e, vel_d m/s, heading rad),
 a row of NaN meaning "none on this sample" (a NaN heading alone: a fix without heading).

@@ -16,7 +16,8 @@ import math
 
 from firmware_protocol import SPEC, Frame, StreamDecoder
 from groundstation import mounting
-from groundstation.estimation import create
+from groundstation.estimation import GpsFix, create
+from groundstation.estimation.compass import heading_rad
 from groundstation.session.link import LinkStats
 from groundstation.session.table import Table
 from groundstation.units import ACCEL_LSB_PER_G, GYRO_LSB_PER_DPS
@@ -33,6 +34,9 @@ _IMU_ID, _ATTITUDE_ID, _CONFIG_ID, _ACK_ID = (SPEC.frame(n).id for n in ("IMU_RA
 _Q_SCALE = SPEC.frame("ATTITUDE").fields[1].scale
 _LAMBDA_SCALE = SPEC.frame("ATTITUDE").fields[5].scale
 _OTHER_TABLES = {SPEC.frame(n).id: n.lower() for n in ("STATUS", "MAG_RAW", "BARO", "GPS")}
+_MAG_ID, _GPS_ID = SPEC.frame("MAG_RAW").id, SPEC.frame("GPS").id
+_FIX_2D = SPEC.enums["gps_fix"].values["fix_2d"]
+HEADING_COLUMN = "heading_deg"  # of the mag_raw table: tilt-compensated compass heading (estimation.compass)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,6 +81,10 @@ class Pipeline:
             table: Table(("time_s",) + tuple(column_name(f) for f in SPEC.frame(table.upper()).fields))
             for table in _OTHER_TABLES.values()
         }
+        self.tables["mag_raw"] = Table(self.tables["mag_raw"].columns + (HEADING_COLUMN,))
+        # Aiding readings that arrived since the last IMU sample, handed to the estimators with the next one.
+        self._mag_body_ut: tuple | None = None
+        self._gps_fix: GpsFix | None = None
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
@@ -108,9 +116,13 @@ class Pipeline:
                 self._config(t_host_ns, frame)
             elif type_id == _ACK_ID:  # the aircraft's answer to a COMMAND (``LiveSession.send_command``)
                 self.events.append({"t_host_ns": t_host_ns, "kind": "ack", **frame.values})
+            elif type_id == _MAG_ID:
+                self._magnetometer(frame, t_us)
             elif type_id in _OTHER_TABLES:
-                row = [(t_us - self._t0_us) / 1e6] + list(frame.scaled().values())
-                self.tables[_OTHER_TABLES[type_id]].append(row)
+                values = frame.scaled()
+                self.tables[_OTHER_TABLES[type_id]].append([(t_us - self._t0_us) / 1e6, *values.values()])
+                if type_id == _GPS_ID and values["fix_type"] >= _FIX_2D:
+                    self._gps_fix = gps_fix(values)
         return len(self.imu) - before
 
     def change_settings(self, name: str, overrides: dict[str, float], t_host_ns: int = 0) -> None:
@@ -186,13 +198,24 @@ class Pipeline:
         dt_s = 1.0 / self.sensor.rate_hz if self._last_us is None else (t_us - self._last_us) * 1e-6
         self._last_us = t_us
         row = [(t_us - self._t0_us) * 1e-6, t_us, (t_host_ns - self._t0_host_ns) * 1e-9, *acc, *gyr, temperature * 0.01]
+        mag, gps, self._mag_body_ut, self._gps_fix = self._mag_body_ut, self._gps_fix, None, None
         for name, estimator in self.estimators.items():
-            q, diag = estimator.step(gyr, acc, dt_s)
+            q, diag = estimator.step(gyr, acc, dt_s, mag, gps)
             self._last_q[name] = q
             row += q
             row += diag
         self.imu.append(row)
         self.link.on_sample(t_host_ns, t_us)
+
+    def _magnetometer(self, frame: Frame, t_us: int) -> None:
+        """Table row with the compass heading from the first estimator's tilt; the body-axis field for the estimators."""
+        values = frame.scaled()
+        sensor = self.sensor or self.assumed_sensor
+        field_sensor = (values["mag_x"], values["mag_y"], values["mag_z"])
+        self._mag_body_ut = tuple(sum(r * v for r, v in zip(row, field_sensor)) for row in mounting.matrix(sensor.mounting).tolist())
+        q = self._last_q[self.filters[0]] if self.filters else None
+        heading = math.degrees(float(heading_rad(q, self._mag_body_ut))) if q is not None else math.nan
+        self.tables["mag_raw"].append([(t_us - self._t0_us) / 1e6, *values.values(), heading])
 
     def _attitude(self, raw: tuple, t_us: int) -> None:
         _, qw, qx, qy, qz, lam, flags = raw
@@ -201,3 +224,10 @@ class Pipeline:
 
     def _warn(self, t_host_ns: int, message: str) -> None:
         self.events.append({"t_host_ns": t_host_ns, "kind": "warning", "message": message})
+
+
+def gps_fix(values: dict) -> GpsFix:
+    """A GPS frame's values as the estimators take them; a heading outside 0..360° (0xFFFF) means none."""
+    heading_deg = values["heading"]
+    heading = math.radians(heading_deg) if 0.0 <= heading_deg <= 360.0 else math.nan
+    return GpsFix(values["vel_n"], values["vel_e"], values["vel_d"], math.atan2(math.sin(heading), math.cos(heading)))
