@@ -83,6 +83,7 @@ class Ahf(Estimator):
     Settings = AhfSettings
     Diagnostics = AhfDiagnostics
     adaptive = True
+    marg = False  # True in marg.Hfm: adds the magnetometer's gradient
 
     def __init__(self, settings=None, dtype=None):
         self._cast = None if dtype is None else np.dtype(dtype).type  # read by Estimator.step
@@ -137,6 +138,8 @@ class Ahf(Estimator):
             s2 = 2.0 * q4 * fx + 2.0 * q1 * fy - 4.0 * q2 * fz
             s3 = -2.0 * q1 * fx + 2.0 * q4 * fy - 4.0 * q3 * fz
             s4 = 2.0 * q2 * fx + 2.0 * q3 * fy
+            if self.marg and self._mag is not None:  # hfm: Madgwick's magnetometer term (marg.py)
+                s1, s2, s3, s4 = self._mag_gradient(q1, q2, q3, q4, s1, s2, s3, s4)
             # (eq. 20) e = ĝ ⊗ â, vector part ĝ × â
             err = abs(vy * az - vz * ay) + abs(vz * ax - vx * az) + abs(vx * ay - vy * ax)
             lam = self._lam_max

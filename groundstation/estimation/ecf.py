@@ -42,6 +42,7 @@ class Ecf(Estimator):
     name = "ecf"
     Settings = EcfSettings
     Diagnostics = EcfDiagnostics
+    marg = False  # True in marg.Ecfm: adds the magnetometer's error term
 
     def _reset_state(self):
         self._bias = (0.0, 0.0, 0.0)
@@ -63,10 +64,12 @@ class Ecf(Estimator):
             vy = 2.0 * (q1 * q2 + q3 * q4)
             vz = q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4
             ex, ey, ez = ay * vz - az * vy, az * vx - ax * vz, ax * vy - ay * vx  # e = â × ĝ
+            self._err = (ex * ex + ey * ey + ez * ez) ** 0.5
+            if self.marg and self._mag is not None:  # ecfm: e += m × w (marg.py)
+                ex, ey, ez = self._mag_error(q1, q2, q3, q4, ex, ey, ez)
             ki, kp = self.settings.ki * dt_s, self.settings.kp
             bx, by, bz = bx - ki * ex, by - ki * ey, bz - ki * ez  # ḃ = -Ki e
             self._bias = (bx, by, bz)
-            self._err = (ex * ex + ey * ey + ez * ez) ** 0.5
             gx, gy, gz = gx + kp * ex, gy + kp * ey, gz + kp * ez
         self._q = integrate_rate(self._q, gx - bx, gy - by, gz - bz, dt_s)  # ω' = ω - b + Kp e
         return self._q, self._diagnostics(status)

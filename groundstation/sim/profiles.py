@@ -21,8 +21,10 @@ duration; evaluation is vectorised over a block of times, so hours of flight cos
 Profiles (``PROFILES``): ``static`` (at rest), ``hover`` (small attitude wander, motor vibration),
 ``flight`` (pitch/roll manoeuvres up to ±30°, yaw turns, climbs), ``slide`` (horizontal translation
 at zero attitude, accelerations up to ±3 m/s², the paper's sliding test), ``fast`` (flips at
-550-900 °/s, beyond a ±500 °/s gyro range) and ``car`` (driving at up to
-15 m/s with speed changes and turns, yaw along the velocity: seed 001's test).
+550-900 °/s, beyond a ±500 °/s gyro range), ``car`` (driving at up to
+15 m/s with speed changes and turns, yaw along the velocity: seed 001's test) and ``turntable`` (seed
+003's three-axis turntable: ±25° sines on pitch, roll and yaw with periods 47 s, 35 s and 15 s after
+60 s at rest, position fixed).
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ _SMOOTHSTEP_PEAK_ACCEL = 10.0 / math.sqrt(3.0)
 # Largest ds/du of the same smoothstep (at u = 1/2).
 _SMOOTHSTEP_PEAK_RATE = 1.875
 
-DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "slide": 120.0, "fast": 120.0, "car": 120.0}
+DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "slide": 120.0, "fast": 120.0, "car": 120.0, "turntable": 765.0}
 PROFILES = tuple(DEFAULT_DURATION_S)
 
 
@@ -328,7 +330,20 @@ def _car(rng, duration_s):
     }
 
 
-_BUILDERS = {"static": _static, "hover": _hover, "flight": _flight, "slide": _slide, "fast": _fast, "car": _car}
+# Seed 003's turntable: the rest during which the paper took its field and gravity references.
+TURNTABLE_REST_S = 60.0
+
+
+def _turntable(rng, duration_s):
+    """±25° on each axis, periods 47 s (pitch), 35 s (roll), 15 s (yaw); 765 s = the rest + 15 pitch periods."""
+
+    def sine(period_s):
+        return Sines([math.radians(25.0)], [1.0 / period_s], [0.0], start_s=TURNTABLE_REST_S)
+
+    return {"pitch": [sine(47.0)], "roll": [sine(35.0)], "yaw": [sine(15.0)]}
+
+
+_BUILDERS = {"static": _static, "hover": _hover, "flight": _flight, "slide": _slide, "fast": _fast, "car": _car, "turntable": _turntable}
 
 
 def make_profile(name: str, duration_s: float | None = None, seed: int = 0) -> Profile:

@@ -17,9 +17,9 @@ NAMES = list(ESTIMATORS)
 
 def chatter_deg(name, dt_s=0.01):
     """How far one sample may move ahf/hf at rest: eq. 18 normalises the gradient, so even a rounding-size
-    error gets a full λ Δt quaternion step, i.e. a turn of 2 λ Δt rad. The other filters' corrections
+    error gets a full λ Δt (hfm: β Δt) quaternion step, i.e. a turn of 2 λ Δt rad. The other filters' corrections
     scale with the error, so they sit still (0.05 deg covers rounding)."""
-    lam = {"ahf": create("ahf").settings.lambda_max, "hf": create("hf").settings.beta}.get(name)
+    lam = {"ahf": create("ahf").settings.lambda_max, "hf": create("hf").settings.beta, "hfm": create("hfm").settings.beta}.get(name)
     return 0.05 if lam is None else math.degrees(2.0 * lam * dt_s) + 0.05
 
 
@@ -34,7 +34,7 @@ def static_acc(pitch_deg, roll_deg):
 
 
 def test_names_used_everywhere():
-    assert NAMES == ["ahf", "hf", "ecf", "cf1", "kf", "ekf"]
+    assert NAMES == ["ahf", "hf", "ecf", "cf1", "kf", "ekf", "hfm", "ecfm"]
 
 
 @pytest.mark.parametrize("name", NAMES)
