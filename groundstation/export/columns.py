@@ -2,7 +2,8 @@
 
 ``time_s``; per estimator ``<name>_qw .. _qz`` (body to NED) and ``<name>_pitch_deg, _roll_deg,
 _yaw_deg`` (ZYX, docs/conventions.md); ``onboard_*`` for the aircraft's own estimate; the sensors
-in physical units; the truth quaternion when the session has one.
+in physical units; the truth quaternion when the session has one; the magnetometer, barometer, GPS
+and fused-position readings when the session has them (``aux_columns``).
 """
 
 from __future__ import annotations
@@ -50,4 +51,36 @@ def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[st
     out.update({name: values[rows] for name, values in data.sensors.items()})
     if data.true_q is not None:
         out.update({f"true_q{c}": data.true_q[rows, i] for i, c in enumerate("wxyz")})
+    out.update(aux_columns(data, rows))
+    return out
+
+
+# The pipeline's tables of the slower sensors and the column prefix each gets in the export.
+AUX_TABLES = {"mag_raw": "mag", "baro": "baro", "gps": "gps", "position": "position"}
+
+
+def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:
+    """Each reading on the row of the first IMU sample at or after it; empty (NaN) on the other rows.
+
+    The readings come at their own rates (e.g. GPS 10 Hz); empty cells show those rates, and any
+    dropout, instead of hiding them behind repeated values. Where IMU frames were lost, two readings
+    can share the next IMU row: the later one is kept. The Excel export's Sensors sheet lists every
+    reading at its own time.
+    """
+    if data.pipeline is None:
+        return {}
+    out = {}
+    for table_name, prefix in AUX_TABLES.items():
+        table = data.pipeline.tables.get(table_name)
+        if table is None or not len(table):
+            continue
+        values = table.to_dict()
+        at = np.searchsorted(data.time_s, values["time_s"])
+        inside = at < len(data.time_s)
+        for column, readings in values.items():
+            if column == "time_s" or column.startswith("t_us"):
+                continue
+            full = np.full(len(data.time_s), np.nan)
+            full[at[inside]] = readings[inside]
+            out[column if column.startswith(prefix) else f"{prefix}_{column}"] = full[rows]
     return out

@@ -31,7 +31,8 @@ SENSORS = (
 AUX_SENSORS = (
     ("mag_raw", "mag", (("mag_x_uT", "mag x (µT, sensor axes)", TWO_PLACES),
                         ("mag_y_uT", "mag y (µT, sensor axes)", TWO_PLACES),
-                        ("mag_z_uT", "mag z (µT, sensor axes)", TWO_PLACES))),
+                        ("mag_z_uT", "mag z (µT, sensor axes)", TWO_PLACES),
+                        ("heading_deg", "compass heading (°, tilt-compensated)", TWO_PLACES))),
     ("baro", "baro", (("pressure_Pa", "pressure (Pa)", "0.0"), ("temperature_degC", "baro temperature (°C)", TWO_PLACES))),
     ("gps", "GPS", (("lat_deg", "latitude (°)", "0.0000000"), ("lon_deg", "longitude (°)", "0.0000000"),
                     ("alt_m", "altitude (m)", "0.000"), ("vel_n_m_s", "velocity N (m/s)", TWO_PLACES),
