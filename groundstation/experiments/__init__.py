@@ -8,7 +8,9 @@ from __future__ import annotations
 import importlib
 
 # name -> module; ``groundstation experiments --only NAME`` picks some.
-EXPERIMENTS: dict[str, str] = {}
+EXPERIMENTS: dict[str, str] = {
+    "seed004": "groundstation.experiments.seed004",
+}
 
 
 def load(name: str):
