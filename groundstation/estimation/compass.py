@@ -1,12 +1,19 @@
-"""Tilt-compensated compass heading (seed 003: heading from the magnetometer with the local field).
+"""The electronic compass of seed 003: heading from the magnetometer given the tilt, and tilt given the heading.
 
-The magnetometer reading on the body axes is rotated onto the horizontal plane with the estimated
-pitch and roll only (yaw 0), ``m_h = R(0, θ, φ) m_b``; the horizontal field then points magnetic north,
-so the craft's heading is ``ψ = atan2(-m_h,y, m_h,x)`` (NED, clockwise from north, the yaw of
-docs/conventions.md), plus the local declination for true north.
+Heading (seed 003 eq. 13-15): the magnetometer reading on the body axes is rotated onto the horizontal
+plane with the estimated pitch and roll only (yaw 0), ``m_h = R(0, θ, φ) m_b``; the horizontal field then
+points magnetic north, so the craft's heading is ``ψ = atan2(-m_h,y, m_h,x)`` (NED, clockwise from north,
+the yaw of docs/conventions.md), plus the local declination for true north.
+
+Tilt (the compass as a third pitch/roll source, ``mcf``): with the heading known and the local field's
+direction in the magnetic-north frame, ``m̂_n = (cos δ, 0, sin δ)`` (δ the dip, positive down), eq. 13
+``m_d = Rz(ψ)ᵀ m̂_n`` is known and ``Ry(θ) Rx(φ) m̂_b = m_d`` is solved for φ then θ (two roll solutions;
+the one nearest a hint is taken).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -19,7 +26,39 @@ def heading_rad(q_body_to_ned, mag_body, declination_rad: float = 0.0) -> np.nda
     Only the pitch and roll of ``q_body_to_ned`` are used. NaN where the reading is NaN.
     """
     _, pitch, roll = np.moveaxis(quaternion.to_euler_zyx(q_body_to_ned), -1, 0)
-    level = quaternion.from_euler_zyx(np.zeros_like(pitch), pitch, roll)
-    m_h = quaternion.rotate(level, np.asarray(mag_body, dtype=float))
-    psi = np.arctan2(-m_h[..., 1], m_h[..., 0]) + declination_rad
+    mag = np.asarray(mag_body, dtype=float)
+    psi = level_heading_rad(pitch, roll, mag[..., 0], mag[..., 1], mag[..., 2]) + declination_rad
     return np.angle(np.exp(1j * psi))
+
+
+def level_heading_rad(pitch_rad, roll_rad, mx, my, mz):
+    """Magnetic heading ψ = atan2(-m_h,y, m_h,x) with ``m_h = Ry(θ) Rx(φ) m_b`` (eq. 14-15); floats or arrays."""
+    sp, cp, sr, cr = np.sin(pitch_rad), np.cos(pitch_rad), np.sin(roll_rad), np.cos(roll_rad)
+    m_hx = cp * mx + sp * (sr * my + cr * mz)
+    m_hy = cr * my - sr * mz
+    return np.arctan2(-m_hy, m_hx)
+
+
+def tilt_from_field_rad(mx, my, mz, heading_rad_: float, dip_rad: float, roll_hint_rad: float):
+    """Pitch and roll (rad) that turn the reading ``m_b`` onto the field at ``heading_rad_`` (module docstring).
+
+    Scalars (per-sample code); any unit for ``m_b``. None when the reading's direction cannot match the
+    field at that heading (its east component exceeds what rolling can give) or is zero.
+    """
+    n = math.sqrt(mx * mx + my * my + mz * mz)
+    if not n > 0.0:
+        return None
+    mx, my, mz = mx / n, my / n, mz / n
+    cd = math.cos(dip_rad)
+    dx, dy, dz = math.cos(heading_rad_) * cd, -math.sin(heading_rad_) * cd, math.sin(dip_rad)  # eq. 13
+    rho = math.hypot(my, mz)
+    if not abs(dy) <= rho:
+        return None
+    # (Rx(φ) m)_y = cos φ m_y - sin φ m_z = ρ cos(φ + α) = d_y
+    alpha = math.atan2(mz, my)
+    spread = math.acos(dy / rho)
+    roll = min((s * spread - alpha for s in (1.0, -1.0)), key=lambda r: abs(math.remainder(r - roll_hint_rad, 2 * math.pi)))
+    ux, uz = mx, math.sin(roll) * my + math.cos(roll) * mz
+    # Ry(θ) turns (u_x, u_z) by -θ in the x-z plane onto (d_x, d_z)
+    pitch = math.atan2(uz * dx - ux * dz, ux * dx + uz * dz)
+    return pitch, math.remainder(roll, 2 * math.pi)

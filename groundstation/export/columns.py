@@ -56,7 +56,7 @@ def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[st
 
 
 # The pipeline's tables of the slower sensors and the column prefix each gets in the export.
-AUX_TABLES = {"mag_raw": "mag", "baro": "baro", "gps": "gps", "position": "position"}
+AUX_TABLES = {"mag_raw": "mag", "baro": "baro", "gps": "gps", "position": "fused"}
 
 
 def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:

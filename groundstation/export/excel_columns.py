@@ -39,6 +39,10 @@ AUX_SENSORS = (
                     ("vel_e_m_s", "velocity E (m/s)", TWO_PLACES), ("vel_d_m_s", "velocity D (m/s)", TWO_PLACES),
                     ("heading_deg", "heading (°)", TWO_PLACES), ("fix_type", "fix type (enum)", COUNT),
                     ("satellites", "satellites (count)", COUNT))),
+    ("position", "fused position", (("pos_n_m", "fused north (m)", "0.000"), ("pos_e_m", "fused east (m)", "0.000"),
+                                    ("pos_d_m", "fused down (m)", "0.000"), ("vel_n_m_s", "fused velocity N (m/s)", TWO_PLACES),
+                                    ("vel_e_m_s", "fused velocity E (m/s)", TWO_PLACES),
+                                    ("vel_d_m_s", "fused velocity D (m/s)", TWO_PLACES))),
 )  # fmt: skip
 STATUS = (
     ("battery_V", "battery (V)", "0.000"), ("retransmits", "retransmits (count)", COUNT),

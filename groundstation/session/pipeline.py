@@ -15,9 +15,10 @@ import dataclasses
 import math
 
 from firmware_protocol import SPEC, Frame, StreamDecoder
-from groundstation import mounting
+from groundstation import geodesy, mounting
 from groundstation.estimation import GpsFix, create
 from groundstation.estimation.compass import heading_rad
+from groundstation.position import DualChannel, linear_acc_ned_m_s2
 from groundstation.session.link import LinkStats
 from groundstation.session.table import Table
 from groundstation.units import ACCEL_LSB_PER_G, GYRO_LSB_PER_DPS
@@ -34,7 +35,8 @@ _IMU_ID, _ATTITUDE_ID, _CONFIG_ID, _ACK_ID = (SPEC.frame(n).id for n in ("IMU_RA
 _Q_SCALE = SPEC.frame("ATTITUDE").fields[1].scale
 _LAMBDA_SCALE = SPEC.frame("ATTITUDE").fields[5].scale
 _OTHER_TABLES = {SPEC.frame(n).id: n.lower() for n in ("STATUS", "MAG_RAW", "BARO", "GPS")}
-_MAG_ID, _GPS_ID = SPEC.frame("MAG_RAW").id, SPEC.frame("GPS").id
+_MAG_ID, _BARO_ID, _GPS_ID = (SPEC.frame(n).id for n in ("MAG_RAW", "BARO", "GPS"))
+POSITION_COLUMNS = ("time_s", "pos_n_m", "pos_e_m", "pos_d_m", "vel_n_m_s", "vel_e_m_s", "vel_d_m_s")
 _FIX_2D = SPEC.enums["gps_fix"].values["fix_2d"]
 HEADING_COLUMN = "heading_deg"  # of the mag_raw table: tilt-compensated compass heading (estimation.compass)
 
@@ -85,6 +87,16 @@ class Pipeline:
         # Aiding readings that arrived since the last IMU sample, handed to the estimators with the next one.
         self._mag_body_ut: tuple | None = None
         self._gps_fix: GpsFix | None = None
+        # Position (seed 004) from the first estimator's attitude, once a barometer or GPS reading arrives:
+        # NED metres from the first GPS fix, height from the first barometer reading.
+        self.position = DualChannel()
+        self.tables["position"] = Table(POSITION_COLUMNS)
+        self._position_on = False
+        self._baro_ground_pa: float | None = None
+        self._gps_origin: tuple[float, float, float] | None = None
+        self._baro_alt_m: float | None = None
+        self._gps_pos_ned_m: tuple | None = None
+        self._gps_vel_ned_m_s: tuple | None = None
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
@@ -122,7 +134,9 @@ class Pipeline:
                 values = frame.scaled()
                 self.tables[_OTHER_TABLES[type_id]].append([(t_us - self._t0_us) / 1e6, *values.values()])
                 if type_id == _GPS_ID and values["fix_type"] >= _FIX_2D:
-                    self._gps_fix = gps_fix(values)
+                    self._gps(values)
+                elif type_id == _BARO_ID:
+                    self._barometer(values["pressure"])
         return len(self.imu) - before
 
     def change_settings(self, name: str, overrides: dict[str, float], t_host_ns: int = 0) -> None:
@@ -205,7 +219,29 @@ class Pipeline:
             row += q
             row += diag
         self.imu.append(row)
+        if self._position_on and self.filters:
+            self._position(row[0], acc, self._last_q[self.filters[0]], dt_s)
         self.link.on_sample(t_host_ns, t_us)
+
+    def _position(self, time_s: float, acc_g: tuple, q: tuple, dt_s: float) -> None:
+        acc_ned = linear_acc_ned_m_s2(acc_g, q)
+        pos, vel = self.position.step(acc_ned, dt_s, self._baro_alt_m, self._gps_pos_ned_m, self._gps_vel_ned_m_s)
+        self._baro_alt_m = self._gps_pos_ned_m = self._gps_vel_ned_m_s = None
+        self.tables["position"].append((time_s, *pos, *vel))
+
+    def _barometer(self, pressure_pa: float) -> None:
+        if self._baro_ground_pa is None:
+            self._baro_ground_pa = pressure_pa
+        self._baro_alt_m = float(geodesy.pressure_altitude_m(pressure_pa, self._baro_ground_pa))
+        self._position_on = True
+
+    def _gps(self, values: dict) -> None:
+        self._gps_fix = gps_fix(values)
+        if self._gps_origin is None:
+            self._gps_origin = (values["lat"], values["lon"], values["alt"])
+        self._gps_pos_ned_m = tuple(geodesy.ned_from_geodetic(values["lat"], values["lon"], values["alt"], self._gps_origin).tolist())
+        self._gps_vel_ned_m_s = (values["vel_n"], values["vel_e"], values["vel_d"])
+        self._position_on = True
 
     def _magnetometer(self, frame: Frame, t_us: int) -> None:
         """Table row with the compass heading from the first estimator's tilt; the body-axis field for the estimators."""

@@ -13,16 +13,13 @@ packs them into ``MAG_RAW``, ``BARO`` and ``GPS`` frames at their own rates.
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
+from groundstation import geodesy
 from groundstation import mounting as mountings
 from groundstation import quaternion as quat
 from groundstation.sim.profiles import Truth
-
-EARTH_RADIUS_M = 6_371_000.0
-
 
 @dataclasses.dataclass(frozen=True)
 class AuxSettings:
@@ -48,16 +45,10 @@ def magnetometer_ut(truth: Truth, settings: AuxSettings, mounting: int, hard_iro
     return mountings.body_to_sensor(field_body, mounting) + hard_iron_ut + noise
 
 
-def pressure_pa(altitude_m, settings: AuxSettings) -> np.ndarray:
-    """ISA troposphere: p = p0 (1 - L h / T0)^(g M / (R L)) with L = 6.5 K/km."""
-    t0_k = settings.ground_temperature_c + 273.15
-    return settings.ground_pressure_pa * (1.0 - 0.0065 * np.asarray(altitude_m) / t0_k) ** 5.25588
-
-
 def barometer(truth: Truth, settings: AuxSettings, rng) -> tuple[np.ndarray, np.ndarray]:
     """Pressure (n,) in Pa and temperature (n,) in °C."""
     altitude_m = -truth.pos_ned_m[:, 2]
-    pressure = pressure_pa(altitude_m, settings) + rng.normal(0.0, settings.baro_noise_pa, len(altitude_m))
+    pressure = geodesy.pressure_pa(altitude_m, settings.ground_pressure_pa, settings.ground_temperature_c) + rng.normal(0.0, settings.baro_noise_pa, len(altitude_m))
     return pressure, settings.ground_temperature_c - 0.0065 * altitude_m
 
 
@@ -67,13 +58,18 @@ def gps(truth: Truth, settings: AuxSettings, rng) -> dict[str, np.ndarray]:
     pos = truth.pos_ned_m + rng.normal(0.0, settings.gps_position_noise_m, (n, 3))
     vel = truth.vel_ned_m_s + rng.normal(0.0, settings.gps_velocity_noise_m_s, (n, 3))
     yaw_deg = np.degrees(quat.to_euler_zyx(truth.q_body_to_ned)[:, 0]) + rng.normal(0.0, settings.gps_heading_noise_deg, n)
-    lat0 = math.radians(settings.origin_lat_deg)
+    lat, lon, alt = geodesy.geodetic_from_ned(pos, origin(settings))
     return {
-        "lat": settings.origin_lat_deg + np.degrees(pos[:, 0] / EARTH_RADIUS_M),
-        "lon": settings.origin_lon_deg + np.degrees(pos[:, 1] / (EARTH_RADIUS_M * math.cos(lat0))),
-        "alt": settings.origin_alt_m - pos[:, 2],
+        "lat": lat,
+        "lon": lon,
+        "alt": alt,
         "vel_n": vel[:, 0],
         "vel_e": vel[:, 1],
         "vel_d": vel[:, 2],
         "heading": np.mod(yaw_deg, 360.0),
     }
+
+
+def origin(settings: AuxSettings) -> tuple[float, float, float]:
+    """The GPS reference point (lat °, lon °, alt m): the simulated craft's take-off point."""
+    return (settings.origin_lat_deg, settings.origin_lon_deg, settings.origin_alt_m)

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from groundstation import geodesy
 from groundstation import mounting as mountings
 from groundstation import units
 from groundstation.sim import extra_sensors
@@ -73,12 +74,7 @@ def simulate(
     mag = extra_sensors.magnetometer_ut(truth, aux, mountings.DEFAULT_MOUNTING, hard_iron_sensor, stream(seed, "mag"))
     pressure, _ = extra_sensors.barometer(truth, aux, stream(seed, "baro"))
     fix = extra_sensors.gps(truth, aux, stream(seed, "gps"))
-    lat0 = math.radians(aux.origin_lat_deg)
-    gps_pos = np.stack([
-        np.radians(fix["lat"] - aux.origin_lat_deg) * extra_sensors.EARTH_RADIUS_M,
-        np.radians(fix["lon"] - aux.origin_lon_deg) * extra_sensors.EARTH_RADIUS_M * math.cos(lat0),
-        aux.origin_alt_m - fix["alt"],
-    ], axis=-1)  # fmt: skip
+    gps_pos = geodesy.ned_from_geodetic(fix["lat"], fix["lon"], fix["alt"], extra_sensors.origin(aux))
     gps = np.column_stack([fix["vel_n"], fix["vel_e"], fix["vel_d"], _wrap_pi(np.radians(fix["heading"]))])
     return SimRun(
         truth=truth,
@@ -87,17 +83,11 @@ def simulate(
         acc_g=acc,
         temperature_c=registers.temperature_c,
         mag_ut=_every(mountings.sensor_to_body(mag, mountings.DEFAULT_MOUNTING), rate_hz, mag_rate_hz),
-        baro_alt_m=_every(altitude_m(pressure, aux.ground_pressure_pa, aux.ground_temperature_c), rate_hz, baro_rate_hz),
+        baro_alt_m=_every(geodesy.pressure_altitude_m(pressure, aux.ground_pressure_pa, aux.ground_temperature_c), rate_hz, baro_rate_hz),
         gps=_every(gps, rate_hz, gps_rate_hz),
         gps_pos_ned_m=_every(gps_pos, rate_hz, gps_rate_hz),
         hard_iron_ut=mountings.sensor_to_body(hard_iron_sensor, mountings.DEFAULT_MOUNTING),
     )
-
-
-def altitude_m(pressure_pa, ground_pressure_pa: float, ground_temperature_c: float = 15.0) -> np.ndarray:
-    """Height above the ground reference from pressure: the ISA troposphere formula inverted."""
-    t0_k = ground_temperature_c + 273.15
-    return t0_k / 0.0065 * (1.0 - (np.asarray(pressure_pa, dtype=float) / ground_pressure_pa) ** (1.0 / 5.25588))
 
 
 def _every(values: np.ndarray, rate_hz: float, sensor_rate_hz: float) -> np.ndarray:

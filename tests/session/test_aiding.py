@@ -4,29 +4,31 @@ estimators with the next IMU sample, and a compass heading that follows the simu
 import numpy as np
 
 from groundstation import quaternion as quat
+from groundstation.geodesy import ned_from_geodetic
 from groundstation.session.pipeline import HEADING_COLUMN, Pipeline, gps_fix
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 
 
 def stream_through(pipeline: Pipeline, scenario: Scenario):
-    """Feed a whole simulated session; returns the truth blocks as (device µs, yaw rad) arrays."""
-    times, yaws = [], []
+    """Feed a whole simulated session; returns the truth at each sample: device µs, yaw (rad), NED position (m)."""
+    times, yaws, positions = [], [], []
 
     def keep(t_dev_us, truth, _raw):
         times.append(np.asarray(t_dev_us, dtype=float))
         yaws.append(quat.to_euler_zyx(truth.q_body_to_ned)[:, 0])
+        positions.append(truth.pos_ned_m)
 
     stream = SimStream(scenario, on_samples=keep)
     for chunk in stream.advance(stream.end_s) + stream.flush():
         pipeline.feed(int(chunk.t_s * 1e9), chunk.data)
-    return np.concatenate(times), np.concatenate(yaws)
+    return np.concatenate(times), np.concatenate(yaws), np.concatenate(positions)
 
 
 def test_compass_heading_column_follows_true_yaw_during_a_flight():
     scenario = Scenario(profile="flight", duration_s=40.0, seed=2, firmware=FirmwareSettings(mode="raw", mag_rate_hz=50))
     pipeline = Pipeline(filters=("ekf",))  # a steady tilt estimate; the heading uses only its pitch and roll
-    t_us, yaw = stream_through(pipeline, scenario)
+    t_us, yaw, _ = stream_through(pipeline, scenario)
     mag = pipeline.tables["mag_raw"].to_dict()
     assert len(mag["time_s"]) > 1900
     t0_us = pipeline.imu.to_dict()["device_time_us"][0]
@@ -77,3 +79,27 @@ def test_a_fix_without_heading_passes_nan_heading():
     fix = gps_fix(values)
     assert fix[:3] == (1.0, 2.0, 0.5) and np.isnan(fix.heading_rad)
     assert np.isclose(gps_fix({**values, "heading": 270.0}).heading_rad, -np.pi / 2)
+
+
+def test_fused_position_follows_truth_closer_than_the_raw_gps_and_barometer():
+    scenario = Scenario(profile="flight", duration_s=60.0, seed=6,
+                        firmware=FirmwareSettings(mode="raw", baro_rate_hz=25, gps_rate_hz=10))
+    pipeline = Pipeline(filters=("ahf",))
+    t_us, _, true_pos = stream_through(pipeline, scenario)
+    t0_us = pipeline.imu.to_dict()["device_time_us"][0]
+    fused = pipeline.tables["position"].to_dict()
+    gps = pipeline.tables["gps"].to_dict()
+
+    def truth_at(time_s):
+        return np.column_stack([np.interp(time_s * 1e6 + t0_us, t_us, true_pos[:, k]) for k in range(3)])
+
+    # Both start from their first reading (GPS origin, barometer ground), so compare the scatter of the error.
+    settled = fused["time_s"] > 10.0
+    fused_error = np.column_stack([fused[f"pos_{a}_m"] for a in "ned"])[settled] - truth_at(fused["time_s"][settled])
+    origin = (gps["lat_deg"][0], gps["lon_deg"][0], gps["alt_m"][0])
+    gps_ned = ned_from_geodetic(gps["lat_deg"], gps["lon_deg"], gps["alt_m"], origin)
+    gps_error = (gps_ned - truth_at(gps["time_s"]))[gps["time_s"] > 10.0]
+    assert np.ptp(true_pos[:, 0]) > 10.0  # the craft really travels
+    horizontal_fused, horizontal_gps = np.std(fused_error[:, :2], axis=0), np.std(gps_error[:, :2], axis=0)
+    assert np.all(horizontal_fused < 0.8 * horizontal_gps), (horizontal_fused, horizontal_gps)
+    assert np.std(fused_error[:, 2]) < 0.3  # barometer 0.17 m noise, smoothed
