@@ -10,6 +10,7 @@ import importlib
 # name -> module; ``groundstation experiments --only NAME`` picks some.
 EXPERIMENTS: dict[str, str] = {
     "seed001": "groundstation.experiments.seed001",
+    "seed003": "groundstation.experiments.seed003",
     "seed004": "groundstation.experiments.seed004",
 }
 
