@@ -53,7 +53,8 @@ def source_errors_deg(run, mag) -> dict[str, np.ndarray]:
     acc_q = quat.from_euler_zyx(np.zeros(len(acc)), acc[:, 0], acc[:, 1])
     nan = np.full(len(truth), np.nan)
     return {
-        "gyro": _wrap_deg(quat.to_euler_zyx(gyro_q) - truth),
+        # unwrapped: the drift passes ±180° on long runs, and a wrap would read as a broadband jump
+        "gyro": np.degrees(np.unwrap(np.radians(_wrap_deg(quat.to_euler_zyx(gyro_q) - truth)), axis=0)),
         "accelerometer": np.column_stack([nan, _wrap_deg(acc - truth[:, 1:])]),
         "compass": np.column_stack([_wrap_deg(heading_rad(acc_q, mag) - truth[:, 0]), _wrap_deg(compass - truth[:, 1:])]),
     }
