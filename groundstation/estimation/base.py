@@ -49,6 +49,7 @@ import numpy as np
 
 from groundstation import quaternion
 from groundstation.estimation.tilt import acc_pitch_roll
+from groundstation.readings import optional_rows
 
 # diag.status bits
 WAITING = 1  # no usable accelerometer sample yet; output is the identity
@@ -171,8 +172,8 @@ class Estimator:
         dt = np.broadcast_to(np.asarray(dt_s, dtype=float), (len(gyr),))
         if len(acc) != len(gyr):
             raise ValueError(f"gyr_rad_s has {len(gyr)} rows but acc_g has {len(acc)}")
-        mags = _optional_rows(mag, 3, len(gyr), "mag")
-        fixes = [None if r is None else GpsFix(*r) for r in _optional_rows(gps, 4, len(gyr), "gps")]
+        mags = optional_rows(mag, len(gyr), 3, "mag")
+        fixes = [None if r is None else GpsFix(*r) for r in optional_rows(gps, len(gyr), 4, "gps")]
         step = self.step
         qs, diags = [], []
         # tolist(): plain Python floats, the fast path of step.
@@ -196,17 +197,6 @@ class Estimator:
         """Quaternion with the given yaw whose pitch and roll put gravity where the accelerometer says."""
         pitch, roll = acc_pitch_roll(float(ax), float(ay), float(az))
         return tuple(quaternion.from_euler_zyx(yaw_rad, pitch, roll).tolist())
-
-
-def _optional_rows(values, width: int, n: int, name: str) -> list:
-    """(N, width) array -> one tuple per row, None for a row of NaN; None -> N Nones."""
-    if values is None:
-        return [None] * n
-    rows = np.asarray(values, dtype=float).reshape(-1, width)
-    if len(rows) != n:
-        raise ValueError(f"{name} has {len(rows)} rows but gyr_rad_s has {n}")
-    missing = np.isnan(rows).all(axis=1).tolist()
-    return [None if gone else tuple(r) for r, gone in zip(rows.tolist(), missing)]
 
 
 def integrate_rate(q, wx, wy, wz, dt_s):

@@ -30,6 +30,7 @@ import math
 import numpy as np
 
 from groundstation.position import design
+from groundstation.readings import optional_rows
 
 # The design inputs of the defaults (design.crossover_rad_s). Accelerometer error in NED, below
 # 0.1 Hz (variance of 10-s means × 10 s), of AHF's attitude on the simulated flight (seeds 11-12, not
@@ -180,9 +181,9 @@ class PositionFilter:
         acc = np.asarray(acc_ned_m_s2, dtype=float).reshape(-1, 3)
         n = len(acc)
         dt = np.broadcast_to(np.asarray(dt_s, dtype=float), (n,)).tolist()
-        baro = _rows(baro_alt_m, n, 1, "baro_alt_m")
-        gps_pos = _rows(gps_pos_ned_m, n, 3, "gps_pos_ned_m")
-        gps_vel = _rows(gps_vel_ned_m_s, n, 3, "gps_vel_ned_m_s")
+        baro = optional_rows(baro_alt_m, n, 1, "baro_alt_m")
+        gps_pos = optional_rows(gps_pos_ned_m, n, 3, "gps_pos_ned_m")
+        gps_vel = optional_rows(gps_vel_ned_m_s, n, 3, "gps_vel_ned_m_s")
         out = np.empty((n, 6))
         step = self.step
         for k, (a, d, h, z, u) in enumerate(zip(acc.tolist(), dt, baro, gps_pos, gps_vel)):
@@ -216,14 +217,3 @@ class DualChannel(PositionFilter):
 def _finite(values) -> bool:
     total = sum(values)
     return total - total == 0.0  # False for any NaN or Inf
-
-
-def _rows(values, n: int, width: int, name: str) -> list:
-    """(N, width) array -> one tuple per row, None for a row of NaN; None -> N Nones."""
-    if values is None:
-        return [None] * n
-    rows = np.asarray(values, dtype=float).reshape(n, width) if np.size(values) == n * width else None
-    if rows is None:
-        raise ValueError(f"{name} has {np.size(values)} values, expected {n} rows of {width}")
-    missing = np.isnan(rows).all(axis=1).tolist()
-    return [None if gone else tuple(r) for r, gone in zip(rows.tolist(), missing)]
