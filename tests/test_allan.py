@@ -38,12 +38,12 @@ def test_white_noise_of_known_density_reads_back():
     terms = noise_terms(curve)
     assert terms.density == pytest.approx(density, rel=0.03)
     assert terms.n_rt_hz == pytest.approx(density / math.sqrt(2.0), rel=0.03)  # σ(1 s), two-sided
-    assert terms.n_per_rt_h == pytest.approx(60.0 * terms.n_rt_hz)
     # σ(τ) = N / √τ at every cluster time with many clusters.
     short = curve.clusters >= 100
     np.testing.assert_allclose(curve.adev[short], terms.n_rt_hz / np.sqrt(curve.tau_s[short]), rtol=0.06)
     assert math.isnan(terms.k_rt_s)  # no rate random walk in white noise
     assert terms.b_tau_s == curve.tau_s[curve.tau_s <= 60000 * DT_S / 8].max()  # still falling at the last τ read
+    assert terms.b_is_bound
 
 
 def test_rate_random_walk_of_known_k_reads_back():
@@ -64,6 +64,7 @@ def test_white_noise_plus_random_walk_has_its_floor_where_theory_puts_it():
     assert terms.k_rt_s == pytest.approx(k, rel=0.15)
     assert terms.b_tau_s == pytest.approx(math.sqrt(3.0) * n_rt_hz / k, rel=0.5)  # on the octave grid
     assert terms.b * FLICKER_FLOOR == pytest.approx(math.sqrt(2.0 * n_rt_hz * k / math.sqrt(3.0)), rel=0.1)
+    assert not terms.b_is_bound
 
 
 def test_constant_has_zero_deviation_and_a_sine_follows_theory():

@@ -11,7 +11,8 @@ lines on the log-log plot, with ``y`` in units U (e.g. °/s):
 
 - angle (velocity) random walk, white rate noise: σ(τ) = N / √τ, slope -1/2; N in U/√Hz is σ at
   τ = 1 s on that line. N² is the *two-sided* rate PSD; a datasheet's noise density (MPU-6050: total
-  RMS = density · √bandwidth) is one-sided, √2 · N (``NoiseTerms.density``). In °/√h: 60 · N.
+  RMS = density · √bandwidth) is one-sided, √2 · N (``NoiseTerms.density``). As a random walk of the
+  integral per √hour, 60 · N: for a gyro in °/s the angle random walk in °/√h (1 °/s/√Hz = 1 °/√s).
 - bias instability (flicker): the flat floor, σ_min = √(2 ln 2 / π) B = 0.664 B.
 - rate random walk: σ(τ) = K √(τ / 3), slope +1/2; K in U/√s is σ at τ = 3 s on that line.
 
@@ -47,8 +48,9 @@ class NoiseTerms:
     """Annex C read-offs of one curve, in the signal's unit U; NaN where the term is not visible."""
 
     n_rt_hz: float  # N: σ(1 s) on the -1/2 line, U/√Hz (= U·√s); two-sided
-    b: float  # B: σ_min / 0.664, U (an upper bound when the minimum is the last point read)
+    b: float  # B: σ_min / 0.664, U
     b_tau_s: float  # τ of the minimum
+    b_is_bound: bool  # the minimum is the last point read: the floor lies beyond, B is an upper bound
     k_rt_s: float  # K: σ(3 s) on the +1/2 line, U/√s
 
     @property
@@ -56,10 +58,6 @@ class NoiseTerms:
         """The one-sided noise density a datasheet quotes, U/√Hz: √2 · N."""
         return math.sqrt(2.0) * self.n_rt_hz
 
-    @property
-    def n_per_rt_h(self) -> float:
-        """N per √hour, U·√h; for U = °/s the angle random walk in °/√h (1 °/s/√Hz = 1 °/√s = 60 °/√h)."""
-        return 60.0 * self.n_rt_hz
 
 
 def allan_deviation(y, dt_s: float) -> AllanCurve:
@@ -104,7 +102,8 @@ def noise_terms(curve: AllanCurve, min_samples: int = 8, max_fraction: float = 1
     # log N = log σ + ½ log τ on the -1/2 line; log K = log σ - ½ log(τ / 3) on the +1/2 line.
     n_rt_hz = _line(np.log(adev) + 0.5 * np.log(tau), weight, before & (np.abs(slope + 0.5) <= SLOPE_TOLERANCE))
     k_rt_s = _line(np.log(adev) - 0.5 * np.log(tau / 3.0), weight, after & (np.abs(slope - 0.5) <= SLOPE_TOLERANCE))
-    return NoiseTerms(n_rt_hz=n_rt_hz, b=float(adev[lowest]) / FLICKER_FLOOR, b_tau_s=float(tau[lowest]), k_rt_s=k_rt_s)
+    b = float(adev[lowest]) / FLICKER_FLOOR
+    return NoiseTerms(n_rt_hz=n_rt_hz, b=b, b_tau_s=float(tau[lowest]), b_is_bound=lowest == len(tau) - 1, k_rt_s=k_rt_s)
 
 
 def _line(log_intercepts: np.ndarray, weight: np.ndarray, on_line: np.ndarray) -> float:

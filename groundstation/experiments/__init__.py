@@ -12,6 +12,7 @@ EXPERIMENTS: dict[str, str] = {
     "seed001": "groundstation.experiments.seed001",
     "seed003": "groundstation.experiments.seed003",
     "seed004": "groundstation.experiments.seed004",
+    "noise": "groundstation.experiments.noise",
 }
 
 
