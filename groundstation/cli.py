@@ -24,6 +24,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "replay": ("groundstation.commands.replay", "replay a recording headless, with a live one-line summary"),
     "import": ("groundstation.commands.import_csv", "turn a dataset CSV (raw IMU layout, plain or .gz) into a recording"),
     "export": ("groundstation.commands.export", "export a recording or dataset CSV to CSV or Parquet"),
+    "experiments": ("groundstation.commands.experiments", "the seed papers' experiments on the simulator: tables and PNG figures"),
 }
 
 
