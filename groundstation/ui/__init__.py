@@ -5,10 +5,12 @@
     sessions.py           starting the demo, serial and replay sessions (readable errors); replay seeks
     connection_bar.py     port list (refreshed), baud, connect, demo, open recording, export
     replay_bar.py         play/pause, step, speed, seek slider
-    live_view.py          attitude, sensor and diagnostic tabs over a time window; pause view
+    live_view.py          attitude, sensor, diagnostic, heading and position tabs over a time window; pause view
+    position_view.py      the position tab: GPS track, height over time, the newest fix in numbers
     plots.py              stacked pyqtgraph plots on a shared time axis, crosshair, gap shading
     series.py             the plotted quantities of a growing table, as numpy arrays (no Qt)
-    attitude_indicator.py artificial horizon and pitch/roll/yaw readouts
+    navigation.py         compass, barometer, GPS and fused-position quantities; the newest heading (no Qt)
+    attitude_indicator.py artificial horizon and pitch/roll/yaw/heading readouts
     link_panel.py         link health with a colour warning
     estimator_panel.py    comparison estimators shown, live tuning, defaults
     uplink_panel.py       firmware mode, AHF parameters, CONFIG, gyro calibration; ACK or timeout

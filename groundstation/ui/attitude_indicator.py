@@ -1,4 +1,5 @@
-"""An artificial horizon with numeric pitch, roll and yaw (degrees, docs/conventions.md).
+"""An artificial horizon with numeric pitch, roll and yaw (degrees, docs/conventions.md), and the
+heading of the compass or the GPS when the session has one (0..360°, the source named).
 
 The horizon turns by -roll (right wing down tilts the horizon the other way, as seen from the
 cockpit) and moves down by pitch (nose up shows more sky), ``VISIBLE_PITCH_DEG`` from the centre to
@@ -14,6 +15,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation import quaternion
 from groundstation.session.live import LiveSession
+from groundstation.ui.navigation import heading_now
 
 SKY, GROUND, LINE = QtGui.QColor("#3a7bd5"), QtGui.QColor("#8b5a2b"), QtGui.QColor("white")
 VISIBLE_PITCH_DEG = 30.0  # from the centre to the top edge
@@ -75,7 +77,7 @@ class AttitudePanel(QtWidgets.QGroupBox):
     def __init__(self, parent=None):
         super().__init__("Attitude (AHF)", parent)
         self.indicator = AttitudeIndicator()
-        self.readouts = {name: QtWidgets.QLabel("—") for name in ("pitch", "roll", "yaw")}
+        self.readouts = {name: QtWidgets.QLabel("—") for name in ("pitch", "roll", "yaw", "heading")}
         numbers = QtWidgets.QFormLayout()
         for name, label in self.readouts.items():
             label.setAlignment(QtCore.Qt.AlignRight)
@@ -89,6 +91,8 @@ class AttitudePanel(QtWidgets.QGroupBox):
         """The newest estimate of ``session``'s first estimator (AHF, unless a recording says otherwise)."""
         name = session.pipeline.filters[0]
         self.setTitle(f"Attitude ({name.upper()})")
+        heading = heading_now(session.pipeline)
+        self.readouts["heading"].setText("—" if heading is None else f"{heading[0]:5.1f}° {heading[1]}")
         imu = session.pipeline.imu
         last = imu.tail(1)
         if not len(last):

@@ -1,8 +1,9 @@
-"""The live view: attitude, raw sensors and AHF diagnostics over a chosen time window.
+"""The live view: attitude, raw sensors, AHF diagnostics, heading and position over a chosen time window.
 
 ``refresh`` is called by the window's redraw timer: it pulls the rows the pipeline added since the
-last call into the ``Series`` buffers and redraws the visible tab. "Pause view" freezes the plots
-(acquisition and recording go on) and frees zoom and pan; panning or zooming pauses it too.
+last call into the ``Series`` buffers and redraws the visible tab. The heading and position tabs
+appear once the session has delivered magnetometer, GPS or barometer frames. "Pause view" freezes
+the plots (acquisition and recording go on) and frees zoom and pan; panning or zooming pauses it too.
 """
 
 from __future__ import annotations
@@ -10,7 +11,9 @@ from __future__ import annotations
 from PySide6 import QtWidgets
 
 from groundstation.session.live import LiveSession
+from groundstation.ui.navigation import aiding_series
 from groundstation.ui.plots import Curve, Plot, StackedPlots
+from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
@@ -19,14 +22,26 @@ COLORS = {"ahf": "#1f5fbf", "onboard": "#e07000", "hf": "#2a9d3a", "ecf": "#8e44
           "kf": "#c0392b", "ekf": "#16a085"}
 LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
+HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
+# The tabs that appear once a series of theirs has rows.
+AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
+
+
+def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None) -> tuple[Curve, ...]:
+    """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others."""
+    host = tuple(Curve("imu", f"{n}_{angle}_deg", LABELS.get(n, n), COLORS.get(n, "#444"), wraps_at) for n in filters)
+    return host[:1] + (Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"], wraps_at),) + host[1:]
 
 
 def attitude_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
-    def curves(angle: str) -> tuple[Curve, ...]:
-        host = tuple(Curve("imu", f"{n}_{angle}_deg", LABELS.get(n, n), COLORS.get(n, "#444")) for n in filters)
-        return host[:1] + (Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"]),) + host[1:]
+    return Plot("pitch", "°", estimator_curves(filters, "pitch")), Plot("roll", "°", estimator_curves(filters, "roll"))
 
-    return Plot("pitch", "°", curves("pitch")), Plot("roll", "°", curves("roll"))
+
+def heading_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
+    """Compass and GPS heading against the estimators' yaw, all 0..360°."""
+    sensors = (Curve("mag", "compass_heading_deg", "compass", HEADING_COLORS["compass"], 360.0),
+               Curve("gps", "gps_heading_deg", "GPS", HEADING_COLORS["GPS"], 360.0))
+    return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0)),)
 
 
 def sensor_plots() -> tuple[Plot, ...]:
@@ -73,15 +88,25 @@ class LiveView(QtWidgets.QWidget):
         self._filters = ("ahf",)
         self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
         self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
+        self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
+        self.position = self._add_tab(PositionView(), "Position")
+        self._show_aiding_tabs()
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(controls)
         layout.addWidget(self.tabs, 1)
 
-    def _add_tab(self, plots: StackedPlots, title: str, index: int = -1) -> StackedPlots:
+    def _add_tab(self, plots: StackedPlots | PositionView, title: str, index: int = -1) -> StackedPlots | PositionView:
         plots.userInteracted.connect(lambda: self.pause_button.setChecked(True))
         self.tabs.insertTab(index, plots, title)
         return plots
+
+    def _replace_tab(self, old: StackedPlots, new: StackedPlots) -> StackedPlots:
+        index = self.tabs.indexOf(old)
+        title = self.tabs.tabText(index)
+        self.tabs.removeTab(index)
+        old.deleteLater()
+        return self._add_tab(new, title, index)
 
     @property
     def window_s(self) -> float | None:
@@ -100,18 +125,30 @@ class LiveView(QtWidgets.QWidget):
         if filters != self._filters:
             self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
-            self.tabs.removeTab(0)
-            self.attitude.deleteLater()
-            self.attitude = self._add_tab(StackedPlots(attitude_plots(filters), self._hidden), "Attitude", 0)
+            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(filters), self._hidden))
+            self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(filters), self._hidden))
             self.tabs.setCurrentIndex(current)
             self._filters = filters
-        for plots in (self.attitude, self.sensors, self.diagnostics):
+        for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
+        self._show_aiding_tabs()
 
     def hidden_labels(self) -> frozenset[str]:
         """The attitude legend entries switched off, with those remembered from earlier sessions."""
         present = {spec.label for spec, _ in self.attitude.curves}
         return frozenset((self._hidden - present) | (present - self.attitude.visible_labels()))
+
+    def set_visible(self, label: str, visible: bool) -> None:
+        """Show or hide an estimator's curves on the attitude and heading tabs."""
+        for plots in (self.attitude, self.heading):
+            plots.set_visible(label, visible)
+
+    def _show_aiding_tabs(self) -> None:
+        for name, sources in AIDING_TABS.items():
+            index = self.tabs.indexOf(getattr(self, name))
+            shown = any(self.series[s].taken for s in sources if s in self.series)
+            if self.tabs.isTabVisible(index) != shown:
+                self.tabs.setTabVisible(index, shown)
 
     def _paused_changed(self, paused: bool) -> None:
         self.pause_button.setText("Resume view" if paused else "Pause view")
@@ -126,8 +163,10 @@ class LiveView(QtWidgets.QWidget):
         if pipeline is not self._pipeline:  # a new session, or a replay restarted by a seek
             self._pipeline = pipeline
             self.series = {"imu": Series(pipeline.imu, imu_quantities(pipeline.filters)),
-                           "onboard": Series(pipeline.onboard, onboard_quantities)}
+                           "onboard": Series(pipeline.onboard, onboard_quantities), **aiding_series(pipeline.tables)}
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}
+        if grew - {"imu", "onboard"}:
+            self._show_aiding_tabs()
         if not grew or self.paused:
             return False
         self.current_plots().draw(self.series, self.window_s, grew)
@@ -139,5 +178,5 @@ class LiveView(QtWidgets.QWidget):
         if self.series and not self.paused:
             self.current_plots().draw(self.series, self.window_s, None)
 
-    def current_plots(self) -> StackedPlots:
+    def current_plots(self) -> StackedPlots | PositionView:
         return self.tabs.currentWidget()

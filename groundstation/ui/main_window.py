@@ -59,7 +59,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.link_panel = LinkPanel()
         self.attitude_panel = AttitudePanel()
         self.estimator_panel = EstimatorPanel()
-        self.estimator_panel.visibilityChanged.connect(lambda label, on: self.live_view.attitude.set_visible(label, on))
+        self.estimator_panel.visibilityChanged.connect(self.live_view.set_visible)
         self.uplink_panel = UplinkPanel()
         self.estimator_panel.sendToAircraft.connect(self.uplink_panel.send_ahf)
         controls = QtWidgets.QTabWidget()

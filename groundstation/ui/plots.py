@@ -6,7 +6,8 @@ steps, not every frame: under software rendering re-laying an axis costs more th
 curves, so the time axis advances by a fraction of the window and the value axes change only when
 the data leaves them or shrinks well inside them. The legend on the
 top plot toggles a curve on every plot that carries the same label. A crosshair follows the mouse
-and reads every visible curve at the nearest sample under it.
+and reads every visible curve at the nearest sample under it. A circular quantity (a heading,
+0..360°) is not joined across its jumps from one end of the circle to the other.
 """
 
 from __future__ import annotations
@@ -27,12 +28,32 @@ Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
 
 
+def refit(low: float, high: float, shown: tuple[float, float], span: float | None = None) -> tuple[float, float] | None:
+    """A new range for an axis whose data spans ``low``..``high`` (``span``: of the data, if more),
+    when the data leaves the ``shown`` range or shrinks well inside it; else None: keep it."""
+    if not (math.isfinite(low) and math.isfinite(high)):
+        return None
+    span = max(high - low, span or 0.0, 1e-6)
+    if low < shown[0] or high > shown[1] or shown[1] - shown[0] > Y_SHRINK * span:
+        return low - Y_HEADROOM * span, high + Y_HEADROOM * span
+    return None
+
+
 @dataclass(frozen=True)
 class Curve:
     series: str  # which Series: "imu" or "onboard"
     quantity: str  # a key of that Series' values
     label: str  # legend entry; curves sharing it are toggled together
     color: str
+    wraps_at: float | None = None  # the period of a circular quantity (360 for a heading in °)
+
+    def connect(self, values: np.ndarray) -> dict:
+        """``setData``'s ``connect``: for a circular quantity, no line across a jump of over half a turn."""
+        if self.wraps_at is None:
+            return {}
+        joined = np.zeros(len(values), dtype=bool)
+        joined[:-1] = np.abs(np.diff(values)) < self.wraps_at / 2
+        return {"connect": joined}
 
 
 @dataclass(frozen=True)
@@ -143,11 +164,12 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             s = series.get(spec.series)
             if s is None or not s.has(spec.quantity):
                 continue
-            curve.setData(*s.data(spec.quantity, window_s))
+            t, values = s.data(spec.quantity, window_s)
+            curve.setData(t, values, **spec.connect(values))
             t, older = s.older(spec.quantity, window_s)
             key = (len(t), t[0] if len(t) else None)
             if key != self._older_drawn[i]:  # changes only when rows are binned or the window moves past them
-                self.older[i].setData(t, older)
+                self.older[i].setData(t, older, **spec.connect(older))
                 self._older_drawn[i] = key
         self._series = series
         imu = series.get("imu")
@@ -174,12 +196,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 lows.append(float(np.nanmin(curve.yData)))  # float32 scalars would overflow in pyqtgraph
                 highs.append(float(np.nanmax(curve.yData)))
         low, high = (min(lows), max(highs)) if lows else (math.nan, math.nan)
-        if not (math.isfinite(low) and math.isfinite(high)):
-            return
-        span = max(high - low, 1e-6)
-        y0, y1 = item.getViewBox().viewRange()[1]
-        if low < y0 or high > y1 or y1 - y0 > Y_SHRINK * span:
-            item.setYRange(low - Y_HEADROOM * span, high + Y_HEADROOM * span, padding=0)
+        y_range = refit(low, high, item.getViewBox().viewRange()[1])
+        if y_range is not None:
+            item.setYRange(*y_range, padding=0)
 
     def _mouse_moved(self, position) -> None:
         item = next((i for i in self.items if i.sceneBoundingRect().contains(position)), None)

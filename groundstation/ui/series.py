@@ -1,9 +1,9 @@
 """The plotted quantities of a growing session table, kept as numpy arrays the plots slice.
 
 Each tick takes only the rows added since the last one (``Table.tail``), converts them once
-(quaternions to pitch and roll in degrees, rad/s to °/s) and appends them. Only plotted quantities
-are kept, as float32 (time float64). The last ``RECENT_S`` seconds stay at full resolution, so
-windows up to 10 minutes are slices, not copies; older samples are kept as the minimum and maximum
+(quaternions to pitch, roll and heading in degrees, rad/s to °/s) and appends them. Only plotted
+quantities are kept, as float32 (time float64). The last ``RECENT_S`` seconds stay at full
+resolution, so windows up to 10 minutes are slices, not copies; older samples are kept as the minimum and maximum
 of every ``BIN_ROWS`` (what peak downsampling would draw of them anyway), which holds a 2-hour
 session in some 20 MB instead of 100, drawn as a second curve (``older``).
 """
@@ -147,19 +147,20 @@ class Series:
         return sum(c.time_s.nbytes + sum(v.nbytes for v in c.values.values()) for c in (self.recent, self.history))
 
 
-def pitch_roll_deg(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:
-    _, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
-    return {f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll}
+def attitude_deg(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:
+    """Pitch, roll and heading (the yaw as a compass reads it, 0..360°)."""
+    yaw, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
+    return {f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll, f"{prefix}_heading_deg": np.mod(yaw, 360.0)}
 
 
 def imu_quantities(filters: tuple[str, ...]) -> Derive:
-    """Pitch and roll of every host estimator, the sensors in g and °/s, AHF's λ and e_a."""
+    """Pitch, roll and heading of every host estimator, the sensors in g and °/s, AHF's λ and e_a."""
 
     def derive(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
         col = {name: rows[:, i] for i, name in enumerate(columns)}
         out = {}
         for name in filters:
-            out.update(pitch_roll_deg(name, np.column_stack([col[f"{name}_q{c}"] for c in "wxyz"])))
+            out.update(attitude_deg(name, np.column_stack([col[f"{name}_q{c}"] for c in "wxyz"])))
         for axis in "xyz":
             out[f"acc_{axis}_g"] = col[f"acc_{axis}_g"]
             out[f"gyr_{axis}_dps"] = np.degrees(col[f"gyr_{axis}_rad_s"])
@@ -174,6 +175,6 @@ def imu_quantities(filters: tuple[str, ...]) -> Derive:
 def onboard_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
     """The aircraft's own estimate (ATTITUDE frames) in degrees, and its λ."""
     col = {name: rows[:, i] for i, name in enumerate(columns)}
-    out = pitch_roll_deg("onboard", np.column_stack([col[f"q{c}"] for c in "wxyz"]))
+    out = attitude_deg("onboard", np.column_stack([col[f"q{c}"] for c in "wxyz"]))
     out["onboard_lam"] = col["lambda"]
     return out

@@ -14,6 +14,7 @@ from groundstation.errors import UserError
 from groundstation.recording import Recording, open_recording
 from groundstation.session.live import LiveSession
 from groundstation.session.replay import pipeline_for
+from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.port import SimulatedPort
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.sources import ReplaySource, SerialSource
@@ -23,13 +24,15 @@ from groundstation.sources import ReplaySource, SerialSource
 LIVE_FILTERS = ("ahf", "hf", "ecf")
 DEMO_DESCRIPTION = "simulated bridge (demo)"
 DEMO_PROFILE_S = 3600.0  # after an hour of flight the simulated craft holds still
+# The demo craft carries every aiding sensor, so the heading and position tabs have something to show.
+DEMO_FIRMWARE = FirmwareSettings(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=10)
 PORT_TIMEOUT_S = 0.05  # the reader's longest wait: it notices a stop request this quickly
 DIALOUT_HINT = ("on Linux, add yourself to the 'dialout' group (sudo usermod -aG dialout $USER), "
                 "then log out and back in")
 
 
 def start_demo(recordings_dir: Path | None = None, settings: dict | None = None, seed: int = 1) -> LiveSession:
-    port = SimulatedPort(SimStream(Scenario("flight", DEMO_PROFILE_S, seed=seed)), timeout=PORT_TIMEOUT_S)
+    port = SimulatedPort(SimStream(Scenario("flight", DEMO_PROFILE_S, seed=seed, firmware=DEMO_FIRMWARE)), timeout=PORT_TIMEOUT_S)
     source = SerialSource(port)
     source.description = DEMO_DESCRIPTION
     return LiveSession(source, LIVE_FILTERS, settings, recordings_dir=recordings_dir, metadata={"demo": True}).start()
