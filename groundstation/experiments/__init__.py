@@ -9,6 +9,7 @@ import importlib
 
 # name -> module; ``groundstation experiments --only NAME`` picks some.
 EXPERIMENTS: dict[str, str] = {
+    "seed000": "groundstation.experiments.seed000",
     "seed001": "groundstation.experiments.seed001",
     "seed003": "groundstation.experiments.seed003",
     "seed004": "groundstation.experiments.seed004",
