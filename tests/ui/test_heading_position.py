@@ -112,6 +112,10 @@ def test_the_demo_shows_heading_and_position(window, qtbot):
     assert len(tables["mag_raw"]) and len(tables["baro"]) and len(tables["gps"])
     view.tabs.setCurrentWidget(view.position)
     qtbot.waitUntil(lambda: view.position.readouts["fix"].text() == "3D", timeout=3000)
+    hf_heading = next(c for s, c in view.heading.curves if s.label == "HF")
+    assert not hf_heading.isVisible()  # the comparison estimators start switched off, here too
+    window.estimator_panel.shown["hf"].setChecked(True)
+    assert hf_heading.isVisible()
 
 
 def test_heading_falls_back_to_the_compass_and_goes_stale():
