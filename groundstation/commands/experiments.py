@@ -101,16 +101,8 @@ def _describe(error: Exception) -> str:
 
 
 def _markdown_section(name: str, title: str, tables, figures: list[Path]) -> str:
-    from groundstation.experiments.report import _cell
-
     lines = [f"## {name}: {title}", ""]
     for table in tables:
-        lines += [f"### {table.title}", "", _row(table.columns), _row(["---"] * len(table.columns))]
-        lines += [_row([_cell(c, table.digits) for c in row]) for row in table.rows]
-        lines += [""] + [f"- {note}" for note in table.notes] + ([""] if table.notes else [])
+        lines += table.markdown()
     lines += [f"![{figure.name}]({figure.name})" for figure in figures]
     return "\n".join(lines) + "\n"
-
-
-def _row(cells) -> str:
-    return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"

@@ -8,7 +8,9 @@ from groundstation.errors import UserError
 
 
 def add_estimator_options(parser: argparse.ArgumentParser, default_filters: str | None) -> None:
-    help_filters = "comma-separated estimators: ahf, hf, ecf, cf1, kf, ekf"
+    from groundstation.estimation import ESTIMATORS
+
+    help_filters = f"comma-separated estimators: {', '.join(ESTIMATORS)}"
     help_filters += f" (default: {default_filters})" if default_filters else " (default: those recorded)"
     parser.add_argument("--filters", default=default_filters, help=help_filters)
     parser.add_argument(

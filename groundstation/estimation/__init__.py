@@ -22,6 +22,7 @@ from groundstation.estimation.mcf import Mcf
 from groundstation.estimation.ukf import Sssrukf, Ukf
 
 ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Hf, Ecf, Cf1, Kf, Ekf, Ukf, Sssrukf, Hfm, Ecfm, Mcf)}
+GPS_AIDED = ("ukf", "sssrukf")  # need GPS velocity and heading to be more than slow tilt filters
 
 
 def create(name: str, overrides: dict[str, float] | None = None) -> Estimator:

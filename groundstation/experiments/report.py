@@ -28,6 +28,12 @@ class Table:
         lines += [f"  note: {n}" for n in self.notes]
         return "\n".join(lines)
 
+    def markdown(self) -> list[str]:
+        """The table as markdown lines: a heading, the table, its notes as a list."""
+        lines = [f"### {self.title}", "", _markdown_row(self.columns), _markdown_row(["---"] * len(self.columns))]
+        lines += [_markdown_row([_cell(c, self.digits) for c in row]) for row in self.rows]
+        return lines + [""] + [f"- {note}" for note in self.notes] + ([""] if self.notes else [])
+
 
 @dataclasses.dataclass
 class Series:
@@ -57,3 +63,7 @@ def _cell(value, digits: int) -> str:
     if isinstance(value, float):
         return "n/a" if not np.isfinite(value) else f"{value:.{digits}f}"
     return str(value)
+
+
+def _markdown_row(cells) -> str:
+    return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
