@@ -46,6 +46,7 @@ from typing import ClassVar, NamedTuple
 import numpy as np
 
 from groundstation.estimation import sigma_points as sp
+from groundstation.estimation import small_linalg as sl
 from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
 from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 from groundstation.units import STANDARD_GRAVITY_M_S2 as G
@@ -94,14 +95,22 @@ class GpsUkfDiagnostics(NamedTuple):
     p_trace: float  # trace of the quaternion covariance
 
 
+def euler_angles(q) -> tuple[float, float, float]:
+    """ZYX Euler angles (pitch, roll, yaw) of a quaternion (w, x, y, z) of any norm, plain floats."""
+    w, x, y, z = q
+    n2 = w * w + x * x + y * y + z * z
+    sin_pitch = 2.0 * (w * y - x * z) / n2
+    sin_pitch = -1.0 if sin_pitch < -1.0 else 1.0 if sin_pitch > 1.0 else sin_pitch
+    return (
+        math.asin(sin_pitch),
+        math.atan2(2.0 * (w * x + y * z), w * w - x * x - y * y + z * z),
+        math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z),
+    )
+
+
 def euler_of(chi: np.ndarray) -> np.ndarray:
     """ZYX Euler angles (3, L) rows (pitch, roll, yaw) of quaternion columns (4, L), any norm."""
-    w, x, y, z = chi
-    n2 = w * w + x * x + y * y + z * z
-    pitch = np.arcsin(np.clip(2.0 * (w * y - x * z) / n2, -1.0, 1.0))
-    roll = np.arctan2(2.0 * (w * x + y * z), w * w - x * x - y * y + z * z)
-    yaw = np.arctan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z)
-    return np.stack([pitch, roll, yaw])
+    return np.array([euler_angles(c) for c in np.asarray(chi, dtype=float).T.tolist()]).reshape(-1, 3).T
 
 
 def ned_to_body(q, v):
@@ -145,11 +154,11 @@ class _GpsUkf(Estimator):
         qv = np.array(q)
         std = 0.5 * self.settings.initial_attitude_noise_rad  # a rotation θ moves q by θ/2
         p = std * std * (np.eye(_N) - np.outer(qv, qv)) + (1e-3 * std) ** 2 * np.outer(qv, qv)
-        return np.linalg.cholesky(p) if self._square_root else p
+        return (np.linalg.cholesky(p) if self._square_root else p).tolist()
 
     def _diagnostics(self, status):
         cov = self._cov
-        trace = float(np.sum(cov * cov)) if self._square_root else float(np.trace(cov))
+        trace = sum(sl.dot(r, r) for r in cov) if self._square_root else sum(cov[i][i] for i in range(_N))
         return GpsUkfDiagnostics(status, *self._acc_pr, self._a_man, self._innovation, trace)
 
     def _take_fix(self):
@@ -193,11 +202,10 @@ class _GpsUkf(Estimator):
 
     def _set_yaw(self, x, heading_rad):
         """Turn the state about NED z so that its yaw is ``heading_rad``."""
-        yaw = float(euler_of(x[:, None])[2, 0])
-        half = 0.5 * wrap_pi(heading_rad - yaw)
+        half = 0.5 * wrap_pi(heading_rad - euler_angles(x)[2])
         c, s = math.cos(half), math.sin(half)
         w, qx, qy, qz = x
-        return np.array([c * w - s * qz, c * qx - s * qy, c * qy + s * qx, c * qz + s * w])
+        return [c * w - s * qz, c * qx - s * qy, c * qy + s * qx, c * qz + s * w]
 
     def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
         self._since_fix_s += dt_s
@@ -205,15 +213,15 @@ class _GpsUkf(Estimator):
         try:
             x, cov = self._filter(gx, gy, gz, ax, ay, az, acc_ok, dt_s)
         except np.linalg.LinAlgError:
-            x = np.array(integrate_rate(self._q, gx, gy, gz, dt_s))
+            x = list(integrate_rate(self._q, gx, gy, gz, dt_s))
             cov, status = self._initial_cov(tuple(x)), status | COVARIANCE_RESET
         status |= self._status
         if self._gps is not None and math.isfinite(self._gps.heading_rad) and not self._yaw_known:
             x = self._set_yaw(x, self._gps.heading_rad)
             self._yaw_known = True
             status |= HEADING_USED
-        x /= math.sqrt(float(x @ x))
-        self._q, self._cov = tuple(x.tolist()), cov
+        norm = math.sqrt(sl.dot(x, x))
+        self._q, self._cov = tuple(c / norm for c in x), cov
         return self._q, self._diagnostics(status)
 
     def _filter(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
@@ -221,14 +229,15 @@ class _GpsUkf(Estimator):
         s, sigma, sr = self.settings, self._sigma, self._square_root
         self._status = 0
         self._innovation = 0.0
-        factor = self._cov if sr else np.linalg.cholesky(self._cov)
-        chi = np.array(integrate_rate(sp.points(np.array(self._q), factor, sigma), gx, gy, gz, dt_s))  # eq. 2
+        factor = self._cov if sr else sl.cholesky(self._cov)
+        chi = [integrate_rate(p, gx, gy, gz, dt_s) for p in sp.points_lists(self._q, factor, sigma)]  # eq. 2
         q_noise = 0.5 * s.gyro_noise_rad_s * dt_s
         if sr:
-            x, cov = sp.sqrt_time_update(chi, sigma, q_noise * np.eye(_N))
+            x, cov = sp.sqrt_time_update_lists(chi, sigma, sl.diag([q_noise] * _N))
         else:
-            x, cov = sp.time_update(chi, sigma, q_noise * q_noise * np.eye(_N))
-        q_pred = tuple((x / math.sqrt(float(x @ x))).tolist())
+            x, cov = sp.time_update_lists(chi, sigma, sl.diag([q_noise * q_noise] * _N))
+        norm = math.sqrt(sl.dot(x, x))
+        q_pred = tuple(c / norm for c in x)
         rows, y, var = [], [], []
         tilt = self._tilt_measurement(q_pred, gx, gy, gz, ax, ay, az, dt_s) if acc_ok else None
         if tilt is not None:
@@ -244,14 +253,15 @@ class _GpsUkf(Estimator):
             self._status |= HEADING_USED
         if not rows:
             return x, cov
-        factor = cov if sr else np.linalg.cholesky(cov)
-        chi = sp.points(x, factor, sigma)
-        y_sigma = euler_of(chi)[rows]
+        factor = cov if sr else sl.cholesky(cov)
+        chi = sp.points_lists(x, factor, sigma)
+        angles = list(zip(*map(euler_angles, chi)))  # pitch, roll, yaw rows
+        y_sigma = [angles[i] for i in rows]
         if sr:
-            x, cov, innovation = sp.sqrt_measurement_update(x, cov, chi, y_sigma, np.array(y), np.diag(np.sqrt(var)), sigma)
+            x, cov, innovation = sp.sqrt_measurement_update_lists(x, cov, chi, y_sigma, y, sl.diag([math.sqrt(v) for v in var]), sigma)
         else:
-            x, cov, innovation = sp.measurement_update(x, cov, chi, y_sigma, np.array(y), np.diag(var), sigma)
-        self._innovation = float(np.sqrt(innovation @ innovation))
+            x, cov, innovation = sp.measurement_update_lists(x, cov, chi, y_sigma, y, sl.diag(var), sigma)
+        self._innovation = math.sqrt(sl.dot(innovation, innovation))
         return x, cov
 
 

@@ -9,6 +9,7 @@ import pytest
 from groundstation import quaternion as quat
 from groundstation.estimation import base, create
 from groundstation.estimation import sigma_points as sp
+from groundstation.estimation import small_linalg as sl
 from groundstation.estimation.ukf import GPS_COMPENSATED, HEADING_USED, euler_of
 from groundstation.sim.offline import simulate
 
@@ -155,3 +156,24 @@ def test_compensation_with_true_velocities_removes_the_manoeuvre_from_the_tilt(c
     assert raw_err.max() > 3.0
     assert comp_err.max() < 0.3 * raw_err.max() and rms(comp_err).max() < 0.3 * rms(raw_err).max(), (raw_err.max(0), comp_err.max(0))
     assert math.isclose(diag["manoeuvre_acc_m_s2"][manoeuvre].max(), np.linalg.norm(truth.acc_ned_m_s2, axis=1).max(), rel_tol=0.2)
+
+
+@pytest.mark.parametrize("shape", [(4, 9), (4, 12), (4, 4), (3, 8), (2, 7), (1, 6)])
+def test_small_linalg_against_numpy_on_random_matrices(shape):
+    # The plain-float QR (tria), Cholesky and solves the filters use, against numpy.linalg as the oracle.
+    rng = np.random.default_rng(sum(shape))
+    for _ in range(20):
+        a = rng.normal(size=shape) * rng.uniform(1e-3, 1e2)
+        low = np.array(sl.tria(a.tolist()))
+        r = np.linalg.qr(a.T, mode="r")
+        np.testing.assert_allclose(low, (r * np.where(np.diagonal(r) < 0.0, -1.0, 1.0)[:, None]).T, rtol=1e-10, atol=1e-12 * np.abs(a).max())
+        assert np.all(np.diagonal(low) > 0.0)
+        p = a @ a.T
+        np.testing.assert_allclose(sl.cholesky(p.tolist()), np.linalg.cholesky(p), rtol=1e-9, atol=1e-12 * np.abs(p).max())
+        b = rng.normal(size=(5, shape[0]))
+        np.testing.assert_allclose(sl.solve_right(low.tolist(), b.tolist()), np.linalg.solve(p, b.T).T, rtol=1e-8, atol=1e-12)
+        v = rng.normal(size=shape[0])
+        up = np.array(sl.cholupdate(low.tolist(), v.tolist(), 0.3))
+        np.testing.assert_allclose(up, np.linalg.cholesky(p + 0.3 * np.outer(v, v)), rtol=1e-9, atol=1e-12 * np.abs(p).max())
+    with pytest.raises(np.linalg.LinAlgError):
+        sl.cholesky([[1.0, 2.0], [2.0, 1.0]])
