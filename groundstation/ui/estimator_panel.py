@@ -1,5 +1,5 @@
-"""The estimator panel: show or hide the comparison estimators, tune AHF's λ bounds, HF's β and
-ECF's Kp/Ki live, back to the defaults, or send AHF's λ bounds to the aircraft.
+"""The estimator panel: show or hide the comparison estimators, tune AHF's λ bounds, HF's and
+HF+mag's β and ECF's and ECF+mag's Kp/Ki live, back to the defaults, or send AHF's λ bounds to the aircraft.
 
 A change goes through ``LiveSession.change_settings``: it applies from the next sample, keeps the
 attitude, and is written to the recording, so a replay changes it at the same point.
@@ -20,7 +20,10 @@ TUNABLE = {
     "ahf": (("lambda_min", "λ min", "rad/s"), ("lambda_max", "λ max", "rad/s")),
     "hf": (("beta", "β", "rad/s"),),
     "ecf": (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²")),
+    "hfm": (("beta", "β", "rad/s"),),
+    "ecfm": (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²")),
 }
+SHOWN_COLUMNS = 4  # "show" check boxes per row
 
 
 def defaults(name: str) -> dict[str, float]:
@@ -39,7 +42,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.message = QtWidgets.QLabel()
         self.message.setWordWrap(True)
         self._layout = QtWidgets.QFormLayout(self)
-        self._shown_row = QtWidgets.QHBoxLayout()
+        self._shown_row = QtWidgets.QGridLayout()
         self._layout.addRow("show", self._shown_row)
         for name, settings in TUNABLE.items():
             for setting, label, unit in settings:
@@ -69,12 +72,12 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.shown = {}
         if session is None:
             return
-        for name in session.pipeline.filters[1:]:
+        for index, name in enumerate(session.pipeline.filters[1:]):
             box = QtWidgets.QCheckBox(LABELS.get(name, name))
             box.setChecked(LABELS.get(name, name) in visible_labels)
             box.toggled.connect(lambda on, label=box.text(): self.visibilityChanged.emit(label, on))
             self.shown[name] = box
-            self._shown_row.addWidget(box)
+            self._shown_row.addWidget(box, *divmod(index, SHOWN_COLUMNS))
         settings = session.pipeline.settings()
         for (name, setting), box in self.boxes.items():
             box.setEnabled(name in settings)

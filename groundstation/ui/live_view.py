@@ -19,8 +19,10 @@ from groundstation.ui.series import Series, imu_quantities, onboard_quantities
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
 COLORS = {"ahf": "#1f5fbf", "onboard": "#e07000", "hf": "#2a9d3a", "ecf": "#8e44ad", "cf1": "#7f7f7f",
-          "kf": "#c0392b", "ekf": "#16a085"}
-LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF"}
+          "kf": "#c0392b", "ekf": "#16a085", "hfm": "#7fc97f", "ecfm": "#d291e0", "mcf": "#8c564b",
+          "ukf": "#e377c2", "sssrukf": "#a5a51a"}
+LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
+          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
 # The tabs that appear once a series of theirs has rows.
@@ -167,9 +169,11 @@ class LiveView(QtWidgets.QWidget):
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}
         if grew - {"imu", "onboard"}:
             self._show_aiding_tabs()
-        if not grew or self.paused:
+        plots = self.current_plots()
+        # A curve switched on after the data stopped (a replay at its end) is drawn all the same.
+        if self.paused or not (grew or getattr(plots, "stale", False)):
             return False
-        self.current_plots().draw(self.series, self.window_s, grew)
+        plots.draw(self.series, self.window_s, grew)
         self.frames_drawn += 1
         return True
 

@@ -28,7 +28,11 @@ REDRAW_HZ = 30
 # Every how many ticks the side panels redraw: the horizon at 15 Hz, figures and labels at 5 Hz
 # (each repaint costs CPU under software rendering; people read numbers no faster).
 HORIZON_EVERY, FIGURES_EVERY = 2, 6
-DEFAULT_HIDDEN = frozenset({"HF", "ECF", "CF1", "KF", "EKF"})  # comparison estimators start switched off
+# comparison estimators start switched off
+DEFAULT_HIDDEN = frozenset({"HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
+# The curves of the versions that stored "hidden_curves" without "known_curves": any other label is new
+# to the user's settings and starts hidden if it is in DEFAULT_HIDDEN.
+FORMERLY_KNOWN = frozenset({"AHF", "onboard", "HF", "ECF"})
 
 
 class MainWindow(QtWidgets.QMainWindow):
@@ -234,10 +238,21 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- settings -------------------------------------------------------------------------------
 
     def _stored_hidden_curves(self) -> frozenset[str]:
-        stored = self.settings.value("hidden_curves")
-        if stored is None:
+        hidden = self._stored_labels("hidden_curves")
+        if hidden is None:
             return DEFAULT_HIDDEN
+        return hidden | (DEFAULT_HIDDEN - self._known_curves())  # estimators added since then start hidden too
+
+    def _stored_labels(self, key: str) -> frozenset[str] | None:
+        stored = self.settings.value(key)
+        if stored is None:
+            return None
         return frozenset([stored] if isinstance(stored, str) else stored)  # QSettings gives one item as a str
+
+    def _known_curves(self) -> frozenset[str]:
+        """The legend labels the stored "hidden_curves" has decided on."""
+        known = self._stored_labels("known_curves")
+        return FORMERLY_KNOWN if known is None else known
 
     def _stored_estimator_settings(self) -> dict | None:
         """The tuned settings of the last live session (QSettings), for the next one."""
@@ -257,6 +272,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.disconnect()
         # "" for none: QSettings reads an empty list back as None, which means "the defaults"
         self.settings.setValue("hidden_curves", sorted(self.live_view.hidden_labels()) or "")
+        known = {spec.label for spec, _ in self.live_view.attitude.curves} | self._known_curves()
+        self.settings.setValue("known_curves", sorted(known))
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("splitter", self.splitter.saveState())
         self.settings.sync()

@@ -26,6 +26,7 @@ GAP_BRUSH = (220, 60, 60, 50)
 FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a time
 Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
+LEGEND_COLUMNS = 6  # more entries (eight estimators, compass and GPS) wrap onto a second legend row
 
 
 def refit(low: float, high: float, shown: tuple[float, float], span: float | None = None) -> tuple[float, float] | None:
@@ -81,7 +82,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self.older: list[pg.PlotDataItem] = []  # each curve's binned history (``Series.older``)
         self._older_drawn: list[tuple | None] = []
         # The legend sits above the plots, not over them: new data then never repaints it.
-        self.legend = pg.LegendItem(colCount=len(plots[0].curves), labelTextColor="#222")
+        self.legend = pg.LegendItem(colCount=min(len(plots[0].curves), LEGEND_COLUMNS), labelTextColor="#222")
         self.addItem(self.legend, row=0, col=0)
         for row, spec in enumerate(plots, start=1):
             item = self.addPlot(row=row, col=0)
@@ -129,6 +130,11 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 if curve.isVisible() != visible:
                     curve.setVisible(visible)
         self._stale = True
+
+    @property
+    def stale(self) -> bool:
+        """A curve was switched on since the last draw: it needs its data even if nothing grew."""
+        return self._stale
 
     def visible_labels(self) -> set[str]:
         return {spec.label for spec, curve in self.curves if curve.isVisible()}

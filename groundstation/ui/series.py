@@ -159,8 +159,14 @@ def imu_quantities(filters: tuple[str, ...]) -> Derive:
     def derive(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
         col = {name: rows[:, i] for i, name in enumerate(columns)}
         out = {}
-        for name in filters:
-            out.update(attitude_deg(name, np.column_stack([col[f"{name}_q{c}"] for c in "wxyz"])))
+        # All estimators' quaternions in one (rows, estimators, 4) array: one conversion per take, so
+        # eight estimators cost about what three did (numpy's per-call overhead dominates a frame's few rows).
+        index = [columns.index(f"{name}_q{c}") for name in filters for c in "wxyz"]
+        q = rows[:, index].reshape(len(rows), len(filters), 4)
+        yaw, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
+        yaw = np.mod(yaw, 360.0)
+        for i, name in enumerate(filters):
+            out[f"{name}_pitch_deg"], out[f"{name}_roll_deg"], out[f"{name}_heading_deg"] = pitch[:, i], roll[:, i], yaw[:, i]
         for axis in "xyz":
             out[f"acc_{axis}_g"] = col[f"acc_{axis}_g"]
             out[f"gyr_{axis}_dps"] = np.degrees(col[f"gyr_{axis}_rad_s"])

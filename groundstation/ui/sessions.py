@@ -19,9 +19,11 @@ from groundstation.sim.port import SimulatedPort
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.sources import ReplaySource, SerialSource
 
-# The comparison estimators with live-tunable settings run on every live session (about 20 µs per
-# sample each), so showing one is a legend click, not a restart.
-LIVE_FILTERS = ("ahf", "hf", "ecf")
+# The comparison estimators run on every live session (and so on its recording's replays), so showing one is a legend click or
+# a check box, not a restart: the IMU filters (HF, ECF), those with the magnetometer (HF+mag, ECF+mag,
+# MCF; a few µs per sample each) and the GPS-aided unscented filters (UKF, SSSRUKF; a few hundred µs
+# per sample each, in the reader thread). Hidden curves cost the UI nothing per frame.
+LIVE_FILTERS = ("ahf", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
 DEMO_DESCRIPTION = "simulated bridge (demo)"
 DEMO_PROFILE_S = 3600.0  # after an hour of flight the simulated craft holds still
 # The demo craft carries every aiding sensor, so the heading and position tabs have something to show.
@@ -65,6 +67,8 @@ def start_replay(path, speed: float | None = 1.0) -> LiveSession:
 
 
 def replay_session(recording: Recording, speed: float | None) -> LiveSession:
+    """Through the recorded estimators (every one of ``LIVE_FILTERS`` for the app's recordings), as the
+    headless replay and the export run it, so the window shows what the export writes."""
     session = LiveSession(ReplaySource(recording, speed), record=False)
     session.pipeline = pipeline_for(recording)
     return session
