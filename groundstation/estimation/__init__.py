@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 
 from groundstation.estimation.ahf import Ahf, Hf
-from groundstation.estimation.base import Estimator, GpsFix
+from groundstation.estimation.base import Estimator
 from groundstation.estimation.cf1 import Cf1
 from groundstation.estimation.ecf import Ecf
 from groundstation.estimation.ekf import Ekf

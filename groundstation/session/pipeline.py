@@ -16,7 +16,8 @@ import math
 
 from firmware_protocol import SPEC, Frame, StreamDecoder
 from groundstation import geodesy, mounting
-from groundstation.estimation import GpsFix, create
+from groundstation.estimation import create
+from groundstation.estimation.base import GpsFix
 from groundstation.estimation.compass import heading_rad
 from groundstation.position import DualChannel, linear_acc_ned_m_s2
 from groundstation.session.link import LinkStats

@@ -8,7 +8,7 @@ import pytest
 
 from groundstation import quaternion as quat
 from groundstation.estimation.compass import tilt_from_field_rad
-from groundstation.estimation.mcf import Mcf, McfSettings, crossover_from_spectra, inverse_variance_weight
+from groundstation.estimation.mcf import Mcf, crossover_from_spectra, inverse_variance_weight
 from groundstation.sim.extra_sensors import AuxSettings
 from groundstation.sim.offline import simulate
 

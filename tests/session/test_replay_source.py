@@ -1,6 +1,5 @@
 """Replay pacing, pause, seek and step, and replaying damaged recordings."""
 
-import shutil
 import subprocess
 import sys
 import time
