@@ -18,17 +18,18 @@ import math
 import numpy as np
 
 from groundstation import quaternion
+from groundstation.estimation.tilt import wrap_pi
 
 
 def heading_rad(q_body_to_ned, mag_body, declination_rad: float = 0.0) -> np.ndarray:
-    """Heading in (-π, π] from attitude quaternions (…, 4) and magnetometer readings (…, 3), any unit.
+    """Heading in [-π, π) from attitude quaternions (…, 4) and magnetometer readings (…, 3), any unit.
 
     Only the pitch and roll of ``q_body_to_ned`` are used. NaN where the reading is NaN.
     """
     _, pitch, roll = np.moveaxis(quaternion.to_euler_zyx(q_body_to_ned), -1, 0)
     mag = np.asarray(mag_body, dtype=float)
     psi = level_heading_rad(pitch, roll, mag[..., 0], mag[..., 1], mag[..., 2]) + declination_rad
-    return np.angle(np.exp(1j * psi))
+    return wrap_pi(psi)
 
 
 def level_heading_rad(pitch_rad, roll_rad, mx, my, mz):

@@ -16,7 +16,7 @@ import numpy as np
 
 from groundstation import quaternion as quat
 from groundstation.estimation import create
-from groundstation.estimation.tilt import acc_pitch_roll
+from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 from groundstation.experiments.report import Figure, Result, Series, Table
 from groundstation.sim.offline import simulate
 
@@ -30,7 +30,7 @@ FILTERS = ("ukf", "sssrukf", "ahf")
 def _errors_deg(pitch_roll_yaw_rad: np.ndarray, truth_q: np.ndarray) -> np.ndarray:
     """(n, 3) pitch, roll, yaw errors in degrees, wrapped; columns missing from the input stay out."""
     truth = quat.to_euler_zyx(truth_q)[:, [1, 2, 0]][:, : pitch_roll_yaw_rad.shape[1]]
-    return np.degrees(np.angle(np.exp(1j * (pitch_roll_yaw_rad - truth))))
+    return np.degrees(wrap_pi(pitch_roll_yaw_rad - truth))
 
 
 def run(quick: bool = False) -> Result:

@@ -26,7 +26,7 @@ from groundstation.estimation import create
 from groundstation.estimation.compass import heading_rad, tilt_from_field_rad
 from groundstation.estimation.magcal import fit
 from groundstation.estimation.mcf import McfSettings, crossover_from_spectra, inverse_variance_weight
-from groundstation.estimation.tilt import acc_pitch_roll
+from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 from groundstation.experiments.report import Figure, Result, Series, Table
 from groundstation.sim.offline import simulate
 from groundstation.sim.profiles import TURNTABLE_REST_S
@@ -38,7 +38,7 @@ PAPER_PITCH_ROLL_DEG, PAPER_HEADING_DEG = 0.37, 0.8
 
 
 def _wrap_deg(angle_rad):
-    return np.degrees(np.angle(np.exp(1j * angle_rad)))
+    return np.degrees(wrap_pi(angle_rad))
 
 
 def source_errors_deg(run, mag) -> dict[str, np.ndarray]:

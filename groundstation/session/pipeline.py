@@ -19,6 +19,7 @@ from groundstation import geodesy, mounting
 from groundstation.estimation import create
 from groundstation.estimation.base import GpsFix
 from groundstation.estimation.compass import heading_rad
+from groundstation.estimation.tilt import wrap_pi
 from groundstation.position import DualChannel, linear_acc_ned_m_s2
 from groundstation.session.link import LinkStats
 from groundstation.session.table import Table
@@ -267,4 +268,4 @@ def gps_fix(values: dict) -> GpsFix:
     """A GPS frame's values as the estimators take them; a heading outside 0..360° (0xFFFF) means none."""
     heading_deg = values["heading"]
     heading = math.radians(heading_deg) if 0.0 <= heading_deg <= 360.0 else math.nan
-    return GpsFix(values["vel_n"], values["vel_e"], values["vel_d"], math.atan2(math.sin(heading), math.cos(heading)))
+    return GpsFix(values["vel_n"], values["vel_e"], values["vel_d"], wrap_pi(heading))

@@ -11,13 +11,13 @@ readings are NaN rows, the convention of ``Estimator.run`` (``estimation.base``)
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 
 from groundstation import geodesy
 from groundstation import mounting as mountings
 from groundstation import units
+from groundstation.estimation.tilt import wrap_pi
 from groundstation.sim import extra_sensors
 from groundstation.sim.imu import MPU6050, MPU6050Settings
 from groundstation.sim.profiles import Profile, Truth, make_profile
@@ -75,7 +75,7 @@ def simulate(
     pressure, _ = extra_sensors.barometer(truth, aux, stream(seed, "baro"))
     fix = extra_sensors.gps(truth, aux, stream(seed, "gps"))
     gps_pos = geodesy.ned_from_geodetic(fix["lat"], fix["lon"], fix["alt"], extra_sensors.origin(aux))
-    gps = np.column_stack([fix["vel_n"], fix["vel_e"], fix["vel_d"], _wrap_pi(np.radians(fix["heading"]))])
+    gps = np.column_stack([fix["vel_n"], fix["vel_e"], fix["vel_d"], wrap_pi(np.radians(fix["heading"]))])
     return SimRun(
         truth=truth,
         dt_s=1.0 / rate_hz,
@@ -97,7 +97,3 @@ def _every(values: np.ndarray, rate_hz: float, sensor_rate_hz: float) -> np.ndar
         step = max(1, int(round(rate_hz / sensor_rate_hz)))
         out[::step] = values[::step]
     return out
-
-
-def _wrap_pi(angle_rad: np.ndarray) -> np.ndarray:
-    return np.remainder(angle_rad + math.pi, 2.0 * math.pi) - math.pi
