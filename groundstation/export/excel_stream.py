@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import itertools
 import os
 from collections.abc import Callable
@@ -136,9 +137,23 @@ def save(workbook, path) -> None:
     try:
         ExcelWriter(workbook, archive).save()
     except BaseException:
-        with contextlib.suppress(OSError, ValueError):  # closing writes the zip's directory: may fail again
+        with contextlib.suppress(OSError, ValueError, XmlWriteError):  # closing writes the zip's directory: may fail again
             archive.close()
         raise
+
+
+try:  # openpyxl writes through lxml when it is installed (pymavlink pulls it in), which reports a failed write
+    from lxml.etree import SerialisationError as XmlWriteError  # as SerialisationError("IO_EFBIG"), not OSError
+except ImportError:  # pragma: no cover - without lxml, openpyxl's own writer raises OSError
+    XmlWriteError = OSError
+
+
+def as_os_error(error: Exception) -> OSError:
+    """A failed write as the OSError it was (lxml names the errno: ``IO_ENOSPC``, ``IO_EFBIG``)."""
+    if isinstance(error, OSError):
+        return error
+    code = getattr(errno, str(error).removeprefix("IO_"), errno.EIO)
+    return OSError(code, os.strerror(code))
 
 
 def discard(workbook) -> None:
@@ -149,7 +164,7 @@ def discard(workbook) -> None:
         if writer is None or not os.path.exists(writer.out):
             continue
         # Closing writes the XML's closing tags, which fails on a full disk; the files go anyway.
-        with contextlib.suppress(OSError, ValueError):
+        with contextlib.suppress(OSError, ValueError, XmlWriteError):
             if sheet._rows is not None:
                 sheet._rows.close()
             writer.close()
