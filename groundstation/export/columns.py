@@ -55,32 +55,33 @@ def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[st
     return out
 
 
-# The pipeline's tables of the slower sensors and the column prefix each gets in the export.
-AUX_TABLES = {"mag_raw": "mag", "baro": "baro", "gps": "gps", "position": "fused"}
-
-
 def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:
-    """Each reading on the row of the first IMU sample at or after it; empty (NaN) on the other rows.
+    """Every timestamped table but ``imu``/``onboard`` (``data.catalogue``: one per downlink frame, and
+    the fused position), each column prefixed by its table's export prefix (``mag_``, ``baro_``,
+    ``gps_``, ``fused_``, ...). Each reading sits on the row of the first IMU sample at or after it;
+    the other rows are empty (NaN).
 
     The readings come at their own rates (e.g. GPS 10 Hz); empty cells show those rates, and any
     dropout, instead of hiding them behind repeated values. Where IMU frames were lost, two readings
     can share the next IMU row: the later one is kept. The Excel export's Sensors sheet lists every
     reading at its own time.
     """
-    if data.pipeline is None:
-        return {}
     out = {}
-    for table_name, prefix in AUX_TABLES.items():
-        table = data.pipeline.tables.get(table_name)
-        if table is None or not len(table):
-            continue
-        values = table.to_dict()
+    for info in reading_tables(data):
+        values = data.tables[info.name]
         at = np.searchsorted(data.time_s, values["time_s"])
         inside = at < len(data.time_s)
-        for column, readings in values.items():
-            if column == "time_s" or column.startswith("t_us"):
-                continue
+        prefix = info.export_prefix
+        for column in info.column_names[1:]:
             full = np.full(len(data.time_s), np.nan)
-            full[at[inside]] = readings[inside]
+            full[at[inside]] = values[column][inside]
             out[column if column.startswith(prefix) else f"{prefix}_{column}"] = full[rows]
     return out
+
+
+def reading_tables(data: SessionData) -> list:
+    """The catalogue's tables of readings at their own rates that this session has rows in."""
+    if data.catalogue is None:
+        return []
+    return [info for info in data.catalogue if info.name not in ("imu", "onboard") and info.timestamped
+            and len(data.tables.get(info.name, {}).get("time_s", ()))]
