@@ -107,7 +107,7 @@ def parse_spec(text: str, **defaults) -> Spec:
         return Spec(text, "recording", target, _query(text, query), defaults)
     if os.path.isdir(target):
         raise SourceError(f"{target} is a folder; give a recording file (.gsrec) or a port")
-    raise SourceError(f"{target}: no such recording file or serial port (groundstation ports lists the ports); "
+    raise SourceError(f"{target}: no such file or serial port (groundstation ports lists the ports); "
                       f"the accepted forms are:{accepted_forms()}")
 
 
