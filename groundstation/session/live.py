@@ -14,7 +14,7 @@ from pathlib import Path
 
 from firmware_protocol import SPEC, encode, make_frame
 from groundstation.recording import RecordingWriter, default_recordings_dir, new_recording_path
-from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
+from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import SettingsSchedule
 from groundstation.sources.base import Source, SourceClosed, SourceError
 
@@ -23,19 +23,20 @@ COMMANDS = SPEC.enums["command"].values
 
 
 class LiveSession:
-    """``record``: write a recording into ``recordings_dir`` (default: ``default_recordings_dir()``).
+    """``source`` through ``pipeline`` (``session.factory.open_session`` makes both from a spec).
 
+    ``record``: write a recording into ``recordings_dir`` (default: ``default_recordings_dir()``).
     Replays are not re-recorded, and their recorded settings changes are re-applied as they pass.
     """
 
-    def __init__(self, source: Source, filters=DEFAULT_FILTERS, settings=None, record: bool = True,
+    def __init__(self, source: Source, pipeline: Pipeline, record: bool = True,
                  recordings_dir: Path | None = None, metadata: dict | None = None):
         self.source = source
-        self.pipeline = Pipeline(filters, settings)
+        self.pipeline = pipeline
         self.lock = threading.Lock()
         self.error: str | None = None  # why the reader stopped, when it was not asked to
         self.connected = True
-        self._schedule = SettingsSchedule(source.recording) if hasattr(source, "recording") else None
+        self._schedule = SettingsSchedule(source.recording) if source.is_replay else None
         self._stop = threading.Event()
         self._last_chunk_ns = 0
         self._uplink_seq = 0
@@ -55,7 +56,8 @@ class LiveSession:
 
     def start(self) -> LiveSession:
         self._thread.start()
-        self.send_command("request_config")  # the full scales, in case the start-up CONFIG was missed
+        if self.source.can_send:
+            self.send_command("request_config")  # the full scales, in case the start-up CONFIG was missed
         return self
 
     def stop(self) -> None:
@@ -101,19 +103,18 @@ class LiveSession:
 
     def _reconnect(self, reason: str) -> bool:
         """Keep trying to reopen a port that went away; False when it cannot be reopened at all."""
-        reopen = getattr(self.source, "reopen", None)
         self._note({"kind": "disconnected", "message": reason})
-        if reopen is None:
+        if not self.source.can_reopen:
             self.error = reason
             return False
         self.connected = False
         while not self._stop.wait(RECONNECT_INTERVAL_S):
             try:
-                reopen()
+                self.source.reopen()
             except SourceError:
                 continue
             self.connected = True
-            self._note({"kind": "reconnected"})
+            self._note({"kind": "reconnected", "source": self.source.description})  # perhaps under a new name
             self.send_command("request_config")
             return True
         return False
