@@ -35,8 +35,8 @@ class ProgressBar:
 class StagedProgress:
     """``progress(stage, done, total)``: one bar per stage ("decoding", then "writing")."""
 
-    def __init__(self, stream=sys.stderr):
-        self.stream = stream
+    def __init__(self, stream=None):
+        self.stream = stream or sys.stderr  # looked up now: tests and callers may have replaced it
         self.stage: str | None = None
         self.bar: ProgressBar | None = None
 
