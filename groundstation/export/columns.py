@@ -8,6 +8,8 @@ and fused-position readings when the session has them (``aux_columns``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from groundstation import quaternion
@@ -15,8 +17,20 @@ from groundstation.errors import UserError
 from groundstation.session.data import SessionData
 
 
+def check_row_options(t_from: float | None, t_to: float | None, rate_hz: float | None) -> None:
+    """UserError for a time range or rate no session can have (NaN, infinite, backwards, not positive)."""
+    for option, value in (("--from", t_from), ("--to", t_to), ("--rate", rate_hz)):
+        if value is not None and not math.isfinite(value):
+            raise UserError(f"{option} must be a finite number, not {value}")
+    if t_from is not None and t_to is not None and t_from > t_to:
+        raise UserError(f"--from ({t_from} s) is after --to ({t_to} s)")
+    if rate_hz is not None and rate_hz <= 0:
+        raise UserError("--rate must be positive")
+
+
 def select_rows(time_s: np.ndarray, t_from: float | None = None, t_to: float | None = None, rate_hz: float | None = None) -> np.ndarray:
     """Indices of the rows in [t_from, t_to], decimated to about ``rate_hz`` (every k-th sample)."""
+    check_row_options(t_from, t_to, rate_hz)
     keep = np.ones(len(time_s), dtype=bool)
     if t_from is not None:
         keep &= time_s >= t_from
@@ -26,8 +40,6 @@ def select_rows(time_s: np.ndarray, t_from: float | None = None, t_to: float | N
     if len(rows) == 0:
         raise UserError(f"no samples between {t_from} s and {t_to} s (the session lasts {time_s[-1] if len(time_s) else 0:.1f} s)")
     if rate_hz is not None:
-        if rate_hz <= 0:
-            raise UserError("--rate must be positive")
         period = np.median(np.diff(time_s)) if len(time_s) > 1 else 1.0
         step = max(1, int(round(1.0 / (rate_hz * period))))
         rows = rows[::step]

@@ -21,6 +21,7 @@ from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
+from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
 
@@ -56,6 +57,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.banner.setStyleSheet("background:#fde0e0; color:#8b0000; padding:6px; border:1px solid #e0a0a0")
         self.banner.setTextInteractionFlags(QtCore.Qt.TextSelectableByMouse)
         self.banner.hide()
+        self.recording_banner = RecordingBanner()
         self.replay_bar = ReplayBar()
         self.replay_bar.seekRequested.connect(self.seek)
         self.replay_bar.hide()
@@ -85,6 +87,7 @@ class MainWindow(QtWidgets.QMainWindow):
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
         layout.addWidget(self.banner)
+        layout.addWidget(self.recording_banner)
         layout.addWidget(self.replay_bar)
         layout.addWidget(self.splitter, 1)
         self.setCentralWidget(central)
@@ -213,6 +216,7 @@ class MainWindow(QtWidgets.QMainWindow):
         figures = self.ticks % FIGURES_EVERY == 0
         if figures:
             self.link_panel.refresh(session)
+            self.recording_banner.refresh(session)
         if session is None:
             return
         self.live_view.refresh()
@@ -228,14 +232,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     @staticmethod
     def _recording_text(session: LiveSession) -> str:
+        if session.recorder.state == "failed":
+            return "⚠ NOT RECORDING (see the red banner)"
         path = session.recording_path
         if path is None:
             return "not recording (replay)" if session.source.is_replay else "not recording"
-        try:
-            size = path.stat().st_size
-        except OSError:
-            size = 0
-        return f"● recording {path}  ({size / 1e6:.1f} MB)"
+        return f"● recording {path}  ({session.recorder.bytes_written / 1e6:.1f} MB)"
 
     # -- settings -------------------------------------------------------------------------------
 
