@@ -14,7 +14,7 @@ import math
 from firmware_protocol import SPEC
 from groundstation import geodesy
 from groundstation.estimation.base import GpsFix
-from groundstation.estimation.compass import heading_rad
+from groundstation.estimation.compass import reading_heading_rad
 from groundstation.estimation.tilt import wrap_pi
 from groundstation.position import DualChannel, linear_acc_ned_m_s2
 
@@ -42,7 +42,7 @@ class Aiding:
     def magnetometer(self, field_body_ut: tuple, q) -> float:
         """Keeps the reading for the estimators; returns the compass heading in degrees (NaN without attitude)."""
         self._mag_body_ut = field_body_ut
-        return math.degrees(float(heading_rad(q, field_body_ut))) if q is not None else math.nan
+        return math.degrees(reading_heading_rad(q, field_body_ut)) if q is not None else math.nan
 
     def barometer(self, pressure_pa: float) -> None:
         if self._baro_ground_pa is None:
