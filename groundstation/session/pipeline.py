@@ -67,7 +67,7 @@ class Pipeline:
         self.bank = EstimatorBank(filters, settings, forced)
         self.filters = self.bank.filters
         self.assumed_sensor = assumed_sensor or SensorConfig()
-        self.decoder = StreamDecoder()
+        self.decoder = StreamDecoder(spec)
         self.link = LinkStats()
         self.catalogue = session_catalogue(self.bank.diagnostics(), spec)
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
