@@ -25,7 +25,7 @@ PROTOCOL_HEADER_DIR = REFERENCE_DIR.parent / "c"
 SOURCES = (*sorted(CORE_DIR.glob("*.c")), REFERENCE_DIR / "host" / "gs_host.c")
 HEADERS = (*sorted(CORE_DIR.glob("*.h")), PROTOCOL_HEADER_DIR / "gs_protocol.h")
 # Warnings are errors: the core must stay clean C99. No FMA contraction: it changes the last bits.
-CFLAGS = ("-std=c99", "-Wall", "-Wextra", "-Werror", "-O2", "-ffp-contract=off")
+CFLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Wconversion", "-Wshadow", "-Werror", "-O2", "-ffp-contract=off")
 
 
 class CoreUnavailable(RuntimeError):
