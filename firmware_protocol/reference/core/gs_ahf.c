@@ -5,6 +5,17 @@
 #include <math.h>
 #include <stddef.h>
 
+/* x^-0.5 in float. The ground station's float32 model writes it x ** -0.5, which NumPy computes with
+ * the C library's powf, so the core calls powf too: bit for bit with the model on the same C library.
+ * C libraries round it differently: newlib's powf (the STM32 build) differs from glibc's in 9 % of
+ * inputs, and the filter turns one ulp into degrees (docs/firmware.md). GS_AHF_PORTABLE_RSQRT builds
+ * (float)(1.0 / sqrt((double)x)) instead: IEEE operations every platform computes alike. */
+#ifdef GS_AHF_PORTABLE_RSQRT
+static float rsqrt(float x) { return (float)(1.0 / sqrt((double)x)); }
+#else
+static float rsqrt(float x) { return powf(x, -0.5f); }
+#endif
+
 void gs_ahf_default_settings(gs_ahf_settings *s)
 {
     s->lambda_max = 2.0;
@@ -96,7 +107,7 @@ unsigned gs_ahf_step(gs_ahf *f, const float gyr_rad_s[3], const float acc_g[3], 
     float d4 = 0.5f * (q1 * gz + q2 * gy - q3 * gx);
     if (acc_ok) {
         /* a: the measured down direction, -acc normalised */
-        float r = -powf(ax * ax + ay * ay + az * az, -0.5f);
+        float r = -rsqrt(ax * ax + ay * ay + az * az);
         ax = ax * r;
         ay = ay * r;
         az = az * r;
@@ -131,7 +142,7 @@ unsigned gs_ahf_step(gs_ahf *f, const float gyr_rad_s[3], const float acc_g[3], 
         float g2 = s1 * s1 + s2 * s2 + s3 * s3 + s4 * s4;
         if (g2 > 0.0f) {
             /* (eq. 18) q_dot = q_dot_w - lambda grad f / |grad f| */
-            float k = lam * powf(g2, -0.5f);
+            float k = lam * rsqrt(g2);
             d1 = d1 - k * s1;
             d2 = d2 - k * s2;
             d3 = d3 - k * s3;
@@ -143,7 +154,7 @@ unsigned gs_ahf_step(gs_ahf *f, const float gyr_rad_s[3], const float acc_g[3], 
     q2 = q2 + d2 * dt_s;
     q3 = q3 + d3 * dt_s;
     q4 = q4 + d4 * dt_s;
-    float r = powf(q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4, -0.5f);
+    float r = rsqrt(q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4);
     f->q[0] = q1 * r;
     f->q[1] = q2 * r;
     f->q[2] = q3 * r;

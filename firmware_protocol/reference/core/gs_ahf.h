@@ -3,7 +3,7 @@
  * The same constants and order of operations as groundstation/estimation/ahf.py run with
  * dtype=np.float32 (and the input guards of groundstation/estimation/base.py), so the two agree bit
  * for bit: every update is float arithmetic in the order the Python writes it, x^-0.5 is powf(x, -0.5f)
- * (NumPy's float32 power), and the few steps the Python does in double (initialisation from gravity,
+ * (NumPy's float32 power; see GS_AHF_PORTABLE_RSQRT in gs_ahf.c), and the few steps the Python does in double (initialisation from gravity,
  * re-normalising a given attitude, the settings) are done in double here too. Build without
  * -ffast-math and without FMA contraction (-ffp-contract=off), or the last bits differ.
  *
