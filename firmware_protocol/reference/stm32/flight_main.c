@@ -87,6 +87,7 @@ int main(void)
             sample.port_flags |= GS_STATUS_IMU_ERROR;
         }
         busy_us += micros() - t0;
+        if ((int32_t)(micros() - next) > (int32_t)period_us) next = micros(); /* overrun: no burst to catch up */
         if (status_sent) { /* STATUS reports the second before it */
             sample.retransmits = retransmits;
             sample.lost_acks = lost;

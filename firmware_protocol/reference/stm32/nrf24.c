@@ -93,7 +93,9 @@ int nrf24_init(int receiver)
     write_reg(REG_SETUP_AW, 3u);     /* 5-byte addresses */
     write_reg(REG_RF_CH, CHANNEL);
     write_reg(REG_RF_SETUP, 0x06u);  /* 1 Mbps, 0 dBm */
-    write_reg(REG_SETUP_RETR, 0x13u); /* 500 us (payloads on acknowledgements need it), 3 retransmissions */
+    /* 500 us between tries (payloads on acknowledgements need it), 2 retransmissions: a frame the
+     * bridge never hears costs 3 tries of about 1 ms, so a sample's frames still fit its 10 ms */
+    write_reg(REG_SETUP_RETR, 0x12u);
     write_reg(REG_EN_AA, 1u);
     write_reg(REG_EN_RXADDR, 1u);
     write_reg(REG_FEATURE, 0x06u);   /* dynamic payload length, payloads on acknowledgements */

@@ -1,7 +1,7 @@
 /* nRF24L01+ on SPI1 (CSN PA4, CE PB0; IRQ not used: STATUS is polled).
  *
  * Link: channel 76 (2.476 GHz), 1 Mbps, 0 dBm, 5-byte address "GSLNK", 2-byte CRC, auto-acknowledge
- * with up to 3 retransmissions 500 us apart, dynamic payload length (a payload is one whole frame,
+ * with up to 2 retransmissions 500 us apart, dynamic payload length (a payload is one whole frame,
  * at most 32 bytes, sent and delivered unchanged) and payloads on acknowledgements: the flight board
  * transmits (PTX); the bridge receives (PRX) and puts uplink frames on its next acknowledgements. */
 #ifndef NRF24_H
