@@ -7,6 +7,7 @@ SIGTERM (or ``--duration``), answers uplink commands, then prints what the link 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import signal
 import sys
@@ -24,6 +25,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds (default: run until stopped)")
     parser.add_argument("--link", default=None, metavar="PATH",
                         help="also make PATH a symlink to the pty (kept across --dropout-every reconnections)")
+    parser.add_argument("--firmware", choices=("python", "c"), default="python",
+                        help="who runs the board: the Python model (default) or the reference firmware's C core, "
+                             "built with the system C compiler (firmware in the loop; MPU-6050 only)")
     parser.add_argument("--timing-log", default=None, metavar="FILE",
                         help="append one line per write: host monotonic ns, then the device t_us of the frames written")
 
@@ -31,10 +35,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     if os.name != "posix":
         raise UserError("bridge-sim needs a POSIX pseudo-terminal; on Windows the app offers the simulator in process")
+    from firmware_protocol.reference.host import CoreUnavailable
     from groundstation.sim.pty_bridge import PtyBridge
     from groundstation.sim.stream import SimStream
 
     scenario = scenario_from_args(args, args.duration if args.duration is not None else OPEN_ENDED_PROFILE_S)
+    scenario = dataclasses.replace(scenario, firmware_core=args.firmware)
+    try:
+        stream = SimStream(scenario)
+    except (ValueError, CoreUnavailable) as error:
+        raise UserError(f"--firmware {args.firmware}: {error}") from None
     link_path = args.link
     if link_path is None and scenario.link.dropout_every_s:
         # A pty that comes back is a new /dev/pts/N: readers need a name that survives it.
@@ -44,11 +54,12 @@ def run(args: argparse.Namespace) -> int:
         signal.signal(signum, lambda *_: stopping.append(True))
     log = open(args.timing_log, "a", encoding="ascii") if args.timing_log else None
     try:
-        bridge = PtyBridge(SimStream(scenario), link_path, log)
+        bridge = PtyBridge(stream, link_path, log)
     except OSError as error:
         raise UserError(f"cannot open a pseudo-terminal or the link {link_path}: {error}") from None
     s = scenario.firmware
-    print(f"bridge-sim: '{scenario.profile}' seed {scenario.seed}, mode {s.mode}, {s.rate_hz} Hz on {bridge.path}", flush=True)
+    print(f"bridge-sim: '{scenario.profile}' seed {scenario.seed}, mode {s.mode}, {s.rate_hz} Hz, {args.firmware} firmware on {bridge.path}",
+          flush=True)
     try:
         bridge.run(lambda: bool(stopping), args.duration)
     finally:
