@@ -18,9 +18,13 @@ from groundstation.ui.series import Series, imu_quantities, onboard_quantities
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
-COLORS = {"ahf": "#1f5fbf", "onboard": "#e07000", "hf": "#2a9d3a", "ecf": "#8e44ad", "cf1": "#7f7f7f",
-          "kf": "#c0392b", "ekf": "#16a085", "hfm": "#7fc97f", "ecfm": "#d291e0", "mcf": "#8c564b",
-          "ukf": "#e377c2", "sssrukf": "#a5a51a"}
+# Paul Tol's "muted" palette: nine colours told apart by colour-blind readers and on white. The nine
+# curves the app shows together (its eight estimators and the onboard one) each get their own; the
+# estimators only a replay of an older recording has (CF1, KF, EKF) share one with a live one.
+ESTIMATOR_PALETTE = ("#332288", "#882255", "#117733", "#44AA99", "#CC6677", "#999933", "#88CCEE", "#DDCC77", "#AA4499")
+INDIGO, WINE, GREEN, TEAL, ROSE, OLIVE, CYAN, SAND, PURPLE = ESTIMATOR_PALETTE
+COLORS = {"ahf": INDIGO, "onboard": WINE, "hf": GREEN, "ecf": TEAL, "ukf": ROSE, "hfm": OLIVE, "ecfm": CYAN,
+          "mcf": SAND, "sssrukf": PURPLE, "cf1": OLIVE, "kf": CYAN, "ekf": SAND}
 LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
           "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
@@ -32,7 +36,8 @@ AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position"
 def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None) -> tuple[Curve, ...]:
     """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others."""
     host = tuple(Curve("imu", f"{n}_{angle}_deg", LABELS.get(n, n), COLORS.get(n, "#444"), wraps_at) for n in filters)
-    return host[:1] + (Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"], wraps_at),) + host[1:]
+    onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"], wraps_at, reference=True)
+    return host[:1] + (onboard,) + host[1:]
 
 
 def attitude_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
@@ -56,8 +61,8 @@ def sensor_plots() -> tuple[Plot, ...]:
 def diagnostic_plots() -> tuple[Plot, ...]:
     return (
         Plot("λ", "rad/s", (Curve("imu", "ahf_lam", "AHF", COLORS["ahf"]),
-                            Curve("onboard", "onboard_lam", "onboard", COLORS["onboard"]))),
-        Plot("acceleration error e_a", "1", (Curve("imu", "ahf_e_a", "AHF", COLORS["ahf"]),)),
+                            Curve("onboard", "onboard_lam", "onboard", COLORS["onboard"], reference=True))),
+        Plot("acceleration error e_a", "", (Curve("imu", "ahf_e_a", "AHF", COLORS["ahf"]),)),
     )
 
 
