@@ -19,6 +19,7 @@ IDLE_WAIT_S = 0.05
 
 
 class ReplaySource:
+    can_send = False  # a recording has no aircraft to command
     def __init__(self, recording: Recording, speed: float | None = None):
         """``speed`` None: as fast as possible; otherwise a multiple of real time in [0.25, 64]."""
         self.recording = recording

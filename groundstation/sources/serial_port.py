@@ -19,6 +19,8 @@ class SerialSource:
     which is how the in-process simulated bridge plugs in where no pseudo-terminal exists.
     """
 
+    can_send = True
+
     def __init__(self, port, baud: int = 115200):
         self.baud = baud
         if isinstance(port, str):

@@ -100,6 +100,11 @@ class AttitudePanel(QtWidgets.QGroupBox):
         q = last[0][[imu.columns.index(f"{name}_q{c}") for c in "wxyz"]]
         self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
 
+    def clear(self) -> None:
+        """No attitude (a new session, before its first estimate)."""
+        self.show_attitude(math.nan, math.nan, math.nan)
+        self.readouts["heading"].setText("—")
+
     def show_attitude(self, yaw_deg: float, pitch_deg: float, roll_deg: float) -> None:
         self.indicator.set_attitude(yaw_deg, pitch_deg, roll_deg)
         for name, value in (("pitch", pitch_deg), ("roll", roll_deg), ("yaw", yaw_deg)):

@@ -75,6 +75,7 @@ class LiveView(QtWidgets.QWidget):
         self.series: dict[str, Series] = {}
         self._pipeline = None
         self.frames_drawn = 0  # for the tests and the benchmark
+        self._browsing: StackedPlots | None = None  # paused, and drawn whole to look back in time
         self.window_box = QtWidgets.QComboBox()
         self.window_box.addItems(list(WINDOWS_S))
         self.window_box.setCurrentText(DEFAULT_WINDOW)
@@ -127,6 +128,7 @@ class LiveView(QtWidgets.QWidget):
         """Show ``session``; its estimators decide the attitude curves."""
         self.session = session
         self._pipeline = None
+        self._browsing = None
         self.series = {}
         filters = session.pipeline.filters if session is not None else self._filters
         if filters != self._filters:
@@ -146,7 +148,9 @@ class LiveView(QtWidgets.QWidget):
         return frozenset((self._hidden - present) | (present - self.attitude.visible_labels()))
 
     def set_visible(self, label: str, visible: bool) -> None:
-        """Show or hide an estimator's curves on the attitude and heading tabs."""
+        """Show or hide an estimator's curves on the attitude and heading tabs (remembered for a
+        session to come when this one lacks the estimator)."""
+        self._hidden = self._hidden | {label} if not visible else self._hidden - {label}
         for plots in (self.attitude, self.heading):
             plots.set_visible(label, visible)
 
@@ -160,7 +164,30 @@ class LiveView(QtWidgets.QWidget):
     def _paused_changed(self, paused: bool) -> None:
         self.pause_button.setText("Resume view" if paused else "Pause view")
         if not paused:
+            self._browsing = None
             self.redraw()
+
+    def show_time(self, t_s: float | None) -> None:
+        """Pause the view and centre it on ``t_s`` (None: the session's start), window wide."""
+        self._browse(lambda low, high, first: (first, first + high - low) if t_s is None else
+                     (t_s - (high - low) / 2, t_s + (high - low) / 2))
+
+    def pan(self, fraction: float) -> None:
+        """Pause the view and move it by ``fraction`` of its width (negative: back in time)."""
+        self._browse(lambda low, high, first: (low + fraction * (high - low), high + fraction * (high - low)))
+
+    def _browse(self, new_range) -> None:
+        """Pause, draw every sample once (the live draw holds only the window's), set the time range."""
+        plots = self.current_plots()
+        imu = self.series.get("imu")
+        if not isinstance(plots, StackedPlots) or imu is None or imu.end_s is None:
+            return
+        low, high = plots.items[0].getViewBox().viewRange()[0]
+        self.pause_button.setChecked(True)
+        if self._browsing is not plots:
+            plots.draw(self.series, None, None)
+            self._browsing = plots
+        plots.items[0].setXRange(*new_range(low, high, imu.start_s), padding=0)
 
     def refresh(self) -> bool:
         """Take the new rows; redraw the visible plots if anything grew. True when it drew."""

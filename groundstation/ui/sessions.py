@@ -66,11 +66,12 @@ def start_replay(path, speed: float | None = 1.0) -> LiveSession:
     return replay_session(recording, speed).start()
 
 
-def replay_session(recording: Recording, speed: float | None) -> LiveSession:
+def replay_session(recording: Recording, speed: float | None, filters=None, forced=None) -> LiveSession:
     """Through the recorded estimators (every one of ``LIVE_FILTERS`` for the app's recordings), as the
-    headless replay and the export run it, so the window shows what the export writes."""
+    headless replay and the export run it, so the window shows what the export writes; or through
+    ``filters`` with ``forced`` settings (``pipeline_for``), a what-if as the CLI's ``--set``."""
     session = LiveSession(ReplaySource(recording, speed), record=False)
-    session.pipeline = pipeline_for(recording)
+    session.pipeline = pipeline_for(recording, filters, forced)
     return session
 
 
@@ -79,8 +80,8 @@ class ReplaySeek:
     through a fresh pipeline first (filters have memory, so the estimates there depend on all that
     came before; a long recording takes seconds). ``session`` is ready, not started, once ``done``."""
 
-    def __init__(self, recording: Recording, speed: float | None, paused: bool, t_s: float):
-        self.session = replay_session(recording, speed)
+    def __init__(self, recording: Recording, speed: float | None, paused: bool, t_s: float, filters=None, forced=None):
+        self.session = replay_session(recording, speed, filters, forced)
         self.session.source.pause(paused)
         self.end = self.session.source.seek(t_s)
         self.fed = 0
