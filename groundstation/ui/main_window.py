@@ -19,6 +19,7 @@ from groundstation.ui import sessions
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
+from groundstation.ui.event_console import EventConsole
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
@@ -75,13 +76,16 @@ class MainWindow(QtWidgets.QMainWindow):
         controls = QtWidgets.QTabWidget()
         controls.addTab(self.estimator_panel, "Estimators")
         controls.addTab(self.uplink_panel, "Uplink")
+        self.event_console = EventConsole()
+        self.event_console.timeRequested.connect(self.live_view.show_time)
+        controls.addTab(self.event_console, "Events")
+        self.controls = controls
         side = QtWidgets.QWidget()
         side_layout = QtWidgets.QVBoxLayout(side)
         side_layout.setContentsMargins(0, 0, 0, 0)
         side_layout.addWidget(self.attitude_panel)
         side_layout.addWidget(self.link_panel)
-        side_layout.addWidget(controls)
-        side_layout.addStretch(1)
+        side_layout.addWidget(controls, 1)
         self.splitter = QtWidgets.QSplitter()
         self.splitter.addWidget(self.live_view)
         self.splitter.addWidget(side)
@@ -214,6 +218,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.replay_bar.set_session(session)
         self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels())
         self.uplink_panel.set_session(session)
+        self.event_console.set_session(session)
         self.bar.set_connected(True)
 
     def disconnect(self) -> None:
@@ -324,6 +329,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if figures:
             self.replay_bar.refresh()
             self.uplink_panel.refresh()
+            self.event_console.refresh()
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
         if session.error and not self.banner.isVisible():
