@@ -29,6 +29,7 @@ LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "
           "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
+SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
 # The tabs that appear once a series of theirs has rows.
 AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
 
@@ -51,11 +52,17 @@ def heading_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
     return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0)),)
 
 
-def sensor_plots() -> tuple[Plot, ...]:
-    def axes(prefix: str, unit: str) -> tuple[Curve, ...]:
-        return tuple(Curve("imu", f"{prefix}_{a}_{unit}", a, c) for a, c in zip("xyz", AXIS_COLORS))
+def sensor_plots(aiding: frozenset[str] = frozenset()) -> tuple[Plot, ...]:
+    """Accelerometer and gyroscope; the magnetometer and barometer too when ``aiding`` names them."""
+    def axes(series: str, prefix: str, unit: str) -> tuple[Curve, ...]:
+        return tuple(Curve(series, f"{prefix}_{a}_{unit}", a, c) for a, c in zip("xyz", AXIS_COLORS))
 
-    return Plot("accelerometer", "g", axes("acc", "g")), Plot("gyroscope", "°/s", axes("gyr", "dps"))
+    plots = [Plot("accelerometer", "g", axes("imu", "acc", "g")), Plot("gyroscope", "°/s", axes("imu", "gyr", "dps"))]
+    if "mag" in aiding:
+        plots.append(Plot("magnetometer", "µT", axes("mag", "mag", "uT")))
+    if "baro" in aiding:
+        plots.append(Plot("pressure", "hPa", (Curve("baro", "baro_pressure_hPa", "barometer", "#444444"),)))
+    return tuple(plots)
 
 
 def diagnostic_plots() -> tuple[Plot, ...]:
@@ -95,6 +102,7 @@ class LiveView(QtWidgets.QWidget):
         self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
         self._filters = ("ahf",)
         self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
+        self._sensor_aiding: frozenset[str] = frozenset()
         self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
         self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
         self.position = self._add_tab(PositionView(), "Position")
@@ -154,7 +162,17 @@ class LiveView(QtWidgets.QWidget):
         for plots in (self.attitude, self.heading):
             plots.set_visible(label, visible)
 
+    def _show_aiding_sensors(self) -> None:
+        """The Sensors tab with a plot for each aiding sensor that has delivered readings."""
+        aiding = frozenset(s for s in SENSOR_AIDING if s in self.series and self.series[s].taken)
+        if aiding != self._sensor_aiding:
+            current = self.tabs.currentIndex()
+            self.sensors = self._replace_tab(self.sensors, StackedPlots(sensor_plots(aiding)))
+            self.tabs.setCurrentIndex(current)
+            self._sensor_aiding = aiding
+
     def _show_aiding_tabs(self) -> None:
+        self._show_aiding_sensors()
         for name, sources in AIDING_TABS.items():
             index = self.tabs.indexOf(getattr(self, name))
             shown = any(self.series[s].taken for s in sources if s in self.series)
