@@ -12,17 +12,16 @@ from PySide6 import QtWidgets
 
 from groundstation.session.live import LiveSession
 from groundstation.ui.navigation import aiding_series
-from groundstation.ui.plots import Curve, Plot, StackedPlots
+from groundstation.ui.channels import ChannelsView
+from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
-# Paul Tol's "muted" palette: nine colours told apart by colour-blind readers and on white. The nine
-# curves the app shows together (its eight estimators and the onboard one) each get their own; the
-# estimators only a replay of an older recording has (CF1, KF, EKF) share one with a live one.
-ESTIMATOR_PALETTE = ("#332288", "#882255", "#117733", "#44AA99", "#CC6677", "#999933", "#88CCEE", "#DDCC77", "#AA4499")
-INDIGO, WINE, GREEN, TEAL, ROSE, OLIVE, CYAN, SAND, PURPLE = ESTIMATOR_PALETTE
+# The nine curves the app shows together (its eight estimators and the onboard one) each get their own
+# colour of the palette; the estimators only a replay of an older recording has (CF1, KF, EKF) share one.
+INDIGO, WINE, GREEN, TEAL, ROSE, OLIVE, CYAN, SAND, PURPLE = PALETTE
 COLORS = {"ahf": INDIGO, "onboard": WINE, "hf": GREEN, "ecf": TEAL, "ukf": ROSE, "hfm": OLIVE, "ecfm": CYAN,
           "mcf": SAND, "sssrukf": PURPLE, "cf1": OLIVE, "kf": CYAN, "ekf": SAND}
 LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
@@ -106,6 +105,7 @@ class LiveView(QtWidgets.QWidget):
         self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
         self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
         self.position = self._add_tab(PositionView(), "Position")
+        self.channels = self._add_tab(ChannelsView(), "Channels")
         self._show_aiding_tabs()
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
@@ -148,6 +148,7 @@ class LiveView(QtWidgets.QWidget):
             self._filters = filters
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
+        self.channels.set_session(session)
         self._show_aiding_tabs()
 
     def hidden_labels(self) -> frozenset[str]:
@@ -198,7 +199,7 @@ class LiveView(QtWidgets.QWidget):
         """Pause, draw every sample once (the live draw holds only the window's), set the time range."""
         plots = self.current_plots()
         imu = self.series.get("imu")
-        if not isinstance(plots, StackedPlots) or imu is None or imu.end_s is None:
+        if not isinstance(plots, (StackedPlots, ChannelsView)) or imu is None or imu.end_s is None:
             return
         low, high = plots.items[0].getViewBox().viewRange()[0]
         self.pause_button.setChecked(True)

@@ -9,7 +9,7 @@ import pytest
 from PySide6 import QtCore
 
 from groundstation.session.table import Table
-from groundstation.ui.live_view import COLORS, ESTIMATOR_PALETTE, attitude_plots, diagnostic_plots
+from groundstation.ui.live_view import COLORS, PALETTE, attitude_plots, diagnostic_plots
 from groundstation.ui.plots import StackedPlots
 from groundstation.ui.series import Series
 
@@ -106,7 +106,7 @@ def test_the_onboard_curve_lies_beneath_the_estimators_and_is_dashed(plots):
 def test_every_estimator_has_its_own_colour_from_one_colour_blind_safe_palette():
     shown = [COLORS[n] for n in ("onboard", *FILTERS)]
     assert len(set(shown)) == len(shown)
-    assert set(COLORS.values()) <= set(ESTIMATOR_PALETTE)
+    assert set(COLORS.values()) <= set(PALETTE)
 
 
 def test_a_dimensionless_axis_carries_no_unit_or_scale_factor(qtbot):
