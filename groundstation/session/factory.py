@@ -39,10 +39,11 @@ def open_session(spec: str, *, filters=LIVE_FILTERS, settings: dict | None = Non
                        metadata={"source_spec": spec})
 
 
-def replay_session(source: ReplaySource) -> LiveSession:
+def replay_session(source: ReplaySource, filters=None, forced=None) -> LiveSession:
     """Through the recorded estimators (every one of ``LIVE_FILTERS`` for the app's recordings), as the
-    headless replay and the export run it."""
-    return LiveSession(source, pipeline_for(source.recording), record=False)
+    headless replay and the export run it, so the window shows what the export writes; or through
+    ``filters`` with ``forced`` settings (``pipeline_for``), a what-if as the CLI's ``--set``."""
+    return LiveSession(source, pipeline_for(source.recording, filters, forced), record=False)
 
 
 class ReplaySeek:
@@ -50,8 +51,8 @@ class ReplaySeek:
     through a fresh pipeline first (filters have memory, so the estimates there depend on all that
     came before; a long recording takes seconds). ``session`` is ready, not started, once ``done``."""
 
-    def __init__(self, recording: Recording, speed: float | None, paused: bool, t_s: float):
-        self.session = replay_session(ReplaySource(recording, speed))
+    def __init__(self, recording: Recording, speed: float | None, paused: bool, t_s: float, filters=None, forced=None):
+        self.session = replay_session(ReplaySource(recording, speed), filters, forced)
         self.session.source.pause(paused)
         self.end = self.session.source.seek(t_s)
         self.fed = 0

@@ -15,6 +15,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation import quaternion
 from groundstation.session.live import LiveSession
+from groundstation.ui.attitude_3d import AttitudeView3D
 from groundstation.ui.navigation import heading_now
 
 SKY, GROUND, LINE = QtGui.QColor("#3a7bd5"), QtGui.QColor("#8b5a2b"), QtGui.QColor("white")
@@ -25,7 +26,7 @@ class AttitudeIndicator(QtWidgets.QWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.pitch_deg = self.roll_deg = self.yaw_deg = math.nan
-        self.setMinimumSize(180, 180)
+        self.setMinimumSize(150, 150)
         self.setSizePolicy(QtWidgets.QSizePolicy.Expanding, QtWidgets.QSizePolicy.Fixed)
 
     def sizeHint(self) -> QtCore.QSize:
@@ -72,11 +73,15 @@ class AttitudeIndicator(QtWidgets.QWidget):
 
 
 class AttitudePanel(QtWidgets.QGroupBox):
-    """The indicator and the readouts of one estimate."""
+    """The horizon, the 3D view of the body beside it, and the readouts of one estimate."""
 
     def __init__(self, parent=None):
         super().__init__("Attitude (AHF)", parent)
         self.indicator = AttitudeIndicator()
+        self.body_view = AttitudeView3D()
+        views = QtWidgets.QHBoxLayout()
+        views.addWidget(self.indicator)
+        views.addWidget(self.body_view)
         self.readouts = {name: QtWidgets.QLabel("—") for name in ("pitch", "roll", "yaw", "heading")}
         numbers = QtWidgets.QFormLayout()
         for name, label in self.readouts.items():
@@ -84,7 +89,7 @@ class AttitudePanel(QtWidgets.QGroupBox):
             label.setStyleSheet("font-family: monospace; font-size: 14px")
             numbers.addRow(name, label)
         layout = QtWidgets.QVBoxLayout(self)
-        layout.addWidget(self.indicator)
+        layout.addLayout(views)
         layout.addLayout(numbers)
 
     def show_session(self, session: LiveSession) -> None:
@@ -99,6 +104,13 @@ class AttitudePanel(QtWidgets.QGroupBox):
             return
         q = last[0][[imu.columns.index(f"{name}_q{c}") for c in "wxyz"]]
         self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
+        self.body_view.set_attitude(q)
+
+    def clear(self) -> None:
+        """No attitude (a new session, before its first estimate)."""
+        self.show_attitude(math.nan, math.nan, math.nan)
+        self.body_view.set_attitude(None)
+        self.readouts["heading"].setText("—")
 
     def show_attitude(self, yaw_deg: float, pitch_deg: float, roll_deg: float) -> None:
         self.indicator.set_attitude(yaw_deg, pitch_deg, roll_deg)

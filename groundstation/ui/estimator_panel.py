@@ -1,8 +1,10 @@
 """The estimator panel: show or hide the comparison estimators, tune AHF's λ bounds, HF's and
 HF+mag's β and ECF's and ECF+mag's Kp/Ki live, back to the defaults, or send AHF's λ bounds to the aircraft.
 
-A change goes through ``LiveSession.change_settings``: it applies from the next sample, keeps the
-attitude, and is written to the recording, so a replay changes it at the same point.
+Live, a change goes through ``LiveSession.change_settings``: it applies from the next sample, keeps
+the attitude, and is written to the recording, so a replay changes it at the same point. In a replay
+every estimator can be shown, those the recording lacks too, and a change is a what-if (the CLI's
+``--set``): the window re-runs the replay from the start with the estimators and settings asked.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.estimation import ESTIMATORS
 from groundstation.session.live import LiveSession
+from groundstation.sources import ReplaySource
 from groundstation.ui.live_view import LABELS
 
 # estimator -> (setting, label, unit); units as in the settings dataclasses.
@@ -33,6 +36,7 @@ def defaults(name: str) -> dict[str, float]:
 class EstimatorPanel(QtWidgets.QGroupBox):
     visibilityChanged = QtCore.Signal(str, bool)  # legend label, shown
     sendToAircraft = QtCore.Signal(dict)  # AHF setting -> value, for set_filter_param
+    replayAsked = QtCore.Signal(tuple, dict)  # a replay's estimators, {estimator: {setting: value}} forced
 
     def __init__(self, parent=None):
         super().__init__(parent)  # titled by its tab
@@ -53,10 +57,10 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         apply_button.clicked.connect(self.apply)
         defaults_button = QtWidgets.QPushButton("Defaults")
         defaults_button.clicked.connect(self.restore_defaults)
-        send_button = QtWidgets.QPushButton("Send AHF λ to aircraft")
-        send_button.clicked.connect(lambda: self.sendToAircraft.emit(self.values("ahf")))
+        self.send_button = QtWidgets.QPushButton("Send AHF λ to aircraft")
+        self.send_button.clicked.connect(lambda: self.sendToAircraft.emit(self.values("ahf")))
         buttons = QtWidgets.QHBoxLayout()
-        for button in (apply_button, defaults_button, send_button):
+        for button in (apply_button, defaults_button, self.send_button):
             buttons.addWidget(button)
         self._layout.addRow(buttons)
         self._layout.addRow(self.message)
@@ -72,17 +76,39 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.shown = {}
         if session is None:
             return
-        for index, name in enumerate(session.pipeline.filters[1:]):
+        self.send_button.setEnabled(session.source.can_send)
+        filters = session.pipeline.filters
+        offered = [*filters[1:], *(n for n in ESTIMATORS if n not in filters)] if self.replay else filters[1:]
+        for index, name in enumerate(offered):
             box = QtWidgets.QCheckBox(LABELS.get(name, name))
-            box.setChecked(LABELS.get(name, name) in visible_labels)
-            box.toggled.connect(lambda on, label=box.text(): self.visibilityChanged.emit(label, on))
+            box.setChecked(LABELS.get(name, name) in visible_labels and name in filters)
+            box.toggled.connect(lambda on, name=name: self._shown_changed(name, on))
             self.shown[name] = box
             self._shown_row.addWidget(box, *divmod(index, SHOWN_COLUMNS))
         settings = session.pipeline.settings()
-        for (name, setting), box in self.boxes.items():
-            box.setEnabled(name in settings)
-            if name in settings:
-                box.setValue(settings[name][setting])
+        for name, fields in TUNABLE.items():
+            for setting, _, unit in fields:
+                box = self.boxes[name, setting]
+                box.setEnabled(name in settings)
+                box.setSuffix(f" {unit}" if name in settings else "")
+                if name in settings:
+                    box.setValue(settings[name][setting])
+                else:
+                    box.clear()  # no number for an estimator the session does not run
+
+    @property
+    def replay(self) -> bool:
+        return self.session is not None and isinstance(self.session.source, ReplaySource)
+
+    def _shown_changed(self, name: str, on: bool) -> None:
+        self.visibilityChanged.emit(LABELS.get(name, name), on)
+        filters = self.session.pipeline.filters
+        if on and name not in filters:  # only a replay offers it: re-run it with this estimator too
+            self.replayAsked.emit((*filters, name), self._forced())
+
+    def _forced(self) -> dict[str, dict[str, float]]:
+        """The fields of every estimator the session runs: the settings a re-run replay is to use."""
+        return {name: self.values(name) for name in TUNABLE if name in self.session.pipeline.filters}
 
     def sync_shown(self, visible_labels: set[str]) -> None:
         """Follow the legend, where curves can be switched too."""
@@ -95,8 +121,15 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         return {setting: self.boxes[name, setting].value() for setting, _, _ in TUNABLE[name]}
 
     def apply(self) -> None:
-        """Change every estimator whose fields differ from the settings in effect."""
+        """Change every estimator whose fields differ from the settings in effect (a replay: re-run it)."""
         current = self.session.pipeline.settings()
+        if self.replay:
+            if any(v != current[name][k] for name, values in self._forced().items() for k, v in values.items()):
+                self.message.setText("re-running the replay from the start with these settings…")
+                self.replayAsked.emit(self.session.pipeline.filters, self._forced())
+            else:
+                self.message.setText("nothing changed")
+            return
         changed = []
         for name in TUNABLE:
             if name not in current:

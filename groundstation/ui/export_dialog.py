@@ -10,6 +10,8 @@ from groundstation.errors import UserError
 from groundstation.ui.export_job import FORMATS, ExportJob
 
 POLL_MS = 100
+STATUS_LINES = 4
+MIN_WIDTH_PX = 560
 
 
 class ExportDialog(QtWidgets.QDialog):
@@ -53,6 +55,10 @@ class ExportDialog(QtWidgets.QDialog):
         buttons.addStretch(1)
         buttons.addWidget(self.export_button)
         buttons.addWidget(self.cancel_button)
+        # Room for the result (a path and a few figures) from the start: a word-wrapped label that
+        # grows later takes its lines from the fields above it, the dialog does not grow for it.
+        self.status.setMinimumHeight(STATUS_LINES * self.status.fontMetrics().lineSpacing())
+        self.setMinimumWidth(MIN_WIDTH_PX)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(form)
         layout.addWidget(self.progress)

@@ -33,9 +33,14 @@ def link_figures(session: LiveSession, now_ns: int) -> dict[str, float]:
         last = link.per_second.tail(1)
         clock = link.clock()
     frames, lost, crc = (last[0][1], last[0][4], last[0][3]) if len(last) else (math.nan, math.nan, math.nan)
+    bytes_per_s = last[0][2] if len(last) else math.nan
+    # The statistics close a second only when a chunk arrives after it: with nothing arriving (a port
+    # gone, a silent link) the last row would stand for ever. No chunk in the last second: none came.
+    if link.last_chunk_ns is not None and now_ns - link.last_chunk_ns >= NO_DATA_S * 1e9:
+        frames = bytes_per_s = crc = lost = 0.0
     return {
         "frames_per_s": frames,
-        "bytes_per_s": last[0][2] if len(last) else math.nan,
+        "bytes_per_s": bytes_per_s,
         "loss_pct": 100.0 * lost / (frames + lost) if frames + lost > 0 else math.nan,
         "crc_per_s": crc,
         "crc_total": stats.crc_errors,

@@ -12,19 +12,23 @@ from PySide6 import QtWidgets
 
 from groundstation.session.live import LiveSession
 from groundstation.ui.navigation import aiding_series
-from groundstation.ui.plots import Curve, Plot, StackedPlots
+from groundstation.ui.channels import ChannelsView
+from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
-COLORS = {"ahf": "#1f5fbf", "onboard": "#e07000", "hf": "#2a9d3a", "ecf": "#8e44ad", "cf1": "#7f7f7f",
-          "kf": "#c0392b", "ekf": "#16a085", "hfm": "#7fc97f", "ecfm": "#d291e0", "mcf": "#8c564b",
-          "ukf": "#e377c2", "sssrukf": "#a5a51a"}
+# The nine curves the app shows together (its eight estimators and the onboard one) each get their own
+# colour of the palette; the estimators only a replay of an older recording has (CF1, KF, EKF) share one.
+INDIGO, WINE, GREEN, TEAL, ROSE, OLIVE, CYAN, SAND, PURPLE = PALETTE
+COLORS = {"ahf": INDIGO, "onboard": WINE, "hf": GREEN, "ecf": TEAL, "ukf": ROSE, "hfm": OLIVE, "ecfm": CYAN,
+          "mcf": SAND, "sssrukf": PURPLE, "cf1": OLIVE, "kf": CYAN, "ekf": SAND}
 LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
           "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
+SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
 # The tabs that appear once a series of theirs has rows.
 AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
 
@@ -32,7 +36,8 @@ AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position"
 def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None) -> tuple[Curve, ...]:
     """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others."""
     host = tuple(Curve("imu", f"{n}_{angle}_deg", LABELS.get(n, n), COLORS.get(n, "#444"), wraps_at) for n in filters)
-    return host[:1] + (Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"], wraps_at),) + host[1:]
+    onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"], wraps_at, reference=True)
+    return host[:1] + (onboard,) + host[1:]
 
 
 def attitude_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
@@ -46,18 +51,24 @@ def heading_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
     return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0)),)
 
 
-def sensor_plots() -> tuple[Plot, ...]:
-    def axes(prefix: str, unit: str) -> tuple[Curve, ...]:
-        return tuple(Curve("imu", f"{prefix}_{a}_{unit}", a, c) for a, c in zip("xyz", AXIS_COLORS))
+def sensor_plots(aiding: frozenset[str] = frozenset()) -> tuple[Plot, ...]:
+    """Accelerometer and gyroscope; the magnetometer and barometer too when ``aiding`` names them."""
+    def axes(series: str, prefix: str, unit: str) -> tuple[Curve, ...]:
+        return tuple(Curve(series, f"{prefix}_{a}_{unit}", a, c) for a, c in zip("xyz", AXIS_COLORS))
 
-    return Plot("accelerometer", "g", axes("acc", "g")), Plot("gyroscope", "°/s", axes("gyr", "dps"))
+    plots = [Plot("accelerometer", "g", axes("imu", "acc", "g")), Plot("gyroscope", "°/s", axes("imu", "gyr", "dps"))]
+    if "mag" in aiding:
+        plots.append(Plot("magnetometer", "µT", axes("mag", "mag", "uT")))
+    if "baro" in aiding:
+        plots.append(Plot("pressure", "hPa", (Curve("baro", "baro_pressure_hPa", "barometer", "#444444"),)))
+    return tuple(plots)
 
 
 def diagnostic_plots() -> tuple[Plot, ...]:
     return (
         Plot("λ", "rad/s", (Curve("imu", "ahf_lam", "AHF", COLORS["ahf"]),
-                            Curve("onboard", "onboard_lam", "onboard", COLORS["onboard"]))),
-        Plot("acceleration error e_a", "1", (Curve("imu", "ahf_e_a", "AHF", COLORS["ahf"]),)),
+                            Curve("onboard", "onboard_lam", "onboard", COLORS["onboard"], reference=True))),
+        Plot("acceleration error e_a", "", (Curve("imu", "ahf_e_a", "AHF", COLORS["ahf"]),)),
     )
 
 
@@ -70,6 +81,7 @@ class LiveView(QtWidgets.QWidget):
         self.series: dict[str, Series] = {}
         self._pipeline = None
         self.frames_drawn = 0  # for the tests and the benchmark
+        self._browsing: StackedPlots | None = None  # paused, and drawn whole to look back in time
         self.window_box = QtWidgets.QComboBox()
         self.window_box.addItems(list(WINDOWS_S))
         self.window_box.setCurrentText(DEFAULT_WINDOW)
@@ -89,9 +101,11 @@ class LiveView(QtWidgets.QWidget):
         self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
         self._filters = ("ahf",)
         self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
+        self._sensor_aiding: frozenset[str] = frozenset()
         self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
         self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
         self.position = self._add_tab(PositionView(), "Position")
+        self.channels = self._add_tab(ChannelsView(), "Channels")
         self._show_aiding_tabs()
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
@@ -122,6 +136,7 @@ class LiveView(QtWidgets.QWidget):
         """Show ``session``; its estimators decide the attitude curves."""
         self.session = session
         self._pipeline = None
+        self._browsing = None
         self.series = {}
         filters = session.pipeline.filters if session is not None else self._filters
         if filters != self._filters:
@@ -133,6 +148,7 @@ class LiveView(QtWidgets.QWidget):
             self._filters = filters
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
+        self.channels.set_session(session)
         self._show_aiding_tabs()
 
     def hidden_labels(self) -> frozenset[str]:
@@ -141,11 +157,23 @@ class LiveView(QtWidgets.QWidget):
         return frozenset((self._hidden - present) | (present - self.attitude.visible_labels()))
 
     def set_visible(self, label: str, visible: bool) -> None:
-        """Show or hide an estimator's curves on the attitude and heading tabs."""
+        """Show or hide an estimator's curves on the attitude and heading tabs (remembered for a
+        session to come when this one lacks the estimator)."""
+        self._hidden = self._hidden | {label} if not visible else self._hidden - {label}
         for plots in (self.attitude, self.heading):
             plots.set_visible(label, visible)
 
+    def _show_aiding_sensors(self) -> None:
+        """The Sensors tab with a plot for each aiding sensor that has delivered readings."""
+        aiding = frozenset(s for s in SENSOR_AIDING if s in self.series and self.series[s].taken)
+        if aiding != self._sensor_aiding:
+            current = self.tabs.currentIndex()
+            self.sensors = self._replace_tab(self.sensors, StackedPlots(sensor_plots(aiding)))
+            self.tabs.setCurrentIndex(current)
+            self._sensor_aiding = aiding
+
     def _show_aiding_tabs(self) -> None:
+        self._show_aiding_sensors()
         for name, sources in AIDING_TABS.items():
             index = self.tabs.indexOf(getattr(self, name))
             shown = any(self.series[s].taken for s in sources if s in self.series)
@@ -155,7 +183,30 @@ class LiveView(QtWidgets.QWidget):
     def _paused_changed(self, paused: bool) -> None:
         self.pause_button.setText("Resume view" if paused else "Pause view")
         if not paused:
+            self._browsing = None
             self.redraw()
+
+    def show_time(self, t_s: float | None) -> None:
+        """Pause the view and centre it on ``t_s`` (None: the session's start), window wide."""
+        self._browse(lambda low, high, first: (first, first + high - low) if t_s is None else
+                     (t_s - (high - low) / 2, t_s + (high - low) / 2))
+
+    def pan(self, fraction: float) -> None:
+        """Pause the view and move it by ``fraction`` of its width (negative: back in time)."""
+        self._browse(lambda low, high, first: (low + fraction * (high - low), high + fraction * (high - low)))
+
+    def _browse(self, new_range) -> None:
+        """Pause, draw every sample once (the live draw holds only the window's), set the time range."""
+        plots = self.current_plots()
+        imu = self.series.get("imu")
+        if not isinstance(plots, (StackedPlots, ChannelsView)) or imu is None or imu.end_s is None:
+            return
+        low, high = plots.items[0].getViewBox().viewRange()[0]
+        self.pause_button.setChecked(True)
+        if self._browsing is not plots:
+            plots.draw(self.series, None, None)
+            self._browsing = plots
+        plots.items[0].setXRange(*new_range(low, high, imu.start_s), padding=0)
 
     def refresh(self) -> bool:
         """Take the new rows; redraw the visible plots if anything grew. True when it drew."""

@@ -10,14 +10,16 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.errors import UserError
 from groundstation.session.factory import DEMO_SPEC, ReplaySeek, open_session
+from groundstation.recording import default_recordings_dir
 from groundstation.session.live import LiveSession
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
+from groundstation.ui.event_console import EventConsole
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
@@ -31,6 +33,9 @@ REDRAW_HZ = 30
 HORIZON_EVERY, FIGURES_EVERY = 2, 6
 # comparison estimators start switched off
 DEFAULT_HIDDEN = frozenset({"HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
+STEP_S = 5.0  # ← and → in a replay
+PAN_FRACTION = 0.1  # of the window, ← and → live
+RECENT_RECORDINGS = 8  # listed in File > Recent recordings
 # The curves of the versions that stored "hidden_curves" without "known_curves": any other label is new
 # to the user's settings and starts hidden if it is in DEFAULT_HIDDEN.
 FORMERLY_KNOWN = frozenset({"AHF", "onboard", "HF", "ECF"})
@@ -45,6 +50,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.session: LiveSession | None = None
         self.seeking: ReplaySeek | None = None
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
+        self.replay_setup: tuple[tuple[str, ...] | None, dict | None] = (None, None)  # estimators, forced settings
         self.bar = ConnectionBar()
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
         self.bar.connectRequested.connect(self.connect_serial)
@@ -62,22 +68,27 @@ class MainWindow(QtWidgets.QMainWindow):
         self.replay_bar.seekRequested.connect(self.seek)
         self.replay_bar.hide()
         self.live_view = LiveView(self._stored_hidden_curves())
+        self.live_view.channels.restore_layout(settings.value("channel_panes"))
         self.link_panel = LinkPanel()
         self.attitude_panel = AttitudePanel()
         self.estimator_panel = EstimatorPanel()
         self.estimator_panel.visibilityChanged.connect(self.live_view.set_visible)
+        self.estimator_panel.replayAsked.connect(self.rerun_replay)
         self.uplink_panel = UplinkPanel()
         self.estimator_panel.sendToAircraft.connect(self.uplink_panel.send_ahf)
         controls = QtWidgets.QTabWidget()
         controls.addTab(self.estimator_panel, "Estimators")
         controls.addTab(self.uplink_panel, "Uplink")
+        self.event_console = EventConsole()
+        self.event_console.timeRequested.connect(self.live_view.show_time)
+        controls.addTab(self.event_console, "Events")
+        self.controls = controls
         side = QtWidgets.QWidget()
         side_layout = QtWidgets.QVBoxLayout(side)
         side_layout.setContentsMargins(0, 0, 0, 0)
         side_layout.addWidget(self.attitude_panel)
         side_layout.addWidget(self.link_panel)
-        side_layout.addWidget(controls)
-        side_layout.addStretch(1)
+        side_layout.addWidget(controls, 1)
         self.splitter = QtWidgets.QSplitter()
         self.splitter.addWidget(self.live_view)
         self.splitter.addWidget(side)
@@ -95,6 +106,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recording_label = QtWidgets.QLabel("not recording")
         self.statusBar().addWidget(self.source_label, 1)
         self.statusBar().addPermanentWidget(self.recording_label)
+        self._build_menus()
         self.resize(1280, 800)
         self._restore_layout()
         self.ticks = 0
@@ -114,18 +126,48 @@ class MainWindow(QtWidgets.QMainWindow):
                                          baud=baud).start())
 
     def open_recording(self, path) -> None:
+        self.replay_setup = (None, None)  # the recorded estimators and settings
         self._start(lambda: open_session(str(path)).start())
+        if self.session is not None:
+            self._remember_recent(Path(path).resolve())
+
+    def recording_dialog(self) -> QtWidgets.QFileDialog:
+        """A file dialog in the folder live sessions record to, where yesterday's flight is."""
+        folder = self.recordings_dir or default_recordings_dir()
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            pass  # the dialog then starts where it can
+        dialog = QtWidgets.QFileDialog(self, "Open recording", str(folder), "Recordings (*.gsrec);;All files (*)")
+        dialog.setFileMode(QtWidgets.QFileDialog.ExistingFile)
+        return dialog
 
     def choose_recording(self) -> None:
-        folder = self.settings.value("recording_folder", str(self.recordings_dir or Path.home()))
-        path, _ = QtWidgets.QFileDialog.getOpenFileName(self, "Open recording", folder, "Recordings (*.gsrec);;All files (*)")
-        if path:
-            self.settings.setValue("recording_folder", str(Path(path).parent))
-            self.open_recording(path)
+        dialog = self.recording_dialog()
+        if dialog.exec() and dialog.selectedFiles():
+            self.open_recording(dialog.selectedFiles()[0])
+
+    def recent_recordings(self) -> list[str]:
+        stored = self.settings.value("recent_recordings") or []
+        return [stored] if isinstance(stored, str) else list(stored)  # QSettings gives one item as a str
+
+    def _remember_recent(self, path: Path) -> None:
+        recent = [str(path), *(p for p in self.recent_recordings() if p != str(path))][:RECENT_RECORDINGS]
+        self.settings.setValue("recent_recordings", recent)
+        self._fill_recent_menu()
+
+    def _fill_recent_menu(self) -> None:
+        self.recent_menu.clear()
+        for path in self.recent_recordings():
+            action = self.recent_menu.addAction(f"{Path(path).parent.name}/{Path(path).name}")
+            action.setData(path)
+            action.setToolTip(path)
+            action.triggered.connect(lambda _=False, p=path: self.open_recording(p))
+        self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
 
     def seek(self, t_s: float) -> None:
-        """Restart the replay at ``t_s``, keeping its pause and speed; the new session is adopted
-        by ``tick`` once the estimates before ``t_s`` are computed."""
+        """Restart the replay at ``t_s``, keeping its pause, speed, estimators and settings; the new
+        session is adopted by ``tick`` once the estimates before ``t_s`` are computed."""
         if self.seeking is not None:
             self.seeking.cancel()
             source = self.seeking.session.source
@@ -134,7 +176,14 @@ class MainWindow(QtWidgets.QMainWindow):
             self._stop_session()
         else:
             return
-        self.seeking = ReplaySeek(source.recording, self.replay_bar.speed, source.paused, t_s)
+        self.seeking = ReplaySeek(source.recording, self.replay_bar.speed, source.paused, t_s, *self.replay_setup)
+
+    def rerun_replay(self, filters: tuple[str, ...], forced: dict) -> None:
+        """The replay again with ``filters`` and ``forced`` settings, from the start to where it is."""
+        if self.session is None and self.seeking is None:
+            return
+        self.replay_setup = (tuple(filters), forced)
+        self.seek((self.seeking.session if self.seeking else self.session).source.position_s)
 
     def _start(self, start, note: str = "") -> None:
         """Stop the current session, then start another; a failure leaves none and says why."""
@@ -170,10 +219,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _adopt(self, session: LiveSession) -> None:
         self.session = session
+        self.attitude_panel.clear()  # nothing of the previous session's attitude
         self.live_view.set_session(session)
         self.replay_bar.set_session(session)
         self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels())
         self.uplink_panel.set_session(session)
+        self.event_console.set_session(session)
         self.bar.set_connected(True)
 
     def disconnect(self) -> None:
@@ -202,6 +253,66 @@ class MainWindow(QtWidgets.QMainWindow):
         self.banner.setText(message or "")
         self.banner.setVisible(bool(message))
 
+    # -- menus and keys -------------------------------------------------------------------------
+
+    def _build_menus(self) -> None:
+        """File and View menus whose actions carry the keyboard shortcuts, and Help listing them."""
+        file = self.menuBar().addMenu("&File")
+        self._action(file, "&Open recording…", "Ctrl+O", self.choose_recording)
+        self.recent_menu = file.addMenu("Recent recordings")
+        self._fill_recent_menu()
+        self._action(file, "&Export…", "Ctrl+E", self.export)
+        file.addSeparator()
+        self._action(file, "&Quit", "Ctrl+Q", self.close)
+        view = self.menuBar().addMenu("&View")
+        self._action(view, "Pause / resume (playback in a replay, the view when live)", "Space", self.pause_or_resume)
+        self._action(view, "Back (5 s in a replay; live: pan the paused view)", "Left", lambda: self.step_time(-1))
+        self._action(view, "Forward", "Right", lambda: self.step_time(+1))
+        self._action(view, "To the start", "Home", lambda: self.to_end(False))
+        self._action(view, "To the end (live: follow the newest data)", "End", lambda: self.to_end(True))
+        help_menu = self.menuBar().addMenu("&Help")
+        self._action(help_menu, "&Keyboard shortcuts", "F1", self.show_shortcuts)
+
+    def _action(self, menu: QtWidgets.QMenu, text: str, key: str, slot) -> QtGui.QAction:
+        action = menu.addAction(text)
+        action.setShortcut(QtGui.QKeySequence(key))
+        action.setShortcutContext(QtCore.Qt.ApplicationShortcut)  # also while a panel's field has the focus
+        action.triggered.connect(lambda _=False: slot())
+        return action
+
+    def shortcuts(self) -> list[tuple[str, str]]:
+        """(key, what it does) of every menu action that has a key."""
+        return [(a.shortcut().toString(QtGui.QKeySequence.NativeText), a.text().replace("&", ""))
+                for menu in self.menuBar().findChildren(QtWidgets.QMenu) for a in menu.actions() if not a.shortcut().isEmpty()]
+
+    def show_shortcuts(self) -> QtWidgets.QMessageBox:
+        rows = "".join(f"<tr><td><b>{key}</b></td><td>{text}</td></tr>" for key, text in self.shortcuts())
+        box = QtWidgets.QMessageBox(QtWidgets.QMessageBox.Information, "Keyboard shortcuts", f"<table>{rows}</table>",
+                                    QtWidgets.QMessageBox.Close, self)
+        box.setModal(False)
+        box.show()
+        return box
+
+    def pause_or_resume(self) -> None:
+        if self.replay_bar.session is not None:
+            self.replay_bar.toggle()
+        else:
+            self.live_view.pause_button.toggle()
+
+    def step_time(self, direction: int) -> None:
+        if self.replay_bar.session is not None:
+            self.seek(max(self.replay_bar.source.position_s + direction * STEP_S, 0.0))
+        else:
+            self.live_view.pan(direction * PAN_FRACTION)
+
+    def to_end(self, end: bool) -> None:
+        if self.replay_bar.session is not None:
+            self.seek(self.replay_bar.source.duration_s if end else 0.0)
+        elif end:
+            self.live_view.pause_button.setChecked(False)
+        else:
+            self.live_view.show_time(None)
+
     # -- the redraw timer -----------------------------------------------------------------------
 
     def tick(self) -> None:
@@ -225,6 +336,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if figures:
             self.replay_bar.refresh()
             self.uplink_panel.refresh()
+            self.event_console.refresh()
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
         if session.error and not self.banner.isVisible():
@@ -280,5 +392,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("known_curves", sorted(known))
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("splitter", self.splitter.saveState())
+        self.settings.setValue("channel_panes", self.live_view.channels.layout_json())
         self.settings.sync()
         super().closeEvent(event)

@@ -37,8 +37,9 @@ def valid_heading_deg(heading_deg: np.ndarray) -> np.ndarray:
 
 
 def compass_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The pipeline's tilt-compensated compass heading, 0..360°."""
-    return {"compass_heading_deg": np.mod(rows[:, columns.index("heading_deg")], 360.0)}
+    """The pipeline's tilt-compensated compass heading, 0..360°, and the field in sensor axes (µT)."""
+    col = columns_of(rows, columns)
+    return {"compass_heading_deg": np.mod(col["heading_deg"], 360.0), **{f"mag_{a}_uT": col[f"mag_{a}_uT"] for a in "xyz"}}
 
 
 def fused_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
@@ -47,7 +48,7 @@ def fused_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np
 
 
 class BaroQuantities:
-    """Barometric height above the first reading."""
+    """Barometric height above the first reading; pressure (hPa) and temperature as read."""
 
     def __init__(self):
         self.ground: tuple[float, float] | None = None  # pressure (Pa) and temperature (°C) of the first reading
@@ -56,7 +57,8 @@ class BaroQuantities:
         col = columns_of(rows, columns)
         if self.ground is None:
             self.ground = float(col["pressure_Pa"][0]), float(col["temperature_degC"][0])
-        return {"baro_height_m": pressure_altitude_m(col["pressure_Pa"], *self.ground)}
+        return {"baro_height_m": pressure_altitude_m(col["pressure_Pa"], *self.ground),
+                "baro_pressure_hPa": col["pressure_Pa"] / 100.0, "baro_temperature_degC": col["temperature_degC"]}
 
 
 class GpsQuantities:

@@ -4,10 +4,12 @@ Each curve is created once and updated with ``setData`` only when its series gre
 changed); peak downsampling and clipping to the view keep long windows cheap. The axes move in
 steps, not every frame: under software rendering re-laying an axis costs more than drawing the
 curves, so the time axis advances by a fraction of the window and the value axes change only when
-the data leaves them or shrinks well inside them. The legend on the
-top plot toggles a curve on every plot that carries the same label. A crosshair follows the mouse
-and reads every visible curve at the nearest sample under it. A circular quantity (a heading,
-0..360°) is not joined across its jumps from one end of the circle to the other.
+the data leaves them or shrinks well inside them; a window longer than the session shows it from 0.
+The legend above the plots has one entry per label and toggles a curve on every plot that carries
+that label. A crosshair follows the mouse and reads every visible curve at the nearest sample under
+it, in an overlay over the plots (a label in the layout would widen the plots as it grows). A
+circular quantity (a heading, 0..360°) is not joined across its jumps from one end of the circle to
+the other. A reference curve (the aircraft's own estimate) is dashed and drawn beneath the others.
 """
 
 from __future__ import annotations
@@ -17,10 +19,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6 import QtCore
+from PySide6 import QtCore, QtWidgets
 
 from groundstation.ui.series import Series
 
+# Paul Tol's "muted" palette: nine colours told apart by colour-blind readers and on white.
+PALETTE = ("#332288", "#882255", "#117733", "#44AA99", "#CC6677", "#999933", "#88CCEE", "#DDCC77", "#AA4499")
 LEFT_AXIS_PX = 60
 GAP_BRUSH = (220, 60, 60, 50)
 FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a time
@@ -47,6 +51,10 @@ class Curve:
     label: str  # legend entry; curves sharing it are toggled together
     color: str
     wraps_at: float | None = None  # the period of a circular quantity (360 for a heading in °)
+    reference: bool = False  # dashed, beneath the others (the aircraft's own estimate under the host's)
+
+    def pen(self):
+        return pg.mkPen(self.color, width=1, style=QtCore.Qt.DashLine if self.reference else QtCore.Qt.SolidLine)
 
     def connect(self, values: np.ndarray) -> dict:
         """``setData``'s ``connect``: for a circular quantity, no line across a jump of over half a turn."""
@@ -60,8 +68,12 @@ class Curve:
 @dataclass(frozen=True)
 class Plot:
     title: str
-    unit: str
+    unit: str  # "" for a dimensionless quantity
     curves: tuple[Curve, ...]
+
+    @property
+    def axis_label(self) -> str:
+        return f"{self.title} ({self.unit})" if self.unit else self.title
 
 
 class StackedPlots(pg.GraphicsLayoutWidget):
@@ -76,17 +88,19 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._stale = True  # a curve was switched on: it needs its data even if nothing grew
         self._series: dict[str, Series] = {}  # as last drawn, for the crosshair
         self._specs = plots
-        self._x_range: tuple[float, float] | None = None
         self._gaps_drawn = 0
         self.curves: list[tuple[Curve, pg.PlotDataItem]] = []
         self.older: list[pg.PlotDataItem] = []  # each curve's binned history (``Series.older``)
         self._older_drawn: list[tuple | None] = []
         # The legend sits above the plots, not over them: new data then never repaints it.
-        self.legend = pg.LegendItem(colCount=min(len(plots[0].curves), LEGEND_COLUMNS), labelTextColor="#222")
+        labels = list(dict.fromkeys(c.label for spec in plots for c in spec.curves))
+        self.legend = pg.LegendItem(colCount=max(1, min(len(labels), LEGEND_COLUMNS)), labelTextColor="#222")
         self.addItem(self.legend, row=0, col=0)
+        in_legend: dict[str, pg.PlotDataItem] = {}  # the curve each legend entry drives
         for row, spec in enumerate(plots, start=1):
             item = self.addPlot(row=row, col=0)
-            item.setLabel("left", f"{spec.title} ({spec.unit})")
+            item.setLabel("left", spec.axis_label)
+            item.getAxis("left").enableAutoSIPrefix(False)  # the label's unit stays the unit of the numbers
             item.hideAxis("bottom")  # one time axis, under the last plot
             item.getAxis("left").setWidth(LEFT_AXIS_PX)  # equal widths keep the stacked time axes aligned
             item.setDownsampling(auto=True, mode="peak")
@@ -95,14 +109,16 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             if self.items:
                 item.setXLink(self.items[0])
             for spec_curve in spec.curves:
-                # One-pixel solid pens: Qt's raster engine strokes them several times faster than wider or dashed ones.
-                curve = item.plot(pen=pg.mkPen(spec_curve.color, width=1))
-                older = item.plot(pen=pg.mkPen(spec_curve.color, width=1))
+                # One-pixel pens: Qt's raster engine strokes them several times faster than wider ones.
+                curve = item.plot(pen=spec_curve.pen())
+                older = item.plot(pen=spec_curve.pen())
                 for c in (curve, older):
                     c.setVisible(spec_curve.label not in hidden)
+                    c.setZValue(-1 if spec_curve.reference else 0)
                 self.older.append(older)
                 self._older_drawn.append(None)
-                if row == 1:
+                if spec_curve.label not in in_legend:
+                    in_legend[spec_curve.label] = curve
                     self.legend.addItem(curve, spec_curve.label)
                 self.curves.append((spec_curve, curve))
             self.items.append(item)
@@ -118,10 +134,14 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         for item, line in zip(self.items, self.crosshair):
             item.addItem(line, ignoreBounds=True)
             line.hide()
-        self.readout = self.addLabel("", row=len(plots) + 1, col=0, justify="left", color="#222")
+        self.readout = QtWidgets.QLabel(self)  # over the plots: it never takes room from them
+        self.readout.setStyleSheet("background: rgba(255, 255, 255, 215); color: #222; padding: 2px 4px")
+        self.readout.setAttribute(QtCore.Qt.WA_TransparentForMouseEvents)
+        self.readout.setWordWrap(True)
+        self.readout.hide()
         self.scene().sigMouseMoved.connect(self._mouse_moved)
-        for spec_curve, curve in self.curves[: len(plots[0].curves)]:  # the legend drives the others
-            curve.visibleChanged.connect(lambda c=curve, label=spec_curve.label: self._mirror(label, c.isVisible()))
+        for label, curve in in_legend.items():  # the legend drives the others
+            curve.visibleChanged.connect(lambda c=curve, label=label: self._mirror(label, c.isVisible()))
 
     def _mirror(self, label: str, visible: bool) -> None:
         for (spec, curve), older in zip(self.curves, self.older):
@@ -129,6 +149,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 older.setVisible(visible)
                 if curve.isVisible() != visible:
                     curve.setVisible(visible)
+        for sample, text in self.legend.items:  # its eye: pyqtgraph repaints it only when clicked
+            if text.text == label:
+                sample.update()
         self._stale = True
 
     @property
@@ -186,13 +209,18 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 self._fit_values(item)
 
     def _follow_time(self, imu: Series, window_s: float | None) -> None:
+        """Step the time axis along; a window longer than the session shows it from 0 until full."""
         first, end = imu.start_s, imu.end_s
         span = end - first if window_s is None else window_s
         step = 2.0 ** math.ceil(math.log2(max(span, 1.0) / FOLLOW_STEPS))
         right = math.ceil(end / step + 1e-9) * step
-        x_range = (first if window_s is None else right - window_s, right)
-        if x_range != self._x_range:
-            self._x_range = x_range
+        if window_s is None:
+            x_range = (first, right)
+        else:
+            left = max(right - window_s, min(first, 0.0))
+            x_range = (left, left + window_s)
+        # Compared with the range shown, not the last one set: the user may have zoomed since.
+        if x_range != tuple(self.items[0].getViewBox().viewRange()[0]):
             self.items[0].setXRange(*x_range, padding=0)
 
     def _fit_values(self, item: pg.PlotItem) -> None:
@@ -209,12 +237,22 @@ class StackedPlots(pg.GraphicsLayoutWidget):
     def _mouse_moved(self, position) -> None:
         item = next((i for i in self.items if i.sceneBoundingRect().contains(position)), None)
         if item is None:
+            self.readout.hide()
             return
         t_s = item.getViewBox().mapSceneToView(position).x()
         for line in self.crosshair:
             line.setPos(t_s)
             line.show()
         self.readout.setText(self.read_at(t_s))
+        top = self.mapFromScene(self.items[0].getViewBox().sceneBoundingRect().topLeft())
+        self.readout.setFixedWidth(max(self.width() - top.x() - 8, 100))
+        self.readout.adjustSize()
+        self.readout.move(top.x() + 4, top.y() + 4)
+        self.readout.show()
+
+    def leaveEvent(self, event) -> None:
+        self.readout.hide()
+        super().leaveEvent(event)
 
     def read_at(self, t_s: float) -> str:
         """The visible curves' values at the samples nearest ``t_s``."""
@@ -229,4 +267,4 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                     values.append(f"{curve.label} {value:+.2f}")
             if values:
                 parts.append(f"{spec.title} ({spec.unit}): " + ", ".join(values))
-        return "   |   ".join(parts)
+        return "\n".join(parts)

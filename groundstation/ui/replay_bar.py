@@ -1,4 +1,4 @@
-"""The replay transport: play/pause, step, speed, a seek slider and the position.
+"""The replay transport: play/pause (Replay at the end), step, speed, a seek slider and the position.
 
 It drives the ``ReplaySource`` directly for pause, speed and step; a seek restarts the replay (see
 ``ReplaySeek``), which the window does, so the bar only emits ``seekRequested``.
@@ -15,6 +15,15 @@ SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 SLIDER_STEPS_PER_S = 10
 
 
+class JumpingStyle(QtWidgets.QProxyStyle):
+    """A left click on a slider's track puts the handle there (not a page step towards it)."""
+
+    def styleHint(self, hint, option=None, widget=None, data=None):
+        if hint == QtWidgets.QStyle.SH_Slider_AbsoluteSetButtons:
+            return QtCore.Qt.LeftButton.value
+        return super().styleHint(hint, option, widget, data)
+
+
 class ReplayBar(QtWidgets.QWidget):
     seekRequested = QtCore.Signal(float)  # seconds from the start of the recording
 
@@ -22,7 +31,7 @@ class ReplayBar(QtWidgets.QWidget):
         super().__init__(parent)
         self.session: LiveSession | None = None
         self.play_button = QtWidgets.QPushButton("Pause")
-        self.play_button.clicked.connect(self._toggle)
+        self.play_button.clicked.connect(self.toggle)
         self.step_button = QtWidgets.QPushButton("Step")
         self.step_button.setToolTip("One more IMU sample (while paused)")
         self.step_button.clicked.connect(self.step)
@@ -32,6 +41,8 @@ class ReplayBar(QtWidgets.QWidget):
         self.speed_box.setCurrentIndex(SPEEDS.index(1.0))
         self.speed_box.currentIndexChanged.connect(self._speed_changed)
         self.slider = QtWidgets.QSlider(QtCore.Qt.Horizontal)
+        self._style = JumpingStyle()  # on a style of its own (a proxy owns its base); kept: the slider does not own it
+        self.slider.setStyle(self._style)
         self.slider.sliderReleased.connect(lambda: self.seekRequested.emit(self.slider.value() / SLIDER_STEPS_PER_S))
         self.slider.actionTriggered.connect(self._clicked_track)
         self.position = QtWidgets.QLabel("0.0 / 0.0 s")
@@ -62,20 +73,29 @@ class ReplayBar(QtWidgets.QWidget):
     def speed(self) -> float:
         return self.speed_box.currentData()
 
-    def _toggle(self) -> None:
+    @property
+    def ended(self) -> bool:
+        return not self.session.running
+
+    def toggle(self) -> None:
+        """Pause or play; at the end, play again from the start."""
+        if self.ended:
+            self.source.pause(False)
+            self.seekRequested.emit(0.0)
+            return
         self.source.pause(not self.source.paused)
         self._show_paused(self.source.paused)
 
     def _show_paused(self, paused: bool) -> None:
-        self.play_button.setText("Play" if paused else "Pause")
-        self.step_button.setEnabled(paused)
+        self.play_button.setText("Replay" if self.ended else "Play" if paused else "Pause")
+        self.step_button.setEnabled(paused and not self.ended)
 
     def _speed_changed(self) -> None:
         if self.session is not None:
             self.source.speed = self.speed
 
     def _clicked_track(self, action: int) -> None:
-        """A click on the track or a key press seeks at once (a drag seeks on release)."""
+        """A key press on the slider seeks at once (a click or a drag seeks on release)."""
         if action != QtWidgets.QAbstractSlider.SliderMove:
             QtCore.QTimer.singleShot(0, lambda: self.seekRequested.emit(self.slider.value() / SLIDER_STEPS_PER_S))
 
@@ -95,5 +115,5 @@ class ReplayBar(QtWidgets.QWidget):
         position, duration = self.source.position_s, self.source.duration_s
         if not self.slider.isSliderDown():
             self.slider.setValue(int(position * SLIDER_STEPS_PER_S))
-        ended = "  (end)" if not self.session.running else ""
-        self.position.setText(f"{position:.1f} / {duration:.1f} s{ended}")
+        self._show_paused(self.source.paused)
+        self.position.setText(f"{position:.1f} / {duration:.1f} s{'  (end)' if self.ended else ''}")

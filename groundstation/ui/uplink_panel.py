@@ -65,16 +65,18 @@ class UplinkPanel(QtWidgets.QGroupBox):
         return row
 
     def set_session(self, session: LiveSession | None) -> None:
-        """A source that accepts uplink only: a replay has no aircraft to command."""
-        live = session is not None and session.source.can_send
-        self.session = session if live else None
-        self.setEnabled(live)
+        """Enabled only when the source can send (a replay has no aircraft to command)."""
+        can_send = session is not None and session.source.can_send
+        self.session = session if can_send else None
+        self.setEnabled(can_send)
         self.sent = []
         self._events_seen = 0
         self.answers.setText("")
-        self.config_label.setText("no CONFIG yet" if live else "(replay: no uplink)")
+        self.config_label.setText("no CONFIG yet" if can_send else "(this source cannot send: no uplink)")
 
     def send(self, command: str, param: int = 0, value: float = 0.0, text: str | None = None) -> None:
+        if self.session is None:  # the source cannot send: its controls are disabled
+            return
         seq = self.session.send_command(command, param, value)
         self.sent = [*self.sent, Sent(seq, text or command, time.monotonic_ns())][-HISTORY:]
         self._show_answers()

@@ -60,6 +60,8 @@ def test_readouts_and_plots_follow_the_tables_and_the_truth(window, qtbot, aided
     view.tabs.setCurrentWidget(view.heading)  # drawn when shown
     compass = next(c for s, c in view.heading.curves if s.label == "compass")
     gps_heading = next(c for s, c in view.heading.curves if s.label == "GPS")
+    newest_s = newest_row(pipeline.tables["mag_raw"])["time_s"]  # the plots take the rows a tick after the pipeline
+    qtbot.waitUntil(lambda: compass.xData is not None and compass.xData[-1] == newest_s, timeout=5000)
     assert compass.yData[-1] == np.float32(newest_row(pipeline.tables["mag_raw"])["heading_deg"] % 360.0)
     assert gps_heading.yData[-1] == np.float32(gps["heading_deg"])
 

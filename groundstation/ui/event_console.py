@@ -1,0 +1,94 @@
+"""The event console: the session's events (``pipeline.events``: configuration, warnings, commands
+and their ACKs, settings changes, reboots and clock jumps, gaps, the port lost and back, the
+recording started, stopped or failed) with their session times; a click moves the view there.
+"""
+
+from __future__ import annotations
+
+import math
+
+from PySide6 import QtCore, QtGui, QtWidgets
+
+from groundstation.session.live import LiveSession
+from groundstation.session.pipeline import Pipeline
+
+# Kinds a pilot must not miss, shown in red.
+ALARMS = frozenset({"warning", "disconnected", "device_reset", "clock_jump", "gap", "recording_failed"})
+HIDDEN_FIELDS = frozenset({"kind", "t_host_ns", "wall_time", "session_time_s"})
+
+
+def event_time_s(pipeline: Pipeline, event: dict) -> float:
+    """Seconds into the session: the clock's own when the event carries it, else the host time since
+    the session's first chunk (to a few ms the session time of the samples that came with it)."""
+    if "session_time_s" in event:
+        return float(event["session_time_s"])
+    t0_ns = getattr(pipeline, "_t0_host_ns", None)  # no public origin yet; the Excel export reads it so too
+    if t0_ns is None or not event.get("t_host_ns"):
+        return 0.0
+    return max((event["t_host_ns"] - t0_ns) / 1e9, 0.0)
+
+
+def describe(event: dict) -> str:
+    return ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+                     for k, v in event.items() if k not in HIDDEN_FIELDS)
+
+
+class EventConsole(QtWidgets.QWidget):
+    timeRequested = QtCore.Signal(float)  # seconds into the session
+
+    def __init__(self, parent=None):
+        super().__init__(parent)
+        self.session: LiveSession | None = None
+        self.shown = 0  # events listed
+        self.table = QtWidgets.QTableWidget(0, 3)
+        self.table.setHorizontalHeaderLabels(["time (s)", "event", "details"])
+        self.table.horizontalHeader().setStretchLastSection(True)
+        self.table.verticalHeader().hide()
+        self.table.setEditTriggers(QtWidgets.QAbstractItemView.NoEditTriggers)
+        self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectRows)
+        self.table.setWordWrap(False)
+        self.table.cellClicked.connect(self._clicked)
+        self.table.setToolTip("Click an event to show its moment in the plots")
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.table)
+
+    def set_session(self, session: LiveSession | None) -> None:
+        self.session = session
+        self.shown = 0
+        self.table.setRowCount(0)
+
+    def refresh(self) -> None:
+        if self.session is None:
+            return
+        pipeline = self.session.pipeline
+        with self.session.lock:
+            new = pipeline.events[self.shown :]
+        if not new:
+            return
+        at_bottom = self.table.verticalScrollBar().value() == self.table.verticalScrollBar().maximum()
+        for event in new:
+            row = self.table.rowCount()
+            self.table.insertRow(row)
+            t_s = event_time_s(pipeline, event)
+            cells = (QtWidgets.QTableWidgetItem(f"{t_s:9.2f}"), QtWidgets.QTableWidgetItem(event.get("kind", "?")),
+                     QtWidgets.QTableWidgetItem(describe(event)))
+            cells[0].setData(QtCore.Qt.UserRole, t_s)
+            cells[2].setToolTip(describe(event))
+            for column, cell in enumerate(cells):
+                if event.get("kind") in ALARMS:
+                    cell.setForeground(QtGui.QColor("#b00020"))
+                self.table.setItem(row, column, cell)
+        self.shown += len(new)
+        self.table.resizeColumnToContents(0)
+        self.table.resizeColumnToContents(1)
+        if at_bottom:
+            self.table.scrollToBottom()
+
+    def times(self) -> list[float]:
+        return [self.table.item(row, 0).data(QtCore.Qt.UserRole) for row in range(self.table.rowCount())]
+
+    def _clicked(self, row: int, _column: int) -> None:
+        t_s = self.table.item(row, 0).data(QtCore.Qt.UserRole)
+        if math.isfinite(t_s):
+            self.timeRequested.emit(t_s)

@@ -1,0 +1,121 @@
+"""The stacked plots on synthetic tables: the crosshair readout never moves the plots, a curve
+switched on from outside repaints its legend entry, "Resume view" follows at once, a window longer
+than the session starts at 0, the onboard curve lies beneath the estimators'."""
+
+import threading
+
+import numpy as np
+import pytest
+from PySide6 import QtCore
+
+from groundstation.session.table import Table
+from groundstation.ui.live_view import COLORS, PALETTE, attitude_plots, diagnostic_plots
+from groundstation.ui.plots import StackedPlots
+from groundstation.ui.series import Series
+
+FILTERS = ("ahf", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
+
+
+def series_until(end_s: float, filters=FILTERS) -> dict[str, Series]:
+    """Pitch and roll of every estimator, and the onboard ones, at 100 Hz up to ``end_s``."""
+    t = np.arange(0.0, end_s, 0.01)
+    quantities = [f"{n}_{a}_deg" for n in filters for a in ("pitch", "roll")]
+    imu = Table(("time_s", *quantities))
+    imu.append(np.column_stack([t] + [np.sin(t + i) * 10 for i in range(len(quantities))]).ravel().tolist())
+    onboard = Table(("time_s", "onboard_pitch_deg", "onboard_roll_deg"))
+    onboard.append(np.column_stack([t, np.cos(t), np.sin(t)]).ravel().tolist())
+
+    def columns(rows, names):
+        return {name: rows[:, i] for i, name in enumerate(names) if name != "time_s"}
+
+    series = {"imu": Series(imu, columns), "onboard": Series(onboard, columns)}
+    for s in series.values():
+        s.take(threading.Lock())
+    return series
+
+
+@pytest.fixture
+def plots(qtbot):
+    widget = StackedPlots(attitude_plots(FILTERS))
+    qtbot.addWidget(widget)
+    widget.resize(900, 600)
+    widget.show()
+    qtbot.waitExposed(widget)
+    return widget
+
+
+def x_range(plots):
+    return tuple(plots.items[0].getViewBox().viewRange()[0])
+
+
+def test_a_long_crosshair_readout_never_changes_the_plot_geometry(plots, qtbot):
+    series = series_until(240.0)
+    plots.draw(series, 30.0, None)
+    qtbot.wait(50)
+    before = [item.sceneBoundingRect() for item in plots.items]
+    middle = plots.items[0].sceneBoundingRect().center()
+    plots.scene().sigMouseMoved.emit(middle)  # every estimator shown: a long readout
+    text = plots.readout.text
+    assert "SSSRUKF" in (text() if callable(text) else text)
+    qtbot.wait(50)
+    plots.draw(series, 30.0, None)
+    qtbot.wait(50)
+    assert [item.sceneBoundingRect() for item in plots.items] == before
+    assert x_range(plots)[1] >= 240.0  # the newest data still in view
+
+
+def test_a_curve_switched_on_from_outside_repaints_its_legend_entry(qtbot):
+    plots = StackedPlots(attitude_plots(FILTERS), hidden=frozenset({"HF"}))
+    qtbot.addWidget(plots)
+    plots.show()
+    qtbot.waitExposed(plots)
+    sample = next(s for s, label in plots.legend.items if label.text == "HF")
+    painted = []
+    paint = sample.paint
+    sample.paint = lambda *args: (painted.append(sample.item.isVisible()), paint(*args))
+    qtbot.wait(100)
+    painted.clear()
+    plots.set_visible("HF", True)  # the Estimators panel's check box
+    qtbot.waitUntil(lambda: True in painted, timeout=1000)  # the entry drawn as shown
+
+
+def test_resume_view_follows_the_newest_data_at_once(plots):
+    series = series_until(200.0)
+    plots.draw(series, 600.0, None)
+    following = x_range(plots)
+    plots.items[0].setXRange(20.0, 25.0, padding=0)  # the user zoomed while the view was paused
+    plots.draw(series, 600.0, None)  # "Resume view": the next draw
+    assert x_range(plots) == pytest.approx(following)
+
+
+def test_a_window_longer_than_the_session_shows_from_zero(plots):
+    plots.draw(series_until(42.0), 600.0, None)
+    assert x_range(plots) == pytest.approx((0.0, 600.0))
+    plots.draw(series_until(700.0), 600.0, None)
+    low, high = x_range(plots)
+    assert high >= 700.0 and high - low == pytest.approx(600.0)
+
+
+def test_the_onboard_curve_lies_beneath_the_estimators_and_is_dashed(plots):
+    onboard = next(c for s, c in plots.curves if s.label == "onboard")
+    ahf = next(c for s, c in plots.curves if s.label == "AHF")
+    assert onboard.zValue() < ahf.zValue()
+    assert onboard.opts["pen"].style() == QtCore.Qt.DashLine
+
+
+def test_every_estimator_has_its_own_colour_from_one_colour_blind_safe_palette():
+    shown = [COLORS[n] for n in ("onboard", *FILTERS)]
+    assert len(set(shown)) == len(shown)
+    assert set(COLORS.values()) <= set(PALETTE)
+
+
+def test_a_dimensionless_axis_carries_no_unit_or_scale_factor(qtbot):
+    plots = StackedPlots(diagnostic_plots())
+    qtbot.addWidget(plots)
+    axis = plots.items[1].getAxis("left")
+    axis.setScale(1.0)
+    plots.items[1].setYRange(0.0, 0.002)
+    plots.show()
+    qtbot.waitExposed(plots)
+    qtbot.wait(50)
+    assert axis.labelString().find("(1)") < 0 and "x0.001" not in axis.labelString()
