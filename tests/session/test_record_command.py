@@ -1,6 +1,7 @@
 """``groundstation record`` as a user runs it: real processes, a real pty bridge, real files."""
 
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -82,3 +83,31 @@ def test_wrong_inputs_get_a_message_exit_2_and_leave_no_file(tmp_path):
         done = gs("record", *args)
         assert done.returncode == 2 and message in done.stderr and "Traceback" not in done.stderr, (args, done.stderr)
         assert not folder.exists() or list(folder.iterdir()) == []
+
+
+@posix_only
+def test_the_summary_says_when_the_port_is_gone_or_silent(tmp_path):
+    from groundstation.commands.summary import summary_line
+    from groundstation.session.live import LiveSession
+    from groundstation.session.pipeline import Pipeline
+    from groundstation.sim.stream import Scenario, SimStream
+    from groundstation.sources import SerialSource
+
+    master, slave = os.openpty()
+    session = LiveSession(SerialSource(os.ttyname(slave)), Pipeline(("ahf",)), recordings_dir=tmp_path)
+    os.close(slave)
+    stream = SimStream(Scenario("static", 10.0, seed=1))
+    with session:
+        os.write(master, b"".join(c.data for c in stream.advance(2.0)))  # 1 s of frames after the boot second
+        deadline = time.monotonic() + 10
+        while len(session.pipeline.imu) < 90:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        assert summary_line(session).startswith("t ")
+        time.sleep(1.5)  # the radio goes quiet; the adapter is still there
+        assert re.match(r"NO DATA for [12] s from /dev/pts/", summary_line(session))
+        os.close(master)  # the adapter is pulled out
+        while session.connected:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        assert summary_line(session).startswith("PORT GONE: ")
