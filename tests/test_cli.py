@@ -1,5 +1,6 @@
 """The console script as a user runs it: a real process, its exit status and its output."""
 
+import os
 import subprocess
 import sys
 
@@ -28,3 +29,14 @@ def test_unknown_option_is_a_usage_error_not_a_traceback():
     result = run_cli("protocol", "--no-such-option")
     assert result.returncode == 2
     assert "Traceback" not in result.stderr
+
+
+def test_a_garbled_port_spec_is_refused_before_any_window_opens():
+    headless = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")}
+    result = subprocess.run([sys.executable, "-m", "groundstation", "app", "--port", "htp://192.168.4.1:23"],
+                            capture_output=True, text=True, timeout=120, env=headless)
+    assert result.returncode == 2 and "Traceback" not in result.stderr
+    assert "unknown source scheme 'htp:'" in result.stderr
+    for form in ("udp://HOST:PORT", "tcp://HOST:PORT", "sim:", "FILE.gsrec", "COM3"):
+        assert form in result.stderr  # the message lists what would have worked
+    assert "no display" not in result.stderr  # said before the app looked for a display (on Linux it has none here)

@@ -12,14 +12,22 @@ from groundstation import quaternion
 from groundstation.session.live import LiveSession
 
 
+SILENT_AFTER_S = 1.0  # a live link with no frame for this long is said to be silent
+
+
 def summary_line(session: LiveSession) -> str:
     p = session.pipeline
     with session.lock:
         last = p.imu.tail(1)
         stats = p.decoder.stats
         rates = p.link.rates()
+        silent_s = p.link.since_last_frame_s(time.monotonic_ns())
+    if not session.connected:
+        return f"PORT GONE: {session.source.description}, reconnecting…"
     if not len(last):
         return f"waiting for data from {session.source.description}…"
+    if not session.source.is_replay and silent_s > SILENT_AFTER_S:  # a replay's times are the recorded ones
+        return f"NO DATA for {silent_s:.0f} s from {session.source.description} (radio out of range? aircraft off?)"
     row = dict(zip(p.imu.columns, last[0]))
     name = p.filters[0]
     _, pitch, roll = np.degrees(quaternion.to_euler_zyx(np.array([row[f"{name}_q{c}"] for c in "wxyz"])))
