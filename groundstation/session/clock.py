@@ -27,6 +27,7 @@ from firmware_protocol.decoder import BACK_TOLERANCE_US
 JUMP_TOLERANCE_S = 0.25  # a frame may arrive this much "early" (sampling jitter, timestamp granularity)
 DRIFT_TOLERANCE = 0.02  # plus this fraction of the device time elapsed (crystals ±50 ppm; RC oscillators ~1 %)
 MIN_STEP_S = 1e-6  # a new segment starts at least this after the last time given
+DISCONTINUITIES = ("device_reset", "clock_jump")  # the event kinds
 _WRAP = 1 << 32
 
 
@@ -79,7 +80,7 @@ class SessionClock:
     def _discontinuity(self, t_host_ns: int, host_s: float, t32: int) -> float:
         time_s = max(self._last_s + MIN_STEP_S, host_s + self._lead_s)
         self.event = {
-            "kind": "device_reset" if t32 < self._last_t32 else "clock_jump",
+            "kind": DISCONTINUITIES[0] if t32 < self._last_t32 else DISCONTINUITIES[1],
             "t_host_ns": t_host_ns,
             "device_time_us_before": self._last_t32,  # the device's 32-bit clock, as sent
             "device_time_us_after": t32,

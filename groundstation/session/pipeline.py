@@ -1,8 +1,10 @@
 """The computation of a session: timestamped chunks -> frames -> physical units -> estimators -> tables.
 
 No threads and no I/O: the same ``Pipeline.feed`` serves the live reader thread, replay and the
-tests, so one recording always gives the same numbers. Device timestamps drive ``dt``; host arrival
-times only feed the link statistics.
+tests, so one recording always gives the same numbers. Device timestamps drive ``dt``; every table's
+``time_s`` is the session time of ``SessionClock`` (docs/time.md). When the device clock restarts or
+jumps, the event is recorded, the estimators start over, and every table gets a gap row (NaN in all
+columns but ``time_s``).
 
 Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames are held (up to
 ``HOLD_FOR_CONFIG_US`` of device time); after that the assumed ``SensorConfig`` is used and a
@@ -21,6 +23,7 @@ from groundstation.estimation.base import GpsFix
 from groundstation.estimation.compass import heading_rad
 from groundstation.estimation.tilt import wrap_pi
 from groundstation.position import DualChannel, linear_acc_ned_m_s2
+from groundstation.session.clock import SessionClock
 from groundstation.session.link import LinkStats
 from groundstation.session.table import Table
 from groundstation.units import ACCEL_LSB_PER_G, GYRO_LSB_PER_DPS
@@ -77,6 +80,7 @@ class Pipeline:
         self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
         self.assumed_sensor = assumed_sensor or SensorConfig()
         self.decoder = StreamDecoder()
+        self.clock = SessionClock()
         self.link = LinkStats()
         columns = IMU_COLUMNS + sum((estimator_columns(n, e) for n, e in self.estimators.items()), ())
         self.imu = Table(columns)
@@ -102,8 +106,7 @@ class Pipeline:
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
-        self._held: list[tuple[int, Frame]] = []
-        self._t0_us: int | None = None
+        self._held: list[tuple[int, Frame, float, int]] = []
         self._t0_host_ns: int | None = None
         self._last_us: int | None = None
         self._last_q = {name: None for name in self.filters}
@@ -114,27 +117,30 @@ class Pipeline:
         """Decode one chunk that arrived at ``t_host_ns``; returns the IMU samples it completed."""
         if self._t0_host_ns is None:
             self._t0_host_ns = t_host_ns
-        frames = self.decoder.feed(data)
+        frames = self.decoder.feed(data, t_host_ns)
         self.link.on_chunk(t_host_ns, self.decoder.stats, len(frames))
         before = len(self.imu)
         for frame in frames:
             frame_type, _, raw, t_us = frame  # unpacking a Frame is C-speed; its properties are not
             type_id = frame_type.id
-            if self._t0_us is None and t_us is not None:
-                self._t0_us = t_us
+            if t_us is not None:
+                time_s = self.clock.place(t_host_ns, t_us)
+                if self.clock.event is not None:
+                    self._discontinuity(self.clock.event)
+                t_us = self.clock.device_us  # unwrapped within the clock's segment: dt never spans a discontinuity
             if type_id == _IMU_ID:
-                self._imu(t_host_ns, frame)
+                self._imu(t_host_ns, frame, time_s, t_us)
             elif type_id == _ATTITUDE_ID:
-                self._attitude(raw, t_us)
+                self._attitude(raw, time_s, t_us)
             elif type_id == _CONFIG_ID:
                 self._config(t_host_ns, frame)
             elif type_id == _ACK_ID:  # the aircraft's answer to a COMMAND (``LiveSession.send_command``)
                 self.events.append({"t_host_ns": t_host_ns, "kind": "ack", **frame.values})
             elif type_id == _MAG_ID:
-                self._magnetometer(frame, t_us)
+                self._magnetometer(frame, time_s)
             elif type_id in _OTHER_TABLES:
                 values = frame.scaled()
-                self.tables[_OTHER_TABLES[type_id]].append([(t_us - self._t0_us) / 1e6, *values.values()])
+                self.tables[_OTHER_TABLES[type_id]].append([time_s, *values.values()])
                 if type_id == _GPS_ID and values["fix_type"] >= _FIX_2D:
                     self._gps(values)
                 elif type_id == _BARO_ID:
@@ -190,30 +196,30 @@ class Pipeline:
 
     def _release_held(self) -> None:
         held, self._held = self._held, []
-        for t_host_ns, frame in held:
-            self._imu_sample(t_host_ns, frame)
+        for sample in held:
+            self._imu_sample(*sample)
 
-    def _imu(self, t_host_ns: int, frame: Frame) -> None:
+    def _imu(self, t_host_ns: int, frame: Frame, time_s: float, t_us: int) -> None:
         if self.sensor is not None:
-            self._imu_sample(t_host_ns, frame)
+            self._imu_sample(t_host_ns, frame, time_s, t_us)
             return
-        self._held.append((t_host_ns, frame))
-        if frame[3] - self._held[0][1][3] >= HOLD_FOR_CONFIG_US:
+        self._held.append((t_host_ns, frame, time_s, t_us))
+        if time_s - self._held[0][2] >= HOLD_FOR_CONFIG_US * 1e-6:
             s = self.assumed_sensor
             self._warn(t_host_ns, f"no CONFIG frame: converting with assumed full scales ±{s.accel_fs_g} g, "
                        f"±{s.gyro_fs_dps} °/s, mounting {s.mounting}")
             self._use_sensor(s)
             self._release_held()
 
-    def _imu_sample(self, t_host_ns: int, frame: Frame) -> None:
-        _, _, (_, cx, cy, cz, rx, ry, rz, temperature), t_us = frame  # t_us: the unwrapped device time
+    def _imu_sample(self, t_host_ns: int, frame: Frame, time_s: float, t_us: int) -> None:
+        _, _, (_, cx, cy, cz, rx, ry, rz, temperature), _ = frame
         (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = self._acc_m
         (g0, g1, g2), (g3, g4, g5), (g6, g7, g8) = self._gyr_m
         acc = (a0 * cx + a1 * cy + a2 * cz, a3 * cx + a4 * cy + a5 * cz, a6 * cx + a7 * cy + a8 * cz)
         gyr = (g0 * rx + g1 * ry + g2 * rz, g3 * rx + g4 * ry + g5 * rz, g6 * rx + g7 * ry + g8 * rz)
         dt_s = 1.0 / self.sensor.rate_hz if self._last_us is None else (t_us - self._last_us) * 1e-6
         self._last_us = t_us
-        row = [(t_us - self._t0_us) * 1e-6, t_us, (t_host_ns - self._t0_host_ns) * 1e-9, *acc, *gyr, temperature * 0.01]
+        row = [time_s, t_us, (t_host_ns - self._t0_host_ns) * 1e-9, *acc, *gyr, temperature * 0.01]
         mag, gps, self._mag_body_ut, self._gps_fix = self._mag_body_ut, self._gps_fix, None, None
         for name, estimator in self.estimators.items():
             q, diag = estimator.step(gyr, acc, dt_s, mag, gps)
@@ -245,7 +251,7 @@ class Pipeline:
         self._gps_vel_ned_m_s = (values["vel_n"], values["vel_e"], values["vel_d"])
         self._position_on = True
 
-    def _magnetometer(self, frame: Frame, t_us: int) -> None:
+    def _magnetometer(self, frame: Frame, time_s: float) -> None:
         """Table row with the compass heading from the first estimator's tilt; the body-axis field for the estimators."""
         values = frame.scaled()
         sensor = self.sensor or self.assumed_sensor
@@ -253,12 +259,27 @@ class Pipeline:
         self._mag_body_ut = tuple(sum(r * v for r, v in zip(row, field_sensor)) for row in mounting.matrix(sensor.mounting).tolist())
         q = self._last_q[self.filters[0]] if self.filters else None
         heading = math.degrees(float(heading_rad(q, self._mag_body_ut))) if q is not None else math.nan
-        self.tables["mag_raw"].append([(t_us - self._t0_us) / 1e6, *values.values(), heading])
+        self.tables["mag_raw"].append([time_s, *values.values(), heading])
 
-    def _attitude(self, raw: tuple, t_us: int) -> None:
+    def _attitude(self, raw: tuple, time_s: float, t_us: int) -> None:
         _, qw, qx, qy, qz, lam, flags = raw
         s = _Q_SCALE
-        self.onboard.append(((t_us - self._t0_us) * 1e-6, t_us, qw * s, qx * s, qy * s, qz * s, lam * _LAMBDA_SCALE, flags))
+        self.onboard.append((time_s, t_us, qw * s, qx * s, qy * s, qz * s, lam * _LAMBDA_SCALE, flags))
+
+    def _discontinuity(self, event: dict) -> None:
+        """The device clock restarted or jumped: record it, start the estimators over, break every table."""
+        self.events.append(event)
+        for estimator in self.estimators.values():
+            estimator.reset()
+        self.position.reset()
+        self._last_us = None
+        self._last_q = dict.fromkeys(self.filters)
+        self._mag_body_ut = self._gps_fix = self._baro_alt_m = self._gps_pos_ned_m = self._gps_vel_ned_m_s = None
+        gap_s = 0.5 * (event["session_time_before_s"] + event["session_time_s"])
+        for table in (self.imu, self.onboard, *self.tables.values()):
+            if len(table):
+                table.append((gap_s,) + (math.nan,) * (len(table.columns) - 1))
+        self.link.restart()
 
     def _warn(self, t_host_ns: int, message: str) -> None:
         self.events.append({"t_host_ns": t_host_ns, "kind": "warning", "message": message})
