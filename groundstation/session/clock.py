@@ -59,26 +59,26 @@ class SessionClock:
             self._origin_ns = t_host_ns
             self._start(t_host_ns, t32, 0.0)
             return 0.0
-        host_s = (t_host_ns - self._origin_ns) * 1e-9
         step = (t32 - self._last_t32) & 0xFFFFFFFF
         if step > _WRAP - BACK_TOLERANCE_US:  # a little before the last frame: a late sensor
             self.device_us = self._last_us - (_WRAP - step)
             return self._last_s
-        waited_us = (t_host_ns - self._last_host_ns) // 1000
-        step += _WRAP * max(0, round((waited_us - step) / _WRAP))  # an outage longer than the wrap
+        waited_ns = t_host_ns - self._last_host_ns
+        if waited_ns > (step + _WRAP // 2) * 1000:  # an outage longer than half a wrap: count the wraps
+            step += _WRAP * round((waited_ns // 1000 - step) / _WRAP)
         device_us = self._last_us + step
         time_s = self._segment_s + (device_us - self._segment_us) * 1e-6
-        early_s = time_s - host_s - self._lead_s
-        if early_s > JUMP_TOLERANCE_S + DRIFT_TOLERANCE * step * 1e-6:
-            return self._discontinuity(t_host_ns, host_s, t32)
+        early_s = time_s - (t_host_ns - self._origin_ns) * 1e-9 - self._lead_s
+        if early_s > 0.0:  # delivered faster than any frame before it
+            if early_s > JUMP_TOLERANCE_S + DRIFT_TOLERANCE * step * 1e-6:
+                return self._discontinuity(t_host_ns, t32)
+            self._lead_s += early_s
         self.device_us = self._last_us = device_us
         self._last_t32, self._last_host_ns, self._last_s = t32, t_host_ns, time_s
-        if early_s > 0.0:
-            self._lead_s += early_s
         return time_s
 
-    def _discontinuity(self, t_host_ns: int, host_s: float, t32: int) -> float:
-        time_s = max(self._last_s + MIN_STEP_S, host_s + self._lead_s)
+    def _discontinuity(self, t_host_ns: int, t32: int) -> float:
+        time_s = max(self._last_s + MIN_STEP_S, (t_host_ns - self._origin_ns) * 1e-9 + self._lead_s)
         self.event = {
             "kind": DISCONTINUITIES[0] if t32 < self._last_t32 else DISCONTINUITIES[1],
             "t_host_ns": t_host_ns,
