@@ -18,12 +18,15 @@ from binascii import crc_hqx
 from firmware_protocol import SPEC, StreamDecoder, encode, make_frame
 
 
-def telemetry_stream(n_frames: int) -> bytes:
-    """A realistic mix: IMU_RAW and ATTITUDE at the output rate, STATUS now and then."""
+def telemetry_stream(n_frames: int, lose_every: int = 0) -> bytes:
+    """A realistic mix: IMU_RAW and ATTITUDE at the output rate, STATUS now and then; without every
+    ``lose_every``-th frame if given (each gap then takes the decoder's closer look at device time)."""
     imu = SPEC.frame("IMU_RAW")
     att = SPEC.frame("ATTITUDE")
     out = bytearray()
     for i in range(n_frames):
+        if lose_every and i % lose_every == lose_every - 1:
+            continue
         t_us = i * 10_000
         if i % 100 == 99:
             frame = make_frame("STATUS", i & 0xFF, t_us=t_us, battery=11_800, retransmits=3, lost_acks=0, cpu_load=70, flags=0)
@@ -81,6 +84,9 @@ def main() -> None:
         rate, count = median_rate(decode_all, data, chunk, args.repeats)
         assert count == args.frames
         print(f"StreamDecoder, {chunk:5d}-byte chunks:   {rate / 1e6:6.2f} M frames/s  ({rate / base:.2f} x baseline)")
+    lossy = telemetry_stream(args.frames, lose_every=20)
+    rate, _ = median_rate(decode_all, lossy, 4096, args.repeats)
+    print(f"StreamDecoder, 4096-byte chunks, 5 % of frames lost: {rate / 1e6:6.2f} M frames/s  ({rate / base:.2f} x baseline)")
 
     n_bytes = int(args.random_mb * 1e6)
     decoder = StreamDecoder()

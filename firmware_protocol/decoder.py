@@ -5,6 +5,24 @@ impossible for its type, or whose CRC fails, gives up only its sync byte, so a c
 truncated frame never swallows the intact frame that follows it. Every byte fed ends up in an
 CRC-valid frame (``frame_bytes``), in ``bytes_skipped``, or still pending (less than one frame):
 ``bytes_in == frame_bytes + bytes_skipped + pending_bytes``.
+
+Lost frames. The sender numbers every frame (one 8-bit counter for all types), so a gap in the
+sequence counts lost frames modulo 256. A gap is placed against the device timestamps too: the
+frames the sender sent in the elapsed device time decide how many whole turns of the counter the gap
+hides, so an outage of any length is counted right. The sending rate (frames of every type per µs)
+is measured on the stream itself, since ``CONFIG``'s ``rate_hz`` counts samples, not frames (a sample
+may send IMU_RAW, ATTITUDE and more); it is measured again after a ``CONFIG`` with another rate or a
+restart, keeping the last measurement meanwhile; until a first one (0.5 s of stream), gaps count
+modulo 256. When ``feed`` is given the chunk's host arrival time, the elapsed time is never taken
+longer than the host waited: a device clock that jumped ahead is not an outage.
+
+Plausibility. CRC-valid noise is rare but real (a CRC-16 passes one random candidate in 65,536), so
+a frame moves the sequence and timestamp state only if it fits the stream: an unknown type never
+does (counted in ``unknown_types``); a timestamp that steps back more than ``BACK_TOLERANCE_US``, or
+ahead by more than the host waited (plus a tolerance), is held back until the next timestamped frame
+decides. If that one follows the held frame, the device restarted (a reboot, a clock jump): both are
+returned, ``restarts`` counts it, device time restarts from the new timestamps and no loss is counted
+across it. Otherwise the held frame was noise: it is dropped and counted in ``implausible``.
 """
 
 from __future__ import annotations
@@ -18,7 +36,16 @@ from firmware_protocol.spec import SPEC, Spec
 _OVERHEAD = HEADER_BYTES + CRC_BYTES
 _CONFIG_ID = SPEC.frame("CONFIG").id
 _FINGERPRINT_INDEX = SPEC.frame("CONFIG").field_names.index("schema_fingerprint")
+_RATE_INDEX = SPEC.frame("CONFIG").field_names.index("rate_hz")
 _new = tuple.__new__  # Frame construction without a Python-level call (see codec.Frame)
+
+DEFAULT_RATE_HZ = 100  # until a CONFIG says otherwise
+BACK_TOLERANCE_US = 500_000  # a frame stamped up to this before the last one (a sensor reporting late) fits
+FORWARD_TOLERANCE_US = 2_000_000  # device time may run ahead of the host's by this (+5 %): host stalls, buffering
+CONFIRM_US = 1_000_000  # a held frame is confirmed by the next one if that follows within this and 32 frames
+LEARN_US = 500_000  # device time over which the sending rate is measured before it is trusted
+_FAST_PERIODS = 4  # consecutive frames less than 4 sample periods apart need no closer look
+_WRAP = 1 << 32
 
 
 def _lookup(spec: Spec) -> tuple[list, list, list, list]:
@@ -38,12 +65,14 @@ class DecoderStats:
     frames: int = 0  # known-type frames returned
     crc_errors: int = 0  # candidates with a plausible header whose CRC failed
     bytes_skipped: int = 0  # bytes not part of any CRC-valid frame
-    frame_bytes: int = 0  # bytes of CRC-valid frames (duplicates and unknown types included)
-    frames_lost: int = 0  # gaps in the sender's sequence counter
+    frame_bytes: int = 0  # bytes of CRC-valid frames (duplicates, unknown types and implausible ones included)
+    frames_lost: int = 0  # frames the sender's sequence counter and timestamps say were sent and did not arrive
     duplicates: int = 0  # a frame repeated byte for byte (same type, seq and values); dropped
     unknown_types: int = 0  # CRC-valid frames of a type this spec lacks; skipped
     bad_lengths: int = 0  # sync + type whose length byte is impossible for that type
     schema_mismatches: int = 0  # CONFIG frames from firmware built from another spec
+    implausible: int = 0  # CRC-valid frames whose timestamp did not fit the stream; dropped
+    restarts: int = 0  # the sender's sequence and clock started over (reboot, clock jump)
 
     def as_dict(self) -> dict[str, int]:
         return {f.name: getattr(self, f.name) for f in fields(self)}
@@ -58,17 +87,28 @@ class StreamDecoder:
         self._types, self._sizes, self._unpackers, self._timestamped = _lookup(spec)
         self.stats = DecoderStats()
         self.remote_fingerprint: int | None = None  # from the last CONFIG seen
+        self.rate_hz = DEFAULT_RATE_HZ  # from the last CONFIG seen
         self._pending = b""
-        self._last_seq: int | None = None
+        self._last_seq: int | None = None  # duplicate detection: the last frame accepted
         self._last_raw: tuple | bytes = ()
-        self._last_t32: int | None = None
-        self._last_t64 = 0
+        # The sequence and timestamp reference: the last plausible frame (``_ref_next`` is the seq expected next).
+        self._ref_next: int | None = None
+        self._ref_t32: int | None = None
+        self._ref_t64 = 0
+        self._ref_host_ns: int | None = None
+        self._untimed_advance = 0  # seq advance taken by frames without timestamp since the reference
+        self._untimed_lost = 0  # of which counted lost (taken back if the sender turns out to have restarted)
+        self._held: tuple | None = None  # (type, seq, raw, t32): a frame whose timestamp awaits confirmation
+        self._learn_from = (0, 0)  # (seq advances, device time) where the rate measurement starts
+        self._frames_per_us: float | None = None  # the measured sending rate; None until measured
+        self._fast_us = 0  # see _fast_threshold
 
     @property
     def pending_bytes(self) -> int:
         return len(self._pending)
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[Frame]:
+    def feed(self, data: bytes | bytearray | memoryview, t_host_ns: int | None = None) -> list[Frame]:
+        """The frames completed by ``data``; ``t_host_ns`` (when it arrived) bounds the loss a clock jump could fake."""
         data = self._pending + bytes(data)
         n = len(data)
         stats = self.stats
@@ -82,7 +122,8 @@ class StreamDecoder:
         crc, new, frame_class = crc_hqx, _new, Frame
         skipped = crc_errors = bad_lengths = lost = duplicates = unknown = accepted = 0
         last_seq, last_raw = self._last_seq, self._last_raw
-        last_t32, last_t64 = self._last_t32, self._last_t64
+        ref_next, ref_t32, ref_t64, fast_us = self._ref_next, self._ref_t32, self._ref_t64, self._fast_us
+        t64_before = ref_t64  # the reference moved in this chunk if its device time did: it arrived at t_host_ns
         pos = 0
         while True:
             start = find(sync, pos)
@@ -114,33 +155,46 @@ class StreamDecoder:
                 continue
             accepted += end - start
             pos = end
+            if size is None:  # noise or a newer spec: it must not move the sequence state
+                unknown += 1
+                continue
             seq = data[start + 3]
             # Encoding is a function of (type, seq, values): equal values mean equal bytes.
-            raw = unpackers[type_id](data, start + header) if size is not None else data[start:end]
+            raw = unpackers[type_id](data, start + header)
             if seq == last_seq and raw == last_raw:
                 duplicates += 1
                 continue
-            if last_seq is not None:
-                lost += (seq - last_seq - 1) & 0xFF
             last_seq, last_raw = seq, raw
-            if size is None:
-                unknown += 1
-                continue
-            t64 = None
             if timestamped[type_id]:
                 t32 = raw[0]
-                if last_t32 is None:
-                    t64 = t32
-                else:  # the signed 32-bit difference unwraps the 71.6-minute wrap
-                    step = (t32 - last_t32) & 0xFFFFFFFF
-                    t64 = last_t64 + (step if step < 0x80000000 else step - 0x100000000)
-                last_t32, last_t64 = t32, t64
-            elif type_id == _CONFIG_ID:
-                self._check_fingerprint(raw[_FINGERPRINT_INDEX])
-            append(new(frame_class, (types[type_id], seq, raw, t64)))
+                step = (t32 - ref_t32) & 0xFFFFFFFF if fast_us else 0
+                if seq == ref_next and step < fast_us:  # the common case: the next frame, soon after
+                    ref_t64 += step
+                    ref_next, ref_t32 = (seq + 1) & 0xFF, t32
+                    append(new(frame_class, (types[type_id], seq, raw, ref_t64)))
+                    continue
+                self._ref_next, self._ref_t32, self._ref_t64 = ref_next, ref_t32, ref_t64
+                if ref_t64 != t64_before:
+                    self._ref_host_ns = t_host_ns
+                lost += self._place(out, types[type_id], seq, raw, t32, t_host_ns, stats.frames + len(out) + stats.frames_lost + lost)
+                ref_next, ref_t32, ref_t64, fast_us = self._ref_next, self._ref_t32, self._ref_t64, self._fast_us
+                t64_before = ref_t64
+                continue
+            # No timestamp: the sequence goes on; the next timestamped frame checks the time (slow path).
+            if ref_next is not None:
+                gap = (seq - ref_next) & 0xFF
+                lost += gap
+                self._untimed_lost += gap
+                self._untimed_advance += gap + 1
+            ref_next, fast_us = (seq + 1) & 0xFF, 0
+            if type_id == _CONFIG_ID:
+                self._config(raw, stats.frames + len(out) + stats.frames_lost + lost)
+            append(new(frame_class, (types[type_id], seq, raw, None)))
         self._pending = data[pos:]
         self._last_seq, self._last_raw = last_seq, last_raw
-        self._last_t32, self._last_t64 = last_t32, last_t64
+        self._ref_next, self._ref_t32, self._ref_t64, self._fast_us = ref_next, ref_t32, ref_t64, fast_us
+        if ref_t64 != t64_before:
+            self._ref_host_ns = t_host_ns
         stats.frames += len(out)
         stats.bytes_skipped += skipped
         stats.frame_bytes += accepted
@@ -151,10 +205,91 @@ class StreamDecoder:
         stats.unknown_types += unknown
         return out
 
-    def _check_fingerprint(self, fingerprint: int) -> None:
+    # -- the slow path: first frame, sequence gaps, long or backward steps, held frames ---------------
+
+    def _fast_threshold(self) -> int:
+        """Steps below this need no closer look; 0 sends every frame to ``_place`` (no reference yet,
+        frames without timestamp since it, or a held frame waiting)."""
+        if self._ref_t32 is None or self._untimed_advance or self._held is not None:
+            return 0
+        return _FAST_PERIODS * 1_000_000 // self.rate_hz
+
+    def _place(self, out: list, frame_type, seq: int, raw: tuple, t32: int, t_host_ns: int | None, advances: int) -> int:
+        """Place a timestamped frame that is not simply the next one; returns the frames lost before it.
+
+        ``advances``: every frame returned or counted lost so far (the sender's sequence, unwrapped).
+        """
+        lost = 0
+        if self._ref_t32 is None:  # the first timestamped frame
+            if self._ref_next is not None:
+                lost = (seq - self._ref_next) & 0xFF
+            self._restart(seq, t32, t_host_ns, advances + lost)
+            out.append(_new(Frame, (frame_type, seq, raw, t32)))
+            return lost
+        step = (t32 - self._ref_t32) & 0xFFFFFFFF
+        step_us = step if step < _WRAP // 2 else step - _WRAP
+        host_us = None if t_host_ns is None or self._ref_host_ns is None else (t_host_ns - self._ref_host_ns) // 1000
+        if step_us >= -BACK_TOLERANCE_US and (host_us is None or step_us <= host_us * 1.05 + FORWARD_TOLERANCE_US):
+            if self._held is not None:
+                self._held = None
+                self.stats.implausible += 1
+            gap = (seq - self._ref_next) & 0xFF
+            sent = self._untimed_advance + gap + 1  # seq advance since the reference, modulo 256
+            lost = gap
+            rate = self._rate(advances)
+            if rate is not None:  # whole turns of the counter the gap hides
+                elapsed_us = step_us if host_us is None else min(step_us, host_us)
+                lost += 256 * max(0, round((elapsed_us * rate - sent) / 256))
+            self._untimed_advance = self._untimed_lost = 0
+            self._move(seq, t32, self._ref_t64 + step_us, t_host_ns)
+            out.append(_new(Frame, (frame_type, seq, raw, self._ref_t64)))
+            return lost
+        held = self._held
+        if held is not None:
+            since = (t32 - held[3]) & 0xFFFFFFFF
+            if since <= CONFIRM_US and 0 < (seq - held[1]) & 0xFF <= 32:  # it follows the held frame: a restart
+                # No loss is counted across a restart: what the sequence said since the reference is taken back.
+                self.stats.restarts += 1
+                lost = -self._untimed_lost
+                self._restart(held[1], held[3], t_host_ns, advances + lost)
+                out.append(_new(Frame, (*held[:3], held[3])))
+                self._move(seq, t32, held[3] + since, t_host_ns)
+                out.append(_new(Frame, (frame_type, seq, raw, self._ref_t64)))
+                return lost
+            self.stats.implausible += 1  # the held frame was noise, and this one may be too
+        self._held = (frame_type, seq, raw, t32)
+        self._fast_us = 0
+        return 0
+
+    def _move(self, seq: int, t32: int, t64: int, t_host_ns: int | None) -> None:
+        self._ref_next, self._ref_t32, self._ref_t64, self._ref_host_ns = (seq + 1) & 0xFF, t32, t64, t_host_ns
+        self._fast_us = self._fast_threshold()
+
+    def _restart(self, seq: int, t32: int, t_host_ns: int | None, advances: int) -> None:
+        """A new reference with no past: the first frame, or the first after the sender restarted."""
+        self._held = None
+        self._untimed_advance = self._untimed_lost = 0
+        self._move(seq, t32, t32, t_host_ns)
+        self._learn_from = (advances + 1, t32)
+
+    def _rate(self, advances: int) -> float | None:
+        """Frames per µs of device time the sender has been sending (measured, or the last measurement)."""
+        advances0, t0 = self._learn_from
+        span_us = self._ref_t64 - t0
+        if span_us >= LEARN_US:
+            self._frames_per_us = (advances - advances0) / span_us
+        return self._frames_per_us
+
+    def _config(self, raw: tuple, advances: int) -> None:
+        fingerprint = raw[_FINGERPRINT_INDEX]
         self.remote_fingerprint = fingerprint
         if fingerprint != SPEC.fingerprint:
             self.stats.schema_mismatches += 1
+        rate_hz = raw[_RATE_INDEX]
+        if 0 < rate_hz != self.rate_hz:  # another rate: measure again
+            self.rate_hz = rate_hz
+            self._frames_per_us = None
+        self._learn_from = (advances + 1, self._ref_t64)
 
     @property
     def schema_matches(self) -> bool | None:

@@ -25,10 +25,17 @@ class Aiding:
     def __init__(self) -> None:
         self.position = DualChannel()
         self.position_on = False  # from the first barometer or GPS reading
-        self._mag_body_ut: tuple | None = None
-        self._gps_fix: GpsFix | None = None
         self._baro_ground_pa: float | None = None
         self._gps_origin: tuple[float, float, float] | None = None
+        self.restart()
+
+    def restart(self) -> None:
+        """Forget the readings waiting for the next IMU sample and the position's state (a device reset).
+
+        The GPS origin and the barometer's ground pressure stay: positions after a reset stay comparable."""
+        self.position.reset()
+        self._mag_body_ut: tuple | None = None
+        self._gps_fix: GpsFix | None = None
         self._baro_alt_m: float | None = None
         self._gps_pos_ned_m: tuple | None = None
         self._gps_vel_ned_m_s: tuple | None = None

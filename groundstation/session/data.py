@@ -18,6 +18,7 @@ from groundstation.estimation import create
 from groundstation.estimation.evaluation import inclination_error_rad, run_on_trial, score
 from groundstation.recording import Recording, open_recording
 from groundstation.session.catalogue import Catalogue, session_catalogue
+from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
 from groundstation.session.replay import recorded_settings, replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -36,7 +37,7 @@ class LinkSummary:
 @dataclasses.dataclass
 class SessionData:
     metadata: dict
-    time_s: np.ndarray  # (N,) seconds from the first sample (device clock)
+    time_s: np.ndarray  # (N,) session time in seconds from the first sample (docs/time.md); monotonic
     estimates: dict[str, np.ndarray]  # name -> (N, 4) quaternions w-first, body -> NED
     diagnostics: dict[str, dict[str, np.ndarray]]  # name -> field -> (N,)
     sensors: dict[str, np.ndarray]  # acc_*_g, gyr_*_dps (body axes), temperature_c, each (N,)
@@ -153,9 +154,9 @@ def from_pipeline(recording: Recording, pipeline: Pipeline) -> SessionData:
     sensors["temperature_c"] = imu["temperature_c"]
     device_us = imu["device_time_us"]
     onboard = None
-    if len(pipeline.onboard):
+    if len(pipeline.onboard):  # by session time: device time repeats after a reboot
         board = whole["tables"]["onboard"]
-        onboard = aligned(device_us, board["device_time_us"], np.column_stack([board[f"q{c}"] for c in "wxyz"]))
+        onboard = aligned(imu["time_s"], board["time_s"], np.column_stack([board[f"q{c}"] for c in "wxyz"]))
     data = SessionData(
         metadata=dict(recording.metadata), time_s=imu["time_s"], estimates=estimates, diagnostics=diagnostics,
         sensors=sensors, onboard=onboard, damage=list(recording.damage), **whole,
@@ -192,19 +193,26 @@ def onboard_only(recording: Recording, pipeline: Pipeline) -> SessionData:
     return data
 
 
-def aligned(device_us: np.ndarray, other_us: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """``values`` (rows at ``other_us``) at the rows of ``device_us``; NaN where no row has that time."""
-    out = np.full((len(device_us), values.shape[1]), np.nan)
-    index = np.searchsorted(other_us, device_us)
-    index = np.clip(index, 0, max(len(other_us) - 1, 0))
-    hit = other_us[index] == device_us if len(other_us) else np.zeros(len(device_us), dtype=bool)
+def aligned(times: np.ndarray, other_times: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``values`` (rows at ``other_times``, sorted) at the rows of ``times``; NaN where no row has that time."""
+    out = np.full((len(times), values.shape[1]), np.nan)
+    index = np.searchsorted(other_times, times)
+    index = np.clip(index, 0, max(len(other_times) - 1, 0))
+    hit = other_times[index] == times if len(other_times) else np.zeros(len(times), dtype=bool)
     out[hit] = values[index[hit]]
     return out
 
 
 def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], device_us: np.ndarray, pipeline: Pipeline) -> None:
-    """Truth stored with a simulated recording (sensor axes -> ENU, at device times) onto the body axes."""
+    """Truth stored with a simulated recording (sensor axes -> ENU, at device times) onto the body axes.
+
+    The simulator's truth keeps the uninterrupted device time, so only samples before the first reboot
+    or clock jump have theirs; the later ones get none rather than another instant's.
+    """
     truth_us = np.rint(samples["time_s"] * 1e6)
+    restarts = [e["session_time_s"] for e in pipeline.events if e["kind"] in DISCONTINUITIES]
+    if restarts:
+        device_us = np.where(data.time_s < restarts[0], device_us, np.nan)
     q_sensor = aligned(device_us, truth_us, np.column_stack([samples[c] for c in TRUE_Q]))
     q_body_from_sensor = quaternion.from_matrix(mounting.matrix(pipeline.sensor.mounting))
     data.true_q = quaternion.multiply(q_sensor, quaternion.conjugate(q_body_from_sensor))

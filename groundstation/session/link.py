@@ -1,7 +1,9 @@
 """Link health: rates, losses and CRC failures per second, and the device-to-host clock.
 
 Everything is computed from the host arrival time of each chunk (stamped at the I/O edge) and
-the decoder's counters, so a replayed recording reproduces the live figures.
+the decoder's counters, so a replayed recording reproduces the live figures. Losses are the
+decoder's, which counts none across a restart of the sender; the clock offset and latency start
+over when the device clock does (``restart``).
 """
 
 from __future__ import annotations
@@ -44,6 +46,10 @@ class LinkStats:
 
     def on_sample(self, t_host_ns: int, device_time_us: int) -> None:
         self._host_minus_device_ns.append(t_host_ns - device_time_us * 1000)
+
+    def restart(self) -> None:
+        """The device clock restarted or jumped: offsets measured before it mean nothing after it."""
+        self._host_minus_device_ns.clear()
 
     def clock(self) -> dict[str, float]:
         """Device-to-host clock offset and per-sample latency (p50, p99) over the last samples.

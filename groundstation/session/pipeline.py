@@ -1,8 +1,10 @@
 """The computation of a session: timestamped chunks -> frames -> physical units -> estimators -> tables.
 
 No threads and no I/O: the same ``Pipeline.feed`` serves the live reader thread, replay and the
-tests, so one recording always gives the same numbers. Device timestamps drive ``dt``; host arrival
-times only feed the link statistics.
+tests, so one recording always gives the same numbers. Device timestamps drive ``dt``; every table's
+``time_s`` is the session time of ``SessionClock`` (docs/time.md). When the device clock restarts or
+jumps, the event is recorded, the estimators start over, and every table gets a gap row (NaN in all
+columns but ``time_s``).
 
 The pipeline is a dispatcher from frame type to a handler. Every downlink frame of the spec lands
 in a table (``catalogue``): most in a table of their own, in physical units; ``IMU_RAW`` through the
@@ -25,6 +27,7 @@ from firmware_protocol.spec import Spec
 from groundstation import mounting
 from groundstation.session.aiding import Aiding
 from groundstation.session.catalogue import session_catalogue
+from groundstation.session.clock import SessionClock
 from groundstation.session.estimators import EstimatorBank
 from groundstation.session.link import LinkStats
 from groundstation.session.table import Table
@@ -68,6 +71,7 @@ class Pipeline:
         self.filters = self.bank.filters
         self.assumed_sensor = assumed_sensor or SensorConfig()
         self.decoder = StreamDecoder(spec)
+        self.clock = SessionClock()
         self.link = LinkStats()
         self.catalogue = session_catalogue(self.bank.diagnostics(), spec)
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
@@ -77,10 +81,10 @@ class Pipeline:
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
         self.t0_host_ns: int | None = None  # arrival of the first chunk: the origin of host times
-        self._held: list[tuple[int, Frame]] = []
-        self._t0_us: int | None = None
+        self._held: list[tuple[int, Frame, float, int]] = []  # IMU samples waiting for CONFIG, with their times
         self._last_us: int | None = None
         self._time_s = math.nan  # session time of the newest timestamped frame
+        self._device_us = 0  # its device time, unwrapped within the clock's segment
         self._mag_m = folded(mounting.matrix(self.assumed_sensor.mounting), _MAG_SCALES)  # until CONFIG says
         self._handlers = {t.id: self._frame_handler(t) for t in spec.frames if t.direction == "down"}
 
@@ -94,16 +98,17 @@ class Pipeline:
         """Decode one chunk that arrived at ``t_host_ns``; returns the IMU samples it completed."""
         if self.t0_host_ns is None:
             self.t0_host_ns = t_host_ns
-        frames = self.decoder.feed(data)
+        frames = self.decoder.feed(data, t_host_ns)
         self.link.on_chunk(t_host_ns, self.decoder.stats, len(frames))
         before = len(self.imu)
-        handlers = self._handlers
+        handlers, clock = self._handlers, self.clock
         for frame in frames:
             t_us = frame[3]
             if t_us is not None:
-                if self._t0_us is None:
-                    self._t0_us = t_us
-                self._time_s = (t_us - self._t0_us) * 1e-6
+                self._time_s = clock.place(t_host_ns, t_us)
+                if clock.event is not None:
+                    self._discontinuity(clock.event)
+                self._device_us = clock.device_us  # dt never spans a discontinuity
             handlers[frame[0].id](t_host_ns, frame)
         return len(self.imu) - before
 
@@ -171,30 +176,30 @@ class Pipeline:
 
     def _release_held(self) -> None:
         held, self._held = self._held, []
-        for t_host_ns, frame in held:
-            self._imu_sample(t_host_ns, frame)
+        for sample in held:
+            self._imu_sample(*sample)
 
     def _imu(self, t_host_ns: int, frame: Frame) -> None:
         if self.sensor is not None:
-            self._imu_sample(t_host_ns, frame)
+            self._imu_sample(t_host_ns, frame, self._time_s, self._device_us)
             return
-        self._held.append((t_host_ns, frame))
-        if frame[3] - self._held[0][1][3] >= HOLD_FOR_CONFIG_US:
+        self._held.append((t_host_ns, frame, self._time_s, self._device_us))
+        if self._time_s - self._held[0][2] >= HOLD_FOR_CONFIG_US * 1e-6:
             s = self.assumed_sensor
             self._warn(t_host_ns, f"no CONFIG frame: converting with assumed full scales ±{s.accel_fs_g} g, "
                        f"±{s.gyro_fs_dps} °/s, mounting {s.mounting}")
             self._use_sensor(s)
             self._release_held()
 
-    def _imu_sample(self, t_host_ns: int, frame: Frame) -> None:
-        _, _, (_, cx, cy, cz, rx, ry, rz, temperature), t_us = frame  # t_us: the unwrapped device time
+    def _imu_sample(self, t_host_ns: int, frame: Frame, time_s: float, t_us: int) -> None:
+        """One IMU sample at session time ``time_s``, device time ``t_us`` (unwrapped within its segment)."""
+        _, _, (_, cx, cy, cz, rx, ry, rz, temperature), _ = frame
         (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = self._acc_m
         (g0, g1, g2), (g3, g4, g5), (g6, g7, g8) = self._gyr_m
         acc = (a0 * cx + a1 * cy + a2 * cz, a3 * cx + a4 * cy + a5 * cz, a6 * cx + a7 * cy + a8 * cz)
         gyr = (g0 * rx + g1 * ry + g2 * rz, g3 * rx + g4 * ry + g5 * rz, g6 * rx + g7 * ry + g8 * rz)
         dt_s = 1.0 / self.sensor.rate_hz if self._last_us is None else (t_us - self._last_us) * 1e-6
         self._last_us = t_us
-        time_s = (t_us - self._t0_us) * 1e-6  # a held sample's own time, not the newest frame's
         row = [time_s, t_us, (t_host_ns - self.t0_host_ns) * 1e-9, *acc, *gyr, temperature * 0.01]
         mag, gps = self.aiding.take_for_estimators()
         row += self.bank.step(gyr, acc, dt_s, mag, gps)
@@ -225,7 +230,19 @@ class Pipeline:
     def _attitude(self, t_host_ns: int, frame: Frame) -> None:
         _, qw, qx, qy, qz, lam, flags = frame[2]
         s = _Q_SCALE
-        self.onboard.append((self._time_s, frame[3], qw * s, qx * s, qy * s, qz * s, lam * _LAMBDA_SCALE, flags))
+        self.onboard.append((self._time_s, self._device_us, qw * s, qx * s, qy * s, qz * s, lam * _LAMBDA_SCALE, flags))
+
+    def _discontinuity(self, event: dict) -> None:
+        """The device clock restarted or jumped: record it, start the estimators over, break every table."""
+        self.events.append(event)
+        self.bank.restart()
+        self.aiding.restart()
+        self._last_us = None
+        gap_s = 0.5 * (event["session_time_before_s"] + event["session_time_s"])
+        for table in self.tables.values():
+            if len(table):
+                table.append((gap_s,) + (math.nan,) * (len(table.columns) - 1))
+        self.link.restart()
 
     def _warn(self, t_host_ns: int, message: str) -> None:
         self.events.append({"t_host_ns": t_host_ns, "kind": "warning", "message": message})

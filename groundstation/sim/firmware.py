@@ -18,6 +18,12 @@ onboard AHF runs in every mode (a mode switch finds it converged) on the same nu
 counts converted with ``groundstation.units``, rotated to the body by the mounting, ``dt`` from the
 device timestamps.
 
+Reboot and clock jump (to test the ground station): ``reboot_after_s`` > 0 resets the board once at
+that true time, as a brown-out does: the clock restarts at 0, the sequence counter at 0, the onboard
+filter, mode, filter settings and gyro offsets start over, and it boots again (calibration, CONFIG).
+``clock_jump_after_s`` > 0 makes the clock jump ahead by ``clock_jump_s`` at that time, the rest
+going on. The truth (``on_samples``) keeps the uninterrupted device time.
+
 Commands (``COMMAND`` frames, uplink): ``set_mode``, ``set_filter_param`` (λ_max, λ_min, low-pass,
 error gain, gyro over-range in rad/s with ≤ 0 meaning off), ``request_config`` and
 ``calibrate_gyro`` (averaging time ``value`` s, 0 → 1 s; STATUS flag bit 0 while it runs; the
@@ -76,6 +82,9 @@ class FirmwareSettings:
     mag_rate_hz: int = 0  # 0 = no magnetometer
     baro_rate_hz: int = 0  # 0 = no barometer
     gps_rate_hz: int = 0  # 0 = no GPS
+    reboot_after_s: float = 0.0  # 0 = never; else the board resets once at this true time
+    clock_jump_after_s: float = 0.0  # 0 = never; else the clock jumps ahead once at this true time
+    clock_jump_s: float = 3600.0  # by this much
 
     def __post_init__(self):
         if self.mode not in MODES:
@@ -87,6 +96,8 @@ class FirmwareSettings:
             rate = getattr(self, name)
             if rate and (rate < 0 or self.rate_hz % rate):
                 raise ValueError(f"{name} must divide the output rate {self.rate_hz} Hz")
+        if not (self.reboot_after_s >= 0.0 and self.clock_jump_after_s >= 0.0 and self.clock_jump_s >= 0.0):
+            raise ValueError("reboot and clock-jump times must be >= 0")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,7 +121,7 @@ class Firmware:
         self.imu = MPU6050(imu, settings.accel_fs_g, settings.gyro_fs_dps, settings.mounting, settings.rate_hz, seed)
         if settings.accel_calibrated:
             self.imu.accel_offset_g = self.imu.accel_turn_on_bias_g.copy()
-        self.ahf_settings = ahf
+        self.ahf_settings = self._boot_ahf_settings = ahf
         self.onboard = Ahf(ahf, dtype=np.float32)
         self._onboard_q: list[float] | None = None  # its last output, None before its first sample
         self._on_samples = on_samples
@@ -124,6 +135,9 @@ class Firmware:
         self._ahead: dict[str, np.ndarray] = {}  # samples computed ahead (see _sampled), up to _ahead_end
         self._ahead_end = 0
         self._seq = 0
+        self._epoch_us = 0  # device time (uninterrupted) at which the board's clock read 0
+        self._mishaps = sorted((self._sample_at(t_s), what) for t_s, what in
+                               ((settings.reboot_after_s, self._reboot), (settings.clock_jump_after_s, self._jump_clock)) if t_s > 0)
         self._last_t_dev_us: int | None = None
         self._queued: list[tuple[str, dict]] = []  # frames to send before the next sample
         self._booting = True
@@ -155,11 +169,35 @@ class Firmware:
         out: list[SentFrame] = []
         while self._k < k_end:
             end = k_end if self._calibration is None else min(k_end, self._calibration[1])
+            if self._mishaps:
+                end = min(end, self._mishaps[0][0])
             self._run_block(self._k, end, out)
             self._k = end
             if self._calibration is not None and self._k == self._calibration[1]:
                 self._finish_calibration()
+            while self._mishaps and self._k >= self._mishaps[0][0]:
+                self._mishaps.pop(0)[1]()
         return out
+
+    def _sample_at(self, t_s: float) -> int:
+        """The first sample at or after true time ``t_s``."""
+        return math.ceil(t_s * self._drift / self._period_s - 1e-9)
+
+    def _reboot(self) -> None:
+        self._epoch_us = round(self._k * self._period_s * 1e6)
+        self._seq, self._queued, self._last_t_dev_us = 0, [], None
+        self.mode = MODES[self.settings.mode]
+        self.ahf_settings = self._boot_ahf_settings
+        self.onboard, self._onboard_q = Ahf(self.ahf_settings, dtype=np.float32), None
+        self.imu.gyro_offset_dps = np.zeros(3)
+        self._booting, self._calibration = True, None
+        if self.settings.boot_calibration_s > 0:
+            self._start_calibration(self.settings.boot_calibration_s)
+        else:
+            self._end_boot()
+
+    def _jump_clock(self) -> None:
+        self._epoch_us -= round(self.settings.clock_jump_s * 1e6)
 
     # -- commands ----------------------------------------------------------------------------
 
@@ -288,7 +326,7 @@ class Firmware:
         extras = self._extra_readings(truth)
         per_status = s.rate_hz
         acc_counts, gyr_counts = raw.acc_counts.tolist(), raw.gyr_counts.tolist()
-        t_true_list, t_us_list = t_true.tolist(), (t_dev_us & 0xFFFFFFFF).tolist()
+        t_true_list, t_us_list = t_true.tolist(), ((t_dev_us - self._epoch_us) & 0xFFFFFFFF).tolist()
         for i in range(n):
             t, t_us = t_true_list[i], t_us_list[i]
             for name, values in self._queued:

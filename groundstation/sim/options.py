@@ -31,6 +31,12 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"board clock error (default: {FirmwareSettings.clock_drift_ppm:g})")
     parser.add_argument("--sample-jitter-us", type=float, default=FirmwareSettings.sample_jitter_us, metavar="US",
                         help=f"σ of the sampling-time jitter (default: {FirmwareSettings.sample_jitter_us:g})")
+    board = parser.add_argument_group("board mishaps (default: none)")
+    board.add_argument("--reboot-after", type=float, default=0.0, metavar="S",
+                       help="the board resets once after S seconds: clock and sequence restart at 0, it boots again")
+    board.add_argument("--clock-jump-after", type=float, default=0.0, metavar="S", help="the board's clock jumps ahead once after S seconds")
+    board.add_argument("--clock-jump", type=float, default=FirmwareSettings.clock_jump_s, metavar="S",
+                       help=f"by this much (default: {FirmwareSettings.clock_jump_s:g})")
     link = parser.add_argument_group("link impairments (default: a clean link)")
     link.add_argument("--loss", type=float, default=0.0, metavar="P", help="independent frame-loss probability")
     link.add_argument("--burst-loss", type=float, default=0.0, metavar="P", help="fraction of frames lost in bursts (Gilbert-Elliott)")
@@ -58,7 +64,8 @@ def scenario_from_args(args: argparse.Namespace, duration_s: float | None) -> Sc
     try:
         firmware = FirmwareSettings(
             rate_hz=args.rate, mode=args.mode, accel_fs_g=args.accel_fs, gyro_fs_dps=args.gyro_fs, mounting=args.mounting,
-            clock_drift_ppm=args.clock_drift_ppm, sample_jitter_us=args.sample_jitter_us, **rates,
+            clock_drift_ppm=args.clock_drift_ppm, sample_jitter_us=args.sample_jitter_us, reboot_after_s=args.reboot_after,
+            clock_jump_after_s=args.clock_jump_after, clock_jump_s=args.clock_jump, **rates,
         )
         link = LinkSettings(
             loss=args.loss, burst_loss=args.burst_loss, burst_length_frames=args.burst_len, ber=args.ber, truncate=args.truncate,

@@ -27,9 +27,10 @@ def feed_in_random_chunks(decoder: StreamDecoder, data: bytes, rng: random.Rando
     return frames
 
 
-def numbered(frames):
-    """Consecutive sequence numbers, as the aircraft's sender gives them."""
-    return [new_frame(f.type, i & 0xFF, f.raw) for i, f in enumerate(frames)]
+def numbered(frames, period_us: int = 10_000):
+    """Consecutive sequence numbers and rising timestamps, as the aircraft's sender gives them."""
+    return [new_frame(f.type, i & 0xFF, (i * period_us,) + f.raw[1:] if f.type.has_timestamp else f.raw)
+            for i, f in enumerate(frames)]
 
 
 def frame_bytes(frames) -> int:

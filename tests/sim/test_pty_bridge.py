@@ -110,3 +110,42 @@ def test_port_disappears_and_comes_back_under_the_same_name(tmp_path):
         process.communicate(timeout=10)
     assert len(sessions) == 2 and all(sum(f.name == "IMU_RAW" for f in s) > 20 for s in sessions)
     assert not os.path.lexists(name)
+
+
+def test_a_board_rebooting_mid_session_through_the_pty(tmp_path):
+    """``bridge-sim --reboot-after``: a live session over pyserial records one device_reset, keeps its
+    time monotonic and in step with the host clock, and a replay of its recording finds the same."""
+    import numpy as np
+
+    from groundstation.session.data import load_session
+    from groundstation.session.live import LiveSession
+    from groundstation.session.pipeline import Pipeline
+    from groundstation.sources import SerialSource
+
+    process, path = start_cli("--scenario", "hover", "--seed", "4", "--reboot-after", "3")
+    try:
+        session = LiveSession(SerialSource(path), Pipeline(), recordings_dir=tmp_path)
+        with session:
+            deadline = time.monotonic() + 20  # however slow the machine is today
+            while time.monotonic() < deadline and not (
+                any(e["kind"] == "device_reset" for e in session.pipeline.events) and len(session.pipeline.imu) > 500
+            ):
+                time.sleep(0.1)
+    finally:
+        process.send_signal(signal.SIGTERM)
+        process.communicate(timeout=10)
+    pipeline = session.pipeline
+    resets = [e for e in pipeline.events if e["kind"] in ("device_reset", "clock_jump")]
+    assert [e["kind"] for e in resets] == ["device_reset"]
+    assert resets[0]["device_time_us_after"] < resets[0]["device_time_us_before"]
+    imu = pipeline.imu.to_dict()
+    assert np.all(np.diff(imu["time_s"]) > 0)
+    samples = np.isfinite(imu["device_time_us"])
+    assert (~samples).sum() == 1  # the gap row
+    # In step with the host clock: apart from delivery delays (a busy machine's included).
+    lag_s = imu["host_time_s"][samples] - imu["time_s"][samples]
+    assert lag_s.max() - lag_s.min() < 1.0
+    assert pipeline.decoder.stats.frames_lost == 0 and pipeline.decoder.stats.restarts == 1
+    replayed = load_session(session.recording_path)
+    assert [e["kind"] for e in replayed.events if e["kind"] == "device_reset"] == ["device_reset"]
+    np.testing.assert_array_equal(replayed.tables["imu"]["time_s"], imu["time_s"])
