@@ -54,6 +54,16 @@ def test_a_full_tmpfs_stops_the_recording_not_the_session_and_room_resumes_it(tm
         # stop() (the with block) closed both without raising
 
 
+def test_stopping_while_the_recording_has_failed_raises_nothing_and_keeps_the_file(tmp_path):
+    with tiny_tmpfs(tmp_path / "full") as folder:
+        session = LiveSession(simulated_source(), filters=("ahf",), recordings_dir=folder).start()
+        wait_for(lambda: session.recorder.state == "failed")
+        session.stop()  # closing used to raise OSError here (the buffered bytes could not be flushed)
+        assert session.recorder.state == "off" and session.recorder.paths == [session.recording_path]
+        recording = open_recording(session.recording_path)
+        assert not recording.closed_cleanly and recording.chunk_count > 0
+
+
 def test_the_files_of_a_full_disk_session_open_and_replay(tmp_path):
     with tiny_tmpfs(tmp_path / "full") as folder:
         session = LiveSession(simulated_source(), filters=("ahf",), recordings_dir=folder)
