@@ -130,3 +130,17 @@ def test_a_file_size_limit_fails_the_recording_and_the_session_decodes_on(tmp_pa
         recording = open_recording(path)  # every file opens, the cut ones included
         assert recording.chunk_count > 0
         assert os.path.getsize(path) <= 12_000
+
+
+def test_a_folder_that_cannot_be_recorded_into_still_gives_a_live_session(tmp_path):
+    """The recording cannot even start (here /proc, which takes no files): the session decodes all the same."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("/proc is Linux's")
+    session = LiveSession(simulated_source(), filters=("ahf",), recordings_dir="/proc/groundstation").start()
+    try:
+        assert session.recorder.state == "failed" and session.recording_path is None
+        assert "cannot record into /proc/groundstation" in session.recorder.error
+        assert kinds(session)[0] == "recording_failed"
+        wait_for(lambda: len(session.pipeline.imu) > 50)
+    finally:
+        session.stop()
