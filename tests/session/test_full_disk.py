@@ -85,6 +85,8 @@ def test_the_files_of_a_full_disk_session_open_and_replay(tmp_path):
         assert resumed.closed_cleanly and resumed.damage == []
         event = next(e for _, e in resumed.events if e["kind"] == "recording_resumed")
         assert event["previous_path"] == str(first) and "No space left on device" in event["failure"]
+        # The session asked the aircraft for its CONFIG again, so the new file replays at the right scales.
+        assert replay(resumed).config is not None
         assert len(replay(resumed).imu) > 50
         # only the two recordings: a failed attempt to resume leaves no empty file behind
         assert sorted(p.name for p in folder.iterdir() if p.suffix == ".gsrec") == sorted([first.name, second.name])
