@@ -20,8 +20,11 @@ def run(args: argparse.Namespace) -> int:
 
     from groundstation.datasets import DatasetError, read_csv
     from groundstation.errors import UserError
-    from groundstation.recording import RecordingWriter
+    from groundstation.export.files import atomic_recording
+    from groundstation.recording import EXTENSION
 
+    if args.out.suffix.lower() != EXTENSION:
+        raise UserError(f"--out must end in {EXTENSION} (the import writes a recording), not {args.out.name}")
     if args.out.exists():
         raise UserError(f"{args.out} exists; choose another name")
     try:
@@ -30,10 +33,7 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(str(error)) from None
     frame = pd.read_csv(args.file, compression="infer")
     columns = {name: pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float) for name in frame.columns}
-    try:
-        with RecordingWriter(args.out, {"source": f"imported from {Path(args.file).name}"}) as writer:
-            writer.write_samples(columns)
-    except OSError as error:
-        raise UserError(f"cannot write {args.out}: {error.strerror}") from None
+    with atomic_recording(args.out, {"source": f"imported from {Path(args.file).name}"}) as writer:
+        writer.write_samples(columns)
     print(f"wrote {args.out}: {len(frame)} samples, columns {', '.join(frame.columns)}")
     return 0

@@ -34,19 +34,36 @@ def print_spec() -> None:
 
 
 def decode_file(path: Path, limit: int) -> None:
-    try:
-        handle = path.open("rb")
-    except OSError as error:
-        raise UserError(f"cannot read {path}: {error.strerror}") from None
     decoder = StreamDecoder()
     shown = 0
-    with handle:
-        while chunk := handle.read(CHUNK_BYTES):
-            for frame in decoder.feed(chunk):
-                if shown < limit:
-                    print(f"{frame.seq:3d} {frame.name:<9} " + " ".join(f"{k}={v:g}" for k, v in frame.scaled().items()))
-                    shown += 1
+    for chunk in link_bytes(path):
+        for frame in decoder.feed(chunk):
+            if shown < limit:
+                print(f"{frame.seq:3d} {frame.name:<9} " + " ".join(f"{k}={v:g}" for k, v in frame.scaled().items()))
+                shown += 1
     counts = ", ".join(f"{k} {v}" for k, v in decoder.stats.as_dict().items())
     print(f"{path}: {counts}; {decoder.pending_bytes} bytes of an incomplete frame at the end")
     if decoder.schema_matches is False:
         print(f"warning: the firmware was built from another protocol spec (fingerprint 0x{decoder.remote_fingerprint:08X})")
+
+
+def link_bytes(path: Path):
+    """The link bytes in ``path``: a raw capture as it is, a recording's chunks (not its record framing)."""
+    from groundstation.recording import open_recording
+    from groundstation.recording.format import MAGIC
+
+    try:
+        handle = path.open("rb")
+    except OSError as error:
+        raise UserError(f"cannot read {path}: {error.strerror}") from None
+    with handle:
+        if handle.read(len(MAGIC)) == MAGIC:
+            recording = open_recording(path)
+            print(f"{path} is a groundstation recording: decoding the link bytes of its {recording.chunk_count} chunks")
+            for finding in recording.damage:
+                print(f"warning: {finding}")
+            yield from (data for _, data in recording.chunks())
+            return
+        handle.seek(0)
+        while chunk := handle.read(CHUNK_BYTES):
+            yield chunk

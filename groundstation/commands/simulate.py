@@ -44,7 +44,8 @@ def truth_path_for(out: Path) -> Path:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundstation.recording import EXTENSION, RecordingWriter
+    from groundstation.export.files import atomic_output, atomic_recording
+    from groundstation.recording import EXTENSION
     from groundstation.sim.stream import SimStream
     from groundstation.sim.truth_file import TruthTable
 
@@ -56,23 +57,22 @@ def run(args: argparse.Namespace) -> int:
     stream = SimStream(scenario, on_samples=table)
     started = time.monotonic()
     as_recording = out.suffix == EXTENSION
-    if as_recording and out.exists():
-        raise UserError(f"{out} exists; choose another name")
-    try:
-        if as_recording:
-            with RecordingWriter(out, {"source": f"simulated '{scenario.profile}' flight, seed {scenario.seed}",
-                                       "scenario": vars(args).get("scenario"), "seed": scenario.seed}) as writer:
-                for chunk in chunks(stream, started):
-                    writer.write_chunk(round(chunk.t_s * 1e9), chunk.data)
-                writer.write_samples({name: column.to_numpy(dtype=float) for name, column in table.frame().items()})
-            truth_path = out
-        else:
-            with open(out, "wb") as sink:
+    for path in (out,) if as_recording else (out, truth_path):
+        if path.exists():
+            raise UserError(f"{path} exists; choose another name")
+    if as_recording:
+        with atomic_recording(out, {"source": f"simulated '{scenario.profile}' flight, seed {scenario.seed}",
+                                    "scenario": vars(args).get("scenario"), "seed": scenario.seed}) as writer:
+            for chunk in chunks(stream, started):
+                writer.write_chunk(round(chunk.t_s * 1e9), chunk.data)
+            writer.write_samples({name: column.to_numpy(dtype=float) for name, column in table.frame().items()})
+        truth_path = out
+    else:
+        with atomic_output(out) as raw_file, atomic_output(truth_path) as truth_file:
+            with open(raw_file, "wb") as sink:
                 for chunk in chunks(stream, started):
                     sink.write(chunk.data)
-            table.write(truth_path)
-    except OSError as error:
-        raise UserError(f"cannot write {error.filename}: {error.strerror}") from None
+            table.write(truth_file)
     elapsed = time.monotonic() - started
     report = stream.link.report
     print(f"\rsimulate: {stream.end_s:g} s of '{scenario.profile}' in {elapsed:.1f} s: {report.bytes_delivered} bytes -> {out}, "

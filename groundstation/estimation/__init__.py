@@ -10,6 +10,7 @@ explicit complementary filter, ``cf1`` first-order complementary filter, ``kf`` 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from groundstation.estimation.ahf import Ahf, Hf
 from groundstation.estimation.base import Estimator
@@ -32,9 +33,11 @@ def create(name: str, overrides: dict[str, float] | None = None) -> Estimator:
     except KeyError:
         raise ValueError(f"unknown estimator {name!r}; choose from {', '.join(ESTIMATORS)}") from None
     fields = {f.name for f in dataclasses.fields(cls.Settings)}
-    for param in overrides or {}:
+    for param, value in (overrides or {}).items():
         if param not in fields:
             raise ValueError(f"{name} has no setting {param!r}; its settings: {', '.join(sorted(fields))}")
+        if math.isnan(value):  # inf can be meant ("no limit"); NaN never is
+            raise ValueError(f"{name}.{param} must be a number, not NaN")
     return cls(dataclasses.replace(cls.Settings(), **(overrides or {})))
 
 

@@ -110,6 +110,8 @@ class Estimator:
         s = self.settings
         if not 0.0 <= s.acc_min_g < s.acc_max_g:
             raise ValueError("need 0 <= acc_min_g < acc_max_g")
+        if not s.max_gap_s > 0.0:  # a gap of any length would re-initialise: the estimator would never integrate
+            raise ValueError(f"max_gap_s must be positive (seconds), not {s.max_gap_s}")
         self._acc_min2 = s.acc_min_g * s.acc_min_g
         self._acc_max2 = s.acc_max_g * s.acc_max_g
         self._max_gap_s = s.max_gap_s

@@ -79,7 +79,7 @@ class RecordingWriter:
         except FileExistsError:
             raise RecordingError(f"{self.path} already exists; a recording is never overwritten") from None
         except OSError as error:
-            raise RecordingError(f"cannot create the recording {self.path}: {error.strerror}") from None
+            raise RecordingError(f"cannot create the recording {self.path}: {error.strerror}") from error
         self._lock = threading.Lock()
         self._closed = threading.Event()
         self._background_error: RecordingError | None = None
@@ -155,7 +155,7 @@ class RecordingWriter:
         try:
             self._file.write(data)
         except OSError as error:
-            raise RecordingError(f"writing the recording {self.path} failed: {error.strerror}") from None
+            raise RecordingError(f"writing the recording {self.path} failed: {error.strerror}") from error
         self.bytes_written += len(data)
 
     def _flush(self) -> None:
@@ -165,7 +165,7 @@ class RecordingWriter:
             if self.fsync:
                 os.fsync(self._file.fileno())
         except OSError as error:
-            raise RecordingError(f"writing the recording {self.path} failed: {error.strerror}") from None
+            raise RecordingError(f"writing the recording {self.path} failed: {error.strerror}") from error
         self._last_flush_ns = time.monotonic_ns()
         self._bytes_flushed = self.bytes_written
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation import mounting, quaternion
-from groundstation.datasets import ACC, GYR, TRUE_Q, DatasetError, Trial, read_csv
+from groundstation.datasets import TRUE_Q, DatasetError, Trial, read_csv, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import inclination_error_rad, run_on_trial, score
@@ -20,7 +20,7 @@ from groundstation.recording import Recording, open_recording
 from groundstation.session.catalogue import Catalogue, session_catalogue
 from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
-from groundstation.session.replay import recorded_settings, replay
+from groundstation.session.replay import check_forced, recorded_settings, replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 DATASET_SUFFIXES = (".csv", ".csv.gz", ".gz")
@@ -81,14 +81,18 @@ def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
             trial = read_csv(path)
         except DatasetError as error:
             raise UserError(str(error)) from None
-        return from_trial(trial, filters or DEFAULT_FILTERS, forced, {"source": f"dataset CSV {path.name}"})
+        filters = filters or DEFAULT_FILTERS
+        check_forced(filters, forced)
+        return from_trial(trial, filters, forced, {"source": f"dataset CSV {path.name}"})
     recording = open_recording(path)
     if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
+        filters = filters or recording.metadata.get("filters", DEFAULT_FILTERS)
+        check_forced(filters, forced)
         settings = {**recorded_settings(recording)}
         for name, values in (forced or {}).items():
             settings[name] = {**settings.get(name, {}), **values}
-        data = from_trial(trial, filters or recording.metadata.get("filters", DEFAULT_FILTERS), settings, recording.metadata)
+        data = from_trial(trial, filters, settings, recording.metadata)
         data.damage = recording.damage
         return data
     if recording.chunk_count == 0:
@@ -97,21 +101,10 @@ def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
 
 
 def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
-    missing = [c for c in ["time_s", *GYR, *ACC] if c not in samples]
-    if missing:
-        raise UserError(f"{path}: the imported samples lack {', '.join(missing)}")
-
-    def optional(columns):
-        return np.column_stack([samples[c] for c in columns]) if all(c in samples for c in columns) else None
-
-    return Trial(
-        time_s=samples["time_s"],
-        gyr_rad_s=np.column_stack([samples[c] for c in GYR]),
-        acc_m_s2=np.column_stack([samples[c] for c in ACC]),
-        mag_uT=optional(["mag_x_uT", "mag_y_uT", "mag_z_uT"]),
-        true_q=optional(TRUE_Q),
-        moving=None if "moving" not in samples else samples["moving"] == 1.0,
-    )
+    try:
+        return trial_from_columns(samples, f"{path} (imported samples)")
+    except DatasetError as error:
+        raise UserError(str(error)) from None
 
 
 def from_trial(trial: Trial, filters, settings_used, metadata: dict) -> SessionData:

@@ -41,6 +41,7 @@ class LiveSession:
         self._stop = threading.Event()
         self._last_chunk_ns = 0
         self._uplink_seq = 0
+        self._config_wanted = False
         self.recorder = Recorder(
             recordings_dir if recordings_dir is not None else default_recordings_dir(),
             lambda: {  # each file's header has the settings in force when it starts
@@ -102,6 +103,9 @@ class LiveSession:
                 continue
             if chunk is not None:
                 self._take(chunk.t_host_ns, chunk.data)
+            if self._config_wanted:  # a resumed recording needs a CONFIG frame of its own to replay
+                self._config_wanted = False
+                self.send_command("request_config")
 
     def _take(self, t_host_ns: int, data: bytes) -> None:
         with self.lock:
@@ -167,3 +171,4 @@ class LiveSession:
     def _recorder_event(self, event: dict) -> None:
         """``recording_failed``/``recording_resumed``; the recorder is only called under ``lock``."""
         self.pipeline.events.append({**event, "wall_time": time.time()})
+        self._config_wanted |= event["kind"] == "recording_resumed"

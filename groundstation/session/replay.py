@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from groundstation.errors import UserError
 from groundstation.recording import Recording
 from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
 
@@ -14,10 +15,19 @@ def recorded_settings(recording: Recording) -> dict[str, dict[str, float]]:
     return {name: {k: float(v) for k, v in settings.items()} for name, settings in recorded.items()}
 
 
+def check_forced(filters, forced) -> None:
+    """UserError when ``forced`` (``--set``) names an estimator that does not run: it would be ignored."""
+    idle = sorted(set(forced or {}) - set(filters))
+    if idle:
+        raise UserError(f"--set {', '.join(idle)}: not among the estimators of this session ({', '.join(filters)}); "
+                        f"add {' and '.join(idle)} with --filters")
+
+
 def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
     """A pipeline set up as the recorded session was (estimators and settings), plus ``forced``."""
     if filters is None:
         filters = recording.metadata.get("filters", DEFAULT_FILTERS)
+    check_forced(filters, forced)
     return Pipeline(filters, recorded_settings(recording), forced)
 
 

@@ -235,6 +235,7 @@ class MainWindow(QtWidgets.QMainWindow):
             description = self.session.source.description
             self._stop_session()
             self.source_label.setText(f"stopped: {description}")
+            self.recording_label.setText("not recording")
         self.replay_bar.set_session(None)
         self.estimator_panel.set_session(None, set())
         self.uplink_panel.set_session(None)

@@ -23,11 +23,16 @@ def tiny_tmpfs(folder: Path, size: str = "64k", room_bytes: int = 16_000):
     if mounted.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here ({mounted.stderr.strip()}); the RLIMIT_FSIZE test covers this case")
     try:
-        free = os.statvfs(folder).f_bavail * os.statvfs(folder).f_frsize
-        (folder / "filler").write_bytes(b"\0" * max(0, free - room_bytes))
+        fill(folder, room_bytes)
         yield folder
     finally:
         subprocess.run(["umount", "-l", str(folder)], check=False)
+
+
+def fill(folder: Path, room_bytes: int, name: str = "filler") -> None:
+    """A file that leaves ``room_bytes`` free in ``folder``'s filesystem."""
+    stat = os.statvfs(folder)
+    (folder / name).write_bytes(b"\0" * max(0, stat.f_bavail * stat.f_frsize - room_bytes))
 
 
 def grow(folder: Path, size: str) -> None:

@@ -55,6 +55,16 @@ def test_a_full_tmpfs_stops_the_recording_not_the_session_and_room_resumes_it(tm
         # stop() (the with block) closed both without raising
 
 
+def test_stopping_while_the_recording_has_failed_raises_nothing_and_keeps_the_file(tmp_path):
+    with tiny_tmpfs(tmp_path / "full") as folder:
+        session = LiveSession(simulated_source(), filters=("ahf",), recordings_dir=folder).start()
+        wait_for(lambda: session.recorder.state == "failed")
+        session.stop()  # closing used to raise OSError here (the buffered bytes could not be flushed)
+        assert session.recorder.state == "off" and session.recorder.paths == [session.recording_path]
+        recording = open_recording(session.recording_path)
+        assert not recording.closed_cleanly and recording.chunk_count > 0
+
+
 def test_the_files_of_a_full_disk_session_open_and_replay(tmp_path):
     with tiny_tmpfs(tmp_path / "full") as folder:
         session = LiveSession(simulated_source(), Pipeline(("ahf",)), recordings_dir=folder)
@@ -76,6 +86,8 @@ def test_the_files_of_a_full_disk_session_open_and_replay(tmp_path):
         assert resumed.closed_cleanly and resumed.damage == []
         event = next(e for _, e in resumed.events if e["kind"] == "recording_resumed")
         assert event["previous_path"] == str(first) and "No space left on device" in event["failure"]
+        # The session asked the aircraft for its CONFIG again, so the new file replays at the right scales.
+        assert replay(resumed).config is not None
         assert len(replay(resumed).imu) > 50
         # only the two recordings: a failed attempt to resume leaves no empty file behind
         assert sorted(p.name for p in folder.iterdir() if p.suffix == ".gsrec") == sorted([first.name, second.name])
@@ -122,3 +134,17 @@ def test_a_file_size_limit_fails_the_recording_and_the_session_decodes_on(tmp_pa
         recording = open_recording(path)  # every file opens, the cut ones included
         assert recording.chunk_count > 0
         assert os.path.getsize(path) <= 12_000
+
+
+def test_a_folder_that_cannot_be_recorded_into_still_gives_a_live_session(tmp_path):
+    """The recording cannot even start (here /proc, which takes no files): the session decodes all the same."""
+    if not sys.platform.startswith("linux"):
+        pytest.skip("/proc is Linux's")
+    session = LiveSession(simulated_source(), filters=("ahf",), recordings_dir="/proc/groundstation").start()
+    try:
+        assert session.recorder.state == "failed" and session.recording_path is None
+        assert "cannot record into /proc/groundstation" in session.recorder.error
+        assert kinds(session)[0] == "recording_failed"
+        wait_for(lambda: len(session.pipeline.imu) > 50)
+    finally:
+        session.stop()

@@ -5,7 +5,7 @@ starts a new file once there is room, and closing the window raises nothing."""
 import numpy as np
 from PySide6 import QtCore
 
-from tests.session.full_disk import grow, tiny_tmpfs
+from tests.session.full_disk import fill, grow, tiny_tmpfs
 
 
 def newest_plotted_time(window) -> float:
@@ -15,7 +15,7 @@ def newest_plotted_time(window) -> float:
 
 
 def test_a_full_disk_shows_a_banner_the_plots_go_on_and_resume_starts_a_new_file(window, qtbot, tmp_path):
-    with tiny_tmpfs(tmp_path / "full") as folder:
+    with tiny_tmpfs(tmp_path / "full", room_bytes=48_000) as folder:  # ~10 s of the demo's link bytes
         window.recordings_dir = folder
         window.start_demo()
         session = window.session
@@ -50,5 +50,11 @@ def test_a_full_disk_shows_a_banner_the_plots_go_on_and_resume_starts_a_new_file
         qtbot.waitUntil(lambda: f"● recording {second}" in window.recording_label.text(), timeout=2_000)
         assert [e["kind"] for e in session.pipeline.events].count("recording_resumed") == 1
 
-        window.close()  # stops the session and closes the files; raises nothing
+        window.disconnect()
+        assert window.recording_label.text() == "not recording"  # not the stopped session's "● recording"
+        fill(folder, 16_000, "filler2")
+        window.start_demo()
+        qtbot.waitUntil(window.recording_banner.isVisible, timeout=30_000)
+        session = window.session
+        window.close()  # stops the session while its recording has failed; raises nothing
         assert window.session is None and session.recorder.state == "off"
