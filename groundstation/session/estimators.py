@@ -21,10 +21,6 @@ class EstimatorBank:
         self.filters = tuple(dict.fromkeys(filters))
         self._settings = {name: dict((settings or {}).get(name, {})) for name in self.filters}
         self._forced = {name: dict((forced or {}).get(name, {})) for name in self.filters}
-        unknown = {name for name in {**(settings or {}), **(forced or {})} if name not in self._settings}
-        if forced and unknown & set(forced):
-            raise ValueError(f"--set names {', '.join(sorted(unknown & set(forced)))}, which this session does not run "
-                             f"(it runs {', '.join(self.filters) or 'no estimator'}); add it with --filters")
         self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
         self.last_q: dict[str, tuple | None] = {name: None for name in self.filters}
         self.at_start = self.settings()
