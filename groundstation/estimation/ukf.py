@@ -193,7 +193,7 @@ class _GpsUkf(Estimator):
             self._a_man = 0.0
             var = s.uncompensated_tilt_noise_rad**2
             compensated = False
-        if not self._acc_min2 <= ax * ax + ay * ay + az * az <= self._acc_max2:
+        if not self._acc_min2 <= ax * ax + ay * ay + az * az < math.inf:
             return None
         pitch, roll = acc_pitch_roll(ax, ay, az)
         self._acc_pr = (pitch, roll)
