@@ -1,6 +1,7 @@
 """Attitude estimators behind one interface (see ``base``), by the names used everywhere.
 
-``ahf`` adaptive hybrid filter (seed 000), ``hf`` the same with λ fixed (Madgwick IMU), ``ecf`` Mahony's
+``ahf`` adaptive hybrid filter (seed 000, the paper's constants), ``ahf2`` its adaptive idea with gyro bias, rest detection
+and a low-passed accelerometer (``ahf2.py``), ``hf`` the same with λ fixed (Madgwick IMU), ``ecf`` Mahony's
 explicit complementary filter, ``cf1`` first-order complementary filter, ``kf`` per-axis Kalman filter,
 ``ekf`` quaternion extended Kalman filter, ``ukf`` and ``sssrukf`` the GPS-aided unscented filters of seed 001
 (standard, and square-root with spherical simplex sigma points); with the magnetometer ``hfm`` (Madgwick MARG) and
@@ -12,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 
 from groundstation.estimation.ahf import Ahf, Hf
+from groundstation.estimation.ahf2 import Ahf2
 from groundstation.estimation.base import Estimator
 from groundstation.estimation.cf1 import Cf1
 from groundstation.estimation.ecf import Ecf
@@ -22,7 +24,7 @@ from groundstation.estimation.mcf import Mcf
 from groundstation.estimation.ukf import Sssrukf, Ukf
 from groundstation.estimation.vqf import Vqf
 
-ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Hf, Ecf, Cf1, Kf, Ekf, Vqf, Ukf, Sssrukf, Hfm, Ecfm, Mcf)}
+ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Ahf2, Hf, Ecf, Cf1, Kf, Ekf, Vqf, Ukf, Sssrukf, Hfm, Ecfm, Mcf)}
 GPS_AIDED = ("ukf", "sssrukf")  # need GPS velocity and heading to be more than slow tilt filters
 
 

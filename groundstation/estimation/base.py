@@ -106,6 +106,9 @@ class Estimator:
     """
 
     name: ClassVar[str]
+    # True when the filter estimates its own gyro bias; the session applies a bias measured at rest
+    # (calibration.RestBiasCalibrator) only to the others
+    estimates_gyro_bias: ClassVar[bool] = False
     _cast = None  # a numpy scalar type to run in (ahf/hf: dtype=np.float32); None = Python floats
     Settings: ClassVar[type]
     Diagnostics: ClassVar[type[NamedTuple]]

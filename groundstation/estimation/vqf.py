@@ -77,6 +77,7 @@ class Vqf(Estimator):
     """VQF (the package) behind the project's interface; built on the first sample's period."""
 
     name = "vqf"
+    estimates_gyro_bias = True
     Settings = VqfSettings
     Diagnostics = VqfDiagnostics
 

@@ -18,6 +18,7 @@ from firmware_protocol import SPEC, Frame, StreamDecoder
 from groundstation import geodesy, mounting
 from groundstation.estimation import create
 from groundstation.estimation.base import GpsFix
+from groundstation.estimation.calibration import RestBiasCalibrator
 from groundstation.estimation.compass import heading_rad
 from groundstation.estimation.tilt import wrap_pi
 from groundstation.position import DualChannel, linear_acc_ned_m_s2
@@ -102,6 +103,8 @@ class Pipeline:
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
+        self.gyro_calibration = RestBiasCalibrator()  # restart() measures again (the user's command)
+        self._gyro_bias_recorded = None
         self._held: list[tuple[int, Frame]] = []
         self._t0_us: int | None = None
         self._t0_host_ns: int | None = None
@@ -215,8 +218,14 @@ class Pipeline:
         self._last_us = t_us
         row = [(t_us - self._t0_us) * 1e-6, t_us, (t_host_ns - self._t0_host_ns) * 1e-9, *acc, *gyr, temperature * 0.01]
         mag, gps, self._mag_body_ut, self._gps_fix = self._mag_body_ut, self._gps_fix, None, None
+        # Gyro bias measured at rest, for the estimators that do not estimate their own (issue 13).
+        bias = self.gyro_calibration.step(gyr, acc, dt_s)
+        if bias is not None and bias != self._gyro_bias_recorded:
+            self._gyro_bias_recorded = bias
+            self.events.append({"t_host_ns": t_host_ns, "kind": "gyro_bias", "bias_rad_s": list(bias)})
+        unbiased = gyr if bias is None else (gyr[0] - bias[0], gyr[1] - bias[1], gyr[2] - bias[2])
         for name, estimator in self.estimators.items():
-            q, diag = estimator.step(gyr, acc, dt_s, mag, gps)
+            q, diag = estimator.step(gyr if estimator.estimates_gyro_bias else unbiased, acc, dt_s, mag, gps)
             self._last_q[name] = q
             row += q
             row += diag
