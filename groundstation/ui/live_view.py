@@ -22,7 +22,7 @@ COLORS = {"ahf": "#1f5fbf", "onboard": "#e07000", "hf": "#2a9d3a", "ecf": "#8e44
           "kf": "#c0392b", "ekf": "#16a085", "hfm": "#7fc97f", "ecfm": "#d291e0", "mcf": "#8c564b",
           "ukf": "#e377c2", "sssrukf": "#a5a51a"}
 LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
-          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF"}
+          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF", "vqf": "VQF", "ahf2": "AHF2"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
 # The tabs that appear once a series of theirs has rows.
