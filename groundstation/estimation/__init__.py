@@ -1,10 +1,11 @@
 """Attitude estimators behind one interface (see ``base``), by the names used everywhere.
 
-``ahf`` adaptive hybrid filter (seed 000), ``hf`` the same with λ fixed (Madgwick IMU), ``ecf`` Mahony's
+``ahf`` adaptive hybrid filter (seed 000, the paper's constants), ``ahf2`` its adaptive idea with gyro bias, rest detection
+and a low-passed accelerometer (``ahf2.py``), ``hf`` the same with λ fixed (Madgwick IMU), ``ecf`` Mahony's
 explicit complementary filter, ``cf1`` first-order complementary filter, ``kf`` per-axis Kalman filter,
 ``ekf`` quaternion extended Kalman filter, ``ukf`` and ``sssrukf`` the GPS-aided unscented filters of seed 001
 (standard, and square-root with spherical simplex sigma points); with the magnetometer ``hfm`` (Madgwick MARG) and
-``ecfm`` (Mahony ECF with the field error term), see ``marg``; ``mcf`` seed 003's multi-sensor complementary filter. ``create("hf", {"beta": 0.033})`` builds one with overrides.
+``ecfm`` (Mahony ECF with the field error term), see ``marg``; ``mcf`` seed 003's multi-sensor complementary filter; ``vqf`` Laidig & Seel's VQF (the ``vqf`` package). ``create("hf", {"beta": 0.033})`` builds one with overrides.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import dataclasses
 import math
 
 from groundstation.estimation.ahf import Ahf, Hf
+from groundstation.estimation.ahf2 import Ahf2
 from groundstation.estimation.base import Estimator
 from groundstation.estimation.cf1 import Cf1
 from groundstation.estimation.ecf import Ecf
@@ -21,8 +23,9 @@ from groundstation.estimation.kf import Kf
 from groundstation.estimation.marg import Ecfm, Hfm
 from groundstation.estimation.mcf import Mcf
 from groundstation.estimation.ukf import Sssrukf, Ukf
+from groundstation.estimation.vqf import Vqf
 
-ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Hf, Ecf, Cf1, Kf, Ekf, Ukf, Sssrukf, Hfm, Ecfm, Mcf)}
+ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Ahf2, Hf, Ecf, Cf1, Kf, Ekf, Vqf, Ukf, Sssrukf, Hfm, Ecfm, Mcf)}
 GPS_AIDED = ("ukf", "sssrukf")  # need GPS velocity and heading to be more than slow tilt filters
 
 

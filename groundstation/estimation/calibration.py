@@ -57,3 +57,54 @@ class AccelCalibration:
 
     def apply(self, acc_g) -> np.ndarray:
         return (np.asarray(acc_g, dtype=float) - np.asarray(self.bias_g)) * np.asarray(self.scale)
+
+
+class RestBiasCalibrator:
+    """Gyro bias measured while the craft is still, sample by sample (the live counterpart of
+    ``detect_rest`` + ``gyro_bias_rad_s``)::
+
+        cal = RestBiasCalibrator()
+        bias = cal.step(gyr_rad_s, acc_g, dt_s)   # None until measured, then the bias (3 floats, rad/s)
+
+    Still: every gyro axis within ``gyro_dev_max_rad_s`` of the running mean (the mean itself is the
+    bias, up to ±20 °/s on an uncalibrated MPU-6050, so magnitude says nothing) and the accelerometer
+    within ``acc_dev_max_g`` of 1 g on every sample. After ``duration_s`` of still samples the mean is the
+    bias and stays fixed; any motion first restarts the count. ``restart()`` measures again (the user's
+    command, once the craft is put down).
+    """
+
+    def __init__(self, duration_s: float = 2.0, gyro_dev_max_rad_s: float = 0.02, acc_dev_max_g: float = 0.05):
+        if not duration_s > 0 or not gyro_dev_max_rad_s > 0 or not acc_dev_max_g > 0:
+            raise ValueError("duration_s, gyro_dev_max_rad_s and acc_dev_max_g must be positive")
+        self.duration_s = duration_s
+        self.gyro_dev_max_rad_s = gyro_dev_max_rad_s
+        self.acc_dev_max_g = acc_dev_max_g
+        self.restart()
+
+    def restart(self) -> None:
+        self.bias_rad_s: tuple[float, float, float] | None = None
+        self._sum = [0.0, 0.0, 0.0]
+        self._n = 0
+        self._still_s = 0.0
+
+    def step(self, gyr_rad_s, acc_g, dt_s):
+        if self.bias_rad_s is not None:
+            return self.bias_rad_s
+        gx, gy, gz = gyr_rad_s
+        ax, ay, az = acc_g
+        n2 = ax * ax + ay * ay + az * az
+        # NaN fails every comparison: a bad sample is not still.
+        still = abs(n2**0.5 - 1.0) <= self.acc_dev_max_g and dt_s > 0
+        if still and self._n:
+            m = self.gyro_dev_max_rad_s
+            sx, sy, sz = (s / self._n for s in self._sum)
+            still = abs(gx - sx) <= m and abs(gy - sy) <= m and abs(gz - sz) <= m
+        if not still:
+            self._sum, self._n, self._still_s = [0.0, 0.0, 0.0], 0, 0.0
+            return None
+        self._sum = [self._sum[0] + gx, self._sum[1] + gy, self._sum[2] + gz]
+        self._n += 1
+        self._still_s += dt_s
+        if self._still_s >= self.duration_s:
+            self.bias_rad_s = tuple(s / self._n for s in self._sum)
+        return self.bias_rad_s

@@ -3,8 +3,12 @@
 Seed 002 (digest §4): ``θ(n) = α (θ(n-1) + ω dt) + (1 - α) θ_acc(n)``, 0 < α < 1, for pitch and roll;
 yaw is integrated from the gyro alone. Two choices the seed leaves open:
 
-- ω is the Euler-angle rate from the body rates (``tilt.euler_rates``), not the raw gyro axis, so a
-  yaw turn while banked does not leak into pitch; the two agree when level.
+- the gyro prediction ``θ(n-1) + ω dt`` is made on the attitude quaternion (seed 000 eq. 6, 19) and
+  read back as angles, rather than integrating Euler-angle rates: the same to first order, but without
+  the gimbal lock at ±90° pitch that made the Euler integration diverge when the sensor was mounted
+  other than flat (BROAD trial 07: 68° at τ = 2 s).
+- the accelerometer's pull ``θ_acc - prediction`` is bounded by ``innovation_max_rad``: under fast
+  translation a wrong accelerometer angle then moves the estimate no more than a moderate one.
 - α is set by a time constant, ``α = τ / (τ + dt)``, so the filter behaves the same at any sample rate:
   τ = 0.5 s gives the classic α ≈ 0.98 at 100 Hz. τ = 0 is accelerometer-only tilt.
 
@@ -19,13 +23,16 @@ import math
 from typing import NamedTuple
 
 from groundstation import quaternion
-from groundstation.estimation.base import CommonSettings, Estimator
-from groundstation.estimation.tilt import acc_pitch_roll, euler_rates, wrap_pi
+from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
+from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 
 
 @dataclasses.dataclass(frozen=True)
 class Cf1Settings(CommonSettings):
-    time_constant_s: float = 0.5  # τ: gyro trusted for changes faster than this; 0 = accelerometer only
+    # τ: gyro trusted for changes faster than this; 0 = accelerometer only. 2 s chosen on the BROAD dev set
+    time_constant_s: float = 2.0
+    # |θ_acc - prediction| bound (rad): a wilder accelerometer angle counts as this much
+    innovation_max_rad: float = 0.05
 
 
 class Cf1Diagnostics(NamedTuple):
@@ -41,28 +48,27 @@ class Cf1(Estimator):
     Diagnostics = Cf1Diagnostics
 
     def _reset_state(self):
-        self._ypr = (0.0, 0.0, 0.0)
         self._diag = (1.0, 0.0, 0.0)
 
     def _set_attitude(self, q):
-        self._ypr = tuple(quaternion.to_euler_zyx(q).tolist())
         self._q = q
 
     def _diagnostics(self, status):
         return Cf1Diagnostics(status, *self._diag)
 
     def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
-        yaw, pitch, roll = self._ypr
-        yaw_rate, pitch_rate, roll_rate = euler_rates(roll, pitch, gx, gy, gz)
-        yaw, pitch, roll = yaw + yaw_rate * dt_s, pitch + pitch_rate * dt_s, roll + roll_rate * dt_s
+        # Gyro prediction on the quaternion (no gimbal lock, whatever the mounting), blend on the angles.
+        q = integrate_rate(self._q, gx, gy, gz, dt_s)
         if acc_ok:
+            yaw, pitch, roll = quaternion.to_euler_zyx(q).tolist()
             pitch_acc, roll_acc = acc_pitch_roll(ax, ay, az)
             tau = self.settings.time_constant_s
             alpha = tau / (tau + dt_s)
-            pitch += (1.0 - alpha) * wrap_pi(pitch_acc - pitch)
-            roll += (1.0 - alpha) * wrap_pi(roll_acc - roll)
+            m = self.settings.innovation_max_rad
+            pitch += (1.0 - alpha) * min(max(wrap_pi(pitch_acc - pitch), -m), m)
+            roll += (1.0 - alpha) * min(max(wrap_pi(roll_acc - roll), -m), m)
             self._diag = (alpha, pitch_acc, roll_acc)
-        pitch = min(max(pitch, -math.pi / 2), math.pi / 2)
-        self._ypr = (wrap_pi(yaw), pitch, wrap_pi(roll))
-        self._q = tuple(quaternion.from_euler_zyx(*self._ypr).tolist())
+            pitch = min(max(pitch, -math.pi / 2), math.pi / 2)
+            q = tuple(quaternion.from_euler_zyx(yaw, pitch, roll).tolist())
+        self._q = q
         return self._q, self._diagnostics(status)

@@ -12,8 +12,14 @@ gravity direction, ``e = â × ĝ``, drives a PI correction of the gyro rate,
 ``ahrs.filters.Mahony``; with that order and the same Euler integration the two filters agree to
 rounding (tests/estimation/test_oracles.py).
 
-Kp is in rad/s (a 1-rad error turns the estimate at Kp rad/s), Ki in rad/s² per unit error. The defaults,
-Kp = 1 and Ki = 0.3, are those of Mahony et al.'s experiments (and of ahrs).
+The integral is bounded, ``|b_i| ≤ bias_max_rad_s``: under fast translation the accelerometer's
+direction is wrong for seconds, and an unbounded integral winds up to rates no gyro bias has (ECF went
+33° off on BROAD trial 21 and 101° on another fast-translation trial); the bound keeps it a bias.
+
+Kp is in rad/s (a 1-rad error turns the estimate at Kp rad/s), Ki in rad/s² per unit error. Kp = 1 is
+Mahony et al.'s (and ahrs's); their Ki = 0.3 winds the bias up under translation, so the default Ki
+(0.01), the bounds ``bias_max_rad_s`` and ``error_max`` (‖e‖ larger than it counts as it: one wild
+accelerometer sample moves the estimate no more than a moderate one) were chosen on the BROAD dev set.
 """
 
 from __future__ import annotations
@@ -27,7 +33,14 @@ from groundstation.estimation.base import CommonSettings, Estimator, integrate_r
 @dataclasses.dataclass(frozen=True)
 class EcfSettings(CommonSettings):
     kp: float = 1.0  # rad/s, proportional gain
-    ki: float = 0.3  # rad/s², integral gain (gyro-bias estimation); 0 = no bias estimation
+    # rad/s², integral gain (gyro-bias estimation); 0 = none. Mahony's 0.3 winds up under translation;
+    # 0.01 chosen on the BROAD dev set (bench/bench_estimators.out.md)
+    ki: float = 0.01
+    # |b_i| bound: the integral cannot wind up beyond a plausible gyro bias (rad/s); inf = unbounded (Mahony)
+    bias_max_rad_s: float = 0.05
+    # ‖e‖ bound (≈ rad): a larger disagreement counts as this much, so one wild sample moves the
+    # estimate no more than a moderate one (Madgwick's normalised step has the same robustness)
+    error_max: float = 0.05
 
 
 class EcfDiagnostics(NamedTuple):
@@ -40,6 +53,7 @@ class EcfDiagnostics(NamedTuple):
 
 class Ecf(Estimator):
     name = "ecf"
+    estimates_gyro_bias = True
     Settings = EcfSettings
     Diagnostics = EcfDiagnostics
     marg = False  # True in marg.Ecfm: adds the magnetometer's error term
@@ -64,11 +78,16 @@ class Ecf(Estimator):
             vy = 2.0 * (q1 * q2 + q3 * q4)
             vz = q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4
             ex, ey, ez = ay * vz - az * vy, az * vx - ax * vz, ax * vy - ay * vx  # e = â × ĝ
-            self._err = (ex * ex + ey * ey + ez * ez) ** 0.5
+            err = self._err = (ex * ex + ey * ey + ez * ez) ** 0.5
+            if err > self.settings.error_max:
+                c = self.settings.error_max / err
+                ex, ey, ez = ex * c, ey * c, ez * c
             if self.marg and self._mag is not None:  # ecfm: e += m × w (marg.py)
                 ex, ey, ez = self._mag_error(q1, q2, q3, q4, ex, ey, ez)
             ki, kp = self.settings.ki * dt_s, self.settings.kp
+            m = self.settings.bias_max_rad_s
             bx, by, bz = bx - ki * ex, by - ki * ey, bz - ki * ez  # ḃ = -Ki e
+            bx, by, bz = min(max(bx, -m), m), min(max(by, -m), m), min(max(bz, -m), m)
             self._bias = (bx, by, bz)
             gx, gy, gz = gx + kp * ex, gy + kp * ey, gz + kp * ez
         self._q = integrate_rate(self._q, gx - bx, gy - by, gz - bz, dt_s)  # ω' = ω - b + Kp e

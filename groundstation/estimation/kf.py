@@ -1,13 +1,17 @@
 """KF: the per-axis Kalman filter of the MPU-6050 articles in seed 002, for pitch and for roll.
 
 Each axis has the state (angle, gyro bias); the gyro rate is the input and the accelerometer's angle
-the measurement (digest §4). Per axis, with ω the Euler-angle rate from the body rates:
+the measurement (digest §4). Per axis, with ω dt the angle's change over the sample, read from the
+attitude quaternion integrated with the body rates (seed 000 eq. 6, 19; no gimbal lock at ±90° pitch,
+whatever the mounting):
 
 - predict:  ``angle += (ω - bias) dt``;  ``P ← F P Fᵀ + diag(q_angle, q_bias) dt``,  F = [[1, -dt], [0, 1]]
-- update:   ``y = angle_acc - angle`` (wrapped); ``S = P00 + r``; ``K = P[:, 0] / S``;
+- update:   ``y = angle_acc - angle`` (wrapped, bounded by ``innovation_max_rad``); ``S = P00 + r``; ``K = P[:, 0] / S``;
   ``[angle, bias] += K y``; ``P ← (I - K [1, 0]) P``
 
-Yaw is integrated from the gyro alone. The noise defaults are the classic Arduino/MPU-6050 values
+The bias is bounded, ``|bias| ≤ bias_max_rad_s``: under fast translation the accelerometer angle is
+wrong for seconds and the bias state would otherwise wind up to rates no gyro bias has (BROAD trials 16
+and 21: 77° and 57°). Yaw is integrated from the gyro alone. The noise defaults are the classic Arduino/MPU-6050 values
 (Q_angle = 0.001, Q_bias = 0.003, R_measure = 0.03, in degree units) converted to radians; like the
 original, the filter starts with P = 0, i.e. confident in the accelerometer initialisation.
 """
@@ -19,8 +23,8 @@ import math
 from typing import NamedTuple
 
 from groundstation import quaternion
-from groundstation.estimation.base import CommonSettings, Estimator
-from groundstation.estimation.tilt import acc_pitch_roll, euler_rates, wrap_pi
+from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
+from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 
 _DEG2 = (math.pi / 180.0) ** 2
 
@@ -30,6 +34,8 @@ class KfSettings(CommonSettings):
     q_angle_rad2_s: float = 0.001 * _DEG2  # angle process noise, rad² per second
     q_bias_rad2_s3: float = 0.003 * _DEG2  # bias random walk, (rad/s)² per second
     r_angle_rad2: float = 0.03 * _DEG2  # accelerometer-angle measurement variance, rad²
+    bias_max_rad_s: float = 0.01  # |bias| bound per axis (no wind-up under fast translation); inf = off
+    innovation_max_rad: float = 0.01  # |y| bound: a wilder accelerometer angle counts as this much
 
 
 class KfDiagnostics(NamedTuple):
@@ -57,12 +63,12 @@ class _Axis:
         self.p10 -= dt * p11
         self.p11 += q_bias * dt
 
-    def correct(self, angle_meas, r):
+    def correct(self, angle_meas, r, bias_max, innovation_max):
         s = self.p00 + r
         k0, k1 = self.p00 / s, self.p10 / s
-        y = wrap_pi(angle_meas - self.angle)
+        y = min(max(wrap_pi(angle_meas - self.angle), -innovation_max), innovation_max)
         self.angle += k0 * y
-        self.bias += k1 * y
+        self.bias = min(max(self.bias + k1 * y, -bias_max), bias_max)
         p00, p01 = self.p00, self.p01
         self.p00 -= k0 * p00
         self.p01 -= k0 * p01
@@ -72,6 +78,7 @@ class _Axis:
 
 class Kf(Estimator):
     name = "kf"
+    estimates_gyro_bias = True
     Settings = KfSettings
     Diagnostics = KfDiagnostics
 
@@ -89,14 +96,16 @@ class Kf(Estimator):
 
     def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
         s, pitch, roll = self.settings, self._pitch, self._roll
-        yaw_rate, pitch_rate, roll_rate = euler_rates(roll.angle, pitch.angle, gx, gy, gz)
-        self._yaw = wrap_pi(self._yaw + yaw_rate * dt_s)
-        pitch.predict(pitch_rate, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
-        roll.predict(roll_rate, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
+        # The gyro's angle change comes from the quaternion (no gimbal lock, whatever the mounting);
+        # each axis then subtracts its own bias estimate in predict.
+        q = integrate_rate(self._q, gx, gy, gz, dt_s)
+        self._yaw, pitch.angle, roll.angle = quaternion.to_euler_zyx(q).tolist()
+        pitch.predict(0.0, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
+        roll.predict(0.0, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
         if acc_ok:
             pitch_acc, roll_acc = acc_pitch_roll(ax, ay, az)
-            pitch.correct(pitch_acc, s.r_angle_rad2)
-            roll.correct(roll_acc, s.r_angle_rad2)
+            pitch.correct(pitch_acc, s.r_angle_rad2, s.bias_max_rad_s, s.innovation_max_rad)
+            roll.correct(roll_acc, s.r_angle_rad2, s.bias_max_rad_s, s.innovation_max_rad)
         pitch.angle = min(max(pitch.angle, -math.pi / 2), math.pi / 2)
         roll.angle = wrap_pi(roll.angle)
         self._q = tuple(quaternion.from_euler_zyx(self._yaw, pitch.angle, roll.angle).tolist())

@@ -54,7 +54,7 @@ from groundstation.units import STANDARD_GRAVITY_M_S2 as G
 # diag.status bits of these filters (above base's)
 GPS_COMPENSATED = 64  # the tilt measurement had the manoeuvre acceleration removed
 HEADING_USED = 128  # a GPS heading was a measurement on this sample (or set yaw, the first time)
-COVARIANCE_RESET = 256  # the covariance lost positive definiteness and was re-initialised
+COVARIANCE_RESET = 256  # the covariance was re-initialised: it lost positive definiteness, or the filter was lost
 
 _N = 4
 _COS_PITCH_MIN = 0.05  # roll noise grows as 1/cos θ; capped near ±90° pitch, where roll is undefined
@@ -72,6 +72,11 @@ class GpsUkfSettings(CommonSettings):
     uncompensated_tilt_noise_rad: float = 0.1  # tilt noise without GPS: covers ~0.1 g of manoeuvre
     gps_timeout_s: float = 0.5  # no fix for longer: the velocity is stale, compensation stops
     initial_attitude_noise_rad: float = 0.05  # σ of the initial attitude (tilt from gravity; yaw is set by the first heading)
+    # Lost: the innovation above this (rad) for lost_time_s means the covariance no longer describes the
+    # error (e.g. after the gyro sat at full scale, where the true rate is unknown): it is re-initialised,
+    # so the next measurements pull the estimate back at the initial gain instead of over minutes.
+    lost_innovation_rad: float = 0.2
+    lost_time_s: float = 0.25
     ut_alpha: float = 1.0  # sigma-point spread (scaled UT, ref. [8])
     ut_beta: float = 2.0  # prior-distribution term; 2 is optimal for a Gaussian
 
@@ -145,6 +150,7 @@ class _GpsUkf(Estimator):
         self._acc_pr = (0.0, 0.0)
         self._a_man = 0.0
         self._innovation = 0.0
+        self._lost_s = 0.0
 
     def _set_attitude(self, q):
         self._q = q
@@ -193,7 +199,7 @@ class _GpsUkf(Estimator):
             self._a_man = 0.0
             var = s.uncompensated_tilt_noise_rad**2
             compensated = False
-        if not self._acc_min2 <= ax * ax + ay * ay + az * az <= self._acc_max2:
+        if not self._acc_min2 <= ax * ax + ay * ay + az * az < math.inf:
             return None
         pitch, roll = acc_pitch_roll(ax, ay, az)
         self._acc_pr = (pitch, roll)
@@ -216,6 +222,10 @@ class _GpsUkf(Estimator):
             x = list(integrate_rate(self._q, gx, gy, gz, dt_s))
             cov, status = self._initial_cov(tuple(x)), status | COVARIANCE_RESET
         status |= self._status
+        self._lost_s = self._lost_s + dt_s if self._innovation > self.settings.lost_innovation_rad else 0.0
+        if self._lost_s >= self.settings.lost_time_s:
+            norm = math.sqrt(sl.dot(x, x))
+            cov, status, self._lost_s = self._initial_cov(tuple(c / norm for c in x)), status | COVARIANCE_RESET, 0.0
         if self._gps is not None and math.isfinite(self._gps.heading_rad) and not self._yaw_known:
             x = self._set_yaw(x, self._gps.heading_rad)
             self._yaw_known = True

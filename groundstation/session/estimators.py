@@ -11,6 +11,7 @@ import dataclasses
 import math
 
 from groundstation.estimation import create
+from groundstation.estimation.calibration import RestBiasCalibrator
 
 
 class EstimatorBank:
@@ -24,20 +25,36 @@ class EstimatorBank:
         self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
         self.last_q: dict[str, tuple | None] = {name: None for name in self.filters}
         self.at_start = self.settings()
+        self.gyro_calibration = RestBiasCalibrator()  # restart() measures again (the user's command)
+        self._bias_noted: tuple | None = None
 
     def diagnostics(self) -> dict[str, tuple[str, ...]]:
         """Each estimator's diagnostic outputs, by name (the ``imu`` table's columns after its quaternion)."""
         return {name: est.Diagnostics._fields for name, est in self.estimators.items()}
 
     def step(self, gyr, acc, dt_s: float, mag, gps) -> list[float]:
-        """One sample through every estimator: their quaternions and diagnostics, in order, as one row part."""
+        """One sample through every estimator: their quaternions and diagnostics, in order, as one row part.
+
+        Once the craft has been still long enough to measure the gyro bias (``RestBiasCalibrator``), the
+        estimators that do not estimate their own get the gyro with that bias removed.
+        """
+        bias = self.gyro_calibration.step(gyr, acc, dt_s)
+        unbiased = gyr if bias is None else (gyr[0] - bias[0], gyr[1] - bias[1], gyr[2] - bias[2])
         row: list[float] = []
         for name, estimator in self.estimators.items():
-            q, diag = estimator.step(gyr, acc, dt_s, mag, gps)
+            q, diag = estimator.step(gyr if estimator.estimates_gyro_bias else unbiased, acc, dt_s, mag, gps)
             self.last_q[name] = q
             row += q
             row += diag
         return row
+
+    def new_gyro_bias(self) -> tuple | None:
+        """The gyro bias (rad/s) once, just after it was measured; None otherwise."""
+        bias = self.gyro_calibration.bias_rad_s
+        if bias is None or bias == self._bias_noted:
+            return None
+        self._bias_noted = bias
+        return bias
 
     def first_q(self):
         """The newest attitude of the first estimator (the compass and the position use it), or None."""

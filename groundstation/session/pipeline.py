@@ -204,6 +204,9 @@ class Pipeline:
         mag, gps = self.aiding.take_for_estimators()
         row += self.bank.step(gyr, acc, dt_s, mag, gps)
         self.imu.append(row)
+        bias = self.bank.new_gyro_bias()
+        if bias is not None:
+            self.events.append({"t_host_ns": t_host_ns, "kind": "gyro_bias", "bias_rad_s": list(bias)})
         if self.aiding.position_on and self.filters:
             self.tables["position"].append((time_s, *self.aiding.position_step(acc, self.bank.first_q(), dt_s)))
         self.link.on_sample(t_host_ns, t_us)

@@ -25,7 +25,7 @@ INDIGO, WINE, GREEN, TEAL, ROSE, OLIVE, CYAN, SAND, PURPLE = PALETTE
 COLORS = {"ahf": INDIGO, "onboard": WINE, "hf": GREEN, "ecf": TEAL, "ukf": ROSE, "hfm": OLIVE, "ecfm": CYAN,
           "mcf": SAND, "sssrukf": PURPLE, "cf1": OLIVE, "kf": CYAN, "ekf": SAND}
 LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
-          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF"}
+          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF", "vqf": "VQF", "ahf2": "AHF2"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from groundstation.estimation.calibration import AccelCalibration, detect_rest, gyro_bias_rad_s
+from groundstation.estimation.calibration import AccelCalibration, RestBiasCalibrator, detect_rest, gyro_bias_rad_s
 
 
 def synthetic(seed=21):
@@ -45,3 +45,29 @@ def test_accel_calibration_undoes_bias_and_scale():
     cal = AccelCalibration(bias_g=(0.02, -0.01, 0.03), scale=(1.0 / 1.02, 1.0 / 0.99, 1.0 / 1.01))
     raw = true * [1.02, 0.99, 1.01] + [0.02, -0.01, 0.03]
     np.testing.assert_allclose(cal.apply(raw), true, atol=1e-12)
+
+
+def test_rest_bias_calibrator_measures_the_bias_after_the_still_time_and_keeps_it():
+    gyr, acc, bias = synthetic()
+    cal = RestBiasCalibrator(duration_s=1.0)
+    out = [cal.step(g, a, 0.01) for g, a in zip(gyr.tolist(), acc.tolist())]
+    assert all(b is None for b in out[:99]) and out[99] is not None  # 100 samples = 1 s of rest
+    np.testing.assert_allclose(out[99], bias, atol=3e-4)  # independent truth: the synthetic bias
+    assert all(b == out[99] for b in out[100:])  # fixed once measured, through the motion
+
+
+def test_rest_bias_calibrator_restarts_on_motion_and_on_command():
+    gyr, acc, bias = synthetic()
+    cal = RestBiasCalibrator(duration_s=1.0)
+    # Motion first (samples 200-399, then rest): measured only after 1 s of the final rest.
+    out = [cal.step(g, a, 0.01) for g, a in zip(gyr[200:].tolist(), acc[200:].tolist())]
+    first = next(i for i, b in enumerate(out) if b is not None)
+    assert 200 + 99 <= first <= 200 + 110
+    np.testing.assert_allclose(out[first], bias, atol=3e-4)
+    cal.restart()
+    assert cal.step(gyr[0], acc[0], 0.01) is None
+    # NaN or a shaken accelerometer is not still
+    cal.restart()
+    assert cal.step([np.nan, 0.0, 0.0], acc[0], 0.01) is None and cal.step(gyr[0], [0.0, 0.0, -1.5], 0.01) is None
+    with pytest.raises(ValueError):
+        RestBiasCalibrator(duration_s=0.0)

@@ -1,14 +1,21 @@
 """Each estimator against an independent implementation: ahrs (Madgwick, Mahony, EKF) and numpy.
 
 Frames: ahrs's filters take the specific force with earth z up; ours take it in body FRD with earth NED
-(z down). Feeding ahrs ``-acc`` makes its reference direction our down direction, which is exactly the
-sign change documented in groundstation/estimation/ahf.py, so the quaternions must agree.
+(z down). Feeding ahrs ``-acc`` makes its reference direction our down direction (Mahony, EKF: the
+quaternions must agree). Madgwick is compared on data it runs upright (ahf.py on the tangent
+projection): a sensor reading +1 g on z, fed as it is, its earth frame turned to NED by a half turn
+about x.
 """
 
 import numpy as np
 import pytest
 from ahrs.filters import EKF, Madgwick, Mahony
 from scipy.signal import lfilter
+from scipy.spatial.transform import Rotation
+
+from groundstation import quaternion
+from groundstation.estimation.evaluation import inclination_error_rad
+from groundstation.sim.offline import simulate
 
 from groundstation.estimation import Ahf, Ecf, Ekf, Hf
 from groundstation.estimation.ahf import AhfSettings, HfSettings
@@ -18,30 +25,76 @@ from estimation_samples import flight_like_samples, random_samples
 Q0 = np.array([0.9, 0.1, -0.3, 0.2]) / np.linalg.norm([0.9, 0.1, -0.3, 0.2])
 
 
-def ahrs_madgwick(gyr, acc, dt, gains):
-    filt, q, out = Madgwick(), Q0.copy(), []
+X_HALF_TURN = np.array([0.0, 1.0, 0.0, 0.0])  # ahrs's earth frame (z up) <-> NED: a half turn about x
+
+
+def reading_plus_g_on_z(gyr, acc, dt):
+    """Samples turned 180° about x: the sensor reads +1 g on z at rest, as BROAD's does. Fed as they
+    are, ahrs's Madgwick (reference earth z up, specific force) runs its sensor upright."""
+    return gyr * [1, -1, -1], acc * [1, -1, -1], dt
+
+
+def ahrs_madgwick(gyr, acc, dt, gains, q0):
+    """ahrs Madgwick from our ``q0`` (body -> NED), its output turned back into NED."""
+    filt, q, out = Madgwick(), quaternion.multiply(X_HALF_TURN, q0), []
     for g, a, d, gain in zip(gyr, acc, dt, gains):
         filt.gain = gain
-        q = filt.updateIMU(q, g, -a, dt=d)
+        q = filt.updateIMU(q, g, a, dt=d)
         out.append(q)
-    return np.array(out)
+    return quaternion.multiply(X_HALF_TURN, np.array(out))
 
 
-def test_hf_equals_ahrs_madgwick_over_10000_random_samples():
-    gyr, acc, dt = random_samples(10_000, seed=1)
+def angle_deg(p, q):
+    """Inclination difference (yaw is unobservable and drifts apart with any difference in the steps)."""
+    return np.degrees(inclination_error_rad(p, q, truth_frame="NED"))
+
+
+def test_hf_step_is_the_normalised_gradient_on_the_unit_sphere():
+    """One HF step with the gyro still is q - β Δt ∇F/‖∇F‖, ∇F the gradient of F(q) = ½‖ĝ(q) - â‖²
+    along the unit sphere, here by central differences through scipy's rotations (ĝ = Rᵀ e_z)."""
+    rng = np.random.default_rng(1)
+    beta, dt = 0.3, 0.01
+    for _ in range(200):
+        q0 = quaternion.normalise(rng.normal(size=4))
+        acc = rng.normal(size=3)
+        acc *= rng.uniform(0.5, 2.0) / np.linalg.norm(acc)  # inside the guards
+        down = -acc / np.linalg.norm(acc)
+
+        def cost(q):
+            g_est = Rotation.from_quat(q, scalar_first=True).inv().apply([0.0, 0.0, 1.0])
+            return 0.5 * np.sum((g_est - down) ** 2)
+
+        h = 1e-6
+        grad = np.array([(cost(q0 + h * e) - cost(q0 - h * e)) / (2 * h) for e in np.eye(4)])
+        grad -= grad.dot(q0) * q0  # along the sphere
+        expected = quaternion.normalise(q0 - beta * dt * grad / np.linalg.norm(grad))
+        hf = Hf(HfSettings(beta=beta))
+        hf.reset(q0)
+        q, _ = hf.step((0.0, 0.0, 0.0), tuple(acc), dt)
+        np.testing.assert_allclose(q, expected, atol=1e-8)
+
+
+def test_hf_agrees_with_ahrs_madgwick_on_a_sensor_reading_plus_g_on_z():
+    """On a hovering craft (small tilts and errors, where ahrs's radial part, of second order in the error
+    and zero when its estimate is upright, vanishes: ahf.py) the two agree closely."""
+    run = simulate("hover", 30.0, seed=1)
+    gyr, acc, dt = reading_plus_g_on_z(run.gyr_rad_s, run.acc_g, np.full(len(run), run.dt_s))
+    q0 = np.array(Hf._attitude_from_acc(*acc[0], 0.0))
     hf = Hf(HfSettings(beta=0.3))
-    hf.reset(Q0)
+    hf.reset(q0)
     q, _ = hf.run(gyr, acc, dt)
-    np.testing.assert_allclose(q, ahrs_madgwick(gyr, acc, dt, np.full(len(dt), 0.3)), atol=1e-9, rtol=0)
+    apart = angle_deg(q, ahrs_madgwick(gyr, acc, dt, np.full(len(dt), 0.3), q0))
+    assert np.median(apart) < 0.005 and np.percentile(apart, 90) < 0.01 and apart.max() < 1.0
 
 
 def test_ahf_is_madgwick_with_the_lambda_of_eq_20():
     """λ recomputed independently (numpy + scipy's lfilter for the low-pass), then Madgwick with that λ."""
-    gyr, acc, dt = flight_like_samples(3_000, seed=2)
+    gyr, acc, dt = reading_plus_g_on_z(*flight_like_samples(3_000, seed=2))
+    q0 = np.array(Hf._attitude_from_acc(*acc[0], 0.0))
     ahf = Ahf()
-    ahf.reset(Q0)
+    ahf.reset(q0)
     q, diag = ahf.run(gyr, acc, dt)
-    prior = np.vstack([Q0, q[:-1]])
+    prior = np.vstack([q0, q[:-1]])
     w, x, y, z = prior.T
     g_est = np.column_stack([2 * (x * z - w * y), 2 * (w * x + y * z), w * w - x * x - y * y + z * z])
     a = -acc / np.linalg.norm(acc, axis=1, keepdims=True)
@@ -50,7 +103,8 @@ def test_ahf_is_madgwick_with_the_lambda_of_eq_20():
     lam = np.clip(2.0 - e_a, 0.2, 2.0)
     np.testing.assert_allclose(diag["lam"], lam, atol=1e-12)
     assert lam.min() == 0.2 and lam.max() > 1.0  # the random inputs exercise both the clamp and the range
-    np.testing.assert_allclose(q, ahrs_madgwick(gyr, acc, dt, lam), atol=1e-9, rtol=0)
+    # Rough data, errors up to tens of degrees: ahrs's second-order radial part shows (ahf.py)
+    assert np.median(angle_deg(q, ahrs_madgwick(gyr, acc, dt, lam, q0))) < 0.5
 
 
 def test_ahf_gyro_overrange_rule_forces_lambda_max():

@@ -1,0 +1,65 @@
+"""AHF2 ablation on the BROAD dev set: each part switched off in turn, one setting for every trial.
+
+    python bench/bench_ahf2.py      # ~5 minutes on 2 cores
+
+Inclination RMSE (deg) over the moving samples, as in bench_estimators.py; every row is ahf2 at its
+defaults with one change. The paper's ahf and vqf run in the same job for reference.
+"""
+
+from __future__ import annotations
+
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+from groundstation.datasets import read_csv
+from groundstation.estimation import create
+from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
+from groundstation.units import STANDARD_GRAVITY_M_S2
+
+BROAD = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets" / "broad"
+VARIANTS = {
+    "ahf2 (defaults)": ("ahf2", {}),
+    "λ fixed at λ_max (no adaptive step)": ("ahf2", {"adaptive": False}),
+    "raw accelerometer (τ_acc = 0, no low-pass in I)": ("ahf2", {"tau_acc_s": 0.0}),
+    "no bias at rest (no rest detection)": ("ahf2", {"rest_bias": False}),
+    "no bias in motion (k_i = 0)": ("ahf2", {"motion_bias_ki": 0.0}),
+    "no bias estimation at all": ("ahf2", {"rest_bias": False, "motion_bias_ki": 0.0}),
+    "τ_acc = 2 s": ("ahf2", {"tau_acc_s": 2.0}),
+    "τ_acc = 8 s": ("ahf2", {"tau_acc_s": 8.0}),
+    "ahf (the paper's)": ("ahf", {}),
+    "vqf": ("vqf", {}),
+}
+
+
+def trial_rows(path):
+    trial = read_csv(path)
+    acc_g = trial.acc_m_s2 / STANDARD_GRAVITY_M_S2
+    dt = sample_periods_s(trial.time_s)
+    row = {}
+    for label, (name, overrides) in VARIANTS.items():
+        q, _ = create(name, overrides).run(trial.gyr_rad_s, acc_g, dt)
+        row[label] = score(inclination_error_rad(q, trial.true_q), trial.moving)["incl_rmse_deg"]
+    return path.name.split("_")[0], row
+
+
+def main() -> int:
+    paths = sorted(BROAD.glob("*.csv*"))
+    if not paths:
+        print(f"no BROAD trials at {BROAD}")
+        return 1
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        rows = dict(pool.map(trial_rows, paths))
+    print(f"python {sys.version.split()[0]}, numpy {np.__version__}\n")
+    print("| variant | " + " | ".join(rows) + " | **mean** |")
+    print("|---|" + "---:|" * (len(rows) + 1))
+    for label in VARIANTS:
+        values = [r[label] for r in rows.values()]
+        print(f"| {label} | " + " | ".join(f"{v:.2f}" for v in values) + f" | **{np.mean(values):.3f}** |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
