@@ -43,7 +43,7 @@ def test_compass_heading_column_follows_true_yaw_during_a_flight():
     assert np.median(np.abs(error_deg[settled])) < 25.0
 
 
-class Recorder:
+class Probe:
     """An estimator stand-in that only records what the pipeline hands over (the pipeline is under test)."""
 
     name = "probe"
@@ -51,6 +51,7 @@ class Recorder:
     def __init__(self, inner):
         self.inner, self.calls = inner, []
         self.Diagnostics, self.settings = inner.Diagnostics, inner.settings
+        self.estimates_gyro_bias = inner.estimates_gyro_bias
 
     def step(self, gyr, acc, dt_s, mag=None, gps=None):
         self.calls.append((mag, gps))
@@ -61,7 +62,7 @@ def test_each_gps_fix_and_mag_reading_reaches_the_estimators_once():
     scenario = Scenario(profile="hover", duration_s=10.0, seed=3,
                         firmware=FirmwareSettings(mode="raw", mag_rate_hz=50, gps_rate_hz=10))
     pipeline = Pipeline(filters=("ahf",))
-    probe = pipeline.estimators["ahf"] = Recorder(pipeline.estimators["ahf"])
+    probe = pipeline.estimators["ahf"] = Probe(pipeline.estimators["ahf"])
     stream_through(pipeline, scenario)
     mags = [m for m, _ in probe.calls if m is not None]
     fixes = [g for _, g in probe.calls if g is not None]

@@ -57,7 +57,7 @@ def test_a_full_tmpfs_stops_the_recording_not_the_session_and_room_resumes_it(tm
 
 def test_stopping_while_the_recording_has_failed_raises_nothing_and_keeps_the_file(tmp_path):
     with tiny_tmpfs(tmp_path / "full") as folder:
-        session = LiveSession(simulated_source(), filters=("ahf",), recordings_dir=folder).start()
+        session = LiveSession(simulated_source(), Pipeline(("ahf",)), recordings_dir=folder).start()
         wait_for(lambda: session.recorder.state == "failed")
         session.stop()  # closing used to raise OSError here (the buffered bytes could not be flushed)
         assert session.recorder.state == "off" and session.recorder.paths == [session.recording_path]
@@ -140,7 +140,7 @@ def test_a_folder_that_cannot_be_recorded_into_still_gives_a_live_session(tmp_pa
     """The recording cannot even start (here /proc, which takes no files): the session decodes all the same."""
     if not sys.platform.startswith("linux"):
         pytest.skip("/proc is Linux's")
-    session = LiveSession(simulated_source(), filters=("ahf",), recordings_dir="/proc/groundstation").start()
+    session = LiveSession(simulated_source(), Pipeline(("ahf",)), recordings_dir="/proc/groundstation").start()
     try:
         assert session.recorder.state == "failed" and session.recording_path is None
         assert "cannot record into /proc/groundstation" in session.recorder.error
