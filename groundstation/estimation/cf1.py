@@ -22,9 +22,8 @@ import dataclasses
 import math
 from typing import NamedTuple
 
-from groundstation import quaternion
 from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
-from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
+from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,7 +59,7 @@ class Cf1(Estimator):
         # Gyro prediction on the quaternion (no gimbal lock, whatever the mounting), blend on the angles.
         q = integrate_rate(self._q, gx, gy, gz, dt_s)
         if acc_ok:
-            yaw, pitch, roll = quaternion.to_euler_zyx(q).tolist()
+            yaw, pitch, roll = euler_of(q)
             pitch_acc, roll_acc = acc_pitch_roll(ax, ay, az)
             tau = self.settings.time_constant_s
             alpha = tau / (tau + dt_s)
@@ -69,6 +68,6 @@ class Cf1(Estimator):
             roll += (1.0 - alpha) * min(max(wrap_pi(roll_acc - roll), -m), m)
             self._diag = (alpha, pitch_acc, roll_acc)
             pitch = min(max(pitch, -math.pi / 2), math.pi / 2)
-            q = tuple(quaternion.from_euler_zyx(yaw, pitch, roll).tolist())
+            q = quaternion_of(yaw, pitch, roll)
         self._q = q
         return self._q, self._diagnostics(status)

@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 from groundstation import quaternion
 from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
-from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
+from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 _DEG2 = (math.pi / 180.0) ** 2
 
@@ -99,7 +99,7 @@ class Kf(Estimator):
         # The gyro's angle change comes from the quaternion (no gimbal lock, whatever the mounting);
         # each axis then subtracts its own bias estimate in predict.
         q = integrate_rate(self._q, gx, gy, gz, dt_s)
-        self._yaw, pitch.angle, roll.angle = quaternion.to_euler_zyx(q).tolist()
+        self._yaw, pitch.angle, roll.angle = euler_of(q)
         pitch.predict(0.0, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
         roll.predict(0.0, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
         if acc_ok:
@@ -108,5 +108,5 @@ class Kf(Estimator):
             roll.correct(roll_acc, s.r_angle_rad2, s.bias_max_rad_s, s.innovation_max_rad)
         pitch.angle = min(max(pitch.angle, -math.pi / 2), math.pi / 2)
         roll.angle = wrap_pi(roll.angle)
-        self._q = tuple(quaternion.from_euler_zyx(self._yaw, pitch.angle, roll.angle).tolist())
+        self._q = quaternion_of(self._yaw, pitch.angle, roll.angle)
         return self._q, self._diagnostics(status)

@@ -33,3 +33,23 @@ def euler_rates(roll_rad, pitch_rad, gx, gy, gz):
 def wrap_pi(angle_rad):
     """Angle wrapped into [-π, π)."""
     return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def euler_of(q):
+    """ZYX (yaw, pitch, roll) in rad of a unit quaternion tuple: ``quaternion.to_euler_zyx`` for one
+    sample on plain floats (numpy's per-call cost is most of a per-sample filter's time)."""
+    w, x, y, z = q
+    s = 2.0 * (w * y - x * z)
+    return (
+        math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)),
+        math.asin(1.0 if s > 1.0 else -1.0 if s < -1.0 else s),
+        math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y)),
+    )
+
+
+def quaternion_of(yaw_rad, pitch_rad, roll_rad):
+    """``qz(ψ) ⊗ qy(θ) ⊗ qx(φ)`` as a tuple: ``quaternion.from_euler_zyx`` for one sample on plain floats."""
+    cy, sy = math.cos(0.5 * yaw_rad), math.sin(0.5 * yaw_rad)
+    cp, sp = math.cos(0.5 * pitch_rad), math.sin(0.5 * pitch_rad)
+    cr, sr = math.cos(0.5 * roll_rad), math.sin(0.5 * roll_rad)
+    return (cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr, cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr)
