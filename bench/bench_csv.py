@@ -11,15 +11,15 @@ baseline of the issue; its output is not the same text (shortest round-trip floa
 from __future__ import annotations
 
 import argparse
-import statistics
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.csv as pacsv
+
+from timing import median_seconds
 
 from groundstation.export.tabular import CSV_FLOAT_FORMAT, write_csv
 
@@ -33,15 +33,6 @@ def export_like(n: int, width: int = 40) -> dict[str, np.ndarray]:
     for values in list(columns.values())[1:]:
         values[gaps] = np.nan
     return columns
-
-
-def median_seconds(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def main() -> None:

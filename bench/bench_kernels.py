@@ -16,14 +16,13 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
+from timing import median_seconds
 from vqf import VQF
 
 from groundstation.estimation import create
@@ -53,12 +52,7 @@ def flight_like(n: int, seed: int = 1):
 
 
 def median_rate(function, n: int, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - t0)
-    return n / statistics.median(times)
+    return n / median_seconds(function, repeats)
 
 
 def import_and_first_call_seconds(cache_dir: str) -> tuple[float, float]:

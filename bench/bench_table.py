@@ -11,22 +11,13 @@ column) and ``array`` (everything) on the filled table; medians of R repeats.
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 from array import array
 
 import numpy as np
 
+from timing import median_seconds
+
 from groundstation.session.table import Table
-
-
-def median_seconds(function, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        function()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def main() -> None:

@@ -75,6 +75,12 @@ def _guard(gx, gy, gz, ax, ay, az, dt_s, q, waiting, acc_min2, acc_max2, max_gap
 
 
 @njit(cache=True)
+def _store_normalised(q, q1, q2, q3, q4):
+    r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
+    q[0], q[1], q[2], q[3] = q1 * r, q2 * r, q3 * r, q4 * r
+
+
+@njit(cache=True)
 def ahf_kernel(gyr, acc, dt, acc_min2, acc_max2, max_gap_s, adaptive, lam_max, lam_min, lowpass, gain, overrange, overrange_on):
     """Ahf (``adaptive``) or Hf (λ fixed at ``lam_max`` = β): ``Ahf._update`` per sample.
 
@@ -124,9 +130,7 @@ def ahf_kernel(gyr, acc, dt, acc_min2, acc_max2, max_gap_s, adaptive, lam_max, l
                 if n2 > 0.0:
                     g = lam * n2**-0.5
                     d1, d2, d3, d4 = d1 - g * s1, d2 - g * s2, d3 - g * s3, d4 - g * s4
-            q1, q2, q3, q4 = q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s
-            r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
-            q[0], q[1], q[2], q[3] = q1 * r, q2 * r, q3 * r, q4 * r
+            _store_normalised(q, q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s)
         q_out[k] = q  # the identity while waiting
         status_out[k], lam_out[k], e_a_out[k], err_out[k] = status, lam, e_a, err
     return q_out, status_out, lam_out, e_a_out, err_out
@@ -164,14 +168,13 @@ def ecf_kernel(gyr, acc, dt, acc_min2, acc_max2, max_gap_s, kp, ki):
             # base.integrate_rate
             wx, wy, wz = gx - bx, gy - by, gz - bz
             h = 0.5 * dt_s
-            q1, q2, q3, q4 = (
+            _store_normalised(
+                q,
                 q1 - h * (q2 * wx + q3 * wy + q4 * wz),
                 q2 + h * (q1 * wx + q3 * wz - q4 * wy),
                 q3 + h * (q1 * wy - q2 * wz + q4 * wx),
                 q4 + h * (q1 * wz + q2 * wy - q3 * wx),
             )
-            r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
-            q[0], q[1], q[2], q[3] = q1 * r, q2 * r, q3 * r, q4 * r
         q_out[k] = q  # the identity while waiting
         status_out[k], err_out[k] = status, err
         bias_out[k, 0], bias_out[k, 1], bias_out[k, 2] = bx, by, bz
