@@ -74,6 +74,11 @@ class FrameColumns:
     def __len__(self) -> int:
         return len(self.seq)
 
+    def scaled(self, field: str) -> np.ndarray:
+        """One field's physical values (raw * scale, in the spec's unit) as float64, as Frame.scaled."""
+        (spec_field,) = (f for f in self.type.fields if f.name == field)
+        return self.raw[field].astype(np.float64) * spec_field.scale
+
 
 @dataclass
 class BatchDecode:

@@ -198,3 +198,6 @@ def test_raw_values_are_the_wire_values_bit_for_bit():
     result = decode_batch(b"".join(encode(f) for f in frames))
     assert result.frames["GPS"].raw.tobytes() == b"".join(encode(f)[4:-2] for f in frames)
     assert np.array_equal(result.frames["GPS"].seq, np.arange(50))
+    for field in frame_type.fields:  # physical values: the same numbers as Frame.scaled
+        expected = [f.scaled()[field.name] for f in frames]
+        np.testing.assert_array_equal(result.frames["GPS"].scaled(field.name), expected)
