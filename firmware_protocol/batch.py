@@ -19,8 +19,9 @@ frame before deciding), so the batch decode is the incremental rules restated ov
 
 Payloads are unpacked by viewing the frames' bytes as a numpy structured dtype built from the spec
 (``payload_dtype``), so the raw values are the wire values, bit for bit. Each frame also gets the
-host arrival time of the chunk that completed it (the chunk holding its last byte), which is when
-the incremental path would have returned it.
+host arrival time of the chunk with which the incremental path returns it: the chunk holding its
+last byte, or a later one when a damaged header before it announced a frame longer than the bytes
+that had arrived (the incremental decoder waits for those bytes before it can go on).
 """
 
 from __future__ import annotations
@@ -49,15 +50,19 @@ def payload_dtype(frame_type: FrameType) -> np.dtype:
     return np.dtype([(f.name, "<" + C_TYPES[f.c_type][0]) for f in frame_type.fields])
 
 
-def _crc_table() -> np.ndarray:
-    """CRC-16/CCITT-FALSE (poly 0x1021, no reflection) of each byte value, from a zero register."""
+def _crc_tables() -> tuple[np.ndarray, np.ndarray]:
+    """CRC-16/CCITT-FALSE (poly 0x1021, no reflection) from a zero register of each byte value, and
+    of each 16-bit word (high byte first). A 16-bit register is shifted out entirely by 16 bits of
+    input, so a register ``c`` followed by a word ``w`` becomes ``T16[c ^ w]``: two bytes per step."""
     table = np.arange(256, dtype=np.uint32) << 8
     for _ in range(8):
         table = np.where(table & 0x8000, (table << 1) ^ 0x1021, table << 1) & 0xFFFF
-    return table.astype(np.uint16)
+    words = np.arange(65536, dtype=np.uint32)
+    first = table[words >> 8]
+    return table.astype(np.uint16), (((first << 8) & 0xFFFF) ^ table[(first >> 8) ^ (words & 0xFF)]).astype(np.uint16)
 
 
-_CRC_TABLE = _crc_table()
+_CRC8, _CRC16 = _crc_tables()
 
 
 @dataclass
@@ -69,7 +74,7 @@ class FrameColumns:
     seq: np.ndarray  # uint8
     raw: np.ndarray  # structured array, payload_dtype(type): wire values as sent
     device_time_us: np.ndarray | None  # int64, unwrapped; None for types without t_us
-    t_host_ns: np.ndarray  # int64: arrival time of the chunk that completed the frame
+    t_host_ns: np.ndarray  # int64: arrival time of the chunk with which StreamDecoder returns the frame
 
     def __len__(self) -> int:
         return len(self.seq)
@@ -105,7 +110,7 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None) -> BatchDec
     n = len(buf)
     if chunk_ends is None:
         chunk_ends, chunk_t_host_ns = np.array([n], dtype=np.int64), np.zeros(1, dtype=np.int64)
-    starts, ends, stop, bad_lengths, crc_errors = _accepted_frames(buf)
+    starts, ends, ready, stop, bad_lengths, crc_errors = _accepted_frames(buf)
     pending = n - stop
     frame_bytes = int((ends - starts).sum())
     # Every byte before the stop is in an accepted frame or skipped (StreamDecoder's accounting).
@@ -117,16 +122,16 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None) -> BatchDec
     duplicate = _duplicates(data, starts, ends, type_ids, seqs)
     stats.duplicates = int(duplicate.sum())
     keep = ~duplicate
-    starts, ends, type_ids, seqs = starts[keep], ends[keep], type_ids[keep], seqs[keep]
+    starts, ready, type_ids, seqs = starts[keep], ready[keep], type_ids[keep], seqs[keep]
     if len(seqs) > 1:
         stats.frames_lost = int(((np.diff(seqs.astype(np.int64)) - 1) & 0xFF).sum())
     known = _KNOWN[type_ids]
     stats.unknown_types = int((~known).sum())
-    starts, ends, type_ids, seqs = starts[known], ends[known], type_ids[known], seqs[known]
+    starts, ready, type_ids, seqs = starts[known], ready[known], type_ids[known], seqs[known]
     stats.frames = len(starts)
 
     device_time = _unwrap(buf, starts, _TIMESTAMPED[type_ids])
-    chunk_index = np.searchsorted(np.asarray(chunk_ends), ends - 1, side="right")
+    chunk_index = np.searchsorted(np.asarray(chunk_ends), ready - 1, side="right")
     t_host = np.asarray(chunk_t_host_ns, dtype=np.int64)[chunk_index]
     frames = {}
     for frame_type in SPEC.frames:
@@ -171,16 +176,20 @@ def _candidates(buf: np.ndarray):
 def _crc_is_zero(buf: np.ndarray, body_starts: np.ndarray, body_bytes: int) -> np.ndarray:
     """CRC over ``body_bytes`` from each start (CRC included) is zero: the frame is intact."""
     rows = np.lib.stride_tricks.sliding_window_view(buf, body_bytes)[body_starts]
-    columns = np.ascontiguousarray(rows.T)  # one contiguous row per byte position
     crc = np.full(len(body_starts), 0xFFFF, dtype=np.uint16)
-    table = _CRC_TABLE
-    for byte in columns:
-        crc = (crc << 8) ^ table[(crc >> 8) ^ byte]
+    if body_bytes % 2:  # an odd byte first, then whole words
+        crc = (crc << 8) ^ _CRC8[(crc >> 8) ^ rows[:, 0]]
+        rows = rows[:, 1:]
+    # One contiguous row of big-endian words per word position.
+    words = np.ascontiguousarray(np.ascontiguousarray(rows).view(">u2").astype(np.uint16).T)
+    for word in words:
+        crc = _CRC16[crc ^ word]
     return crc == 0
 
 
-def _accepted_frames(buf: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, int, int]:
-    """Starts and ends of the frames the incremental decoder accepts; where its scan stops
+def _accepted_frames(buf: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int, int]:
+    """Starts and ends of the frames the incremental decoder accepts, and how many bytes it needs
+    before it returns each (at least its end); where its scan stops
     (``len(buf)`` unless it waits on an incomplete candidate at the end); and the bad lengths and
     CRC failures among the sync bytes it examined and gave up on the way."""
     syncs, header, plausible, complete, valid, ends = _candidates(buf)
@@ -199,7 +208,16 @@ def _accepted_frames(buf: np.ndarray) -> tuple[np.ndarray, np.ndarray, int, int,
         examined &= syncs < stop
     bad_lengths = int((examined & header & ~plausible).sum())
     crc_errors = int((examined & complete & ~valid).sum())
-    return s, e, stop, bad_lengths, crc_errors
+    # A frame comes out once the scan has decided every candidate before it, and some of those need
+    # bytes beyond the frame's end (a damaged header announcing a longer frame than follows).
+    needed = np.where(plausible, ends, syncs + HEADER_BYTES)[examined]
+    before = np.searchsorted(syncs[examined], s)
+    ready = e.copy()
+    if len(needed):
+        reach = np.maximum.accumulate(needed)
+        has_before = before > 0
+        ready[has_before] = np.maximum(e[has_before], reach[before[has_before] - 1])
+    return s, e, ready, stop, bad_lengths, crc_errors
 
 
 def _greedy(s: np.ndarray, e: np.ndarray) -> np.ndarray:

@@ -164,6 +164,16 @@ def test_crc_valid_frame_hidden_inside_another_is_resolved_like_the_scan():
     assert len(result.frames["STATUS"]) == 2 and len(result.frames["ACK"]) == 1
 
 
+def test_a_frame_behind_a_truncated_longer_header_comes_out_with_the_later_chunk():
+    """The incremental decoder waits for the bytes a damaged header announces before it decides on
+    it, so the intact frame after it is returned with the chunk that brings those bytes."""
+    status = encode(make_frame("STATUS", 1, t_us=5, battery=1, retransmits=2, lost_acks=3, cpu_load=4, flags=5))
+    ack = encode(make_frame("ACK", 2, command_seq=1, command=1, result=0))
+    assert len(ack) < len(status) - 6
+    result = assert_same([(100, status[:6] + ack), (200, bytes(SPEC.max_frame_bytes))])
+    assert result.frames["ACK"].t_host_ns.tolist() == [200]
+
+
 def imu(seq: int, t_us: int):
     return make_frame("IMU_RAW", seq & 0xFF, t_us=t_us & 0xFFFFFFFF, acc_x=seq % 7, acc_y=2, acc_z=3, gyr_x=4, gyr_y=5, gyr_z=6, temperature=7)
 
