@@ -31,18 +31,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from firmware_protocol.codec import CRC_BYTES, HEADER_BYTES, SYNC
+from firmware_protocol.codec import CRC_BYTES, FRAME_TYPES_BY_ID, HEADER_BYTES, SYNC
 from firmware_protocol.decoder import DecoderStats
 from firmware_protocol.spec import C_TYPES, SPEC, FrameType
 
 _OVERHEAD = HEADER_BYTES + CRC_BYTES
 _CONFIG = SPEC.frame("CONFIG")
-# Payload size per type id, -1 for ids the spec lacks (any length up to the maximum is plausible).
-_SIZE = np.full(256, -1, dtype=np.int16)
-for _t in SPEC.frames:
-    _SIZE[_t.id] = _t.payload_size
+_TYPES = [FRAME_TYPES_BY_ID.get(i) for i in range(256)]
+# Per type id (0..255): payload size, -1 for ids the spec lacks (any length up to the maximum is plausible).
+_SIZE = np.array([t.payload_size if t else -1 for t in _TYPES], dtype=np.int16)
 _KNOWN = _SIZE >= 0
-_TIMESTAMPED = np.array([bool(t and t.has_timestamp) for t in (next((f for f in SPEC.frames if f.id == i), None) for i in range(256))])
+_TIMESTAMPED = np.array([bool(t and t.has_timestamp) for t in _TYPES])
 
 
 def payload_dtype(frame_type: FrameType) -> np.dtype:
