@@ -1,5 +1,6 @@
 """Excel export speed and memory: a simulated 100 Hz session (1 hour by default) to .xlsx, and in the
-same run bare openpyxl write-only writing the same cells, the CSV export and the Parquet export.
+same run bare openpyxl write-only writing the same cells, bare XlsxWriter (``constant_memory``) writing
+the same cells, the CSV export and the Parquet export.
 
     python bench/bench_excel.py [--minutes M] [--filters ahf,hf]
 
@@ -7,7 +8,8 @@ The session is simulated, recorded and decoded once; each writer then runs in a 
 shares it. In the child the kernel's peak-RSS mark is reset at the start (/proc/self/clear_refs, Linux),
 so "peak" is the child's high-water mark (the session included) and "writer" is the peak minus the
 RSS at the start. "bare openpyxl" appends the same values to the same sheets as plain lists: no number
-formats, no header styles, no Session sheet, no chart.
+formats, no header styles, no Session sheet, no chart; "bare XlsxWriter" writes the same rows with
+``write_row`` (its row-at-a-time path in ``constant_memory`` mode), skipped when xlsxwriter is absent.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import json
 import os
 import tempfile
 import time
+from importlib.util import find_spec
 from pathlib import Path
 
 import numpy as np
@@ -52,23 +55,40 @@ def tables(data) -> dict:
             "Link": link_blocks(data, window), "Chart data": [chart_block(data, rows)]}
 
 
+def sheet_rows(blocks):
+    """The header, then the sheet's rows as lists of plain values (None: empty cell)."""
+    columns = layout(blocks)
+    yield [c.header if c else None for c in columns]
+    n = table_rows(blocks)
+    values = np.full((n, len(columns)), np.nan)
+    for j, column in enumerate(columns):
+        if column is not None:
+            values[: len(column.values), j] = column.values
+    for start in range(0, n, CHUNK_ROWS):
+        part = values[start : start + CHUNK_ROWS]
+        yield from np.where(np.isfinite(part), part, None).tolist()  # Excel has no NaN
+
+
 def bare_openpyxl(data, path: Path) -> None:
     """The same cells through openpyxl's documented write-only path: rows of plain values."""
     workbook = Workbook(write_only=True)
     for title, blocks in tables(data).items():
         sheet = workbook.create_sheet(title)
-        columns = layout(blocks)
-        sheet.append([c.header if c else None for c in columns])
-        n = table_rows(blocks)
-        values = np.full((n, len(columns)), np.nan)
-        for j, column in enumerate(columns):
-            if column is not None:
-                values[: len(column.values), j] = column.values
-        for start in range(0, n, CHUNK_ROWS):
-            part = values[start : start + CHUNK_ROWS]
-            for row in np.where(np.isfinite(part), part, None).tolist():  # Excel has no NaN
-                sheet.append(row)
+        for row in sheet_rows(blocks):
+            sheet.append(row)
     workbook.save(path)
+
+
+def bare_xlsxwriter(data, path: Path) -> None:
+    """The same cells through XlsxWriter's constant_memory mode, one write_row per row."""
+    import xlsxwriter
+
+    workbook = xlsxwriter.Workbook(path, {"constant_memory": True})
+    for title, blocks in tables(data).items():
+        sheet = workbook.add_worksheet(title)
+        for i, row in enumerate(sheet_rows(blocks)):
+            sheet.write_row(i, 0, row)
+    workbook.close()
 
 
 def cells(data) -> int:
@@ -122,6 +142,7 @@ def main() -> None:
         runs = [
             ("xlsx (write_workbook)", "a.xlsx", lambda p: write_workbook(data, p)),
             ("bare openpyxl write-only", "b.xlsx", lambda p: bare_openpyxl(data, p)),
+            *([("bare XlsxWriter constant_memory", "e.xlsx", lambda p: bare_xlsxwriter(data, p))] if find_spec("xlsxwriter") else []),
             (f"CSV ({len(columns)} columns)", "c.csv", lambda p: write_csv(columns, p)),
             (f"Parquet ({len(columns)} columns)", "d.parquet", lambda p: write_parquet(columns, p)),
         ]
@@ -137,6 +158,8 @@ def main() -> None:
             print(f"| {r['label']} | {r['seconds']:.1f} | {r['seconds'] / hours:.1f} | {r['peak_mb']:.0f} | "
                   f"{r['writer_mb']:.0f} | {r['file_mb']:.1f} |")
         print(f"\nxlsx / bare openpyxl: {results[0]['seconds'] / results[1]['seconds']:.2f}x the time")
+        if find_spec("xlsxwriter"):
+            print(f"bare XlsxWriter / bare openpyxl: {results[2]['seconds'] / results[1]['seconds']:.2f}x the time")
 
 
 if __name__ == "__main__":

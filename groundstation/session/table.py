@@ -1,8 +1,14 @@
 """An append-only table of float64 rows, cheap enough to grow at 100 Hz for hours.
 
-Rows are stored flat in one ``array('d')``: appending a row is a single C call, memory is 8 bytes
-per value, and the newest rows (``tail``) are a slice, which is all the live view needs. One
-writer thread may append while other threads read: each append and each slice holds the GIL.
+Rows are stored flat, 8 bytes per value and no Python object per row: the newest rows in one
+``array('d')`` (appending a row is one C call), sealed into a read-only numpy block every
+``chunk_rows`` rows (the block is a view of that array's memory: no copy). Memory is linear in the
+rows, with at most one growing chunk of slack; a column is read without copying the other columns,
+and ``extend`` adds a whole array of rows at once (the batch path).
+
+One writer thread may append while other threads read: the blocks and the growing chunk are
+published together as one tuple, and each append and each copy holds the GIL, so a reader sees
+whole rows, in order.
 """
 
 from __future__ import annotations
@@ -11,28 +17,70 @@ from array import array
 
 import numpy as np
 
+CHUNK_ROWS = 65_536  # 11 minutes at 100 Hz per block
+
 
 class Table:
-    def __init__(self, columns: tuple[str, ...] | list[str]):
+    def __init__(self, columns: tuple[str, ...] | list[str], chunk_rows: int = CHUNK_ROWS):
         self.columns = tuple(columns)
         self._width = len(self.columns)
-        self._data = array("d")
-        self.append = self._data.extend  # append(row): row is a sequence of len(columns) numbers
+        self._chunk_values = chunk_rows * self._width
+        self._state: tuple[tuple[np.ndarray, ...], array] = ((), array("d"))
+        self._sealed_rows = 0
+
+    def append(self, row) -> None:
+        """Add one row: a sequence of len(columns) numbers."""
+        growing = self._state[1]
+        growing.extend(row)
+        if len(growing) >= self._chunk_values:
+            self._seal()
+
+    def extend(self, rows) -> None:
+        """Add rows from an (N, len(columns)) array-like in one step (copied)."""
+        rows = np.array(rows, dtype=float, copy=True).reshape(-1, self._width)
+        if len(rows):
+            self._seal()
+            blocks, growing = self._state
+            rows.flags.writeable = False
+            self._sealed_rows += len(rows)
+            self._state = (blocks + (rows,), growing)
+
+    def _seal(self) -> None:
+        blocks, growing = self._state
+        if len(growing):
+            block = np.frombuffer(growing, dtype=float).reshape(-1, self._width)  # never extended again
+            self._sealed_rows += len(block)
+            self._state = (blocks + (block,), array("d"))
 
     def __len__(self) -> int:
-        return len(self._data) // self._width
+        return self._sealed_rows + len(self._state[1]) // self._width
+
+    def _parts(self) -> list[np.ndarray]:
+        """The blocks and a copy of the growing chunk, a consistent snapshot."""
+        blocks, growing = self._state
+        return [*blocks, np.array(growing, dtype=float).reshape(-1, self._width)]
 
     def array(self) -> np.ndarray:
         """All rows as an (N, len(columns)) float64 array (a copy)."""
-        return np.array(self._data, dtype=float).reshape(-1, self._width)
+        return np.concatenate(self._parts())
 
     def tail(self, rows: int) -> np.ndarray:
         """The newest ``rows`` rows (fewer if the table is shorter), as a copy."""
-        n = min(rows, len(self)) * self._width
-        return np.array(self._data[len(self._data) - n :], dtype=float).reshape(-1, self._width)
+        blocks, growing = self._state
+        n = min(rows, len(growing) // self._width) * self._width
+        newest = [np.array(growing[len(growing) - n :], dtype=float).reshape(-1, self._width)]
+        have = n // self._width
+        for block in reversed(blocks):
+            if have >= rows:
+                break
+            newest.insert(0, block[max(0, len(block) - (rows - have)) :])
+            have += len(newest[0])
+        return np.concatenate(newest)
 
     def column(self, name: str) -> np.ndarray:
-        return self.array()[:, self.columns.index(name)]
+        """One column (a copy of that column only)."""
+        i = self.columns.index(name)
+        return np.concatenate([part[:, i] for part in self._parts()])
 
     def to_dict(self) -> dict[str, np.ndarray]:
         data = self.array()

@@ -1,0 +1,94 @@
+"""Table: the same rows back as went in, across chunk boundaries; memory linear in the rows."""
+
+import gc
+import threading
+import tracemalloc
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from groundstation.session.table import Table
+
+COLUMNS = ("time_s", "a", "b")
+
+
+@settings(max_examples=100, derandomize=True, deadline=None)
+@given(
+    st.integers(1, 7),
+    st.lists(st.one_of(st.integers(0, 3), st.integers(0, 20).map(lambda n: -n - 1)), max_size=30),
+    st.integers(0, 40),
+)
+def test_rows_come_back_in_order_across_chunks(chunk_rows, steps, tail_rows):
+    """Appends (a non-negative step: rows one by one) and bulk extends (negative: -n - 1 rows) mixed."""
+    table, expected, counter = Table(COLUMNS, chunk_rows=chunk_rows), [], 0
+    for step in steps:
+        count = step if step >= 0 else -step - 1
+        rows = [(counter + k, -(counter + k), 0.5 * (counter + k)) for k in range(count)]
+        counter += count
+        if step >= 0:
+            for row in rows:
+                table.append(row)
+        else:
+            table.extend(np.array(rows, dtype=float).reshape(-1, 3))
+        expected += rows
+    reference = np.array(expected, dtype=float).reshape(-1, 3)
+    assert len(table) == len(reference)
+    np.testing.assert_array_equal(table.array(), reference)
+    np.testing.assert_array_equal(table.tail(tail_rows), reference[len(reference) - min(tail_rows, len(reference)) :])
+    for i, name in enumerate(COLUMNS):
+        np.testing.assert_array_equal(table.column(name), reference[:, i])
+        np.testing.assert_array_equal(table.to_dict()[name], reference[:, i])
+
+
+def test_returned_arrays_are_copies_or_read_only():
+    table = Table(COLUMNS, chunk_rows=2)
+    for k in range(5):
+        table.append((k, k, k))
+    table.array()[:] = -1
+    table.column("a")[:] = -1
+    table.tail(3)[:] = -1
+    assert table.array()[:, 0].tolist() == [0, 1, 2, 3, 4]
+
+
+def traced_bytes(rows: int, width: int = 12) -> tuple[int, int]:
+    """Memory held by a table of ``rows`` appended rows, and Python objects created for it."""
+    gc.collect()
+    objects_before = len(gc.get_objects())
+    tracemalloc.start()
+    table = Table([f"c{i}" for i in range(width)], chunk_rows=10_000)
+    row = tuple(float(i) for i in range(width))
+    for _ in range(rows):
+        table.append(row)
+    held, _ = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    objects = len(gc.get_objects()) - objects_before
+    del table
+    return held, objects
+
+
+def test_memory_is_linear_in_the_rows_with_no_object_per_row():
+    small_bytes, small_objects = traced_bytes(20_000)
+    large_bytes, large_objects = traced_bytes(200_000)
+    per_row = (large_bytes - small_bytes) / 180_000
+    assert 12 * 8 <= per_row <= 12 * 8 * 1.15  # 8 bytes a value, at most one chunk's growth slack
+    assert large_objects - small_objects < 100  # blocks only, never an object per row
+
+
+def test_reader_thread_sees_whole_rows_in_order_while_a_writer_appends():
+    table = Table(COLUMNS, chunk_rows=64)
+    done, bad = threading.Event(), []
+
+    def read():
+        while not done.is_set():
+            data = table.array()
+            if len(data) and not (np.array_equal(data[:, 0], np.arange(len(data))) and np.array_equal(data[:, 1], -data[:, 0])):
+                bad.append(len(data))
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    for k in range(20_000):
+        table.append((k, -k, 0.0))
+    done.set()
+    reader.join()
+    assert not bad and len(table) == 20_000
