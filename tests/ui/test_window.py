@@ -8,7 +8,7 @@ import threading
 import time
 
 import pytest
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore
 
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.ui.export_dialog import ExportDialog
