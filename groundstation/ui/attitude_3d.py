@@ -121,7 +121,8 @@ class AttitudeView3D(QtWidgets.QWidget):
         north = project(np.array([[GRID[-1] + 0.3, 0.0, GROUND_Z]]), scale)[0]
         painter.drawText(QtCore.QPointF(north[0] - 4, north[1]), "N")
         if self.q is None:
-            painter.drawText(QtCore.QRectF(-self.width() / 2, -10, self.width(), 20), QtCore.Qt.AlignCenter, "no attitude")
+            painter.drawText(QtCore.QRectF(-self.width() / 2, -self.height() / 2, self.width(), 20), QtCore.Qt.AlignCenter,
+                             "no attitude")
             painter.end()
             return
         # Every point turned and projected at once; then the painter's algorithm, the farthest part first.
