@@ -68,6 +68,10 @@ def tour() -> None:
     shoot(window, "live.png")
     shoot(window.attitude_panel, "3d-view.png")
 
+    window.uplink_panel.config_button.click()  # a few events of a user's session: a command, a tuning
+    window.estimator_panel.boxes["ecf", "kp"].setValue(1.5)
+    window.estimator_panel.apply()
+    wait(1.5)
     window.controls.setCurrentWidget(window.event_console)
     wait(0.5)
     shoot(window, "events.png")
@@ -83,6 +87,7 @@ def tour() -> None:
     recording = window.session.recording_path
     window.disconnect()
     dialog = window.export()
+    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
     dialog.path_edit.setText(str(Path(tempfile.mkdtemp()) / "flight.csv"))
     dialog.export_button.click()
     while dialog.job is None or not dialog.job.done or dialog.timer.isActive():
