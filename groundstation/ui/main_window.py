@@ -27,10 +27,10 @@ from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
 
 REDRAW_HZ = 30
-# Every how many ticks the side panels redraw: the horizon at 15 Hz, the 3D view at 7.5 Hz (its paint
-# costs several times the horizon's), figures and labels at 5 Hz (each repaint costs CPU under
-# software rendering; people read numbers no faster).
-HORIZON_EVERY, BODY_EVERY, FIGURES_EVERY = 2, 4, 6
+# Every how many ticks the side panels redraw: the horizon at 15 Hz, the 3D view (its paint costs
+# several times the horizon's), figures and labels at 5 Hz (each repaint costs CPU under software
+# rendering; people read numbers no faster).
+HORIZON_EVERY, BODY_EVERY, FIGURES_EVERY = 2, 6, 6
 # comparison estimators start switched off
 DEFAULT_HIDDEN = frozenset({"HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
 STEP_S = 5.0  # ← and → in a replay
