@@ -2,13 +2,15 @@
 
     python bench/bench_ui.py [--live-seconds S] [--hours H] [--skip-redraw] [--skip-memory]
 
-1. Redraw: the attitude plots (4 curves: AHF and onboard pitch and roll) over a 60 s and a 10 min
-   window of 100 Hz data from the simulator; per frame: ``setData`` of every curve, the x range,
-   and a synchronous repaint of a 1000x700 widget. Median ms per frame with peak downsampling (as
-   the app) and plain, and the frames/s that leaves.
+1. Redraw: the attitude plots (4 curves: AHF and onboard pitch and roll; 8 curves: with HF and ECF
+   too) over a 60 s and a 10 min window of 100 Hz data from the simulator; per frame: ``setData`` of
+   every curve, the x range, and a synchronous repaint of a 1000x700 widget. Median ms per frame with
+   peak downsampling (as the app) and plain (4 curves), and the frames/s that leaves; the 8-curve
+   cost as a ratio to the 4-curve one measured in the same run.
 2. Live: the main window for S s (default 60) on the in-process simulated bridge (the simulated
-   aircraft's CPU included), then on bridge-sim through a pty (as a real USB bridge): whole-process
-   CPU % (reader, pipeline with ahf+hf+ecf, recorder, UI), UI frames/s, median ms per redraw tick.
+   aircraft's CPU included), then on bridge-sim through a pty (as a real USB bridge), both with the
+   4 default curves, then the demo again with HF and ECF shown (8 curves): whole-process CPU %
+   (reader, pipeline with the app's eight estimators, recorder, UI), UI frames/s, median ms per redraw tick.
 3. Memory: an H-hour (default 2) simulated flight, recorded as the app records (ahf, hf, ecf), is
    replayed as fast as possible, in fresh processes: headless, and into the window on its "whole
    session" window. The difference in RSS growth is what the UI costs beyond the session's data.
@@ -60,8 +62,8 @@ def table_mb(pipeline: Pipeline) -> float:
     return sum(len(t) * len(t.columns) * 8 for t in tables) / 1e6
 
 
-def simulated_table(seconds: float) -> Pipeline:
-    pipeline = Pipeline(("ahf",))
+def simulated_table(seconds: float, filters: tuple[str, ...]) -> Pipeline:
+    pipeline = Pipeline(filters)
     stream = SimStream(Scenario("flight", seconds + 5, seed=1))
     for chunk in stream.advance(seconds + 1.5):
         pipeline.feed(int(chunk.t_s * 1e9), chunk.data)
@@ -76,36 +78,42 @@ def growing(table: Table, rows: np.ndarray) -> Table:
 
 def bench_redraw() -> None:
     """Per frame, as in the app: 1/30 s of new 100 Hz rows, taken into the Series, drawn, painted."""
-    pipeline = simulated_table(610.0)
+    filters = ("ahf", "hf", "ecf")
+    pipeline = simulated_table(610.0, filters)
     imu_rows, onboard_rows = pipeline.imu.array(), pipeline.onboard.array()
-    plots = StackedPlots(attitude_plots(("ahf",)))
-    plots.resize(1000, 700)
-    plots.show()
-    QtTest.QTest.qWaitForWindowExposed(plots)  # an unexposed widget does not paint at all
     lock = threading.Lock()
-    for window_s in (60.0, 600.0):
-        for mode in ("peak", None):
-            for item in plots.items:
-                item.setDownsampling(auto=mode is not None, mode=mode or "peak", ds=1)
-            start = int(np.searchsorted(imu_rows[:, 0], window_s + 2.0))
-            imu, onboard = growing(pipeline.imu, imu_rows[:start]), growing(pipeline.onboard, onboard_rows[:start])
-            series = {"imu": Series(imu, imu_quantities(("ahf",))), "onboard": Series(onboard, onboard_quantities)}
-            times = []
-            for frame in range(FRAMES):
-                rows = slice(start + 3 * frame, start + 3 * frame + 3)
-                imu.append(imu_rows[rows].ravel().tolist())
-                onboard.append(onboard_rows[rows].ravel().tolist())
-                t0 = time.perf_counter()
-                for s in series.values():
-                    s.take(lock)
-                plots.draw(series, window_s, None)
-                plots.viewport().repaint()  # the paint, synchronously
-                times.append(time.perf_counter() - t0)
-            ms = 1e3 * statistics.median(times)
-            points = len(series["imu"].data("ahf_pitch_deg", window_s)[0])
-            print(f"redraw 4 curves x {points:6d} points ({window_s:4.0f} s window), "
-                  f"{'peak downsampling' if mode else 'plain            '}: {ms:5.1f} ms/frame  ({1e3 / ms:4.0f} frames/s possible)")
-    plots.close()
+    medians = {}
+    for shown in (filters[:1], filters):
+        plots = StackedPlots(attitude_plots(shown))
+        plots.resize(1000, 700)
+        plots.show()
+        QtTest.QTest.qWaitForWindowExposed(plots)  # an unexposed widget does not paint at all
+        curves = len(plots.curves)
+        for window_s in (60.0, 600.0):
+            for mode in ("peak", None) if curves == 4 else ("peak",):
+                for item in plots.items:
+                    item.setDownsampling(auto=mode is not None, mode=mode or "peak", ds=1)
+                start = int(np.searchsorted(imu_rows[:, 0], window_s + 2.0))
+                imu, onboard = growing(pipeline.imu, imu_rows[:start]), growing(pipeline.onboard, onboard_rows[:start])
+                series = {"imu": Series(imu, imu_quantities(filters)), "onboard": Series(onboard, onboard_quantities)}
+                times = []
+                for frame in range(FRAMES):
+                    rows = slice(start + 3 * frame, start + 3 * frame + 3)
+                    imu.append(imu_rows[rows].ravel().tolist())
+                    onboard.append(onboard_rows[rows].ravel().tolist())
+                    t0 = time.perf_counter()
+                    for s in series.values():
+                        s.take(lock)
+                    plots.draw(series, window_s, None)
+                    plots.viewport().repaint()  # the paint, synchronously
+                    times.append(time.perf_counter() - t0)
+                ms = 1e3 * statistics.median(times)
+                medians[curves, window_s, mode] = ms
+                ratio = f"  ({ms / medians[4, window_s, mode]:.2f}x the 4 curves)" if curves == 8 else ""
+                points = len(series["imu"].data("ahf_pitch_deg", window_s)[0])
+                print(f"redraw {curves} curves x {points:6d} points ({window_s:4.0f} s window), "
+                      f"{'peak downsampling' if mode else 'plain            '}: {ms:5.1f} ms/frame  ({1e3 / ms:4.0f} frames/s possible){ratio}")
+        plots.close()
 
 
 def bench_live(seconds: float) -> None:
@@ -115,8 +123,9 @@ def bench_live(seconds: float) -> None:
                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         pty = bridge.stdout.readline().split()[-1]
-        for label, start in (("simulated bridge in process (demo)", lambda w: w.start_demo()),
-                             ("bridge-sim on a pty (another process)", lambda w: w.connect_serial(pty, 115200))):
+        for label, start in (("simulated bridge in process (demo), 4 curves", lambda w: w.start_demo()),
+                             ("bridge-sim on a pty (another process), 4 curves", lambda w: w.connect_serial(pty, 115200)),
+                             ("simulated bridge in process (demo), 8 curves", demo_with_8_curves)):
             cpu, frames, ticks = live_run(start, seconds)
             print(f"live 100 Hz, {label}, {seconds:.0f} s: CPU {cpu:.1f} % of one core (whole process), {frames:.1f} UI frames/s, "
                   f"redraw tick median {1e3 * statistics.median(ticks):.1f} ms (p95 {1e3 * np.percentile(ticks, 95):.1f} ms; "
@@ -124,6 +133,12 @@ def bench_live(seconds: float) -> None:
     finally:
         bridge.terminate()
         bridge.wait(timeout=10)
+
+
+def demo_with_8_curves(window: MainWindow) -> None:
+    window.start_demo()
+    for label in ("HF", "ECF"):
+        window.live_view.set_visible(label, True)
 
 
 def live_run(start, seconds: float) -> tuple[float, float, list[float]]:

@@ -9,6 +9,7 @@ ground plane gives the horizon.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -39,6 +40,24 @@ GRID = np.arange(-2.0, 2.01, 1.0)
 GROUND_Z = 1.2  # the ground plane, below the aircraft (NED: down is +z)
 
 
+def _mesh() -> tuple[np.ndarray, list[tuple[slice, str, QtGui.QColor]]]:
+    """All the body points in one array, and the parts as (rows, "line" or "polygon", colour)."""
+    pieces, parts, start = [], [], 0
+    for tip, ring, colour in zip(ARM_TIPS, ROTORS, (FRONT, FRONT, REAR, REAR)):
+        for points, kind in ((np.array([[0.0, 0.0, 0.0], tip]), "line"), (ring, "polygon")):
+            pieces.append(points)
+            parts.append((slice(start, start + len(points)), kind, colour))
+            start += len(points)
+    for face in BOX_FACES:
+        pieces.append(BOX_CORNERS[list(face)])
+        parts.append((slice(start, start + 4), "polygon", BODY_COLOR))
+        start += 4
+    return np.concatenate(pieces), parts
+
+
+MESH_POINTS, MESH_PARTS = _mesh()
+
+
 def to_camera(points_ned: np.ndarray) -> np.ndarray:
     """NED points to camera axes (right, up, depth away from the viewer)."""
     e = math.radians(ELEVATION_DEG)
@@ -55,6 +74,18 @@ def project(points_ned: np.ndarray, scale: float) -> np.ndarray:
     camera = to_camera(points_ned)
     factor = scale * CAMERA_DISTANCE / (CAMERA_DISTANCE + camera[:, 2])
     return np.column_stack([camera[:, 0] * factor, -camera[:, 1] * factor])
+
+
+@functools.lru_cache(maxsize=4)
+def ground_lines(scale: float) -> list[QtCore.QLineF]:
+    """The ground grid, north-south and east-west lines, on screen (the same for every paint at a size)."""
+    lines = []
+    for value in GRID:
+        for ends in (np.array([[value, GRID[0], GROUND_Z], [value, GRID[-1], GROUND_Z]]),
+                     np.array([[GRID[0], value, GROUND_Z], [GRID[-1], value, GROUND_Z]])):
+            (ax, ay), (bx, by) = project(ends, scale)
+            lines.append(QtCore.QLineF(ax, ay, bx, by))
+    return lines
 
 
 def body_to_ned(q_wxyz: np.ndarray, points_body: np.ndarray) -> np.ndarray:
@@ -84,44 +115,29 @@ class AttitudeView3D(QtWidgets.QWidget):
         painter.fillRect(self.rect(), QtGui.QColor("#f4f6fa"))
         painter.translate(self.width() / 2, self.height() / 2)
         scale = min(self.width(), self.height()) / 3.2
-        self._draw_ground(painter, scale)
+        painter.setPen(QtGui.QPen(GROUND, 1))
+        painter.drawLines(ground_lines(scale))
+        painter.setPen(QtGui.QColor("#555"))
+        north = project(np.array([[GRID[-1] + 0.3, 0.0, GROUND_Z]]), scale)[0]
+        painter.drawText(QtCore.QPointF(north[0] - 4, north[1]), "N")
         if self.q is None:
-            painter.setPen(QtGui.QColor("#666"))
-            painter.drawText(QtCore.QRectF(-self.width() / 2, -10, self.width(), 20), QtCore.Qt.AlignCenter, "no attitude")
+            painter.drawText(QtCore.QRectF(-self.width() / 2, -self.height() / 2, self.width(), 20), QtCore.Qt.AlignCenter,
+                             "no attitude")
             painter.end()
             return
-        # Painter's algorithm: the farthest part first.
-        parts = []
-        for tip, ring, colour in zip(ARM_TIPS, ROTORS, (FRONT, FRONT, REAR, REAR)):
-            arm = body_to_ned(self.q, np.array([[0.0, 0.0, 0.0], tip]))
-            parts.append((to_camera(arm)[:, 2].mean(), "line", arm, colour))
-            disc = body_to_ned(self.q, ring)
-            parts.append((to_camera(disc)[:, 2].mean(), "polygon", disc, colour))
-        corners = body_to_ned(self.q, BOX_CORNERS)
-        for face in BOX_FACES:
-            points = corners[list(face)]
-            parts.append((to_camera(points)[:, 2].mean(), "polygon", points, BODY_COLOR))
-        for _, kind, points, colour in sorted(parts, key=lambda part: -part[0]):
-            screen = [QtCore.QPointF(x, y) for x, y in project(points, scale)]
+        # Every point turned and projected at once; then the painter's algorithm, the farthest part first.
+        ned = body_to_ned(self.q, MESH_POINTS)
+        depth = to_camera(ned)[:, 2]
+        screen = project(ned, scale)
+        for index in np.argsort([-depth[part].sum() / (part.stop - part.start) for part, _, _ in MESH_PARTS]):
+            part, kind, colour = MESH_PARTS[index]
+            points = [QtCore.QPointF(x, y) for x, y in screen[part]]
             if kind == "line":
                 painter.setPen(QtGui.QPen(colour, 4))
-                painter.drawLine(*screen)
+                painter.drawLine(*points)
             else:
-                fill = QtGui.QColor(colour)
-                fill.setAlpha(150 if colour is not BODY_COLOR else 230)
                 painter.setPen(QtGui.QPen(colour.darker(130), 1))
-                painter.setBrush(fill)
-                painter.drawPolygon(QtGui.QPolygonF(screen))
+                painter.setBrush(colour if colour is BODY_COLOR else colour.lighter(140))  # opaque: blending costs
+                painter.drawPolygon(QtGui.QPolygonF(points))
         painter.end()
 
-    @staticmethod
-    def _draw_ground(painter: QtGui.QPainter, scale: float) -> None:
-        painter.setPen(QtGui.QPen(GROUND, 1))
-        for value in GRID:
-            for line in (np.array([[value, GRID[0], GROUND_Z], [value, GRID[-1], GROUND_Z]]),
-                         np.array([[GRID[0], value, GROUND_Z], [GRID[-1], value, GROUND_Z]])):
-                a, b = project(line, scale)
-                painter.drawLine(QtCore.QPointF(*a), QtCore.QPointF(*b))
-        north = project(np.array([[GRID[-1] + 0.3, 0.0, GROUND_Z]]), scale)[0]
-        painter.setPen(QtGui.QColor("#555"))
-        painter.drawText(QtCore.QPointF(north[0] - 4, north[1]), "N")

@@ -92,8 +92,9 @@ class AttitudePanel(QtWidgets.QGroupBox):
         layout.addLayout(views)
         layout.addLayout(numbers)
 
-    def show_session(self, session: LiveSession) -> None:
-        """The newest estimate of ``session``'s first estimator (AHF, unless a recording says otherwise)."""
+    def show_session(self, session: LiveSession, body: bool = True) -> None:
+        """The newest estimate of ``session``'s first estimator (AHF, unless a recording says otherwise);
+        ``body``: the 3D view too."""
         name = session.pipeline.filters[0]
         self.setTitle(f"Attitude ({name.upper()})")
         heading = heading_now(session.pipeline)
@@ -104,7 +105,8 @@ class AttitudePanel(QtWidgets.QGroupBox):
             return
         q = last[0][[imu.columns.index(f"{name}_q{c}") for c in "wxyz"]]
         self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
-        self.body_view.set_attitude(q)
+        if body:
+            self.body_view.set_attitude(q)
 
     def clear(self) -> None:
         """No attitude (a new session, before its first estimate)."""

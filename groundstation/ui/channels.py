@@ -109,7 +109,8 @@ class ChannelsView(QtWidgets.QWidget):
                     child.setData(0, QtCore.Qt.UserRole, f"{name}.{column}")
                     parent.addChild(child)
                 self.tree.addTopLevelItem(parent)
-        self._rebuild()
+        self.stacked.clear_data()  # the same panes: only their data is new (plots are slow to build)
+        self._make_series()
 
     def layout_json(self) -> str:
         return json.dumps(self.panes)
@@ -170,12 +171,16 @@ class ChannelsView(QtWidgets.QWidget):
         return plots
 
     def _rebuild(self) -> None:
-        """New plots for the panes, and a series for each plotted table of the session, holding only
-        its plotted columns (from its first row: a channel added later shows its past too)."""
+        """New plots for the panes, and the series they draw."""
         old, self.stacked = self.stacked, self._new_plots()
         self.splitter.replaceWidget(1, self.stacked)
         old.deleteLater()
         self._fill_pane_box()
+        self._make_series()
+
+    def _make_series(self) -> None:
+        """A series for each plotted table of the session, holding only its plotted columns (from its
+        first row: a channel added later shows its past too)."""
         self.series = {}
         if self.session is None:
             return

@@ -72,7 +72,9 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.setEnabled(session is not None)
         self.message.clear()
         while self._shown_row.count():
-            self._shown_row.takeAt(0).widget().deleteLater()
+            box = self._shown_row.takeAt(0).widget()
+            box.setParent(None)  # off the panel now: deleteLater waits for the outermost event loop
+            box.deleteLater()
         self.shown = {}
         if session is None:
             return

@@ -1,9 +1,12 @@
-"""The live view: attitude, raw sensors, AHF diagnostics, heading and position over a chosen time window.
+"""The live view: attitude, raw sensors, AHF diagnostics, heading, position and any channel over a
+chosen time window.
 
 ``refresh`` is called by the window's redraw timer: it pulls the rows the pipeline added since the
 last call into the ``Series`` buffers and redraws the visible tab. The heading and position tabs
-appear once the session has delivered magnetometer, GPS or barometer frames. "Pause view" freezes
-the plots (acquisition and recording go on) and frees zoom and pan; panning or zooming pauses it too.
+appear, and the Sensors tab gains the magnetometer and barometer, once the session has delivered
+their frames. "Pause view" freezes the plots (acquisition and recording go on) and frees zoom and
+pan; panning or zooming pauses it too. ``show_time`` and ``pan`` pause it and move it (the event
+console, the arrow keys), drawing every sample once so that the past beyond the window shows.
 """
 
 from __future__ import annotations
@@ -96,7 +99,6 @@ class LiveView(QtWidgets.QWidget):
         controls.addWidget(self.pause_button)
         controls.addStretch(1)
         self.tabs = QtWidgets.QTabWidget()
-        self.tabs.currentChanged.connect(lambda _: self.redraw())
         self._hidden = hidden  # remembered also for labels the current session lacks
         self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
         self._filters = ("ahf",)
@@ -106,6 +108,7 @@ class LiveView(QtWidgets.QWidget):
         self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
         self.position = self._add_tab(PositionView(), "Position")
         self.channels = self._add_tab(ChannelsView(), "Channels")
+        self.tabs.currentChanged.connect(self._tab_changed)  # once every tab is there
         self._show_aiding_tabs()
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
@@ -163,14 +166,19 @@ class LiveView(QtWidgets.QWidget):
         for plots in (self.attitude, self.heading):
             plots.set_visible(label, visible)
 
+    def _tab_changed(self) -> None:
+        self._show_aiding_sensors()
+        self.redraw()
+
     def _show_aiding_sensors(self) -> None:
-        """The Sensors tab with a plot for each aiding sensor that has delivered readings."""
+        """The Sensors tab with a plot for each aiding sensor that has delivered readings; rebuilt when
+        it is shown (building plots takes a good part of a second, which the other tabs need not wait)."""
         aiding = frozenset(s for s in SENSOR_AIDING if s in self.series and self.series[s].taken)
-        if aiding != self._sensor_aiding:
+        if aiding != self._sensor_aiding and self.tabs.currentWidget() is self.sensors:
+            self._sensor_aiding = aiding  # first: replacing the tab changes the current one, which calls here
             current = self.tabs.currentIndex()
             self.sensors = self._replace_tab(self.sensors, StackedPlots(sensor_plots(aiding)))
             self.tabs.setCurrentIndex(current)
-            self._sensor_aiding = aiding
 
     def _show_aiding_tabs(self) -> None:
         self._show_aiding_sensors()

@@ -28,9 +28,10 @@ from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
 
 REDRAW_HZ = 30
-# Every how many ticks the side panels redraw: the horizon at 15 Hz, figures and labels at 5 Hz
-# (each repaint costs CPU under software rendering; people read numbers no faster).
-HORIZON_EVERY, FIGURES_EVERY = 2, 6
+# Every how many ticks the side panels redraw: the horizon at 15 Hz, the 3D view (its paint costs
+# several times the horizon's), figures and labels at 5 Hz (each repaint costs CPU under software
+# rendering; people read numbers no faster).
+HORIZON_EVERY, BODY_EVERY, FIGURES_EVERY = 2, 6, 6
 # comparison estimators start switched off
 DEFAULT_HIDDEN = frozenset({"AHF", "AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
 STEP_S = 5.0  # ← and → in a replay
@@ -91,7 +92,13 @@ class MainWindow(QtWidgets.QMainWindow):
         side_layout.addWidget(controls, 1)
         self.splitter = QtWidgets.QSplitter()
         self.splitter.addWidget(self.live_view)
-        self.splitter.addWidget(side)
+        scroll = QtWidgets.QScrollArea()  # the panels are taller than a laptop's screen allows
+        scroll.setWidget(side)
+        scroll.setWidgetResizable(True)
+        scroll.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
+        scroll.setMinimumWidth(side.minimumSizeHint().width() + scroll.verticalScrollBar().sizeHint().width())
+        scroll.setFrameShape(QtWidgets.QFrame.NoFrame)
+        self.splitter.addWidget(scroll)
         self.splitter.setStretchFactor(0, 1)
         central = QtWidgets.QWidget()
         layout = QtWidgets.QVBoxLayout(central)
@@ -333,7 +340,7 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.live_view.refresh()
         if self.ticks % HORIZON_EVERY == 0:
-            self.attitude_panel.show_session(session)
+            self.attitude_panel.show_session(session, body=self.ticks % BODY_EVERY == 0)
         if figures:
             self.replay_bar.refresh()
             self.uplink_panel.refresh()

@@ -252,6 +252,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
 
     def leaveEvent(self, event) -> None:
         self.readout.hide()
+        for line in self.crosshair:
+            line.hide()
         super().leaveEvent(event)
 
     def read_at(self, t_s: float) -> str:

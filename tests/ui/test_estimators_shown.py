@@ -121,7 +121,8 @@ def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_record
     rows = imu_rows(window)
     for name in NEW:
         assert len(rows[f"{name}_qw"]) > 1500 and np.all(np.isfinite(rows[f"{name}_qw"])), name
-    assert list(window.estimator_panel.shown) == list(COMPARED)
+    offered = list(window.estimator_panel.shown)  # the recorded ones, then those a replay can add
+    assert offered[: len(COMPARED)] == list(COMPARED) and set(offered[len(COMPARED) :]) == {"cf1", "kf", "ekf"}
     assert not any(window.estimator_panel.shown[name].isChecked() for name in NEW)
     window.estimator_panel.shown["mcf"].setChecked(True)
     mcf = curves(window.live_view.attitude, "MCF")[0]

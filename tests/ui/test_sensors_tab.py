@@ -8,8 +8,8 @@ from groundstation.ui.plots import Plot
 def test_magnetometer_and_barometer_appear_on_the_sensors_tab(window, qtbot, recording):
     window.start_demo()  # the demo craft carries a magnetometer and a barometer
     view = window.live_view
-    qtbot.waitUntil(lambda: len(view.sensors.items) == 4, timeout=8000)
     view.tabs.setCurrentWidget(view.sensors)
+    qtbot.waitUntil(lambda: len(view.sensors.items) == 4, timeout=8000)
     mag_x = next(c for s, c in view.sensors.curves if s.quantity == "mag_x_uT")
     pressure = next(c for s, c in view.sensors.curves if s.quantity == "baro_pressure_hPa")
     qtbot.waitUntil(lambda: mag_x.xData is not None and len(mag_x.xData) > 20 and pressure.xData is not None, timeout=5000)
