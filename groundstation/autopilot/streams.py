@@ -1,0 +1,71 @@
+"""The only uplink a MAVLink session sends: requests for stream rates. Nothing here arms, changes
+mode or moves the aircraft.
+
+Two requests, because autopilots honour different ones: ``REQUEST_DATA_STREAM`` (ArduPilot; groups
+RAW_SENSORS = RAW_IMU, SCALED_PRESSURE, ... and EXTRA1 = ATTITUDE) and ``MAV_CMD_SET_MESSAGE_INTERVAL``
+per message (PX4 and current ArduPilot). The ground station sends as system 255, component 190
+(MAV_COMP_ID_MISSIONPLANNER), as GCSs do.
+
+``ImuRateMonitor`` says when the IMU arrives too slowly for host filtering to mean anything (many
+telemetry links send RAW_IMU at 2–10 Hz; the host filters integrate the gyro between samples).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+GCS_SYSTEM, GCS_COMPONENT = 255, 190
+MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
+STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
+                     mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
+STREAM_GROUPS = (mavlink.MAV_DATA_STREAM_RAW_SENSORS, mavlink.MAV_DATA_STREAM_EXTRA1)
+
+
+def gcs_encoder(file=None) -> mavlink.MAVLink:
+    return mavlink.MAVLink(file, srcSystem=GCS_SYSTEM, srcComponent=GCS_COMPONENT)
+
+
+def stream_requests(target_system: int, target_component: int, rate_hz: float) -> bytes:
+    """Bytes asking the autopilot for the IMU and attitude at ``rate_hz`` (both request kinds)."""
+    encoder = gcs_encoder()
+    out = bytearray()
+    for group in STREAM_GROUPS:
+        msg = encoder.request_data_stream_encode(target_system, target_component, group, int(round(rate_hz)), 1)
+        out += msg.pack(encoder)
+    for msg_id in STREAMED_MESSAGES:
+        msg = encoder.command_long_encode(target_system, target_component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                          msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0)  # fmt: skip
+        out += msg.pack(encoder)
+    return bytes(out)
+
+
+class ImuRateMonitor:
+    """IMU rate from the autopilot's own timestamps (median interval of the last ``window`` samples)."""
+
+    def __init__(self, window: int = 50):
+        self._times_us: deque[int] = deque(maxlen=window)
+
+    def add(self, time_us: int) -> None:
+        if not self._times_us or time_us > self._times_us[-1]:
+            self._times_us.append(time_us)
+
+    @property
+    def rate_hz(self) -> float:
+        if len(self._times_us) < 3:
+            return float("nan")
+        return 1e6 / float(np.median(np.diff(np.array(self._times_us, dtype=float))))
+
+    @property
+    def too_slow(self) -> bool:
+        return self.rate_hz < MIN_FILTER_RATE_HZ  # NaN (no rate yet) compares False
+
+
+def slow_imu_note(rate_hz: float) -> str | None:
+    """The message the window, the importer and evaluate show; None when the rate is fine."""
+    if not rate_hz < MIN_FILTER_RATE_HZ:
+        return None
+    return (f"IMU at {rate_hz:.1f} Hz: too slow for host filtering (needs >= {MIN_FILTER_RATE_HZ:.0f} Hz); "
+            "the host estimates are shown but mean little; compare with the onboard attitude instead")
