@@ -88,5 +88,6 @@ def read_log(path, progress=None) -> FlightLog:
         raise UserError(f"{path}: not a flight log (.tlog, .bin or .ulg)")
     log = reader(path, progress)
     if log.imu is None and log.onboard is None:
-        raise UserError(f"{path}: holds neither IMU samples nor an attitude estimate; nothing to show")
+        found = f" ({'; '.join(log.notes)})" if log.notes else ""
+        raise UserError(f"{path}: holds neither IMU samples nor an attitude estimate{found}; damaged or empty?")
     return log
