@@ -17,10 +17,14 @@ from collections import deque
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
+from groundstation.autopilot.records import ImuSample, VehicleStatus
+
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
 STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
                      mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
+AUTOPILOTS = (MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4)
 STREAM_GROUPS = (mavlink.MAV_DATA_STREAM_RAW_SENSORS, mavlink.MAV_DATA_STREAM_EXTRA1)
 
 
@@ -40,6 +44,33 @@ def stream_requests(target_system: int, target_component: int, rate_hz: float) -
                                           msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0)  # fmt: skip
         out += msg.pack(encoder)
     return bytes(out)
+
+
+class StreamRequester:
+    """Asks every autopilot that sends a heartbeat for the IMU and attitude at ``rate_hz``, and asks
+    again every ``retry_s`` while its IMU stays slower than ``MIN_FILTER_RATE_HZ`` (a request can be
+    lost on a radio link, and ArduPilot's SRx_ parameters may override it)."""
+
+    def __init__(self, rate_hz: float = 50.0, retry_s: float = 5.0):
+        self.rate_hz = rate_hz
+        self.retry_ns = int(retry_s * 1e9)
+        self.monitors: dict[int, ImuRateMonitor] = {}
+        self._asked_ns: dict[tuple[int, int], int] = {}
+
+    def update(self, records, t_host_ns: int) -> bytes:
+        """The request bytes to send now (often none), given the records just decoded."""
+        out = b""
+        for r in records:
+            if isinstance(r, ImuSample):
+                self.monitors.setdefault(r.system, ImuRateMonitor()).add(r.time_us)
+            elif isinstance(r, VehicleStatus) and r.autopilot in AUTOPILOTS:
+                target = (r.system, r.component)
+                asked = self._asked_ns.get(target)
+                slow = r.system not in self.monitors or not self.monitors[r.system].rate_hz >= MIN_FILTER_RATE_HZ
+                if asked is None or (slow and t_host_ns - asked >= self.retry_ns):
+                    self._asked_ns[target] = t_host_ns
+                    out += stream_requests(*target, self.rate_hz)
+        return out
 
 
 class ImuRateMonitor:
