@@ -67,13 +67,14 @@ def write_ulog(path, topics: dict[str, tuple[list[tuple[str, str]], dict[str, np
         out += _message(b"F", f"{topic}:{spec}".encode())
     for msg_id, (topic, (fields, columns)) in enumerate(topics.items()):
         out += _message(b"A", struct.pack("<BH", 0, msg_id) + topic.encode())
-        fmt = "<" + "".join(f"{ftype.split('[')[1][:-1] if '[' in ftype else ''}{ULOG_TYPES[ftype.split('[')[0]]}" for ftype, _ in fields)
-        n = len(columns["timestamp"])
-        for i in range(n):
+        codes = [ULOG_TYPES[ftype.split("[")[0]] for ftype, _ in fields]
+        counts = [int(ftype.split("[")[1][:-1]) if "[" in ftype else 1 for ftype, _ in fields]
+        fmt = "<" + "".join(f"{n}{c}" for c, n in zip(codes, counts))
+        for i in range(len(columns["timestamp"])):
             values = []
-            for _, fname in fields:
-                v = columns[fname][i]
-                values.extend(np.atleast_1d(v).tolist())
+            for (_, fname), code in zip(fields, codes):
+                cast = float if code == "f" else int
+                values.extend(cast(v) for v in np.atleast_1d(columns[fname][i]).tolist())
             rows.append((int(columns["timestamp"][i]), msg_id, struct.pack(fmt, *values)))
     for _, msg_id, payload in sorted(rows, key=lambda r: (r[0], r[1])):
         out += _message(b"D", struct.pack("<H", msg_id) + payload)

@@ -89,9 +89,9 @@ def test_a_file_that_is_no_tlog_is_a_clear_error(tmp_path):
 
 def test_sitl_tlog_uses_the_autopilot_clock_not_the_compressed_receive_time(tmp_path):
     # ArduPilot's autotest ran ~25x faster than real time: 308 s of autopilot time in 12 s of receive
-    # time (README). The first 800 kB (a cut file, like a crash) keep the test short.
+    # time (README). The first 400 kB (a cut file, like a crash) keep the test short.
     trimmed = tmp_path / "rover_start.tlog"
-    trimmed.write_bytes(flightlog("ardurover_boat_sitl_autotest.tlog").read_bytes()[:800_000])
+    trimmed.write_bytes(flightlog("ardurover_boat_sitl_autotest.tlog").read_bytes()[:400_000])
     log = read_log(trimmed)
     assert log.autopilot == "ArduPilot" and log.imu.source == "RAW_IMU"
     assert log.imu.rate_hz == pytest.approx(10.0, rel=0.02)  # README: 10 Hz on time_boot_ms / time_usec
