@@ -3,7 +3,7 @@
 | spec | what |
 |---|---|
 | ``mavlink:/dev/ttyUSB0?baud=57600``, ``mavlink:COM4`` | a serial port (SiK telemetry radios: 57600, the default) |
-| ``mavlink:udpin:0.0.0.0:14550`` | listen on UDP (SITL, Wi-Fi bridges); uplink goes to whoever sent last |
+| ``mavlink:udpin:0.0.0.0:14550`` | listen on UDP (SITL, Wi-Fi bridges; port 0: any free one); uplink goes to whoever sent last |
 | ``mavlink:udpout:192.168.4.1:14550`` | send to a UDP address and read its answers |
 | ``mavlink:tcp:127.0.0.1:5760`` | a TCP connection (ArduPilot SITL's serial 0) |
 | ``mavlink:flight.tlog?speed=4`` | a ``.tlog`` replayed, as fast as possible or at 0.25x-64x |
@@ -49,7 +49,7 @@ def open_mavlink(spec: str):
 
 def split_address(address: str, spec: str) -> tuple[str, int]:
     host, _, port = address.rpartition(":")
-    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+    if not host or not port.isdigit() or not 0 <= int(port) < 65536:
         raise SourceError(f"{spec!r}: expected HOST:PORT, e.g. mavlink:udpin:0.0.0.0:14550")
     return host, int(port)
 
