@@ -223,3 +223,22 @@ def packets_of_chunks(chunks: Iterable[tuple[int, bytes]], unix_us_at_first: int
         for msg in parser.parse_buffer(data) or ():
             if msg.get_type() != "BAD_DATA":
                 yield stamp_us, msg.get_msgbuf()
+
+
+def recording_to_tlog(recording, out) -> int:
+    """A recorded MAVLink session (raw bytes with arrival times) as a standard .tlog: each packet
+    stamped with the wall-clock time its bytes arrived (the recording's ``start_utc`` plus the
+    monotonic time since it opened). Returns the number of packets; UserError if there are none."""
+    from datetime import datetime
+
+    if recording.chunk_count == 0:
+        raise UserError(f"{recording.path}: the recording holds no link bytes")
+    first_ns = int(recording.chunk_t_host_ns[0])
+    start = recording.metadata.get("start_utc")
+    unix_us = int(datetime.fromisoformat(start).timestamp() * 1e6) if start else 0
+    if start and recording.t_open_ns is not None:
+        unix_us += (first_ns - recording.t_open_ns) // 1000
+    packets = list(packets_of_chunks(recording.chunks(), unix_us))
+    if not packets:
+        raise UserError(f"{recording.path}: holds no MAVLink packets (a recording of this project's own protocol?)")
+    return write_tlog(out, packets)

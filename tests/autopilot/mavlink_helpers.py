@@ -9,6 +9,9 @@ from pathlib import Path
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from groundstation import geodesy
+from groundstation.sim.profiles import make_profile
+
 FLIGHTLOGS = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs"
 
 
@@ -79,3 +82,30 @@ def write_ulog(path, topics: dict[str, tuple[list[tuple[str, str]], dict[str, np
     for _, msg_id, payload in sorted(rows, key=lambda r: (r[0], r[1])):
         out += _message(b"D", struct.pack("<H", msg_id) + payload)
     Path(path).write_bytes(bytes(out))
+
+
+BOOT_US = 5_000_000
+
+
+def px4_flight(duration_s=12.0, imu_hz=200, att_hz=50):
+    """A PX4-like log of the simulator's flight profile: ideal IMU, its truth as both vehicle_attitude and
+    the SITL ground truth, GPS every 40 IMU samples; returns (topics for ``write_ulog``, IMU-rate truth)."""
+    profile = make_profile("flight", duration_s, seed=4)
+    t_imu = np.arange(int(duration_s * imu_hz)) / imu_hz
+    truth = profile.truth(t_imu)
+    t_att = np.arange(int(duration_s * att_hz)) / att_hz
+    att = profile.truth(t_att).q_body_to_ned
+    sensor_combined = ([("uint64_t", "timestamp"), ("float[3]", "gyro_rad"), ("float[3]", "accelerometer_m_s2")],
+                       {"timestamp": BOOT_US + np.rint(t_imu * 1e6), "gyro_rad": truth.rate_body_rad_s,
+                        "accelerometer_m_s2": truth.specific_force_body_m_s2()})
+    attitude = ([("uint64_t", "timestamp"), ("float[4]", "q")], {"timestamp": BOOT_US + np.rint(t_att * 1e6), "q": att})
+    t_gps = t_imu[::40]
+    lat, lon, alt = geodesy.geodetic_from_ned(profile.truth(t_gps).pos_ned_m, (47.0, 8.0, 400.0))
+    vel = profile.truth(t_gps).vel_ned_m_s
+    gps = ([("uint64_t", "timestamp"), ("int32_t", "lat"), ("int32_t", "lon"), ("int32_t", "alt"), ("float", "vel_n_m_s"),
+            ("float", "vel_e_m_s"), ("float", "vel_d_m_s"), ("uint8_t", "fix_type"), ("uint8_t", "satellites_used")],
+           {"timestamp": BOOT_US + np.rint(t_gps * 1e6), "lat": np.rint(lat * 1e7), "lon": np.rint(lon * 1e7), "alt": np.rint(alt * 1000),
+            "vel_n_m_s": vel[:, 0], "vel_e_m_s": vel[:, 1], "vel_d_m_s": vel[:, 2], "fix_type": np.full(len(t_gps), 3),
+            "satellites_used": np.full(len(t_gps), 11)})  # fmt: skip
+    return {"sensor_combined": sensor_combined, "vehicle_attitude": attitude, "vehicle_attitude_groundtruth": attitude,
+            "vehicle_gps_position": gps}, truth  # fmt: skip
