@@ -18,7 +18,7 @@ import numpy as np
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import new_parser
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, series
-from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4, MessageMapper
+from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
 from groundstation.errors import UserError
 
 STAMP = struct.Struct(">Q")
@@ -139,7 +139,7 @@ def from_records(path: Path, records: list, mapper: MessageMapper) -> FlightLog:
     fixes = [r for r in by_kind[rec.GpsReading] if r.fix_type >= 2 and r.time_us > 0]
     log.gps = series([r.time_us for r in fixes], {c: [getattr(r, c) for r in fixes] for c in GPS_COLUMNS}, "GPS_RAW_INT")
     log.tables, log.units = _tables(mine, by_kind, device_us)
-    modes = list(dict.fromkeys(r.mode for r in by_kind[rec.VehicleStatus] if r.component == 1 or len(systems) == 0))
+    modes = list(dict.fromkeys(r.mode for r in by_kind[rec.VehicleStatus] if r.autopilot != MAV_AUTOPILOT_INVALID))
     if modes:
         log.notes.append(f"modes: {', '.join(modes)}")
     return log
