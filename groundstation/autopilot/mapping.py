@@ -176,22 +176,31 @@ class MessageMapper:
 
 def generic(msg, sender, t_host_ns) -> GenericMessage:
     """Numeric fields (arrays flattened as ``name_i``), with pymavlink's units where it has them."""
-    fields: dict[str, float] = {}
-    for name in msg.get_fieldnames():
-        value = getattr(msg, name)
-        if isinstance(value, (int, float)):
-            fields[name] = float(value)
-        elif isinstance(value, (list, tuple)):
-            fields.update((f"{name}_{i}", float(v)) for i, v in enumerate(value) if isinstance(v, (int, float)))
-    return GenericMessage(*sender, t_host_ns, device_time_us(msg), msg.get_type(), fields, field_units(msg, fields))
+    scalars, arrays, units = _layout(msg)
+    fields = {name: getattr(msg, name) for name in scalars}
+    for name, flat in arrays:
+        fields.update(zip(flat, getattr(msg, name)))
+    return GenericMessage(*sender, t_host_ns, device_time_us(msg), msg.get_type(), fields, units)
 
 
-_UNITS: dict[str, dict[str, str]] = {}  # message type -> field -> unit (each type's fields are fixed)
+# message type -> (numeric scalar fields, (array field, its flattened names), unit per flattened field);
+# a type's fields are fixed, so this is worked out from its first message.
+_LAYOUTS: dict[str, tuple[tuple[str, ...], tuple[tuple[str, tuple[str, ...]], ...], dict[str, str]]] = {}
 
 
-def field_units(msg, fields) -> dict[str, str]:
-    units = _UNITS.get(msg.get_type())
-    if units is None:
+def _layout(msg):
+    layout = _LAYOUTS.get(msg.get_type())
+    if layout is None:
         by_name = getattr(msg, "fieldunits_by_name", None) or {}
-        units = _UNITS[msg.get_type()] = {name: by_name.get(name, by_name.get(name.rpartition("_")[0], "")) for name in fields}
-    return units
+        scalars, arrays, units = [], [], {}
+        for name in msg.get_fieldnames():
+            value = getattr(msg, name)
+            if isinstance(value, (int, float)):
+                scalars.append(name)
+                units[name] = by_name.get(name, "")
+            elif isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) for v in value):
+                flat = tuple(f"{name}_{i}" for i in range(len(value)))
+                arrays.append((name, flat))
+                units.update(dict.fromkeys(flat, by_name.get(name, "")))
+        layout = _LAYOUTS[msg.get_type()] = (tuple(scalars), tuple(arrays), units)
+    return layout

@@ -185,7 +185,8 @@ def _tables(mine, by_kind, device_us) -> tuple[dict[str, Series], dict[str, dict
         fields = list(rows[0].fields)
         own = np.array([r.time_us or 0 for r in rows], dtype=float)
         times = np.where(own > 0, own, device_us(np.array([r.t_host_ns for r in rows], dtype=float)))
-        tables[name] = series(times, {f: [r.fields.get(f, np.nan) for r in rows] for f in fields}, name)
+        values = np.array([list(r.fields.values()) for r in rows], dtype=float).reshape(len(rows), len(fields))  # one layout per type
+        tables[name] = series(times, dict(zip(fields, values.T)), name)
         units[name] = dict(rows[0].units)
     for kind, name in TABLE_KINDS.items():
         rows = by_kind[kind]
