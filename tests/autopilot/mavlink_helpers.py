@@ -109,3 +109,27 @@ def px4_flight(duration_s=12.0, imu_hz=200, att_hz=50):
             "satellites_used": np.full(len(t_gps), 11)})  # fmt: skip
     return {"sensor_combined": sensor_combined, "vehicle_attitude": attitude, "vehicle_attitude_groundtruth": attitude,
             "vehicle_gps_position": gps}, truth  # fmt: skip
+
+
+# -- ArduPilot DataFlash (.bin): records "A3 95 id payload", formats declared by FMT (id 128) records --
+
+def dataflash_record(msg_id: int, payload: bytes) -> bytes:
+    return b"\xa3\x95" + bytes([msg_id]) + payload
+
+
+def dataflash_fmt(msg_id: int, name: str, fmt: str, labels: str) -> bytes:
+    length = 3 + struct.calcsize("<" + fmt.replace("n", "4s").replace("N", "16s").replace("Z", "64s"))
+    return dataflash_record(128, struct.pack("<BB4s16s64s", msg_id, length, name.encode(), fmt.encode(), labels.encode()))
+
+
+def write_dataflash(path, messages: dict[str, tuple[str, str, list[tuple]]]) -> None:
+    """``messages``: name -> (struct format of the fields, labels, rows); rows of all types are written
+    in order of their first field (TimeUS)."""
+    out = bytearray(dataflash_fmt(128, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns"))
+    rows = []
+    for msg_id, (name, (fmt, labels, values)) in enumerate(messages.items(), start=130):
+        out += dataflash_fmt(msg_id, name, fmt, labels)
+        rows += [(row[0], msg_id, struct.pack("<" + fmt, *row)) for row in values]
+    for _, msg_id, payload in sorted(rows, key=lambda r: r[:2]):
+        out += dataflash_record(msg_id, payload)
+    Path(path).write_bytes(bytes(out))
