@@ -28,21 +28,21 @@ AUTOPILOTS = (MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4)
 STREAM_GROUPS = (mavlink.MAV_DATA_STREAM_RAW_SENSORS, mavlink.MAV_DATA_STREAM_EXTRA1)
 
 
-def gcs_encoder(file=None) -> mavlink.MAVLink:
-    return mavlink.MAVLink(file, srcSystem=GCS_SYSTEM, srcComponent=GCS_COMPONENT)
+def gcs_encoder() -> mavlink.MAVLink:
+    return mavlink.MAVLink(None, srcSystem=GCS_SYSTEM, srcComponent=GCS_COMPONENT)
 
 
-def stream_requests(target_system: int, target_component: int, rate_hz: float) -> bytes:
-    """Bytes asking the autopilot for the IMU and attitude at ``rate_hz`` (both request kinds)."""
-    encoder = gcs_encoder()
+def stream_requests(target_system: int, target_component: int, rate_hz: float, encoder: mavlink.MAVLink | None = None) -> bytes:
+    """Bytes asking the autopilot for the IMU and attitude at ``rate_hz`` (both request kinds), packed
+    with ``encoder``'s sequence numbers (pass the session's own to keep them counting)."""
+    encoder = encoder or gcs_encoder()
+    messages = [encoder.request_data_stream_encode(target_system, target_component, group, int(round(rate_hz)), 1) for group in STREAM_GROUPS]
+    messages += [encoder.command_long_encode(target_system, target_component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                             msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0) for msg_id in STREAMED_MESSAGES]  # fmt: skip
     out = bytearray()
-    for group in STREAM_GROUPS:
-        msg = encoder.request_data_stream_encode(target_system, target_component, group, int(round(rate_hz)), 1)
+    for msg in messages:
         out += msg.pack(encoder)
-    for msg_id in STREAMED_MESSAGES:
-        msg = encoder.command_long_encode(target_system, target_component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-                                          msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0)  # fmt: skip
-        out += msg.pack(encoder)
+        encoder.seq = (encoder.seq + 1) % 256  # pack() does not count; MAVLink.send() would
     return bytes(out)
 
 
@@ -56,6 +56,7 @@ class StreamRequester:
         self.retry_ns = int(retry_s * 1e9)
         self.monitors: dict[int, ImuRateMonitor] = {}
         self._asked_ns: dict[tuple[int, int], int] = {}
+        self._encoder = gcs_encoder()
 
     def update(self, records, t_host_ns: int) -> bytes:
         """The request bytes to send now (often none), given the records just decoded."""
@@ -69,7 +70,7 @@ class StreamRequester:
                 slow = r.system not in self.monitors or not self.monitors[r.system].rate_hz >= MIN_FILTER_RATE_HZ
                 if asked is None or (slow and t_host_ns - asked >= self.retry_ns):
                     self._asked_ns[target] = t_host_ns
-                    out += stream_requests(*target, self.rate_hz)
+                    out += stream_requests(*target, self.rate_hz, self._encoder)
         return out
 
 
