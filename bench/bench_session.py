@@ -93,6 +93,7 @@ def bench_replay(hours: float, repeats: int) -> None:
 
 def bench_live(seconds: float) -> None:
     from groundstation.session.live import LiveSession
+    from groundstation.session.pipeline import Pipeline
     from groundstation.sources import SerialSource
 
     bridge = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "flight", "--mode", "both"],
@@ -100,7 +101,7 @@ def bench_live(seconds: float) -> None:
     try:
         pty = bridge.stdout.readline().split()[-1]
         with tempfile.TemporaryDirectory() as folder:
-            session = LiveSession(SerialSource(pty), filters=("ahf", "hf", "ecf"), recordings_dir=folder)
+            session = LiveSession(SerialSource(pty), Pipeline(("ahf", "hf", "ecf")), recordings_dir=folder)
             latencies_ns: list[int] = []
             feed = session.pipeline.feed
 

@@ -37,7 +37,8 @@ from groundstation.recording import open_recording  # noqa: E402
 from groundstation.session.pipeline import Pipeline  # noqa: E402
 from groundstation.session.table import Table  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
-from groundstation.ui import sessions  # noqa: E402
+from groundstation.session.factory import LIVE_FILTERS, replay_session  # noqa: E402
+from groundstation.sources import ReplaySource  # noqa: E402
 from groundstation.ui.live_view import attitude_plots  # noqa: E402
 from groundstation.ui.main_window import MainWindow  # noqa: E402
 from groundstation.ui.plots import StackedPlots  # noqa: E402
@@ -164,7 +165,7 @@ def make_recording(path: Path, hours: float) -> None:
 
     duration_s = hours * 3600
     stream = SimStream(Scenario("flight", duration_s, seed=2))
-    with RecordingWriter(path, {"source": "bench_ui", "filters": list(sessions.LIVE_FILTERS)}) as writer:
+    with RecordingWriter(path, {"source": "bench_ui", "filters": list(LIVE_FILTERS)}) as writer:
         t = 0.0
         while t < duration_s:
             t += 60.0
@@ -203,7 +204,7 @@ def memory_child(kind: str, path: str) -> None:
         wait(0.5)
     before = rss_mb()
     t0 = time.monotonic()
-    session = sessions.replay_session(recording, None).start()
+    session = replay_session(ReplaySource(recording, None)).start()
     if window is not None:
         window._adopt(session)
         session.source.speed = None  # the transport set its 1x: as fast as possible instead

@@ -19,7 +19,6 @@ HEADER_BYTES = SPEC.header_bytes
 CRC_BYTES = SPEC.crc_bytes
 FRAME_TYPES_BY_ID: dict[int, FrameType] = {t.id: t for t in SPEC.frames}
 FRAME_TYPES_BY_NAME: dict[str, FrameType] = {t.name: t for t in SPEC.frames}
-_STRUCTS = {t.id: t.struct for t in SPEC.frames}
 _INDEX = {t.id: {name: i for i, name in enumerate(t.field_names)} for t in SPEC.frames}
 
 
@@ -107,7 +106,7 @@ def encode(frame: Frame) -> bytes:
     if not 0 <= frame.seq <= 255:
         raise ValueError(f"{frame_type.name}: seq {frame.seq} does not fit one byte")
     try:
-        payload = _STRUCTS[frame_type.id].pack(*frame.raw)
+        payload = frame_type.struct.pack(*frame.raw)
     except Exception as error:  # struct.error or OverflowError, both say which value is bad
         raise ValueError(f"{frame_type.name}: {error}") from None
     body = bytes((len(payload), frame_type.id, frame.seq)) + payload

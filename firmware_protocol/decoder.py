@@ -12,19 +12,22 @@ from __future__ import annotations
 from binascii import crc_hqx
 from dataclasses import dataclass, fields
 
-from firmware_protocol.codec import CRC_BYTES, CRC_INIT, FRAME_TYPES_BY_ID, HEADER_BYTES, SYNC, Frame
-from firmware_protocol.spec import SPEC
+from firmware_protocol.codec import CRC_BYTES, CRC_INIT, HEADER_BYTES, SYNC, Frame
+from firmware_protocol.spec import SPEC, Spec
 
 _OVERHEAD = HEADER_BYTES + CRC_BYTES
-_MAX_PAYLOAD = SPEC.max_payload_bytes
 _CONFIG_ID = SPEC.frame("CONFIG").id
 _FINGERPRINT_INDEX = SPEC.frame("CONFIG").field_names.index("schema_fingerprint")
-# Per type id (0..255): the frame type, its payload size and struct, or None for unknown ids.
-_TYPE = [FRAME_TYPES_BY_ID.get(i) for i in range(256)]
-_SIZE = [t.payload_size if t else None for t in _TYPE]
-_UNPACK = [t.struct.unpack_from if t else None for t in _TYPE]
-_TIMESTAMPED = [bool(t and t.has_timestamp) for t in _TYPE]
 _new = tuple.__new__  # Frame construction without a Python-level call (see codec.Frame)
+
+
+def _lookup(spec: Spec) -> tuple[list, list, list, list]:
+    """Per type id (0..255): the frame type, its payload size, unpacker and whether it is timestamped
+    (None/False for ids the spec lacks): lists indexed in the hot loop."""
+    by_id = {t.id: t for t in spec.frames}
+    types = [by_id.get(i) for i in range(256)]
+    return (types, [t.payload_size if t else None for t in types], [t.struct.unpack_from if t else None for t in types],
+            [bool(t and t.has_timestamp) for t in types])
 
 
 @dataclass
@@ -49,7 +52,10 @@ class DecoderStats:
 class StreamDecoder:
     """Feed chunks of any size and boundary; get back the complete, valid, new frames."""
 
-    def __init__(self) -> None:
+    def __init__(self, spec: Spec = SPEC) -> None:
+        """``spec``: the protocol to decode (the project's own by default; tests decode others)."""
+        self.spec = spec
+        self._types, self._sizes, self._unpackers, self._timestamped = _lookup(spec)
         self.stats = DecoderStats()
         self.remote_fingerprint: int | None = None  # from the last CONFIG seen
         self._pending = b""
@@ -71,8 +77,9 @@ class StreamDecoder:
         append = out.append
         find = data.find
         # Locals, not globals, in the loop that runs a million times a second.
-        sync, header, overhead, max_payload, crc_init = SYNC, HEADER_BYTES, _OVERHEAD, _MAX_PAYLOAD, CRC_INIT
-        sizes, unpackers, types, timestamped, crc, new, frame_class = _SIZE, _UNPACK, _TYPE, _TIMESTAMPED, crc_hqx, _new, Frame
+        sync, header, overhead, max_payload, crc_init = SYNC, HEADER_BYTES, _OVERHEAD, self.spec.max_payload_bytes, CRC_INIT
+        sizes, unpackers, types, timestamped = self._sizes, self._unpackers, self._types, self._timestamped
+        crc, new, frame_class = crc_hqx, _new, Frame
         skipped = crc_errors = bad_lengths = lost = duplicates = unknown = accepted = 0
         last_seq, last_raw = self._last_seq, self._last_raw
         last_t32, last_t64 = self._last_t32, self._last_t64

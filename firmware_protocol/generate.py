@@ -160,6 +160,8 @@ def c_header(spec: Spec = SPEC) -> str:
         upper = frame_type.name
         lines.append(f"#define GS_ID_{upper} 0x{frame_type.id:02X}u")
         lines.append(f"#define GS_PAYLOAD_{upper} {frame_type.payload_size}u")
+        # physical value = raw * scale, in the field's unit
+        lines += [f"#define GS_SCALE_{upper}_{f.name.upper()} {f.scale!r}" for f in frame_type.fields if f.scale != 1.0]
     lines += ["", _C_HELPERS]
     for frame_type in spec.frames:
         lines += _c_frame_block(frame_type)
@@ -288,7 +290,8 @@ def protocol_markdown(spec: Spec = SPEC) -> str:
         "## C",
         "",
         f"`firmware_protocol/c/{HEADER_NAME}` is header-only C99: a struct per frame, `gs_pack_<frame>()` writing a "
-        "whole frame, `gs_unpack_<frame>()` reading a payload, `gs_check_frame()` and `gs_crc16()`. "
+        "whole frame, `gs_unpack_<frame>()` reading a payload, `gs_check_frame()` and `gs_crc16()`, and "
+        "`GS_SCALE_<FRAME>_<FIELD>` for every field with a scale. "
         "It does not depend on the CPU's byte order or struct packing.",
         "",
     ]

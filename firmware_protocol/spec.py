@@ -10,6 +10,7 @@ import struct
 import tomllib
 import zlib
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 # C type -> (struct format character, size in bytes, smallest raw value, largest raw value)
@@ -61,7 +62,7 @@ class FrameType:
     def field_names(self) -> tuple[str, ...]:
         return tuple(f.name for f in self.fields)
 
-    @property
+    @cached_property  # made once: the encoder packs with it a hundred times a second
     def struct(self) -> struct.Struct:
         return struct.Struct("<" + "".join(C_TYPES[f.c_type][0] for f in self.fields))
 

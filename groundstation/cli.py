@@ -22,6 +22,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "simulate": ("groundstation.commands.simulate", "write a simulated session (raw bytes + truth CSV) as fast as possible"),
     "ports": ("groundstation.commands.ports", "list the serial ports with description and VID:PID"),
     "replay": ("groundstation.commands.replay", "replay a recording headless, with a live one-line summary"),
+    "record": ("groundstation.commands.record", "record a live source headless (--port SPEC), printing link health"),
     "import": ("groundstation.commands.import_csv", "turn a dataset CSV (raw IMU layout, plain or .gz) into a recording"),
     "export": ("groundstation.commands.export", "export a recording or dataset CSV to CSV or Parquet"),
     "experiments": ("groundstation.commands.experiments", "the seed papers' experiments on the simulator: tables and PNG figures"),

@@ -13,6 +13,8 @@ the rows they arrived at, so export and evaluate treat it like any session.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, read_log
@@ -56,10 +58,12 @@ def log_session(log: FlightLog, filters, forced: dict) -> SessionData:
         if stream is not None:
             values = on_rows(t_us, stream, list(stream.columns))
             sensors.update({f"{prefix}_{name}": values[:, i] for i, name in enumerate(stream.columns)})
+    settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
     return SessionData(
         metadata=metadata, time_s=(t_us - t_us[0]) / 1e6,
         estimates={name: q for name, (q, _) in runs.items()}, diagnostics={name: d for name, (_, d) in runs.items()},
         sensors=sensors, onboard=interpolated(t_us, log.onboard), true_q=interpolated(t_us, log.truth), true_frame="NED",
+        settings_at_start=settings, settings_at_end=settings,
     )  # fmt: skip
 
 

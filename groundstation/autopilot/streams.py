@@ -1,5 +1,5 @@
-"""The only uplink a MAVLink session sends: requests for stream rates. Nothing here arms, changes
-mode or moves the aircraft.
+"""The only uplink a MAVLink session sends: requests for stream rates (and, on ``udpout``, a GCS
+heartbeat so the vehicle learns our address). Nothing here arms, changes mode or moves the aircraft.
 
 Two requests, because autopilots honour different ones: ``REQUEST_DATA_STREAM`` (ArduPilot; groups
 RAW_SENSORS = RAW_IMU, SCALED_PRESSURE, ... and EXTRA1 = ATTITUDE) and ``MAV_CMD_SET_MESSAGE_INTERVAL``
@@ -32,6 +32,19 @@ def gcs_encoder() -> mavlink.MAVLink:
     return mavlink.MAVLink(None, srcSystem=GCS_SYSTEM, srcComponent=GCS_COMPONENT)
 
 
+def pack_next(encoder: mavlink.MAVLink, msg, mavlink1: bool = False) -> bytes:
+    """``msg`` packed with the sender's next sequence number (``MAVLink.send`` counts it; ``pack`` does not)."""
+    data = msg.pack(encoder, mavlink1)
+    encoder.seq = (encoder.seq + 1) % 256
+    return data
+
+
+def gcs_heartbeat(encoder: mavlink.MAVLink | None = None) -> bytes:
+    """A ground station's HEARTBEAT (MAV_TYPE_GCS): how a UDP peer learns where to send."""
+    encoder = encoder or gcs_encoder()
+    return pack_next(encoder, encoder.heartbeat_encode(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE))
+
+
 def stream_requests(target_system: int, target_component: int, rate_hz: float, encoder: mavlink.MAVLink | None = None) -> bytes:
     """Bytes asking the autopilot for the IMU and attitude at ``rate_hz`` (both request kinds), packed
     with ``encoder``'s sequence numbers (pass the session's own to keep them counting)."""
@@ -39,11 +52,7 @@ def stream_requests(target_system: int, target_component: int, rate_hz: float, e
     messages = [encoder.request_data_stream_encode(target_system, target_component, group, int(round(rate_hz)), 1) for group in STREAM_GROUPS]
     messages += [encoder.command_long_encode(target_system, target_component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
                                              msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0) for msg_id in STREAMED_MESSAGES]  # fmt: skip
-    out = bytearray()
-    for msg in messages:
-        out += msg.pack(encoder)
-        encoder.seq = (encoder.seq + 1) % 256  # pack() does not count; MAVLink.send() would
-    return bytes(out)
+    return b"".join(pack_next(encoder, msg) for msg in messages)
 
 
 class StreamRequester:

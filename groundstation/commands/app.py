@@ -15,13 +15,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("recording", nargs="?", metavar="RECORDING", help="open this recording (.gsrec) for replay")
     parser.add_argument("--demo", action="store_true",
                         help="stream from the built-in simulated radio bridge (also the default without --port or RECORDING)")
-    parser.add_argument("--port", metavar="PORT", help="connect to this serial port (COM3, /dev/ttyUSB0, a pyserial URL)")
-    parser.add_argument("--baud", type=int, default=115200, metavar="N", help="baud rate (default: 115200)")
+    parser.add_argument("--port", metavar="SPEC",
+                        help="connect to this source: COM3, /dev/ttyUSB0, udp://HOST:PORT, tcp://HOST:PORT, sim:?scenario=NAME, "
+                             "a pyserial URL, a recording (docs/sources.md)")
+    parser.add_argument("--baud", type=int, default=115200, metavar="N", help="serial baud rate unless the spec gives ?baud= (default: 115200)")
 
 
 def run(args: argparse.Namespace) -> int:
     if args.demo and (args.port or args.recording):
         raise UserError("--demo opens the simulated bridge; leave out --port and RECORDING, or --demo")
+    if args.port:
+        from groundstation.sources import parse_spec
+
+        parse_spec(args.port)  # a garbled spec is said here (status 2); a port that fails to open, in the window
     from groundstation.ui.app import run as run_app  # Qt is imported only here
 
     return run_app(args.port, args.baud, args.recording)

@@ -9,6 +9,7 @@ SIGTERM (or ``--duration``), answers uplink commands, then prints what the link 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import signal
 import sys
@@ -26,6 +27,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds (default: run until stopped)")
     parser.add_argument("--link", default=None, metavar="PATH",
                         help="also make PATH a symlink to the pty (kept across --dropout-every reconnections)")
+    parser.add_argument("--firmware", choices=("python", "c"), default="python",
+                        help="who runs the board: the Python model (default) or the reference firmware's C core, "
+                             "built with the system C compiler (firmware in the loop; MPU-6050 only)")
     parser.add_argument("--timing-log", default=None, metavar="FILE",
                         help="append one line per write: host monotonic ns, then the device t_us of the frames written")
     mav = parser.add_argument_group("MAVLink aircraft")
@@ -38,13 +42,21 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.sim.stream import SimStream
 
     scenario = scenario_from_args(args, args.duration if args.duration is not None else OPEN_ENDED_PROFILE_S)
+    scenario = dataclasses.replace(scenario, firmware_core=args.firmware)
     mavlink = args.mavlink or args.mavlink1 or args.udp is not None
     if mavlink:
         from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 
+        if args.firmware != "python":
+            raise UserError("--firmware c runs this project's firmware, which does not speak MAVLink")
         stream = MavlinkAircraft(scenario, mavlink1=args.mavlink1)
     else:
-        stream = SimStream(scenario)
+        from firmware_protocol.reference.host import CoreUnavailable
+
+        try:
+            stream = SimStream(scenario)
+        except (ValueError, CoreUnavailable) as error:
+            raise UserError(f"--firmware {args.firmware}: {error}") from None
     stopping = []
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stopping.append(True))
@@ -64,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as error:
         raise UserError(f"cannot open a pseudo-terminal or the link {link_path}: {error}") from None
     s = scenario.firmware
-    what = "MAVLink" + (" 1" if args.mavlink1 else " 2") if mavlink else f"mode {s.mode}, {s.rate_hz} Hz"
+    what = "MAVLink" + (" 1" if args.mavlink1 else " 2") if mavlink else f"mode {s.mode}, {s.rate_hz} Hz, {args.firmware} firmware"
     print(f"bridge-sim: '{scenario.profile}' seed {scenario.seed}, {what} on {bridge.path}", flush=True)
     try:
         bridge.run(lambda: bool(stopping), args.duration)

@@ -30,3 +30,23 @@ class ProgressBar:
         if self._shown:
             self.stream.write("\n")
             self.stream.flush()
+
+
+class StagedProgress:
+    """``progress(stage, done, total)``: one bar per stage ("decoding", then "writing")."""
+
+    def __init__(self, stream=None):
+        self.stream = stream or sys.stderr  # looked up now: tests and callers may have replaced it
+        self.stage: str | None = None
+        self.bar: ProgressBar | None = None
+
+    def __call__(self, stage: str, done: float, total: float) -> None:
+        if stage != self.stage:
+            self.done()
+            self.stage, self.bar = stage, ProgressBar(stage, self.stream)
+        self.bar(done, total)
+
+    def done(self) -> None:
+        if self.bar is not None:
+            self.bar.done()
+            self.bar = None

@@ -15,28 +15,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundstation.commands.summary import follow
-    from groundstation.errors import UserError
-    from groundstation.recording import open_recording
+    from groundstation.commands.summary import follow, totals_line
     from groundstation.session.live import LiveSession
     from groundstation.session.replay import pipeline_for
-    from groundstation.sources import ReplaySource
+    from groundstation.sources.replay import open_replay
 
     filters, overrides = estimator_options(args)
-    recording = open_recording(args.file)
-    for finding in recording.damage:
+    source = open_replay(args.file, args.speed)  # the opener of open_source's recording specs
+    for finding in source.recording.damage:
         print(f"warning: {finding}")
-    if recording.chunk_count == 0:
-        raise UserError(f"{args.file}: no link data to replay (an imported dataset? use export or evaluate)")
-    try:
-        source = ReplaySource(recording, args.speed)
-    except ValueError as error:
-        raise UserError(str(error)) from None
-    session = LiveSession(source, record=False)
-    session.pipeline = pipeline_for(recording, filters, overrides)  # the recorded estimators and settings
+    session = LiveSession(source, pipeline_for(source.recording, filters, overrides), record=False)
     with session:
         follow(session)
-    stats = session.pipeline.decoder.stats
-    print(f"{len(session.pipeline.imu)} IMU samples, {stats.frames} frames, {stats.frames_lost} lost, "
-          f"{stats.crc_errors} CRC errors, {stats.bytes_skipped} bytes skipped")
+    print(totals_line(session))
     return 0

@@ -29,6 +29,16 @@ def summary_line(session: LiveSession) -> str:
             f"{fps_text} frames/s  lost {stats.frames_lost}  CRC errors {stats.crc_errors}")
 
 
+def totals_line(session: LiveSession) -> str:
+    """What the session decoded in all: the last line of ``replay`` and ``record`` (equal for a
+    recording and its replay)."""
+    p = session.pipeline
+    with session.lock:
+        stats = p.decoder.stats
+        return (f"{len(p.imu)} IMU samples, {stats.frames} frames, {stats.frames_lost} lost, "
+                f"{stats.crc_errors} CRC errors, {stats.bytes_skipped} bytes skipped")
+
+
 def follow(session: LiveSession, stream=sys.stdout, interval_s: float = 0.25, until=None) -> None:
     """Rewrite the summary line until the session's reader stops (or ``until()`` is true)."""
     tty = stream.isatty()

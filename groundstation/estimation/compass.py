@@ -32,6 +32,20 @@ def heading_rad(q_body_to_ned, mag_body, declination_rad: float = 0.0) -> np.nda
     return wrap_pi(psi)
 
 
+def reading_heading_rad(q_body_to_ned, mag_body) -> float:
+    """``heading_rad`` of one reading in plain floats, for per-sample code (a few µs, not a numpy call's 100).
+
+    The same eq. 14-15, written through the whole rotation: ``m_h = Rz(ψ)ᵀ R(q) m_b``, so the heading
+    is the attitude's yaw ψ minus the direction of the field turned into NED, ``atan2(m_n,y, m_n,x)``.
+    """
+    w, x, y, z = q_body_to_ned
+    mx, my, mz = mag_body
+    north = (1 - 2 * (y * y + z * z)) * mx + 2 * (x * y - w * z) * my + 2 * (x * z + w * y) * mz
+    east = 2 * (x * y + w * z) * mx + (1 - 2 * (x * x + z * z)) * my + 2 * (y * z - w * x) * mz
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return math.remainder(yaw - math.atan2(east, north), 2 * math.pi)
+
+
 def level_heading_rad(pitch_rad, roll_rad, mx, my, mz):
     """Magnetic heading ψ = atan2(-m_h,y, m_h,x) with ``m_h = Ry(θ) Rx(φ) m_b`` (eq. 14-15); floats or arrays."""
     sp, cp, sr, cr = np.sin(pitch_rad), np.cos(pitch_rad), np.sin(roll_rad), np.cos(roll_rad)

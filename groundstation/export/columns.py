@@ -8,6 +8,8 @@ and fused-position readings when the session has them (``aux_columns``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from groundstation import quaternion
@@ -15,8 +17,20 @@ from groundstation.errors import UserError
 from groundstation.session.data import SessionData
 
 
+def check_row_options(t_from: float | None, t_to: float | None, rate_hz: float | None) -> None:
+    """UserError for a time range or rate no session can have (NaN, infinite, backwards, not positive)."""
+    for option, value in (("--from", t_from), ("--to", t_to), ("--rate", rate_hz)):
+        if value is not None and not math.isfinite(value):
+            raise UserError(f"{option} must be a finite number, not {value}")
+    if t_from is not None and t_to is not None and t_from > t_to:
+        raise UserError(f"--from ({t_from} s) is after --to ({t_to} s)")
+    if rate_hz is not None and rate_hz <= 0:
+        raise UserError("--rate must be positive")
+
+
 def select_rows(time_s: np.ndarray, t_from: float | None = None, t_to: float | None = None, rate_hz: float | None = None) -> np.ndarray:
     """Indices of the rows in [t_from, t_to], decimated to about ``rate_hz`` (every k-th sample)."""
+    check_row_options(t_from, t_to, rate_hz)
     keep = np.ones(len(time_s), dtype=bool)
     if t_from is not None:
         keep &= time_s >= t_from
@@ -26,8 +40,6 @@ def select_rows(time_s: np.ndarray, t_from: float | None = None, t_to: float | N
     if len(rows) == 0:
         raise UserError(f"no samples between {t_from} s and {t_to} s (the session lasts {time_s[-1] if len(time_s) else 0:.1f} s)")
     if rate_hz is not None:
-        if rate_hz <= 0:
-            raise UserError("--rate must be positive")
         period = np.median(np.diff(time_s)) if len(time_s) > 1 else 1.0
         step = max(1, int(round(1.0 / (rate_hz * period))))
         rows = rows[::step]
@@ -55,32 +67,33 @@ def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[st
     return out
 
 
-# The pipeline's tables of the slower sensors and the column prefix each gets in the export.
-AUX_TABLES = {"mag_raw": "mag", "baro": "baro", "gps": "gps", "position": "fused"}
-
-
 def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:
-    """Each reading on the row of the first IMU sample at or after it; empty (NaN) on the other rows.
+    """Every timestamped table but ``imu``/``onboard`` (``data.catalogue``: one per downlink frame, and
+    the fused position), each column prefixed by its table's export prefix (``mag_``, ``baro_``,
+    ``gps_``, ``fused_``, ...). Each reading sits on the row of the first IMU sample at or after it;
+    the other rows are empty (NaN).
 
     The readings come at their own rates (e.g. GPS 10 Hz); empty cells show those rates, and any
     dropout, instead of hiding them behind repeated values. Where IMU frames were lost, two readings
     can share the next IMU row: the later one is kept. The Excel export's Sensors sheet lists every
     reading at its own time.
     """
-    if data.pipeline is None:
-        return {}
     out = {}
-    for table_name, prefix in AUX_TABLES.items():
-        table = data.pipeline.tables.get(table_name)
-        if table is None or not len(table):
-            continue
-        values = table.to_dict()
+    for info in reading_tables(data):
+        values = data.tables[info.name]
         at = np.searchsorted(data.time_s, values["time_s"])
         inside = at < len(data.time_s)
-        for column, readings in values.items():
-            if column == "time_s" or column.startswith("t_us"):
-                continue
+        prefix = info.export_prefix
+        for column in info.column_names[1:]:
             full = np.full(len(data.time_s), np.nan)
-            full[at[inside]] = readings[inside]
+            full[at[inside]] = values[column][inside]
             out[column if column.startswith(prefix) else f"{prefix}_{column}"] = full[rows]
     return out
+
+
+def reading_tables(data: SessionData) -> list:
+    """The catalogue's tables of readings at their own rates that this session has rows in."""
+    if data.catalogue is None:
+        return []
+    return [info for info in data.catalogue if info.name not in ("imu", "onboard") and info.timestamped
+            and len(data.tables.get(info.name, {}).get("time_s", ()))]

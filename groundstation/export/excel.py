@@ -16,7 +16,7 @@ from groundstation.export.columns import select_rows
 from groundstation.export.excel_chart import write_chart_sheets
 from groundstation.export.excel_columns import attitude_block, chart_block, link_blocks, sensor_blocks
 from groundstation.export.excel_session import session_rows, write_session_sheet
-from groundstation.export.excel_stream import EXCEL_MAX_ROWS, discard, save, table_rows, write_table
+from groundstation.export.excel_stream import EXCEL_MAX_ROWS, as_os_error, discard, save, table_rows, write_table
 from groundstation.export.files import atomic_output
 from groundstation.session.data import SessionData
 
@@ -73,7 +73,10 @@ def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to
                 titles += write_table(workbook, title, blocks, max_rows, advance)
             write_chart_sheets(workbook, chart, advance)
             save(workbook, temporary)
-        except BaseException:  # a cancel, a failure, Ctrl-C: no temporary file may stay behind
+        except BaseException as error:  # a cancel, a failure, Ctrl-C: no temporary file may stay behind
             discard(workbook)
+            os_error = as_os_error(error)
+            if os_error is not None:  # a full disk, said as atomic_output says it
+                raise os_error from error
             raise
     return titles + ["Chart"]

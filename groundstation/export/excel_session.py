@@ -4,7 +4,6 @@ estimators did when the session has truth. A short sheet of labelled rows with a
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from datetime import datetime
 
@@ -14,7 +13,6 @@ from openpyxl.styles import Font
 
 from groundstation import mounting
 from groundstation.errors import UserError
-from groundstation.estimation import create
 from groundstation.export.excel_columns import DATE_TIME, start_time
 from groundstation.session.data import SessionData
 
@@ -34,9 +32,8 @@ class Heading(str):
 def session_rows(data: SessionData, rows: np.ndarray, forced: dict | None = None) -> list[list]:
     """The sheet as rows of values; ``forced``: the caller's setting overrides (``--set``)."""
     out = [[Heading("Session")], *facts(data, rows), []]
-    if data.pipeline is not None:
-        stats = data.pipeline.decoder.stats
-        out += [[Heading("Link")], *([label, getattr(stats, name)] for name, label in LINK_COUNTS), []]
+    if data.link is not None:
+        out += [[Heading("Link")], *([label, data.link.counters[name]] for name, label in LINK_COUNTS), []]
     if data.estimates:
         out += settings_table(data, forced or {})
     out += events_table(data)
@@ -74,9 +71,9 @@ def firmware(data: SessionData) -> list[list]:
     """What the aircraft's last CONFIG frame said; a dataset has no aircraft."""
     if "autopilot" in data.metadata:
         return [["mounting", "the autopilot's body axes (x forward, y right, z down), as logged"]]
-    if data.pipeline is None:
+    if data.link is None:
         return [["mounting", "dataset: the IMU axes are taken as the body axes"]]
-    config = data.pipeline.config
+    config = data.config
     if config is None:
         return [["firmware", "no CONFIG frame received"]]
     return [
@@ -91,14 +88,11 @@ def firmware(data: SessionData) -> list[list]:
 
 
 def settings_table(data: SessionData, forced: dict) -> list[list]:
-    """Every estimator's settings at the start (recorded, then forced) and, from the link, at the end."""
-    recorded = data.metadata.get("estimator_settings", {})
-    at_end = data.pipeline.settings() if data.pipeline is not None else {}
-    out = [[Heading("Estimator settings"), Heading("at start"), *([Heading("at end")] if at_end else [])]]
+    """Every estimator's settings at the start (recorded, then forced) and at the end (changed during the session)."""
+    out = [[Heading("Estimator settings"), Heading("at start"), Heading("at end")]]
     for name in data.estimates:
-        start = {k: float(v) for k, v in recorded.get(name, {}).items()} | forced.get(name, {})
-        for param, value in dataclasses.asdict(create(name, start).settings).items():
-            out.append([f"{name}.{param}", cell_number(value), *([cell_number(at_end[name][param])] if name in at_end else [])])
+        start, end = data.settings_at_start[name], data.settings_at_end[name]
+        out += [[f"{name}.{param}", cell_number(value), cell_number(end[param])] for param, value in start.items()]
     if forced:
         out.append([f"forced for this export (--set): {forced}"])
     return out + [[]]
@@ -106,14 +100,10 @@ def settings_table(data: SessionData, forced: dict) -> list[list]:
 
 def events_table(data: SessionData) -> list[list]:
     """Settings changes, CONFIG frames and warnings in stream order, then what the recording lost."""
-    events = data.pipeline.events if data.pipeline is not None else []
-    if not events and not data.damage:
+    if not data.events and not data.damage:
         return []
     out = [[Heading("Events"), Heading("time (s from first byte)"), Heading("kind"), Heading("what")]]
-    # Pipeline events carry the host clock; its origin (the first chunk) has no public accessor yet.
-    t0_ns = getattr(data.pipeline, "_t0_host_ns", None) or 0
-    for event in events:
-        out.append(["", (event["t_host_ns"] - t0_ns) / 1e9, event["kind"], describe_event(event)])
+    out += [["", event["t_s"], event["kind"], describe_event(event)] for event in data.events]
     out += [["", None, "damage", finding] for finding in data.damage]
     return out + [[]]
 
@@ -126,7 +116,7 @@ def describe_event(event: dict) -> str:
                 f"±{event['gyro_fs_dps']} °/s, {event['rate_hz']} Hz, mounting {event['mounting']}")
     if "message" in event:
         return str(event["message"])
-    return ", ".join(f"{k} = {v}" for k, v in event.items() if k not in ("t_host_ns", "kind"))  # e.g. an ACK
+    return ", ".join(f"{k} = {v}" for k, v in event.items() if k not in ("t_host_ns", "t_s", "kind"))  # e.g. an ACK
 
 
 def error_table(data: SessionData) -> list[list]:

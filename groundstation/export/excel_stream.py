@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import itertools
 import os
 from collections.abc import Callable
@@ -24,6 +25,13 @@ from openpyxl.styles import Alignment, Font
 from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.writer.excel import ExcelWriter
+
+try:  # openpyxl writes its sheets through lxml when lxml is installed, and lxml reports I/O errors its own way
+    from lxml.etree import SerialisationError
+
+    XML_WRITE_ERRORS: tuple[type[Exception], ...] = (SerialisationError,)
+except ImportError:
+    XML_WRITE_ERRORS = ()
 
 EXCEL_MAX_ROWS = 1_048_576
 CHUNK_ROWS = 2048  # rows converted to Python values at a time: bounds memory and the cancel delay
@@ -149,9 +157,17 @@ def discard(workbook) -> None:
         if writer is None or not os.path.exists(writer.out):
             continue
         # Closing writes the XML's closing tags, which fails on a full disk; the files go anyway.
-        with contextlib.suppress(OSError, ValueError):
+        with contextlib.suppress(OSError, ValueError, *XML_WRITE_ERRORS):
             if sheet._rows is not None:
                 sheet._rows.close()
             writer.close()
         sheet._rows = None  # else its generator, collected later, writes to the closed file
         writer.cleanup()
+
+
+def as_os_error(error: BaseException) -> OSError | None:
+    """lxml's "IO_ENOSPC"-style write failure as the OSError it stands for (None for anything else)."""
+    if not isinstance(error, XML_WRITE_ERRORS) or not str(error).startswith("IO_"):
+        return None
+    code = getattr(errno, str(error)[3:], None)
+    return OSError(code, os.strerror(code)) if code else OSError(str(error))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib.util
+
 import pandas as pd
 
 from groundstation.errors import UserError
@@ -15,10 +17,13 @@ def write_csv(columns: dict, path, overwrite: bool = False) -> None:
         pd.DataFrame(columns).to_csv(temporary, index=False, float_format=CSV_FLOAT_FORMAT, lineterminator="\n")
 
 
+def require_pyarrow() -> None:
+    """Parquet needs the optional pyarrow (pandas uses it): a clear message, not pandas' ImportError."""
+    if importlib.util.find_spec("pyarrow") is None:
+        raise UserError("Parquet export needs pyarrow: pip install 'groundstation[parquet]'")
+
+
 def write_parquet(columns: dict, path, overwrite: bool = False) -> None:
-    try:
-        import pyarrow  # noqa: F401  (pandas needs it; checked first for a clear message)
-    except ImportError:
-        raise UserError("Parquet export needs pyarrow: pip install 'groundstation[parquet]'") from None
+    require_pyarrow()
     with atomic_output(path, overwrite) as temporary:
         pd.DataFrame(columns).to_parquet(temporary, index=False)

@@ -89,7 +89,10 @@ class RecordingWriter:
             self._write(encode_record(Kind.METADATA, time.monotonic_ns(), header))
             self._flush()  # the header is on disk before the first byte of the flight
         except RecordingError:
-            self._file.close()
+            # Without its header the file holds nothing of the flight: leave no empty file behind
+            # (a full disk would otherwise collect one at every attempt to resume).
+            self._close_file_quietly()
+            self.path.unlink(missing_ok=True)
             raise
         self._flusher = threading.Thread(target=self._flush_periodically, name="recording-flush", daemon=True)
         self._flusher.start()
@@ -123,12 +126,20 @@ class RecordingWriter:
                 return
             self._closed.set()
             try:
+                self._raise_background_error()
                 self._write(encode_record(Kind.END, time.monotonic_ns(), b""))
                 self._flush()
             finally:
-                self._file.close()
+                self._close_file_quietly()
         self._flusher.join()
-        self._raise_background_error()
+
+    def _close_file_quietly(self) -> None:
+        """Closes the file even when its last buffered bytes cannot be written (a full disk): those
+        are lost either way, what reached the file stays readable, and the caller gets a RecordingError."""
+        try:
+            self._file.close()
+        except OSError:
+            pass
 
     def _append(self, record: bytes) -> None:
         with self._lock:

@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import threading
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 
 from firmware_protocol import SPEC, encode, make_frame
-from groundstation.recording import RecordingWriter, default_recordings_dir, new_recording_path
-from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
+from groundstation.recording import Recorder, default_recordings_dir
+from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import SettingsSchedule
 from groundstation.sources.base import Source, SourceClosed, SourceError
 
@@ -23,47 +22,51 @@ COMMANDS = SPEC.enums["command"].values
 
 
 class LiveSession:
-    """``record``: write a recording into ``recordings_dir`` (default: ``default_recordings_dir()``).
+    """``source`` through ``pipeline`` (``session.factory.open_session`` makes both from a spec).
 
+    ``record``: write a recording into ``recordings_dir`` (default: ``default_recordings_dir()``)
+    through ``recorder``, which never stops the session: a failing disk stops the recording, not the
+    decoding (``groundstation.recording.recorder``).
     Replays are not re-recorded, and their recorded settings changes are re-applied as they pass.
     """
 
-    def __init__(self, source: Source, filters=DEFAULT_FILTERS, settings=None, record: bool = True,
+    def __init__(self, source: Source, pipeline: Pipeline, record: bool = True,
                  recordings_dir: Path | None = None, metadata: dict | None = None):
         self.source = source
-        self.pipeline = Pipeline(filters, settings)
+        self.pipeline = pipeline
         self.lock = threading.Lock()
         self.error: str | None = None  # why the reader stopped, when it was not asked to
         self.connected = True
-        self._schedule = SettingsSchedule(source.recording) if hasattr(source, "recording") else None
+        self._schedule = SettingsSchedule(source.recording) if source.is_replay else None
         self._stop = threading.Event()
         self._last_chunk_ns = 0
         self._uplink_seq = 0
-        self.recording_path: Path | None = None
-        self._writer = None
-        if record and self._schedule is None:
-            folder = Path(recordings_dir) if recordings_dir is not None else default_recordings_dir()
-            folder.mkdir(parents=True, exist_ok=True)
-            self.recording_path = new_recording_path(folder, datetime.now(timezone.utc))
-            self._writer = RecordingWriter(self.recording_path, {
+        self.recorder = Recorder(
+            recordings_dir if recordings_dir is not None else default_recordings_dir(),
+            lambda: {  # each file's header has the settings in force when it starts
                 "source": source.description,
                 **(metadata or {}),
                 "filters": list(self.pipeline.filters),
                 "estimator_settings": self.pipeline.settings_json(),
-            })
+            },
+            self._recorder_event,
+        )
+        if record and self._schedule is None:
+            self.recorder.start()
         self._thread = threading.Thread(target=self._read_loop, name="groundstation-reader", daemon=True)
 
     def start(self) -> LiveSession:
         self._thread.start()
-        self.send_command("request_config")  # the full scales, in case the start-up CONFIG was missed
+        if self.source.can_send:
+            self.send_command("request_config")  # the full scales, in case the start-up CONFIG was missed
         return self
 
     def stop(self) -> None:
         self._stop.set()
         self._thread.join(timeout=5)
         self.source.close()
-        if self._writer is not None:
-            self._writer.close()
+        with self.lock:
+            self.recorder.stop()
 
     def __enter__(self) -> LiveSession:
         return self.start()
@@ -74,6 +77,16 @@ class LiveSession:
     @property
     def running(self) -> bool:
         return self._thread.is_alive()
+
+    @property
+    def recording_path(self) -> Path | None:
+        """The file being recorded (or the last one); None for a session that never recorded."""
+        return self.recorder.path
+
+    def resume_recording(self) -> bool:
+        """The user's "Resume recording": a new file now; False (``recorder.error`` says why) if it cannot."""
+        with self.lock:
+            return self.recorder.start()
 
     # -- the reader thread ------------------------------------------------------------------------
 
@@ -92,8 +105,7 @@ class LiveSession:
 
     def _take(self, t_host_ns: int, data: bytes) -> None:
         with self.lock:
-            if self._writer is not None:
-                self._writer.write_chunk(t_host_ns, data)
+            self.recorder.write_chunk(t_host_ns, data)
             if self._schedule is not None:
                 self._schedule.apply_before(self.pipeline, t_host_ns)
             self.pipeline.feed(t_host_ns, data)
@@ -101,19 +113,18 @@ class LiveSession:
 
     def _reconnect(self, reason: str) -> bool:
         """Keep trying to reopen a port that went away; False when it cannot be reopened at all."""
-        reopen = getattr(self.source, "reopen", None)
         self._note({"kind": "disconnected", "message": reason})
-        if reopen is None:
+        if not self.source.can_reopen:
             self.error = reason
             return False
         self.connected = False
         while not self._stop.wait(RECONNECT_INTERVAL_S):
             try:
-                reopen()
+                self.source.reopen()
             except SourceError:
                 continue
             self.connected = True
-            self._note({"kind": "reconnected"})
+            self._note({"kind": "reconnected", "source": self.source.description})  # perhaps under a new name
             self.send_command("request_config")
             return True
         return False
@@ -129,8 +140,7 @@ class LiveSession:
         """Change a host estimator's settings now; recorded, so a replay changes them at the same point."""
         with self.lock:
             self.pipeline.change_settings(name, overrides, self._last_chunk_ns)
-            if self._writer is not None:
-                self._writer.write_event(self._last_chunk_ns, self.pipeline.events[-1])
+            self.recorder.write_event(self._last_chunk_ns, self.pipeline.events[-1])
 
     def send_command(self, command: str, param: int = 0, value: float = 0.0) -> int:
         """Send a COMMAND to the aircraft; returns its seq (the ACK carries it back)."""
@@ -152,5 +162,8 @@ class LiveSession:
     def _note_locked(self, event: dict) -> None:
         event = {"t_host_ns": self._last_chunk_ns, **event, "wall_time": time.time()}
         self.pipeline.events.append(event)
-        if self._writer is not None:
-            self._writer.write_event(self._last_chunk_ns, event)
+        self.recorder.write_event(self._last_chunk_ns, event)
+
+    def _recorder_event(self, event: dict) -> None:
+        """``recording_failed``/``recording_resumed``; the recorder is only called under ``lock``."""
+        self.pipeline.events.append({**event, "wall_time": time.time()})

@@ -52,6 +52,16 @@ FIRMWARE_VERSION = (0, 1, 0)
 PREFETCH_SAMPLES = 50
 
 
+def battery_v(t_s: float) -> float:
+    """The simulated battery at true time ``t_s``: a 3S LiPo over a 10-minute flight."""
+    return max(10.5, 12.6 - 1.5 * t_s / 600.0)
+
+
+def cpu_load_pct(mode: int) -> float:
+    """The simulated board's CPU load in ``mode`` (the AHF runs in every mode; sending costs)."""
+    return 25.0 if mode == MODES["raw"] else 40.0
+
+
 @dataclasses.dataclass(frozen=True)
 class FirmwareSettings:
     rate_hz: int = 100  # output rate of IMU_RAW / ATTITUDE
@@ -299,11 +309,11 @@ class Firmware:
                     self._emit(out, t, name, scaled=True, t_us=t_us, **{key: v[i] for key, v in values.items()})
 
     def _emit_status(self, out, t: float, t_us: int) -> None:
-        battery_v = max(10.5, 12.6 - 1.5 * t / 600.0)  # a 3S LiPo over a 10-minute flight
-        flags = (self._calibration is not None) | ((battery_v < 10.8) << 1)
+        battery = battery_v(t)
+        flags = (self._calibration is not None) | ((battery < 10.8) << 1)
         # The radio's own counters are not modelled on the aircraft side (the link model acts at the ground end).
-        self._emit(out, t, "STATUS", scaled=True, t_us=t_us, battery=battery_v, retransmits=0, lost_acks=0,
-                   cpu_load=25.0 if self.mode == MODES["raw"] else 40.0, flags=flags)
+        self._emit(out, t, "STATUS", scaled=True, t_us=t_us, battery=battery, retransmits=0, lost_acks=0,
+                   cpu_load=cpu_load_pct(self.mode), flags=flags)
 
     def _emit_attitude(self, out, t: float, t_us: int, q, diag) -> None:
         qw, qx, qy, qz = (min(max(round(float(v) * _Q14), -32768), 32767) for v in q)

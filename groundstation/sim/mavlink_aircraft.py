@@ -27,6 +27,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from groundstation import geodesy
 from groundstation import quaternion as quat
 from groundstation.autopilot.decoder import new_parser
+from groundstation.autopilot.streams import pack_next
 from groundstation.sim.extra_sensors import origin
 from groundstation.sim.firmware import SentFrame
 from groundstation.sim.link import Chunk, Link
@@ -112,10 +113,7 @@ class MavlinkAircraft:
         return mavlink.MAV_RESULT_ACCEPTED
 
     def _frame(self, encoder, msg, t_s: float, t_us: int | None) -> SentFrame:
-        """Packed with the sender's next sequence number (pymavlink's ``send`` counts it; ``pack`` does not)."""
-        data = msg.pack(encoder, self.mavlink1)
-        encoder.seq = (encoder.seq + 1) % 256
-        return SentFrame(t_s, data, t_us)
+        return SentFrame(t_s, pack_next(encoder, msg, self.mavlink1), t_us)
 
     def _set_interval(self, name: str, interval_s: float) -> None:
         interval_s = max(interval_s, 1.0 / self.base_rate_hz)

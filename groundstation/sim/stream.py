@@ -29,14 +29,21 @@ class Scenario:
     imu: MPU6050Settings = MPU6050Settings()
     ahf: AhfSettings = AhfSettings()
     extra: AuxSettings = AuxSettings()
+    # Who runs the board: "python", the model in firmware.py; "c", the reference firmware's C core
+    # (firmware_c.py), the same code as on the STM32.
+    firmware_core: str = "python"
 
 
 class SimStream:
     def __init__(self, scenario: Scenario, on_samples=None):
         self.scenario = scenario
         self.profile = make_profile(scenario.profile, scenario.duration_s, scenario.seed)
-        self.firmware = Firmware(self.profile, scenario.firmware, scenario.imu, scenario.ahf, scenario.extra,
-                                 scenario.seed, on_samples)
+        board = Firmware
+        if scenario.firmware_core == "c":
+            from groundstation.sim.firmware_c import CFirmware as board
+        elif scenario.firmware_core != "python":
+            raise ValueError(f"firmware_core must be 'python' or 'c', not {scenario.firmware_core!r}")
+        self.firmware = board(self.profile, scenario.firmware, scenario.imu, scenario.ahf, scenario.extra, scenario.seed, on_samples)
         self.link = Link(scenario.link, scenario.seed)
         self.uplink = fp.StreamDecoder()
         self._pending: list[Chunk] = []

@@ -1,178 +1,89 @@
-"""MAVLink sources: ``open_mavlink("mavlink:...")`` for the ``mavlink:`` scheme of ``open_source``.
+"""``mavlink:``: an autopilot speaking MAVLink 1 or 2 (ArduPilot, PX4), over any of the byte transports.
 
 | spec | what |
 |---|---|
-| ``mavlink:/dev/ttyUSB0?baud=57600``, ``mavlink:COM4`` | a serial port (SiK telemetry radios: 57600, the default) |
-| ``mavlink:udpin:0.0.0.0:14550`` | listen on UDP (SITL, Wi-Fi bridges; port 0: any free one); uplink goes to whoever sent last |
-| ``mavlink:udpout:192.168.4.1:14550`` | send to a UDP address and read its answers |
-| ``mavlink:tcp:127.0.0.1:5760`` | a TCP connection (ArduPilot SITL's serial 0) |
-| ``mavlink:flight.tlog?speed=4`` | a ``.tlog`` replayed, as fast as possible or at 0.25x-64x |
+| ``mavlink:/dev/ttyUSB0[?baud=N]``, ``mavlink:COM4`` | a serial port: a SiK telemetry radio (57600, the default here) or a USB autopilot |
+| ``mavlink:udpin:0.0.0.0:14550`` | listen on UDP (SITL, Wi-Fi bridges; port 0: any free one); uplink to the last sender |
+| ``mavlink:udpout:192.168.4.1:14550`` | send to that address first (a GCS heartbeat, so it learns ours) and read its answers |
+| ``mavlink:tcp:127.0.0.1:5760`` | a TCP connection (ArduPilot SITL's first serial port) |
+| ``mavlink:flight.tlog[?speed=X]`` | a ``.tlog`` replayed, packet by packet at its receive times (X: 0.25-64, or max) |
 
-Every source yields the raw bytes stamped on arrival (``Chunk``): what a session records. Decoding is
-``groundstation.autopilot.decoder.MavlinkDecoder``; ``protocol = "mavlink"`` tells the pipeline which.
+The transports are the generic ones (``serial_port``, ``udp``); ``MavlinkSource`` hands over their bytes
+unchanged, stamped on arrival (what a session records), and says ``protocol = "mavlink"`` so the
+session decodes them with ``groundstation.autopilot.decoder.MavlinkDecoder``.
 """
 
 from __future__ import annotations
 
-import select
-import socket
 import time
 from pathlib import Path
-from urllib.parse import parse_qs
 
 from groundstation.sources.base import Chunk, SourceClosed, SourceError
 from groundstation.sources.serial_port import SerialSource
+from groundstation.sources.spec import Spec
+from groundstation.sources.udp import UdpSource
 
-SCHEME = "mavlink:"
 SIK_BAUD = 57600
 READ_WAIT_S = 0.05
-MAX_DATAGRAM = 65_535
 MIN_SPEED, MAX_SPEED = 0.25, 64.0
 
 
-def open_mavlink(spec: str):
-    """The source a ``mavlink:`` string names; SourceError with a clear message otherwise."""
-    if not spec.startswith(SCHEME):
-        raise SourceError(f"{spec!r} is not a MAVLink source (it should start with {SCHEME!r})")
-    target, _, query = spec[len(SCHEME):].partition("?")
-    options = {k: v[-1] for k, v in parse_qs(query).items()}
-    kind, _, address = target.partition(":")
+class MavlinkSource:
+    """A transport carrying MAVLink: its capabilities, reads and writes, labelled for the decoder."""
+
+    protocol = "mavlink"
+
+    def __init__(self, transport, description: str):
+        self.transport = transport
+        self.description = description
+        self.is_replay = transport.is_replay
+        self.can_reopen = transport.can_reopen
+        self.can_send = transport.can_send
+
+    def read(self) -> Chunk | None:
+        return self.transport.read()
+
+    def write(self, data: bytes) -> None:
+        self.transport.write(data)
+
+    def reopen(self) -> None:
+        self.transport.reopen()
+
+    def close(self) -> None:
+        self.transport.close()
+
+
+def open_spec(spec: Spec) -> MavlinkSource:
+    kind, _, address = spec.target.partition(":")
     if kind in ("udpin", "udpout", "tcp"):
-        host, port = split_address(address, spec)
-        return UdpSource(host, port, listen=kind == "udpin") if kind != "tcp" else TcpSource(host, port)
-    if target.lower().endswith(".tlog"):
-        return TlogReplaySource(target, number(options.get("speed"), spec) if "speed" in options else None)
-    if not target:
-        raise SourceError(f"{spec!r}: name a serial port, udpin:, udpout:, tcp: or a .tlog file after 'mavlink:'")
-    return MavlinkSerialSource(target, int(number(options.get("baud", SIK_BAUD), spec)))
+        spec.check_options(())
+        host, port = Spec(spec.text, "udp", address).host_port()
+        if kind == "udpin":
+            return MavlinkSource(UdpSource(host, port), f"MAVLink UDP in {host or '0.0.0.0'}:{port}")
+        if kind == "tcp":
+            host = host or "localhost"
+            return MavlinkSource(SerialSource(f"socket://{host}:{port}", description=f"MAVLink TCP {host}:{port}"),
+                                 f"MAVLink TCP {host}:{port}")  # fmt: skip
+        from groundstation.autopilot.streams import gcs_heartbeat
 
-
-def split_address(address: str, spec: str) -> tuple[str, int]:
-    host, _, port = address.rpartition(":")
-    if not host or not port.isdigit() or not 0 <= int(port) < 65536:
-        raise SourceError(f"{spec!r}: expected HOST:PORT, e.g. mavlink:udpin:0.0.0.0:14550")
-    return host, int(port)
-
-
-def number(text, spec: str) -> float:
-    try:
-        return float(text)
-    except (TypeError, ValueError):
-        raise SourceError(f"{spec!r}: {text!r} is not a number") from None
-
-
-class MavlinkSerialSource(SerialSource):
-    protocol = "mavlink"
-    is_replay = False
-    can_reopen = True
-    can_send = True
-
-    def __init__(self, port: str, baud: int = SIK_BAUD):
-        super().__init__(port, baud)
-        self.description = f"MAVLink on {port} @ {baud} baud"
-
-
-class UdpSource:
-    """``listen``: bound to (host, port), answering the last sender; else sending to (host, port)."""
-
-    protocol = "mavlink"
-    is_replay = False
-    can_reopen = False
-    can_send = True
-
-    def __init__(self, host: str, port: int, listen: bool):
-        self._socket = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        try:
-            if listen:
-                self._socket.bind((host, port))
-            else:
-                self._socket.connect((host, port))  # a local port is chosen; the peer answers to it
-        except OSError as error:
-            self._socket.close()
-            raise SourceError(f"cannot {'listen on' if listen else 'reach'} UDP {host}:{port}: {error.strerror or error}") from None
-        self._peer = None if listen else (host, port)
-        self.description = f"MAVLink UDP {'in' if listen else 'out'} {host}:{self.port if listen else port}"
-
-    @property
-    def port(self) -> int:
-        """The local port (useful when bound to port 0)."""
-        return self._socket.getsockname()[1]
-
-    def read(self) -> Chunk | None:
-        try:
-            readable, _, _ = select.select([self._socket], [], [], READ_WAIT_S)
-            if not readable:
-                return None
-            data, peer = self._socket.recvfrom(MAX_DATAGRAM)
-        except ConnectionRefusedError:
-            return None  # udpout before the peer listens: ICMP port unreachable; keep trying
-        except OSError as error:
-            raise SourceError(f"{self.description}: {error.strerror or error}") from None
-        self._peer = peer
-        return Chunk(time.monotonic_ns(), data)
-
-    def write(self, data: bytes) -> None:
-        if self._peer is None:
-            return  # udpin before anyone has sent: nobody to answer yet
-        try:
-            self._socket.sendto(data, self._peer)
-        except OSError as error:
-            raise SourceError(f"{self.description}: cannot send ({error.strerror or error})") from None
-
-    def reopen(self) -> None:
-        raise SourceError(f"{self.description} cannot be reopened")
-
-    def close(self) -> None:
-        self._socket.close()
-
-
-class TcpSource:
-    protocol = "mavlink"
-    is_replay = False
-    can_reopen = True
-    can_send = True
-
-    def __init__(self, host: str, port: int):
-        self.host, self.port = host, port
-        self.description = f"MAVLink TCP {host}:{port}"
-        self._socket = self._connect()
-
-    def _connect(self) -> socket.socket:
-        try:
-            return socket.create_connection((self.host, self.port), timeout=2.0)
-        except OSError as error:
-            raise SourceError(f"cannot connect to TCP {self.host}:{self.port}: {error.strerror or error}") from None
-
-    def read(self) -> Chunk | None:
-        try:
-            readable, _, _ = select.select([self._socket], [], [], READ_WAIT_S)
-            if not readable:
-                return None
-            data = self._socket.recv(MAX_DATAGRAM)
-        except OSError as error:
-            raise SourceError(f"{self.description}: {error.strerror or error}") from None
-        if not data:
-            raise SourceError(f"{self.description}: the other end closed the connection")
-        return Chunk(time.monotonic_ns(), data)
-
-    def write(self, data: bytes) -> None:
-        try:
-            self._socket.sendall(data)
-        except OSError as error:
-            raise SourceError(f"{self.description}: cannot send ({error.strerror or error})") from None
-
-    def reopen(self) -> None:
-        self.close()
-        self._socket = self._connect()
-
-    def close(self) -> None:
-        self._socket.close()
+        source = MavlinkSource(UdpSource("", 0, remote=(host, port)), f"MAVLink UDP out {host}:{port}")
+        source.write(gcs_heartbeat())  # the vehicle answers whoever spoke to it
+        return source
+    if spec.target.lower().endswith(".tlog"):
+        spec.check_options({"speed"})
+        speed = spec.option("speed", lambda text: None if text == "max" else float(text), None)
+        return MavlinkSource(TlogReplaySource(spec.target, speed), f"MAVLink replay of {Path(spec.target).name}")
+    if not spec.target:
+        raise SourceError(f"{spec.text}: name a serial port, udpin:, udpout:, tcp: or a .tlog file after 'mavlink:'")
+    spec.check_options({"baud"})
+    # The app's baud box is for this project's bridge (115200); MAVLink radios want ?baud= or 57600.
+    baud = spec.option("baud", int, SIK_BAUD) if "baud" in spec.options else SIK_BAUD
+    return MavlinkSource(SerialSource(spec.target, baud), f"MAVLink on {spec.target} @ {baud} baud")
 
 
 class TlogReplaySource:
     """A ``.tlog`` as a source: one chunk per packet, stamped with its recorded receive time (ns)."""
 
-    protocol = "mavlink"
     is_replay = True
     can_reopen = False
     can_send = False
@@ -193,7 +104,7 @@ class TlogReplaySource:
         self.description = f"replay of {path.name}"
         self.speed = speed
         self._index = 0
-        self._wall0 = None
+        self._wall0: int | None = None
 
     def read(self) -> Chunk | None:
         if self._index >= len(self._packets):

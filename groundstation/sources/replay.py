@@ -11,14 +11,19 @@ import time
 
 import numpy as np
 
-from groundstation.recording import Recording
-from groundstation.sources.base import Chunk, SourceClosed
+from groundstation.errors import UserError
+from groundstation.recording import Recording, open_recording
+from groundstation.sources.base import Chunk, SourceClosed, SourceError, refuse_reopen, refuse_uplink
 
 MIN_SPEED, MAX_SPEED = 0.25, 64.0
 IDLE_WAIT_S = 0.05
 
 
 class ReplaySource:
+    is_replay = True
+    can_reopen = False
+    can_send = False  # a recording has no aircraft to command
+
     def __init__(self, recording: Recording, speed: float | None = None):
         """``speed`` None: as fast as possible; otherwise a multiple of real time in [0.25, 64]."""
         self.recording = recording
@@ -111,8 +116,34 @@ class ReplaySource:
         return Chunk(t_host_ns, data)
 
     def write(self, data: bytes) -> None:
-        """A recording has no aircraft to command: uplink bytes are dropped."""
+        refuse_uplink(self)
+
+    def reopen(self) -> None:
+        refuse_reopen(self)
 
     def close(self) -> None:
         with self._lock:
             self._index = len(self._times)
+
+
+def open_replay(path, speed: float | None = 1.0) -> ReplaySource:
+    """The recording at ``path`` as a source; UserError when it cannot be read, has no link data
+    (an imported dataset: export it instead) or the speed is out of range."""
+    recording = open_recording(path)  # RecordingError (a UserError) when nothing can be read
+    if recording.chunk_count == 0:
+        raise UserError(f"{recording.path.name}: no link data to replay (an imported dataset? export or evaluate it instead)")
+    try:
+        return ReplaySource(recording, speed)
+    except ValueError as error:
+        raise SourceError(str(error)) from None
+
+
+def parse_speed(text: str) -> float | None:
+    """``max`` (as fast as possible) or a multiple of real time."""
+    return None if text.lower() == "max" else float(text)
+
+
+def open_spec(spec) -> ReplaySource:
+    """``FILE.gsrec[?speed=X]``: real time unless told (``speed=max``: as fast as possible)."""
+    spec.check_options({"speed"})
+    return open_replay(spec.target, spec.option("speed", parse_speed, 1.0))

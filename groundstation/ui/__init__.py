@@ -2,7 +2,6 @@
 
     app.py                QApplication and the main window on a source (``groundstation app``)
     main_window.py        connection bar, live view, side panels, status bar; owns the session
-    sessions.py           starting the demo, serial and replay sessions (readable errors); replay seeks
     connection_bar.py     port list (refreshed), baud, connect, demo, open recording, export
     replay_bar.py         play/pause, step, speed, seek slider
     live_view.py          attitude, sensor, diagnostic, heading and position tabs over a time window; pause view

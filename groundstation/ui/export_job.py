@@ -1,8 +1,9 @@
-"""An export running in a worker thread: decode the session, select rows, write the file.
+"""An export running in a worker thread: ``groundstation.export.request``'s ``run_export``.
 
-No Qt here: the dialog polls ``fraction``, ``done``, ``message`` and ``error`` on its timer. A cancel
-stops the decoding at its next progress report and the workbook writer within a few thousand rows;
-the writers are atomic, so a cancelled or failed export leaves nothing at the destination.
+No Qt here: the dialog polls ``fraction``, ``done``, ``message`` and ``error`` on its timer. The
+request is checked when the job is made (a wrong folder or a missing pyarrow is said at once, before
+any decoding). A cancel stops the decoding at its next progress report and the workbook writer within
+a few thousand rows; the writers are atomic, so a cancelled or failed export leaves nothing behind.
 """
 
 from __future__ import annotations
@@ -11,28 +12,25 @@ import threading
 from pathlib import Path
 
 from groundstation.errors import UserError
-from groundstation.export.columns import export_columns, select_rows
-from groundstation.export.excel import ExportCancelled, write_workbook
-from groundstation.export.tabular import write_csv, write_parquet
-from groundstation.session.data import SessionData, load_session
+from groundstation.export import request as export
+from groundstation.export.excel import ExportCancelled
 
-# suffix -> (menu label, share of the progress bar the decoding takes; the writing takes the rest)
-FORMATS = {".xlsx": ("Excel", 0.4), ".csv": ("CSV", 0.9), ".parquet": ("Parquet", 0.9)}
+# The share of the progress bar the decoding takes (the writing takes the rest): a workbook is slow to write.
+DECODE_SHARE = {".xlsx": 0.4, ".csv": 0.9, ".parquet": 0.9}
+# suffix -> (menu label, decoding's share of the progress bar)
+FORMATS = {suffix: (label, DECODE_SHARE[suffix]) for suffix, label in export.FORMATS.items()}
 
 
 class ExportJob:
     def __init__(self, source: Path, out: Path, t_from: float | None = None, t_to: float | None = None,
                  rate_hz: float | None = None, overwrite: bool = False):
-        self.suffix = out.suffix.lower()
-        if self.suffix not in FORMATS:
-            raise UserError(f"{out.name}: the name must end in {', '.join(FORMATS)}")
-        self.source, self.out = Path(source), Path(out)
-        self.t_from, self.t_to, self.rate_hz, self.overwrite = t_from, t_to, rate_hz, overwrite
+        self.request = export.export_request(source, out, t_from=t_from, t_to=t_to, rate_hz=rate_hz, overwrite=overwrite)
+        self.source, self.out = self.request.source, self.request.out
         self.fraction = 0.0
         self.done = False
         self.message = ""  # what happened, for the user
         self.error: str | None = None
-        self._decode_share = FORMATS[self.suffix][1]
+        self._decode_share = DECODE_SHARE[self.request.format]
         self._cancel = threading.Event()
         self._thread = threading.Thread(target=self._run, name="groundstation-export", daemon=True)
 
@@ -46,21 +44,14 @@ class ExportJob:
     def wait(self, timeout_s: float | None = None) -> None:
         self._thread.join(timeout_s)
 
-    def _decoding(self, done: int, total: int) -> None:
-        if self._cancel.is_set():
-            raise ExportCancelled
-        self.fraction = self._decode_share * done / max(total, 1)
-
-    def _writing(self, done: int, total: int) -> None:
-        self.fraction = self._decode_share + (1.0 - self._decode_share) * done / max(total, 1)
+    def _progress(self, stage: str, done: int, total: int) -> None:
+        share = done / max(total, 1)
+        self.fraction = self._decode_share * share if stage == "decoding" else self._decode_share + (1 - self._decode_share) * share
 
     def _run(self) -> None:
         try:
-            data = load_session(self.source, progress=self._decoding)
-            self._decoding(1, 1)
-            written = self._workbook(data) if self.suffix == ".xlsx" else self._table(data)
+            self.message = export.run_export(self.request, self._progress, self._cancel).message
             self.fraction = 1.0
-            self.message = f"wrote {self.out}: {written}"
         except ExportCancelled:
             self.message = "cancelled; nothing was written"
         except UserError as error:
@@ -69,13 +60,3 @@ class ExportJob:
             self.error = f"export failed: {type(error).__name__}: {error}"
         finally:
             self.done = True
-
-    def _table(self, data: SessionData) -> str:
-        columns = export_columns(data, select_rows(data.time_s, self.t_from, self.t_to, self.rate_hz))
-        (write_csv if self.suffix == ".csv" else write_parquet)(columns, self.out, self.overwrite)
-        return f"{len(columns['time_s'])} rows, {len(columns)} columns"
-
-    def _workbook(self, data: SessionData) -> str:
-        sheets = write_workbook(data, self.out, t_from=self.t_from, t_to=self.t_to, rate_hz=self.rate_hz,
-                                overwrite=self.overwrite, progress=self._writing, cancel=self._cancel)
-        return "sheets " + ", ".join(sheets)

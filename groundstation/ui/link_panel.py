@@ -85,7 +85,7 @@ class LinkPanel(QtWidgets.QGroupBox):
             self._show_state("idle", "no source")
             return
         # A replay's link times are the recorded ones: measure "since" against the newest chunk.
-        replay = hasattr(session.source, "recording")
+        replay = session.source.is_replay
         now_ns = (session.pipeline.link.last_chunk_ns or 0) if replay else time.monotonic_ns()
         f = link_figures(session, now_ns)
         self._show_state(*link_state(session, f))

@@ -13,14 +13,15 @@ from pathlib import Path
 from PySide6 import QtCore, QtWidgets
 
 from groundstation.errors import UserError
+from groundstation.session.factory import DEMO_SPEC, ReplaySeek, open_session
 from groundstation.session.live import LiveSession
-from groundstation.ui import sessions
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
+from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
 
@@ -42,7 +43,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings = settings
         self.recordings_dir = recordings_dir
         self.session: LiveSession | None = None
-        self.seeking: sessions.ReplaySeek | None = None
+        self.seeking: ReplaySeek | None = None
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
         self.bar = ConnectionBar()
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
@@ -56,6 +57,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.banner.setStyleSheet("background:#fde0e0; color:#8b0000; padding:6px; border:1px solid #e0a0a0")
         self.banner.setTextInteractionFlags(QtCore.Qt.TextSelectableByMouse)
         self.banner.hide()
+        self.recording_banner = RecordingBanner()
         self.replay_bar = ReplayBar()
         self.replay_bar.seekRequested.connect(self.seek)
         self.replay_bar.hide()
@@ -85,6 +87,7 @@ class MainWindow(QtWidgets.QMainWindow):
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
         layout.addWidget(self.banner)
+        layout.addWidget(self.recording_banner)
         layout.addWidget(self.replay_bar)
         layout.addWidget(self.splitter, 1)
         self.setCentralWidget(central)
@@ -101,15 +104,17 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- sessions -------------------------------------------------------------------------------
 
     def start_demo(self, note: str = "") -> None:
-        self._start(lambda: sessions.start_demo(self.recordings_dir, self._stored_estimator_settings()), note)
+        self._start(lambda: open_session(DEMO_SPEC, settings=self._stored_estimator_settings(),
+                                         recordings_dir=self.recordings_dir).start(), note)
 
     def connect_serial(self, port: str, baud: int) -> None:
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
-        self._start(lambda: sessions.start_serial(port, baud, self.recordings_dir, self._stored_estimator_settings()))
+        self._start(lambda: open_session(port, settings=self._stored_estimator_settings(), recordings_dir=self.recordings_dir,
+                                         baud=baud).start())
 
     def open_recording(self, path) -> None:
-        self._start(lambda: sessions.start_replay(path))
+        self._start(lambda: open_session(str(path)).start())
 
     def choose_recording(self) -> None:
         folder = self.settings.value("recording_folder", str(self.recordings_dir or Path.home()))
@@ -129,7 +134,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self._stop_session()
         else:
             return
-        self.seeking = sessions.ReplaySeek(source.recording, self.replay_bar.speed, source.paused, t_s)
+        self.seeking = ReplaySeek(source.recording, self.replay_bar.speed, source.paused, t_s)
 
     def _start(self, start, note: str = "") -> None:
         """Stop the current session, then start another; a failure leaves none and says why."""
@@ -156,7 +161,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     @staticmethod
     def _session_file(session: LiveSession) -> tuple[Path, float] | None:
-        if hasattr(session.source, "recording"):
+        if session.source.is_replay:
             return session.source.recording.path, session.source.duration_s
         if session.recording_path is None:
             return None
@@ -188,7 +193,7 @@ class MainWindow(QtWidgets.QMainWindow):
         session, self.session = self.session, None
         session.stop()
         self.last_file = self._session_file(session)
-        if not hasattr(session.source, "recording"):  # a replay's settings are the recording's, not the user's
+        if not session.source.is_replay:  # a replay's settings are the recording's, not the user's
             tuned = session.pipeline.settings()
             self.settings.setValue("estimator_settings", json.dumps(
                 {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in TUNABLE.items() if name in tuned}))
@@ -211,6 +216,7 @@ class MainWindow(QtWidgets.QMainWindow):
         figures = self.ticks % FIGURES_EVERY == 0
         if figures:
             self.link_panel.refresh(session)
+            self.recording_banner.refresh(session)
         if session is None:
             return
         self.live_view.refresh()
@@ -226,14 +232,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     @staticmethod
     def _recording_text(session: LiveSession) -> str:
+        if session.recorder.state == "failed":
+            return "⚠ NOT RECORDING (see the red banner)"
         path = session.recording_path
         if path is None:
-            return "not recording (replay)" if hasattr(session.source, "recording") else "not recording"
-        try:
-            size = path.stat().st_size
-        except OSError:
-            size = 0
-        return f"● recording {path}  ({size / 1e6:.1f} MB)"
+            return "not recording (replay)" if session.source.is_replay else "not recording"
+        return f"● recording {path}  ({session.recorder.bytes_written / 1e6:.1f} MB)"
 
     # -- settings -------------------------------------------------------------------------------
 

@@ -65,8 +65,8 @@ class UplinkPanel(QtWidgets.QGroupBox):
         return row
 
     def set_session(self, session: LiveSession | None) -> None:
-        """A live link only: a replay has no aircraft to command."""
-        live = session is not None and not hasattr(session.source, "recording")
+        """A source that accepts uplink only: a replay has no aircraft to command."""
+        live = session is not None and session.source.can_send
         self.session = session if live else None
         self.setEnabled(live)
         self.sent = []

@@ -10,6 +10,7 @@ import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation import geodesy
+from groundstation.autopilot.streams import pack_next
 from groundstation.sim.profiles import make_profile
 
 FLIGHTLOGS = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs"
@@ -33,9 +34,7 @@ class Sender:
         self.mavlink1 = mavlink1
 
     def pack(self, msg) -> bytes:
-        data = msg.pack(self.encoder, self.mavlink1)
-        self.encoder.seq = (self.encoder.seq + 1) % 256
-        return data
+        return pack_next(self.encoder, msg, self.mavlink1)
 
     def __getattr__(self, name):  # sender.heartbeat(...) -> bytes
         encode = getattr(self.encoder, f"{name}_encode")

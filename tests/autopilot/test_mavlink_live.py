@@ -20,7 +20,7 @@ from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ, StreamRequester
 from groundstation.autopilot.tlog import packets_of_chunks, write_tlog
 from groundstation.sim.mavlink_aircraft import ACC_NOISE_G, GYR_NOISE_RAD_S, MavlinkAircraft
 from groundstation.sim.stream import Scenario
-from groundstation.sources import SourceClosed, SourceError, open_mavlink
+from groundstation.sources import SourceClosed, SourceError, open_source
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 SCENARIO = dataclasses.replace(Scenario(), profile="flight", duration_s=60.0, seed=3)
@@ -83,7 +83,7 @@ def test_pty_live_session_requests_rates_matches_truth_and_saves_a_tlog(tmp_path
 
     aircraft = MavlinkAircraft(SCENARIO)
     bridge = PtyBridge(aircraft)
-    source = open_mavlink(f"mavlink:{bridge.path}?baud=57600")
+    source = open_source(f"mavlink:{bridge.path}?baud=57600")
     assert (source.is_replay, source.can_send, source.can_reopen) == (False, True, True) and "57600" in source.description
     stop, thread = running(bridge)
     try:
@@ -104,7 +104,7 @@ def test_pty_live_session_requests_rates_matches_truth_and_saves_a_tlog(tmp_path
     assert np.array_equal(log.imu.time_us, [r.time_us for r in imu])
     assert np.allclose(log.imu.stack(["acc_x_g", "acc_y_g", "acc_z_g"]), [r.acc_g for r in imu])
     # ... and replay as a source, packet by packet, to the same records.
-    replay = open_mavlink(f"mavlink:{path}")
+    replay = open_source(f"mavlink:{path}")
     assert replay.is_replay and not replay.can_send
     again = MavlinkDecoder()
     replayed = []
@@ -119,8 +119,8 @@ def test_udp_live_session_mavlink1():
     from groundstation.sim.udp_bridge import UdpBridge
 
     aircraft = MavlinkAircraft(SCENARIO, mavlink1=True)
-    source = open_mavlink("mavlink:udpin:127.0.0.1:0")
-    bridge = UdpBridge(aircraft, ("127.0.0.1", source.port))
+    source = open_source("mavlink:udpin:127.0.0.1:0")
+    bridge = UdpBridge(aircraft, ("127.0.0.1", source.transport.local_address[1]))
     stop, thread = running(bridge)
     try:
         chunks, records, requester, decoder = session(source, 3.0)
@@ -135,8 +135,8 @@ def test_udp_live_session_mavlink1():
 
 
 def test_bridge_sim_command_sends_mavlink_over_udp():
-    source = open_mavlink("mavlink:udpin:127.0.0.1:0")
-    process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--udp", f"127.0.0.1:{source.port}",
+    source = open_source("mavlink:udpin:127.0.0.1:0")
+    process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--udp", f"127.0.0.1:{source.transport.local_address[1]}",
                                 "--duration", "3", "--seed", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
     try:
         _, records, requester, _ = session(source, 4.5)
@@ -152,22 +152,45 @@ def test_bridge_sim_command_sends_mavlink_over_udp():
 @pytest.mark.parametrize("spec, message", [
     ("mavlink:", "name a serial port"),
     ("mavlink:udpin:14550", "HOST:PORT"),
-    ("mavlink:tcp:127.0.0.1:notaport", "HOST:PORT"),
-    ("mavlink:/dev/ttyUSB0?baud=fast", "not a number"),
+    ("mavlink:tcp:127.0.0.1:notaport", "bad address"),
+    ("mavlink:/dev/ttyUSB0?baud=fast", "bad baud"),
+    ("mavlink:/dev/ttyUSB0?speed=2", "unknown option speed"),
     ("mavlink:/no/such/port", "cannot open serial port"),
     ("mavlink:/no/such/file.tlog", "cannot open"),
-    ("mavlink:tcp:127.0.0.1:1", "cannot connect"),
-    ("serial:/dev/ttyUSB0", "not a MAVLink source"),
+    ("mavlink:tcp:127.0.0.1:1", "cannot open"),
+    ("mavlonk:/dev/ttyUSB0", "unknown source scheme"),
 ])  # fmt: skip
 def test_bad_specs_are_clear_errors(spec, message):
     with pytest.raises(SourceError, match=message):
-        open_mavlink(spec)
+        open_source(spec)
 
 
 def test_a_busy_udp_port_is_a_clear_error():
-    first = open_mavlink("mavlink:udpin:127.0.0.1:0")
+    first = open_source("mavlink:udpin:127.0.0.1:0")
     try:
-        with pytest.raises(SourceError, match="cannot listen on UDP"):
-            open_mavlink(f"mavlink:udpin:127.0.0.1:{first.port}")
+        with pytest.raises(SourceError, match="cannot listen"):
+            open_source(f"mavlink:udpin:127.0.0.1:{first.transport.local_address[1]}")
     finally:
         first.close()
+
+
+def test_udpout_introduces_itself_with_a_gcs_heartbeat_and_reads_the_answers():
+    import socket
+
+    vehicle = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    vehicle.bind(("127.0.0.1", 0))
+    vehicle.settimeout(2.0)
+    source = open_source(f"mavlink:udpout:127.0.0.1:{vehicle.getsockname()[1]}")
+    try:
+        hello, gcs = vehicle.recvfrom(1024)
+        (heartbeat,) = MavlinkDecoder().messages(hello)
+        assert heartbeat.get_type() == "HEARTBEAT" and heartbeat.type == 6 and heartbeat.get_srcSystem() == 255  # MAV_TYPE_GCS
+        aircraft = MavlinkAircraft(SCENARIO)
+        vehicle.sendto(b"".join(c.data for c in aircraft.advance(1.0)), gcs)
+        chunk = None
+        while chunk is None:
+            chunk = source.read()
+        assert any(isinstance(r, rec.ImuSample) for r in MavlinkDecoder().feed(chunk.data))
+    finally:
+        source.close()
+        vehicle.close()

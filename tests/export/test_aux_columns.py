@@ -13,7 +13,7 @@ def test_each_reading_lands_once_on_the_next_imu_row_of_the_csv(sim_session, tmp
     csv = pd.read_csv(path)
     for table_name, column, csv_column in (("mag_raw", "mag_z_uT", "mag_z_uT"), ("baro", "pressure_Pa", "baro_pressure_Pa"),
                                            ("gps", "lat_deg", "gps_lat_deg"), ("mag_raw", "heading_deg", "mag_heading_deg")):
-        table = sim_session.pipeline.tables[table_name].to_dict()
+        table = sim_session.tables[table_name]
         filled = csv[csv_column].notna().to_numpy()
         rows = np.searchsorted(sim_session.time_s, table["time_s"])
         # Where lost IMU frames make two readings share a row, the later one is kept.

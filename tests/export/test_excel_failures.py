@@ -167,8 +167,7 @@ def test_progress_counts_every_row_up_to_the_total(sim_session, tmp_path):
     write_workbook(sim_session, tmp_path / "out.xlsx", progress=lambda done, total: reports.append((done, total)))
     done = [d for d, _ in reports]
     assert done == sorted(done) and reports[-1][0] == reports[-1][1]
-    tables = sim_session.pipeline.tables
-    link = max(len(sim_session.pipeline.link.per_second), len(tables["status"]))  # side by side
+    link = max(len(sim_session.link.per_second["t_s"]), len(sim_session.tables["status"]["time_s"]))  # side by side
     assert reports[-1][1] == len(sim_session) * 3 + link  # Attitude, Sensors, chart points, Link
 
 

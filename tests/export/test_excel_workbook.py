@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from openpyxl import load_workbook
 
+from groundstation.estimation import create
 from groundstation.export import excel_columns
 from groundstation.export.columns import select_rows
 from groundstation.export.excel import write_workbook
 from groundstation.recording import open_recording
-
 from groundstation.session.data import load_session
 
 from .conftest import CHANGE_AT_S, simulated_recording
@@ -65,12 +65,12 @@ def test_sheets_headers_row_counts_and_layout(sim_session, sim_book):
     assert attitude["B2"].number_format == "yyyy-mm-dd hh:mm:ss.000"
     assert attitude.column_dimensions["B"].width >= 23  # the date-time is not shown as ####
     sensors = columns(book["Sensors"])
-    tables = sim_session.pipeline.tables
-    assert len([v for v in sensors["mag x (µT, sensor axes)"] if v is not None]) == len(tables["mag_raw"])
-    assert len([v for v in sensors["pressure (Pa)"] if v is not None]) == len(tables["baro"])
-    assert len([v for v in sensors["latitude (°)"] if v is not None]) == len(tables["gps"])
+    rows = {name: len(table["time_s"]) for name, table in sim_session.tables.items()}
+    assert len([v for v in sensors["mag x (µT)"] if v is not None]) == rows["mag_raw"]
+    assert len([v for v in sensors["baro pressure (Pa)"] if v is not None]) == rows["baro"]
+    assert len([v for v in sensors["gps lat (°)"] if v is not None]) == rows["gps"]
     link = columns(book["Link"])
-    assert len([v for v in link["frames (1/s)"] if v is not None]) == len(sim_session.pipeline.link.per_second)
+    assert len([v for v in link["frames (1/s)"] if v is not None]) == len(sim_session.link.per_second["t_s"])
 
 
 def test_attitude_values_are_the_sessions(sim_session, sim_book):
@@ -94,12 +94,12 @@ def test_sensor_and_link_values_are_the_sessions(sim_session, sim_book):
     got = columns(book["Sensors"])
     for name, header in (("acc_y_g", "acc y (g)"), ("gyr_z_dps", "gyro z (°/s)"), ("temperature_c", "temperature (°C)")):
         np.testing.assert_allclose(floats(got[header]), sim_session.sensors[name], rtol=1e-15)
-    baro = sim_session.pipeline.tables["baro"].to_dict()
+    baro = sim_session.tables["baro"]
     n = len(baro["time_s"])
     np.testing.assert_allclose(floats(got["baro time (s)"][:n]), baro["time_s"], rtol=1e-15)
-    np.testing.assert_allclose(floats(got["pressure (Pa)"][:n]), baro["pressure_Pa"], rtol=1e-15)
+    np.testing.assert_allclose(floats(got["baro pressure (Pa)"][:n]), baro["pressure_Pa"], rtol=1e-15)
     link = columns(book["Link"])
-    per_second = sim_session.pipeline.link.per_second.to_dict()
+    per_second = sim_session.link.per_second
     for name, header in (("frames", "frames (1/s)"), ("crc_errors", "CRC failures (1/s)"), ("bytes", "bytes (B/s)")):
         assert link[header][: len(per_second[name])] == per_second[name].astype(int).tolist()
 
@@ -110,11 +110,11 @@ def session_values(sheet) -> dict:
 
 def test_session_sheet_explains_the_session(sim_session, sim_book, sim_recording):
     rows = session_values(sim_book[1]["Session"])
-    stats = sim_session.pipeline.decoder.stats
-    assert stats.crc_errors > 0 and stats.frames_lost > 0  # the numbers below are not trivially 0
-    assert rows["CRC failures (count)"][0] == stats.crc_errors
-    assert rows["frames lost (count)"][0] == stats.frames_lost
-    assert rows["frames received (count)"][0] == stats.frames
+    counters = sim_session.link.counters
+    assert counters["crc_errors"] > 0 and counters["frames_lost"] > 0  # the numbers below are not trivially 0
+    assert rows["CRC failures (count)"][0] == counters["crc_errors"]
+    assert rows["frames lost (count)"][0] == counters["frames_lost"]
+    assert rows["frames received (count)"][0] == counters["frames"]
     assert rows["port"][0] == "/dev/ttySIM"
     assert rows["recording started (UTC)"][0] == datetime(2024, 5, 1, 12, 0, 0)
     assert rows["duration (s)"][0] == pytest.approx(sim_session.time_s[-1])
@@ -134,7 +134,8 @@ def test_error_table_and_rows_of_a_session_with_truth(trial_session, tmp_path):
     rows = session_values(book["Session"])
     for name, scores in trial_session.evaluate().items():
         assert rows[name][:2] == pytest.approx((scores["incl_rmse_deg"], scores["incl_max_deg"]), rel=1e-15)
-    assert rows["hf.beta"][0] == 0.05  # the forced setting is what the export ran with
+    # What the session ran with (the forced settings reach it through load_session, as in the export command).
+    assert rows["hf.beta"][0] == trial_session.settings_at_start["hf"]["beta"] == create("hf", {}).settings.beta
     expected = select_rows(trial_session.time_s, 5, 10, 50)
     got = columns(book["Attitude"])
     assert "time (UTC)" not in got  # a dataset has no wall clock

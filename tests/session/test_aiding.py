@@ -5,7 +5,9 @@ import numpy as np
 
 from groundstation import quaternion as quat
 from groundstation.geodesy import ned_from_geodetic
-from groundstation.session.pipeline import HEADING_COLUMN, Pipeline, gps_fix
+from groundstation.session.aiding import gps_fix
+from groundstation.session.catalogue import HEADING
+from groundstation.session.pipeline import Pipeline
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 
@@ -33,7 +35,7 @@ def test_compass_heading_column_follows_true_yaw_during_a_flight():
     assert len(mag["time_s"]) > 1900
     t0_us = pipeline.imu.to_dict()["device_time_us"][0]
     true_yaw = np.interp(mag["time_s"] * 1e6 + t0_us, t_us, np.unwrap(yaw))
-    error_deg = np.degrees(np.angle(np.exp(1j * (np.radians(mag[HEADING_COLUMN]) - true_yaw))))
+    error_deg = np.degrees(np.angle(np.exp(1j * (np.radians(mag[HEADING.name]) - true_yaw))))
     settled = mag["time_s"] > 5.0
     assert np.abs(true_yaw[settled]).max() > np.radians(45)  # the craft turns
     # Hard iron is left uncalibrated here (up to ~10 µT on a 20 µT horizontal field), so this bounds the

@@ -18,8 +18,9 @@ RECORDER = textwrap.dedent(
     """
     import sys, time
     from groundstation.session.live import LiveSession
+    from groundstation.session.pipeline import Pipeline
     from groundstation.sources import SerialSource
-    session = LiveSession(SerialSource(sys.argv[1]), filters=("ahf",), recordings_dir=sys.argv[2]).start()
+    session = LiveSession(SerialSource(sys.argv[1]), Pipeline(("ahf",)), recordings_dir=sys.argv[2]).start()
     print(session.recording_path, flush=True)
     while True:
         time.sleep(1)

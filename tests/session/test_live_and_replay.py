@@ -10,6 +10,7 @@ import pytest
 
 from groundstation.recording import open_recording
 from groundstation.session.live import LiveSession
+from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import replay
 from groundstation.sources import SerialSource
 
@@ -29,7 +30,7 @@ def bridge():
 
 
 def run_live(path, tmp_path, seconds: float, settings_change_at: float | None = None) -> LiveSession:
-    session = LiveSession(SerialSource(path, 115200), filters=("ahf", "hf", "ecf"), recordings_dir=tmp_path)
+    session = LiveSession(SerialSource(path, 115200), Pipeline(("ahf", "hf", "ecf")), recordings_dir=tmp_path)
     with session:
         deadline = time.monotonic() + seconds
         changed = False
@@ -61,7 +62,7 @@ def test_replay_of_a_live_recording_reproduces_the_live_estimates_bit_for_bit(br
 
 
 def test_live_link_statistics_match_the_decoder(bridge, tmp_path):
-    live = LiveSession(SerialSource(bridge, 115200), filters=("ahf",), recordings_dir=tmp_path)
+    live = LiveSession(SerialSource(bridge, 115200), Pipeline(("ahf",)), recordings_dir=tmp_path)
     with live:
         deadline = time.monotonic() + 20  # three full seconds of link, however slow the machine is today
         while len(live.pipeline.link.per_second) < 3 and time.monotonic() < deadline:
@@ -85,7 +86,7 @@ def test_an_unplugged_port_is_reopened_when_it_comes_back(tmp_path):
     )
     try:
         process.stdout.readline()
-        session = LiveSession(SerialSource(str(link)), recordings_dir=tmp_path)
+        session = LiveSession(SerialSource(str(link)), Pipeline(), recordings_dir=tmp_path)
         with session:
             deadline = time.monotonic() + 15
             while time.monotonic() < deadline and not any(e["kind"] == "reconnected" for e in session.pipeline.events):

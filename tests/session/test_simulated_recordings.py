@@ -49,5 +49,5 @@ def test_sample_recordings_are_small_intact_and_scored(name):
 
 def test_lossy_sample_counts_its_losses():
     data = load_session(SAMPLES / "flight-both-lossy.gsrec")
-    stats = data.pipeline.decoder.stats
-    assert stats.frames_lost > 0 and stats.crc_errors > 0
+    counters = data.link.counters
+    assert counters["frames_lost"] > 0 and counters["crc_errors"] > 0

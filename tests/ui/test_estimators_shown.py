@@ -8,12 +8,14 @@ import pytest
 
 from groundstation import quaternion
 from groundstation.recording import RecordingWriter
-from groundstation.sim.stream import Scenario, SimStream
+from groundstation.session.factory import DEMO_SPEC, LIVE_FILTERS
+from groundstation.sim.stream import SimStream
+from groundstation.sources import parse_spec
+from groundstation.sources.sim import parse_scenario
 from groundstation.ui.export_job import ExportJob
 from groundstation.ui.estimator_panel import SHOWN_COLUMNS
 from groundstation.ui.live_view import LABELS
 from groundstation.ui.main_window import MainWindow
-from groundstation.ui.sessions import DEMO_FIRMWARE, LIVE_FILTERS
 
 NEW = ("hfm", "ecfm", "mcf", "ukf", "sssrukf")
 COMPARED = tuple(name for name in LIVE_FILTERS if name != "ahf")
@@ -104,7 +106,7 @@ def test_hfm_yaw_follows_the_compass_on_the_demo(window, qtbot):
 def app_recording(tmp_path_factory):
     """20 s of the demo's flight (magnetometer, barometer, GPS) recorded as the app records: every estimator."""
     path = tmp_path_factory.mktemp("app") / "demo.gsrec"
-    stream = SimStream(Scenario("flight", 20.0, seed=3, firmware=DEMO_FIRMWARE))
+    stream = SimStream(parse_scenario(parse_spec(f"{DEMO_SPEC}?duration=20&seed=3")))
     with RecordingWriter(path, {"source": "test", "filters": list(LIVE_FILTERS)}) as writer:
         for chunk in stream.advance(20.0):
             writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)

@@ -7,7 +7,7 @@ import sys
 import pyqtgraph as pg
 import pytest
 
-from groundstation.ui.sessions import explain_port_error
+from groundstation.sources.serial_port import explain_port_error
 
 
 def test_missing_or_damaged_recording_shows_a_message(window, tmp_path):

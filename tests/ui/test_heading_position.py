@@ -50,7 +50,8 @@ def test_readouts_and_plots_follow_the_tables_and_the_truth(window, qtbot, aided
     view, gps = window.live_view, newest_row(pipeline.tables["gps"])
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["heading"].text() == f"{gps['heading_deg']:5.1f}° GPS",
                     timeout=3000)
-    truth = make_profile("flight", DURATION_S, SEED).truth(pipeline.tables["gps"].column("t_us_us") / 1e6)
+    first_device_s = pipeline.imu.column("device_time_us")[0] / 1e6 - pipeline.imu.column("time_s")[0]
+    truth = make_profile("flight", DURATION_S, SEED).truth(pipeline.tables["gps"].column("time_s") + first_device_s)
     true_yaw_deg = math.degrees(quaternion.to_euler_zyx(truth.q_body_to_ned[-1])[0])
     assert angle_between_deg(gps["heading_deg"], true_yaw_deg) < 3.0  # σ 0.5°
     assert view.tabs.isTabVisible(view.tabs.indexOf(view.heading))

@@ -1,0 +1,113 @@
+"""The reference firmware built for the Cortex-M3 (``arm-none-eabi-gcc``), and the core's AHF run on an
+emulated Cortex-M3 (``qemu-system-arm -M lm3s6965evb``, semihosting): what ``bench/bench_firmware.py``
+reports and ``tests/firmware/test_fw_cross.py`` checks. Everything is built into a directory the
+caller gives (a temporary one), never into the source tree.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from firmware_protocol.reference.host import CORE_DIR
+
+REFERENCE_DIR = Path(__file__).parent
+STM32_DIR = REFERENCE_DIR / "stm32"
+QEMU_DIR = REFERENCE_DIR / "qemu"
+CROSS_CFLAGS = ("-mcpu=cortex-m3", "-mthumb", "-std=c99", "-Wall", "-Wextra", "-Werror", "-ffp-contract=off",
+                "-ffunction-sections", "-fdata-sections")
+CROSS_LDFLAGS = ("-nostartfiles", "--specs=nano.specs", "--specs=nosys.specs", "-Wl,--gc-sections", "-lm")
+STM32F103C8_FLASH_BYTES, STM32F103C8_RAM_BYTES = 64 * 1024, 20 * 1024
+
+
+def toolchain() -> str | None:
+    return shutil.which("arm-none-eabi-gcc")
+
+
+def emulator() -> str | None:
+    return shutil.which("qemu-system-arm")
+
+
+@dataclasses.dataclass(frozen=True)
+class ImageSize:
+    text: int
+    data: int
+    bss: int
+
+    @property
+    def flash_bytes(self) -> int:
+        return self.text + self.data  # code and constants, plus the initial values of .data
+
+    @property
+    def static_ram_bytes(self) -> int:
+        return self.data + self.bss  # the stack takes what is left
+
+
+def _run(command: list[str], **kwargs) -> subprocess.CompletedProcess:
+    result = subprocess.run(command, capture_output=True, text=True, **kwargs)
+    if result.returncode != 0:
+        raise RuntimeError(f"{' '.join(command)} failed:\n{result.stdout}\n{result.stderr}")
+    return result
+
+
+def build_images(build_dir: Path) -> dict[str, ImageSize]:
+    """flight.elf/.bin and bridge.elf/.bin with the port's Makefile; their sizes (arm-none-eabi-size)."""
+    _run(["make", "-s", "-C", str(STM32_DIR), f"BUILD={build_dir}", "all"])
+    sizes = {}
+    for name in ("flight", "bridge"):
+        out = _run(["arm-none-eabi-size", str(build_dir / f"{name}.elf")]).stdout.splitlines()
+        text, data, bss = (int(v) for v in out[1].split()[:3])
+        sizes[name] = ImageSize(text, data, bss)
+    return sizes
+
+
+def _input_header(gyr_rad_s, acc_g, dt_s) -> str:
+    rows = np.column_stack([np.asarray(gyr_rad_s), np.asarray(acc_g), np.asarray(dt_s)]).astype(np.float32).view(np.uint32)
+    lines = [f"#define GS_INPUT_SAMPLES {len(rows)}u", "static const uint32_t gs_input[GS_INPUT_SAMPLES][7] = {"]
+    lines += ["    {" + ", ".join(f"0x{v:08x}u" for v in row) + "}," for row in rows.tolist()]
+    return "\n".join([*lines, "};", ""])
+
+
+def build_ahf_program(gyr_rad_s, acc_g, dt_s, build_dir: Path, defines: tuple[str, ...] = ()) -> Path:
+    """The QEMU program (qemu/ahf_qemu.c + core/gs_ahf.c, -Os as the board's) with these samples compiled in."""
+    build_dir.mkdir(parents=True, exist_ok=True)
+    (build_dir / "ahf_input.h").write_text(_input_header(gyr_rad_s, acc_g, dt_s))
+    elf = build_dir / f"ahf{''.join('-' + name for name in defines)}.elf"
+    options = [f"-D{name}" for name in defines]
+    _run(["arm-none-eabi-gcc", *CROSS_CFLAGS, "-Os", *options, "-I", str(build_dir), "-I", str(CORE_DIR),
+          str(QEMU_DIR / "ahf_qemu.c"), str(CORE_DIR / "gs_ahf.c"), "-o", str(elf), f"-T{QEMU_DIR / 'lm3s6965.ld'}", *CROSS_LDFLAGS])
+    return elf
+
+
+def _qemu(elf: Path, *extra: str, timeout_s: float = 300.0) -> str:
+    """What the program wrote over semihosting (QEMU puts it on its stderr, beside its own messages)."""
+    command = ["qemu-system-arm", "-M", "lm3s6965evb", "-nographic", "-monitor", "none", "-serial", "none",
+               "-semihosting-config", "enable=on,target=native", "-kernel", str(elf), *extra]
+    return _run(command, timeout=timeout_s, stdin=subprocess.DEVNULL).stderr
+
+
+_OUTPUT_LINE = re.compile(r"[0-9a-f]{8}( [0-9a-f]{8}){5}")
+
+
+def run_ahf(elf: Path) -> list[tuple[int, ...]]:
+    """Per sample: (status, bits of q_w, q_x, q_y, q_z, bits of lambda) as the emulated Cortex-M3 computed them."""
+    return [tuple(int(v, 16) for v in line.split()) for line in _qemu(elf).splitlines() if _OUTPUT_LINE.fullmatch(line)]
+
+
+def count_step_instructions(elf: Path, trace: Path) -> list[int]:
+    """Instructions executed per AHF step (between the two mark() calls around it, the call included),
+    from a QEMU trace of every instruction (-singlestep -d exec,nochain)."""
+    mark = next(int(line.split()[0], 16) for line in _run(["arm-none-eabi-nm", str(elf)]).stdout.splitlines()
+                if line.split()[-1] == "mark")
+    _qemu(elf, "-singlestep", "-d", "exec,nochain", "-D", str(trace))
+    marks = []
+    with open(trace) as log:
+        for i, line in enumerate(log):
+            if "[" in line and int(line.split("[", 1)[1].split("/", 2)[1], 16) == mark:
+                marks.append(i)
+    return [marks[2 * j + 1] - marks[2 * j] - 1 for j in range(len(marks) // 2)]

@@ -1,0 +1,79 @@
+"""``groundstation record``: a headless live session that records and prints link health.
+
+For the field (a laptop by the runway, no window) and for tests. Runs until ``--duration`` or Ctrl-C
+(SIGINT/SIGTERM), then closes the recording cleanly and says where it is. Exit status 0 when stopped
+that way, 1 when the source failed for good (the recording keeps what came before), 2 for bad input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import signal
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from groundstation.commands.options import add_estimator_options, estimator_options
+from groundstation.errors import UserError
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from groundstation.session.factory import LIVE_FILTERS
+
+    parser.add_argument("--port", required=True, metavar="SPEC",
+                        help="the source: COM3, /dev/ttyUSB0, udp://HOST:PORT, tcp://HOST:PORT, sim:?scenario=NAME, "
+                             "a pyserial URL (docs/sources.md)")
+    parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds (default: at Ctrl-C)")
+    parser.add_argument("--baud", type=int, default=115200, metavar="N", help="serial baud rate unless the spec gives ?baud= (default: 115200)")
+    parser.add_argument("--recordings", type=Path, default=None, metavar="DIR",
+                        help="record into DIR (default: $GROUNDSTATION_RECORDINGS or the platform's recordings folder)")
+    add_estimator_options(parser, ",".join(LIVE_FILTERS))
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundstation.commands.summary import follow, totals_line
+    from groundstation.recording import default_recordings_dir
+    from groundstation.session.factory import open_session
+    from groundstation.sources import parse_spec
+
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise UserError(f"--duration must be a positive number of seconds, not {args.duration:g}")
+    filters, overrides = estimator_options(args)
+    if parse_spec(args.port).scheme == "recording":
+        raise UserError(f"{args.port} is a recording already: 'groundstation replay {args.port}' plays it")
+    folder = writable_folder(args.recordings or default_recordings_dir())
+    session = open_session(args.port, filters=filters, settings=overrides, recordings_dir=folder, baud=args.baud)
+    print(f"recording {session.source.description} to {session.recording_path}", flush=True)
+    stopping: list[int] = []
+    previous = {signum: signal.signal(signum, lambda signum, _: stopping.append(signum))
+                for signum in (signal.SIGINT, signal.SIGTERM)}
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    try:
+        with session:
+            follow(session, until=lambda: bool(stopping) or (deadline is not None and time.monotonic() >= deadline))
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+    print(totals_line(session))
+    size = session.recording_path.stat().st_size if session.recording_path.exists() else 0
+    print(f"recording closed: {session.recording_path} ({size / 1e6:.2f} MB)")
+    if session.error:
+        print(f"groundstation record: the source stopped: {session.error}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def writable_folder(folder: Path) -> Path:
+    """``folder``, created if needed, once a file could be written there: a bad folder is said before
+    the session starts, not after the first seconds of a flight."""
+    folder = Path(folder).expanduser()
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as error:
+        raise UserError(f"cannot write recordings into {folder}: {error.strerror or error} "
+                        "(choose another with --recordings DIR or GROUNDSTATION_RECORDINGS)") from None
+    return folder

@@ -1,0 +1,111 @@
+"""The one way to export a session, for the CLI's ``export`` and the app's export dialog alike.
+
+``export_request`` checks everything the user chose before any decoding (format, source, destination
+folder and its permission, overwrite, Parquet's optional pyarrow, time range and rate), so a mistake
+costs no waiting; ``run_export`` decodes and writes atomically (``files.atomic_output``), so a failure
+or a cancel leaves nothing at the destination.
+
+    request = export_request("flight.gsrec", "flight.xlsx", t_from=10, t_to=70)   # UserError if wrong
+    result = run_export(request, progress=lambda stage, done, total: ..., cancel=threading.Event())
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import secrets
+from collections.abc import Callable
+from pathlib import Path
+
+from groundstation.errors import UserError
+from groundstation.export.columns import check_row_options
+
+FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet"}  # suffix -> what the user calls it
+
+
+@dataclasses.dataclass(frozen=True)
+class ExportRequest:
+    source: Path
+    out: Path
+    filters: list[str] | None = None  # None: the recorded estimators
+    overrides: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)  # --set
+    t_from: float | None = None
+    t_to: float | None = None
+    rate_hz: float | None = None
+    overwrite: bool = False
+
+    @property
+    def format(self) -> str:
+        return self.out.suffix.lower()
+
+
+@dataclasses.dataclass(frozen=True)
+class ExportResult:
+    message: str  # "wrote OUT: ..."
+    damage: list[str]  # what the source recording had lost, for warnings
+
+
+def export_request(source, out, *, filters=None, overrides=None, t_from=None, t_to=None, rate_hz=None,
+                   overwrite: bool = False) -> ExportRequest:
+    """The request, once everything in it is known to be possible; UserError says what is not."""
+    request = ExportRequest(Path(source), Path(out), filters, dict(overrides or {}), t_from, t_to, rate_hz, overwrite)
+    if request.format not in FORMATS:
+        raise UserError(f"{request.out.name}: the name must end in {', '.join(FORMATS)}")
+    check_row_options(t_from, t_to, rate_hz)
+    if not request.source.is_file():
+        raise UserError(f"{request.source}: no such file")
+    if request.out.resolve() == request.source.resolve():
+        raise UserError(f"{request.out} is the file being exported; choose another name")
+    if request.format == ".parquet":
+        from groundstation.export.tabular import require_pyarrow
+
+        require_pyarrow()
+    check_destination(request.out, overwrite)
+    return request
+
+
+def check_destination(out: Path, overwrite: bool) -> None:
+    """The folder exists and takes a new file (tried, not guessed from permission bits); ``out`` is free."""
+    folder = out.parent
+    if not folder.is_dir():
+        raise UserError(f"cannot write {out}: the folder {folder} does not exist")
+    if out.is_dir():
+        raise UserError(f"cannot write {out}: it is a folder")
+    if out.exists() and not overwrite:
+        raise UserError(f"{out} exists; choose another name or pass --overwrite")
+    probe = folder / f".{out.name}.{secrets.token_hex(4)}.probe"
+    try:
+        os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+    except OSError as error:
+        raise UserError(f"cannot write in {folder}: {error.strerror}") from None
+    probe.unlink()
+
+
+def run_export(request: ExportRequest, progress: Callable[[str, int, int], None] | None = None,
+               cancel=None) -> ExportResult:
+    """Decodes ``request.source`` and writes ``request.out``; ``progress(stage, done, total)`` with stage
+    "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises ExportCancelled, nothing written."""
+    from groundstation.export.columns import export_columns, select_rows
+    from groundstation.export.excel import ExportCancelled, write_workbook
+    from groundstation.export.tabular import write_csv, write_parquet
+    from groundstation.session.data import load_session
+
+    report = progress or (lambda stage, done, total: None)
+
+    def decoding(done: int, total: int) -> None:
+        if cancel is not None and cancel.is_set():
+            raise ExportCancelled("export cancelled; nothing was written")
+        report("decoding", done, total)
+
+    data = load_session(request.source, request.filters, request.overrides, decoding)
+    decoding(1, 1)
+    if request.format == ".xlsx":
+        sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,
+                                forced=request.overrides, overwrite=request.overwrite,
+                                progress=lambda done, total: report("writing", done, total), cancel=cancel)
+        written = f"sheets {', '.join(sheets)}"
+    else:
+        columns = export_columns(data, select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz))
+        (write_csv if request.format == ".csv" else write_parquet)(columns, request.out, request.overwrite)
+        written = f"{len(columns['time_s'])} rows, {len(columns)} columns"
+    return ExportResult(f"wrote {request.out}: {written}", list(data.damage))

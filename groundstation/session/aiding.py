@@ -1,0 +1,76 @@
+"""The aiding sensors of a session: magnetometer, barometer and GPS readings for the estimators, and
+the fused position (seed 004) they make possible.
+
+Each reading is handed to the estimators with the next IMU sample (``take_for_estimators``). Once a
+barometer or GPS reading arrives, every IMU sample also steps the dual-channel position filter on
+the first estimator's attitude: NED metres from the first GPS fix, height from the first barometer
+reading (docs/conventions.md).
+"""
+
+from __future__ import annotations
+
+import math
+
+from firmware_protocol import SPEC
+from groundstation import geodesy
+from groundstation.estimation.base import GpsFix
+from groundstation.estimation.compass import reading_heading_rad
+from groundstation.estimation.tilt import wrap_pi
+from groundstation.position import DualChannel, linear_acc_ned_m_s2
+
+_FIX_2D = SPEC.enums["gps_fix"].values["fix_2d"]
+
+
+class Aiding:
+    def __init__(self) -> None:
+        self.position = DualChannel()
+        self.position_on = False  # from the first barometer or GPS reading
+        self._mag_body_ut: tuple | None = None
+        self._gps_fix: GpsFix | None = None
+        self._baro_ground_pa: float | None = None
+        self._gps_origin: tuple[float, float, float] | None = None
+        self._baro_alt_m: float | None = None
+        self._gps_pos_ned_m: tuple | None = None
+        self._gps_vel_ned_m_s: tuple | None = None
+
+    def take_for_estimators(self) -> tuple[tuple | None, GpsFix | None]:
+        """The magnetometer reading (body axes, µT) and GPS fix that arrived since the last IMU sample."""
+        taken = self._mag_body_ut, self._gps_fix
+        self._mag_body_ut = self._gps_fix = None
+        return taken
+
+    def magnetometer(self, field_body_ut: tuple, q) -> float:
+        """Keeps the reading for the estimators; returns the compass heading in degrees (NaN without attitude)."""
+        self._mag_body_ut = field_body_ut
+        return math.degrees(reading_heading_rad(q, field_body_ut)) if q is not None else math.nan
+
+    def barometer(self, pressure_pa: float) -> None:
+        if self._baro_ground_pa is None:
+            self._baro_ground_pa = pressure_pa
+        self._baro_alt_m = float(geodesy.pressure_altitude_m(pressure_pa, self._baro_ground_pa))
+        self.position_on = True
+
+    def gps(self, values: dict) -> None:
+        """A GPS frame's physical values; ignored without at least a 2D fix."""
+        if values["fix_type"] < _FIX_2D:
+            return
+        self._gps_fix = gps_fix(values)
+        if self._gps_origin is None:
+            self._gps_origin = (values["lat"], values["lon"], values["alt"])
+        self._gps_pos_ned_m = tuple(geodesy.ned_from_geodetic(values["lat"], values["lon"], values["alt"], self._gps_origin).tolist())
+        self._gps_vel_ned_m_s = (values["vel_n"], values["vel_e"], values["vel_d"])
+        self.position_on = True
+
+    def position_step(self, acc_g: tuple, q, dt_s: float) -> tuple:
+        """One IMU sample through the position filter: (pos_n, pos_e, pos_d, vel_n, vel_e, vel_d)."""
+        acc_ned = linear_acc_ned_m_s2(acc_g, q)
+        pos, vel = self.position.step(acc_ned, dt_s, self._baro_alt_m, self._gps_pos_ned_m, self._gps_vel_ned_m_s)
+        self._baro_alt_m = self._gps_pos_ned_m = self._gps_vel_ned_m_s = None
+        return (*pos, *vel)
+
+
+def gps_fix(values: dict) -> GpsFix:
+    """A GPS frame's values as the estimators take them; a heading outside 0..360° (0xFFFF) means none."""
+    heading_deg = values["heading"]
+    heading = math.radians(heading_deg) if 0.0 <= heading_deg <= 360.0 else math.nan
+    return GpsFix(values["vel_n"], values["vel_e"], values["vel_d"], wrap_pi(heading))

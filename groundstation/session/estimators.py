@@ -1,0 +1,75 @@
+"""The host estimators of a session: which, with what settings, and their state.
+
+Settings are kept apart from state: ``recorded`` settings (the session's, changeable while it runs)
+and ``forced`` ones (the what-if ``--set`` of replay and export, which win over everything) decide
+each estimator's effective settings; the estimator objects hold only state.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from groundstation.estimation import create
+
+
+class EstimatorBank:
+    """``filters``: estimator names (``ahf`` first by convention; the first one drives the compass
+    heading and the position); ``settings``/``forced``: name -> {setting: value}."""
+
+    def __init__(self, filters, settings=None, forced=None):
+        self.filters = tuple(dict.fromkeys(filters))
+        self._settings = {name: dict((settings or {}).get(name, {})) for name in self.filters}
+        self._forced = {name: dict((forced or {}).get(name, {})) for name in self.filters}
+        unknown = {name for name in {**(settings or {}), **(forced or {})} if name not in self._settings}
+        if forced and unknown & set(forced):
+            raise ValueError(f"--set names {', '.join(sorted(unknown & set(forced)))}, which this session does not run "
+                             f"(it runs {', '.join(self.filters) or 'no estimator'}); add it with --filters")
+        self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
+        self.last_q: dict[str, tuple | None] = {name: None for name in self.filters}
+        self.at_start = self.settings()
+
+    def diagnostics(self) -> dict[str, tuple[str, ...]]:
+        """Each estimator's diagnostic outputs, by name (the ``imu`` table's columns after its quaternion)."""
+        return {name: est.Diagnostics._fields for name, est in self.estimators.items()}
+
+    def step(self, gyr, acc, dt_s: float, mag, gps) -> list[float]:
+        """One sample through every estimator: their quaternions and diagnostics, in order, as one row part."""
+        row: list[float] = []
+        for name, estimator in self.estimators.items():
+            q, diag = estimator.step(gyr, acc, dt_s, mag, gps)
+            self.last_q[name] = q
+            row += q
+            row += diag
+        return row
+
+    def first_q(self):
+        """The newest attitude of the first estimator (the compass and the position use it), or None."""
+        return self.last_q[self.filters[0]] if self.filters else None
+
+    def restart(self) -> None:
+        """Forget every attitude (a device reset: the next sample starts each estimator afresh)."""
+        for name, estimator in self.estimators.items():
+            estimator.reset()
+            self.last_q[name] = None
+
+    def change(self, name: str, overrides: dict[str, float]) -> None:
+        """New settings for one estimator from now on, keeping its attitude; ValueError before any change."""
+        if name not in self.estimators:
+            raise ValueError(f"{name} is not among this session's estimators ({', '.join(self.filters)})")
+        estimator = create(name, {**self._settings[name], **overrides, **self._forced[name]})  # validates first
+        self._settings[name].update(overrides)
+        if self.last_q[name] is not None:
+            estimator.reset(q0=self.last_q[name])
+        self.estimators[name] = estimator
+
+    def settings(self) -> dict[str, dict[str, float]]:
+        """Every estimator's full settings as in effect now."""
+        return {name: dataclasses.asdict(est.settings) for name, est in self.estimators.items()}
+
+    def settings_json(self) -> dict[str, dict[str, float | str]]:
+        """``settings()`` for a JSON file: JSON has no infinity, so non-finite values become strings."""
+        return {n: {k: v if math.isfinite(v) else str(v) for k, v in s.items()} for n, s in self.settings().items()}
+
+    def _effective(self, name: str) -> dict[str, float]:
+        return {**self._settings[name], **self._forced[name]}

@@ -1,0 +1,54 @@
+"""The window when the recordings' disk fills up during a live session (a real 64 kB tmpfs): a loud
+banner says so and why, the plots go on, the status bar stops saying "recording", "Resume recording"
+starts a new file once there is room, and closing the window raises nothing."""
+
+import numpy as np
+from PySide6 import QtCore
+
+from tests.session.full_disk import grow, tiny_tmpfs
+
+
+def newest_plotted_time(window) -> float:
+    _, curve = window.live_view.attitude.curves[0]
+    x, _ = curve.getData()
+    return float(np.nanmax(x)) if x is not None and len(x) else float("nan")
+
+
+def test_a_full_disk_shows_a_banner_the_plots_go_on_and_resume_starts_a_new_file(window, qtbot, tmp_path):
+    with tiny_tmpfs(tmp_path / "full") as folder:
+        window.recordings_dir = folder
+        window.start_demo()
+        session = window.session
+        session.recorder.retry_interval_s = None  # resuming is the user's action in this test
+        first = session.recording_path
+        qtbot.waitUntil(lambda: "● recording" in window.recording_label.text(), timeout=10_000)
+        assert not window.recording_banner.isVisible()
+
+        qtbot.waitUntil(window.recording_banner.isVisible, timeout=30_000)
+        text = window.recording_banner.label.text()
+        assert "RECORDING STOPPED" in text and "No space left on device" in text
+        assert "Decoding and the display go on" in text and str(first) in text
+        qtbot.waitUntil(lambda: "NOT RECORDING" in window.recording_label.text(), timeout=2_000)
+        assert "● recording" not in window.recording_label.text()
+
+        # The plots go on: the newest plotted time advances while nothing is recorded.
+        before = newest_plotted_time(window)
+        qtbot.wait(1_500)
+        assert newest_plotted_time(window) > before + 1.0
+        assert session.running
+
+        # Resume while the disk is still full: it says why and leaves no file behind.
+        qtbot.mouseClick(window.recording_banner.resume_button, QtCore.Qt.MouseButton.LeftButton)
+        assert window.recording_banner.isVisible() and session.recorder.state == "failed"
+        assert [p.name for p in folder.glob("*.gsrec")] == [first.name]
+
+        grow(folder, "16m")
+        qtbot.mouseClick(window.recording_banner.resume_button, QtCore.Qt.MouseButton.LeftButton)
+        assert not window.recording_banner.isVisible()
+        second = session.recording_path
+        assert second != first and second.exists()
+        qtbot.waitUntil(lambda: f"● recording {second}" in window.recording_label.text(), timeout=2_000)
+        assert [e["kind"] for e in session.pipeline.events].count("recording_resumed") == 1
+
+        window.close()  # stops the session and closes the files; raises nothing
+        assert window.session is None and session.recorder.state == "off"
