@@ -14,6 +14,7 @@ the rows they arrived at, so export and evaluate treat it like any session.
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import numpy as np
 
@@ -22,10 +23,12 @@ from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
+from groundstation.session.catalogue import TIME, Catalogue, Column, TableInfo, session_catalogue
 from groundstation.session.data import SessionData
 from groundstation.session.pipeline import DEFAULT_FILTERS
 
 MAX_GAP_S = 1.0
+UNIT_SLUG = re.compile(r"[^A-Za-z0-9]+")  # "m/s" -> "m_s", "cdeg" stays
 FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
 
 
@@ -59,12 +62,36 @@ def log_session(log: FlightLog, filters, forced: dict) -> SessionData:
             values = on_rows(t_us, stream, list(stream.columns))
             sensors.update({f"{prefix}_{name}": values[:, i] for i, name in enumerate(stream.columns)})
     settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
+    diagnostics = {name: d for name, (_, d) in runs.items()}
+    tables, catalogue = catalogued(log, {name: q for name, (q, _) in runs.items()}, diagnostics)
     return SessionData(
         metadata=metadata, time_s=(t_us - t_us[0]) / 1e6,
-        estimates={name: q for name, (q, _) in runs.items()}, diagnostics={name: d for name, (_, d) in runs.items()},
+        estimates={name: q for name, (q, _) in runs.items()}, diagnostics=diagnostics,
         sensors=sensors, onboard=interpolated(t_us, log.onboard), true_q=interpolated(t_us, log.truth), true_frame="NED",
-        settings_at_start=settings, settings_at_end=settings,
+        settings_at_start=settings, settings_at_end=settings, tables=tables, catalogue=catalogue,
     )  # fmt: skip
+
+
+def catalogued(log: FlightLog, estimates: dict, diagnostics: dict) -> tuple[dict, Catalogue]:
+    """The session's ``imu`` table (samples and estimates) and one table per other logged message type
+    (a tlog's VFR_HUD, SYS_STATUS, ...: "plot any channel"), with their catalogue; columns named
+    ``<field>_<unit>`` from pymavlink's units, on session time."""
+    t_us = log.imu.time_us
+    imu_info = session_catalogue({name: tuple(d) for name, d in diagnostics.items()})["imu"]
+    imu = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
+    for name, q in estimates.items():
+        imu.update({f"{name}_q{c}": q[:, i] for i, c in enumerate("wxyz")})
+        imu.update({f"{name}_{d}": values for d, values in diagnostics[name].items()})
+    nan = np.full(len(t_us), np.nan)
+    tables = {"imu": {c: imu.get(c, nan) for c in imu_info.column_names}}
+    infos = {"imu": imu_info}
+    for name, stream in log.tables.items():
+        units = log.units.get(name, {})
+        columns = {f: "_".join(filter(None, (f, UNIT_SLUG.sub("_", units.get(f, "").replace("%", "pct")).strip("_")))) for f in stream.columns}
+        key = name.lower()
+        infos[key] = TableInfo(key, f"{name} ({log.format})", (TIME, *(Column(c, units.get(f) or "1", f, 3) for f, c in columns.items())))
+        tables[key] = {"time_s": (stream.time_us - t_us[0]) / 1e6, **{c: stream.columns[f] for f, c in columns.items()}}
+    return tables, Catalogue(infos)
 
 
 def describe(log: FlightLog) -> dict:

@@ -94,3 +94,28 @@ def test_import_saves_a_recorded_mavlink_session_as_a_tlog(tmp_path, capsys):
 def test_import_of_a_flight_log_explains_that_none_is_needed(px4_log, tmp_path, capsys):
     assert main(["import", str(px4_log), "--out", str(tmp_path / "x.gsrec")]) == 2
     assert "no import needed" in capsys.readouterr().err
+
+
+def test_every_other_tlog_message_is_a_catalogued_table_and_exported(tmp_path, capsys):
+    from mavlink_helpers import Sender, ardupilot_heartbeat
+    from groundstation.autopilot.tlog import write_tlog
+
+    ap, t0_us = Sender(), 1_700_000_000_000_000
+    packets = [(t0_us, ardupilot_heartbeat(ap))]
+    for i in range(100):  # IMU at 50 Hz, VFR_HUD at 5 Hz (no time field: placed by its receive time)
+        packets.append((t0_us + i * 20_000, ap.raw_imu(3_000_000 + i * 20_000, 0, 0, -1000, 0, 0, 0, 1, 2, 3)))
+        if i % 10 == 5:
+            packets.append((t0_us + i * 20_000 + 1, ap.vfr_hud(10.0 + i, 11.0, 90, 42, 100.0, 0.5)))
+    path = tmp_path / "hud.tlog"
+    write_tlog(path, packets)
+    data = load_log(path, ["hf"])
+    info = data.catalogue["vfr_hud"]
+    assert info.column("airspeed_m_s").unit == "m/s" and info.column("throttle_pct").unit == "%"
+    assert list(data.tables["vfr_hud"]["airspeed_m_s"]) == [10.0 + i for i in range(5, 100, 10)]
+    assert main(["export", str(path), "--out", str(tmp_path / "hud.csv"), "--filters", "hf"]) == 0
+    capsys.readouterr()
+    csv = pd.read_csv(tmp_path / "hud.csv")
+    hud = csv.dropna(subset=["vfr_hud_airspeed_m_s"])
+    # Each reading on the first IMU row at or after it (receive time mapped onto the autopilot clock).
+    assert list(hud.vfr_hud_airspeed_m_s) == [10.0 + i for i in range(5, 100, 10)]
+    assert np.allclose(hud.time_s, [(i * 20_000 + 20_000) / 1e6 for i in range(5, 100, 10)], atol=1e-6)
