@@ -1,8 +1,13 @@
-"""``groundstation evaluate``: inclination accuracy of the estimators on a file with truth.
+"""``groundstation evaluate``: inclination accuracy of the estimators on a file with truth, or their
+agreement with the aircraft's own estimate when there is no truth.
 
-The file is a recording with truth (a simulated flight, an imported dataset trial) or a dataset CSV
-(plain or .gz; ../shared/datasets/README.md); an imported trial scores exactly as its CSV. Output: a table, or with ``--json`` an object mapping each estimator
-name to ``{"incl_rmse_deg": ..., "incl_max_deg": ...}``.
+The file is a recording with truth (a simulated flight, an imported dataset trial), a dataset CSV
+(plain or .gz; ../shared/datasets/README.md), or an autopilot's flight log (.tlog, .bin, .ulg); an
+imported trial scores exactly as its CSV. With truth the output is a table, or with ``--json`` an
+object mapping each estimator name to ``{"incl_rmse_deg": ..., "incl_max_deg": ...}``. Without truth but
+with an onboard estimate (a flight log), it is each estimator's pitch/roll difference from that
+estimate, labelled as agreement (the onboard estimate is not truth); ``--json`` gives
+``{"agreement_with_onboard": {name: {"pitch_rms_deg", "pitch_max_deg", "roll_rms_deg", "roll_max_deg", "rows"}}}``.
 """
 
 from __future__ import annotations
@@ -11,10 +16,13 @@ import argparse
 import json
 
 from groundstation.commands.options import add_estimator_options, estimator_options
+from groundstation.errors import UserError
+
+AGREEMENT_TITLE = "agreement with the onboard estimate (difference, not error: the onboard estimate is not truth)"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec) with truth, or a dataset CSV (.csv or .csv.gz)")
+    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec) with truth, a dataset CSV (.csv or .csv.gz), or a flight log (.tlog, .bin, .ulg)")
     from groundstation.estimation import ESTIMATORS, GPS_AIDED
 
     # The GPS-aided filters are left out by default: the datasets have no GPS, and without it they are
@@ -24,14 +32,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from groundstation.autopilot.agreement import agreement
     from groundstation.session.data import load_session
 
     names, overrides = estimator_options(args)
-    results = load_session(args.file, names, overrides).evaluate()
+    data = load_session(args.file, names, overrides)
+    if data.true_q is None and data.onboard is not None:
+        if not data.estimates:
+            raise UserError(f"{args.file}: no IMU samples, so no host estimator ran; only the onboard estimate is there")
+        return print_agreement(agreement(data.estimates, data.onboard), data.metadata.get("imu_warning"), args.json)
+    results = data.evaluate()
     if args.json:
         print(json.dumps(results, indent=2))
     else:
         print(f"{'estimator':<10} {'incl RMSE (deg)':>16} {'incl max (deg)':>15}")
         for name, figures in results.items():
             print(f"{name:<10} {figures['incl_rmse_deg']:>16.3f} {figures['incl_max_deg']:>15.3f}")
+    return 0
+
+
+def print_agreement(results: dict, warning: str | None, as_json: bool) -> int:
+    if as_json:
+        print(json.dumps({"agreement_with_onboard": results}, indent=2))
+        return 0
+    print(AGREEMENT_TITLE)
+    if warning:
+        print(f"warning: {warning}")
+    print(f"{'estimator':<10} {'pitch RMS (deg)':>16} {'pitch max (deg)':>16} {'roll RMS (deg)':>15} {'roll max (deg)':>15}")
+    for name, f in results.items():
+        print(f"{name:<10} {f['pitch_rms_deg']:>16.3f} {f['pitch_max_deg']:>16.3f} {f['roll_rms_deg']:>15.3f} {f['roll_max_deg']:>15.3f}")
     return 0

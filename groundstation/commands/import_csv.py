@@ -1,7 +1,9 @@
-"""``groundstation import``: a dataset CSV (the raw-IMU layout, plain or .gz) to a recording.
+"""``groundstation import``: a dataset CSV (the raw-IMU layout, plain or .gz) to a recording, or a
+recorded MAVLink session to a standard ``.tlog`` (Mission Planner and QGroundControl open it).
 
 The samples are stored bit for bit, so replay, export and evaluate give exactly the numbers the
-CSV gives; truth columns are kept.
+CSV gives; truth columns are kept. Flight logs (.tlog, .bin, .ulg) need no import: replay, export
+and evaluate read them as they are.
 """
 
 from __future__ import annotations
@@ -11,13 +13,15 @@ from pathlib import Path
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", metavar="FILE", help="dataset CSV (.csv or .csv.gz): time_s, gyr_*_rad_s, acc_*_m_s2, ...")
-    parser.add_argument("--out", required=True, type=Path, metavar="FILE", help="the recording to write (.gsrec)")
+    parser.add_argument("file", metavar="FILE", help="dataset CSV (.csv or .csv.gz): time_s, gyr_*_rad_s, acc_*_m_s2, ...; "
+                                                     "or a recording (.gsrec) of a MAVLink session, with --out FILE.tlog")
+    parser.add_argument("--out", required=True, type=Path, metavar="FILE", help="the recording to write (.gsrec), or FILE.tlog")
 
 
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
+    from groundstation.autopilot import LOG_SUFFIXES
     from groundstation.datasets import DatasetError, read_csv
     from groundstation.errors import UserError
     from groundstation.export.files import atomic_recording
@@ -27,6 +31,10 @@ def run(args: argparse.Namespace) -> int:
         raise UserError(f"--out must end in {EXTENSION} (the import writes a recording), not {args.out.name}")
     if args.out.exists():
         raise UserError(f"{args.out} exists; choose another name")
+    if Path(args.file).suffix.lower() in LOG_SUFFIXES:
+        raise UserError(f"{args.file} is a flight log: no import needed; export, evaluate and the app's Open read it directly")
+    if args.out.suffix.lower() == ".tlog":
+        return save_tlog(Path(args.file), args.out)
     try:
         read_csv(args.file)  # the same checks and messages as evaluate
     except DatasetError as error:
@@ -36,4 +44,16 @@ def run(args: argparse.Namespace) -> int:
     with atomic_recording(args.out, {"source": f"imported from {Path(args.file).name}"}) as writer:
         writer.write_samples(columns)
     print(f"wrote {args.out}: {len(frame)} samples, columns {', '.join(frame.columns)}")
+    return 0
+
+
+def save_tlog(recording_path: Path, out: Path) -> int:
+    from groundstation.autopilot.tlog import recording_to_tlog
+    from groundstation.recording import open_recording
+
+    recording = open_recording(recording_path)
+    count = recording_to_tlog(recording, out)
+    for finding in recording.damage:
+        print(f"warning: {finding}")
+    print(f"wrote {out}: {count} MAVLink packets")
     return 0

@@ -16,7 +16,7 @@ from groundstation.errors import UserError
 from groundstation.export.excel_columns import DATE_TIME, start_time
 from groundstation.session.data import SessionData
 
-WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70}
+WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70, "E": 24}
 LINK_COUNTS = (
     ("frames", "frames received (count)"), ("frames_lost", "frames lost (count)"),
     ("crc_errors", "CRC failures (count)"), ("bytes_in", "bytes received (B)"),
@@ -39,6 +39,8 @@ def session_rows(data: SessionData, rows: np.ndarray, forced: dict | None = None
     out += events_table(data)
     if data.true_q is not None:
         out += error_table(data)
+    elif data.onboard is not None and data.estimates:
+        out += agreement_table(data)
     return out
 
 
@@ -67,6 +69,8 @@ def facts(data: SessionData, rows: np.ndarray) -> list[list]:
 
 def firmware(data: SessionData) -> list[list]:
     """What the aircraft's last CONFIG frame said; a dataset has no aircraft."""
+    if "autopilot" in data.metadata:
+        return [["mounting", "the autopilot's body axes (x forward, y right, z down), as logged"]]
     if data.link is None:
         return [["mounting", "dataset: the IMU axes are taken as the body axes"]]
     config = data.config
@@ -124,6 +128,18 @@ def error_table(data: SessionData) -> list[list]:
         return [[Heading(title)], [str(error)], []]
     out = [[Heading(title), Heading("inclination RMSE (°)"), Heading("inclination max (°)")]]
     return out + [[name, s["incl_rmse_deg"], s["incl_max_deg"]] for name, s in scores.items()] + [[]]
+
+
+def agreement_table(data: SessionData) -> list[list]:
+    """Without truth: each estimator's pitch/roll difference from the aircraft's own estimate."""
+    from groundstation.autopilot.agreement import agreement
+
+    out = [[Heading("Agreement with the onboard estimate (whole session; a difference, not an error: the onboard estimate is not truth)")],
+           [Heading("estimator"), Heading("pitch RMS difference (°)"), Heading("pitch max difference (°)"),
+            Heading("roll RMS difference (°)"), Heading("roll max difference (°)")]]  # fmt: skip
+    for name, f in agreement(data.estimates, data.onboard).items():
+        out.append([name, f["pitch_rms_deg"], f["pitch_max_deg"], f["roll_rms_deg"], f["roll_max_deg"]])
+    return out + [[]]
 
 
 def cell_number(value: float):

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation import mounting, quaternion
+from groundstation.autopilot import LOG_SUFFIXES
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, read_csv, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create
@@ -76,6 +77,10 @@ class SessionData:
 def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
     """Decode, import or read ``path`` and run the estimators; UserError with a clear message on bad input."""
     path = Path(path)
+    if path.suffix.lower() in LOG_SUFFIXES:  # an autopilot's flight log (.tlog, .bin, .ulg)
+        from groundstation.autopilot.session import load_log
+
+        return load_log(path, filters, forced, progress)
     if path.name.lower().endswith(DATASET_SUFFIXES):
         try:
             trial = read_csv(path)

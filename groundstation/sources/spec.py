@@ -7,6 +7,7 @@ A spec is what the user types in the app's port field or after ``--port``:
     udp://HOST:PORT, tcp://HOST:PORT   a UDP or TCP (Wi-Fi) bridge       -> udp.py, tcp.py
     sim:[?scenario=NAME&seed=N...]     the in-process simulated bridge   -> sim.py
     FILE.gsrec[?speed=X]               a recording, replayed             -> replay.py
+    mavlink:...                        an autopilot (MAVLink 1/2)        -> mavlink.py
 
 ``SCHEMES`` is the registry: a new input is one module with ``open_spec(spec: Spec) -> Source`` and
 one entry here. Strings without a scheme are a recording when they name a file, else a serial port.
@@ -34,6 +35,10 @@ SCHEMES: dict[str, tuple[str, str, str]] = {
     "tcp": ("groundstation.sources.tcp", "tcp://HOST:PORT", "a TCP bridge: connect to HOST:PORT, reconnect when it drops"),
     "sim": ("groundstation.sources.sim", "sim:[?scenario=NAME&seed=N&...]",
             "the built-in simulated bridge (any bridge-sim option as a parameter)"),
+    "mavlink": ("groundstation.sources.mavlink", "mavlink:PORT[?baud=N], mavlink:udpin:HOST:PORT, mavlink:udpout:HOST:PORT, "
+                "mavlink:tcp:HOST:PORT, mavlink:FILE.tlog[?speed=X]",
+                "an autopilot speaking MAVLink (ArduPilot, PX4): a SiK radio (57600 baud unless ?baud=), SITL or a Wi-Fi "
+                "bridge over UDP or TCP, or a .tlog replayed"),
     "recording": ("groundstation.sources.replay", "FILE.gsrec[?speed=X]",
                   "a recording, replayed at X times real time (0.25-64, default 1; speed=max: as fast as possible)"),
 }

@@ -1,0 +1,93 @@
+"""A flight log (``.tlog``, DataFlash ``.bin``, PX4 ``.ulg``) as arrays on the autopilot's clock.
+
+Each stream is a ``Series``: ``time_us`` (µs since the autopilot booted, strictly increasing) and
+named columns whose names carry their units, in this project's frames (body FRD, body -> NED):
+
+- ``imu``: ``gyr_{x,y,z}_rad_s``, ``acc_{x,y,z}_g`` — the one IMU the host estimators run on;
+- ``onboard``: ``q{w,x,y,z}`` — the autopilot's own attitude estimate;
+- ``mag``: ``mag_{x,y,z}_uT``; ``baro``: ``pressure_hpa``, ``temperature_c``;
+- ``gps``: ``lat_deg``, ``lon_deg``, ``alt_m``, ``vel_{n,e,d}_m_s``, ``fix_type``, ``satellites``;
+- ``truth``: ``q{w,x,y,z}`` — a simulator's true attitude when the log has one (PX4 SITL).
+
+A stream the log lacks is None, and ``notes`` says so in words.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from groundstation.errors import UserError
+
+Q_COLUMNS = ("qw", "qx", "qy", "qz")
+IMU_COLUMNS = ("gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s", "acc_x_g", "acc_y_g", "acc_z_g")
+MAG_COLUMNS = ("mag_x_uT", "mag_y_uT", "mag_z_uT")
+GPS_COLUMNS = ("lat_deg", "lon_deg", "alt_m", "vel_n_m_s", "vel_e_m_s", "vel_d_m_s", "fix_type", "satellites")
+
+
+@dataclasses.dataclass
+class Series:
+    time_us: np.ndarray  # (N,) int64, strictly increasing
+    columns: dict[str, np.ndarray]  # name -> (N,) float
+    source: str  # the message or topic it came from
+
+    def __len__(self) -> int:
+        return len(self.time_us)
+
+    def stack(self, names) -> np.ndarray:
+        return np.column_stack([self.columns[n] for n in names])
+
+    @property
+    def rate_hz(self) -> float:
+        """Median rate on the autopilot's clock; NaN with fewer than two samples."""
+        return 1e6 / float(np.median(np.diff(self.time_us))) if len(self) > 1 else float("nan")
+
+
+def series(time_us, columns: dict, source: str) -> Series | None:
+    """Sorted by time, with repeated or backward times dropped (a tlog can hold a message twice); None if empty."""
+    time_us = np.asarray(time_us, dtype=np.int64)
+    if len(time_us) == 0:
+        return None
+    order = np.argsort(time_us, kind="stable")
+    time_us = time_us[order]
+    keep = np.concatenate([[True], np.diff(time_us) > 0])
+    return Series(time_us[keep], {n: np.asarray(v, dtype=float)[order][keep] for n, v in columns.items()}, source)
+
+
+@dataclasses.dataclass
+class FlightLog:
+    path: Path
+    format: str  # "tlog", "dataflash", "ulog"
+    autopilot: str  # "ArduPilot", "PX4", or what the log says
+    imu: Series | None = None
+    onboard: Series | None = None
+    mag: Series | None = None
+    baro: Series | None = None
+    gps: Series | None = None
+    truth: Series | None = None
+    tables: dict[str, Series] = dataclasses.field(default_factory=dict)  # other messages, per type
+    units: dict[str, dict[str, str]] = dataclasses.field(default_factory=dict)  # table -> column -> unit
+    notes: list[str] = dataclasses.field(default_factory=list)
+
+
+def read_log(path, progress=None) -> FlightLog:
+    """The log at ``path`` by its suffix; UserError with a clear message when it cannot be read."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"{path}: no such file")
+    suffix = path.suffix.lower()
+    if suffix == ".tlog":
+        from groundstation.autopilot.tlog import read_tlog as reader
+    elif suffix == ".bin":
+        from groundstation.autopilot.dataflash import read_dataflash as reader
+    elif suffix == ".ulg":
+        from groundstation.autopilot.ulog import read_ulog as reader
+    else:
+        raise UserError(f"{path}: not a flight log (.tlog, .bin or .ulg)")
+    log = reader(path, progress)
+    if log.imu is None and log.onboard is None:
+        found = f" ({'; '.join(log.notes)})" if log.notes else ""
+        raise UserError(f"{path}: holds neither IMU samples nor an attitude estimate{found}; damaged or empty?")
+    return log

@@ -1,0 +1,121 @@
+"""What MAVLink messages become: records in this project's units and frames (docs/conventions.md).
+
+Every record names its sender (``system``, ``component``: MAVLink ids), the host time the bytes
+arrived (``t_host_ns``; for a log, the time it stored) and, where the message carries one, the
+autopilot's own time ``time_us`` (µs since boot) — the time base to use for rates and ``dt``
+(a tlog's receive time can run 25x faster than the vehicle's, as in SITL autotests).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+
+class ImuSample(NamedTuple):
+    system: int
+    component: int
+    t_host_ns: int
+    time_us: int
+    source: str  # the message it came from: "RAW_IMU", "SCALED_IMU2", "HIGHRES_IMU", ...
+    gyr_rad_s: tuple[float, float, float]  # body FRD
+    acc_g: tuple[float, float, float]  # body FRD specific force (level at rest: (0, 0, -1))
+    temperature_c: float  # NaN when not reported
+
+
+class OnboardAttitude(NamedTuple):
+    system: int
+    component: int
+    t_host_ns: int
+    time_us: int
+    source: str  # "ATTITUDE" or "ATTITUDE_QUATERNION"
+    q: tuple[float, float, float, float]  # w, x, y, z; body -> NED
+
+
+class MagReading(NamedTuple):
+    system: int
+    component: int
+    t_host_ns: int
+    time_us: int
+    source: str
+    mag_uT: tuple[float, float, float]  # body FRD
+
+
+class BaroReading(NamedTuple):
+    system: int
+    component: int
+    t_host_ns: int
+    time_us: int
+    source: str  # "SCALED_PRESSURE", "SCALED_PRESSURE2", "HIGHRES_IMU", ...
+    pressure_hpa: float
+    temperature_c: float  # NaN when not reported
+
+
+class GpsReading(NamedTuple):
+    system: int
+    component: int
+    t_host_ns: int
+    time_us: int
+    lat_deg: float
+    lon_deg: float
+    alt_m: float  # above mean sea level
+    vel_n_m_s: float  # from ground speed and course; NaN when the receiver gives neither
+    vel_e_m_s: float
+    vel_d_m_s: float  # NaN: GPS_RAW_INT has no vertical speed
+    fix_type: int  # MAVLink GPS_FIX_TYPE: 0-1 none, 2 2D, 3 3D, 4 DGPS, 5 RTK float, 6 RTK fixed
+    satellites: int  # -1 when unknown
+
+
+class LinkHealth(NamedTuple):
+    """RADIO_STATUS (SiK radios): both ends' signal; rssi/noise in the radio's units (SiK: ~dBm*1.9+127)."""
+
+    system: int
+    component: int
+    t_host_ns: int
+    rssi: int  # local (ground) radio; 255 = unknown
+    remote_rssi: int  # the aircraft's radio
+    noise: int
+    remote_noise: int
+    rx_errors: int  # count, as the radio reports it
+    fixed: int  # packets corrected by error correction
+    tx_buffer_pct: int
+
+
+class VehicleStatus(NamedTuple):
+    """HEARTBEAT: what the sender is and what it is doing."""
+
+    system: int
+    component: int
+    t_host_ns: int
+    autopilot: int  # MAV_AUTOPILOT: 3 ArduPilot, 12 PX4, 8 none (a GCS, camera, companion)
+    vehicle_type: int  # MAV_TYPE
+    mode: str  # pymavlink's name for the custom mode ("LOITER", "MANUAL", ...)
+    armed: bool
+    system_status: int  # MAV_STATE
+
+
+class Battery(NamedTuple):
+    """SYS_STATUS: battery and the autopilot's own view of the link."""
+
+    system: int
+    component: int
+    t_host_ns: int
+    voltage_v: float  # NaN when unknown
+    current_a: float  # NaN when unknown
+    remaining_pct: float  # NaN when unknown
+    drop_rate_comm_pct: float
+    errors_comm: int
+
+
+class GenericMessage(NamedTuple):
+    """Any other message: its fields (arrays flattened to ``name_0``, ``name_1``, ...) and their units."""
+
+    system: int
+    component: int
+    t_host_ns: int
+    time_us: int | None
+    msg_type: str
+    fields: dict[str, float]
+    units: dict[str, str]  # field -> unit, where pymavlink's message definition gives one
+
+
+Record = ImuSample | OnboardAttitude | MagReading | BaroReading | GpsReading | LinkHealth | VehicleStatus | Battery | GenericMessage

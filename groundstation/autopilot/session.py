@@ -1,0 +1,147 @@
+"""A flight log as a ``SessionData``: the host estimators run over its IMU on the autopilot's clock,
+the onboard estimate (and a simulator's truth) interpolated onto the IMU rows, the slower sensors on
+the rows they arrived at, so export and evaluate treat it like any session.
+
+- ``dt`` comes from the autopilot's timestamps (never a log's receive time).
+- Magnetometer readings reach the estimators on the first IMU row at or after them (as in the live
+  pipeline), and GPS velocity when it has all three NED components (GPS_RAW_INT has no vertical
+  speed, so a tlog's GPS does not aid); single-antenna GPS gives no heading.
+- The onboard attitude and truth are interpolated (normalised linear, shortest way) between the
+  two samples around each IMU row, and NaN where those two are more than ``MAX_GAP_S`` apart or the
+  row lies outside them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import numpy as np
+
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, read_log
+from groundstation.autopilot.streams import slow_imu_note
+from groundstation.errors import UserError
+from groundstation.estimation import create
+from groundstation.estimation.evaluation import sample_periods_s
+from groundstation.session.catalogue import TIME, Catalogue, Column, TableInfo, session_catalogue
+from groundstation.session.data import SessionData
+from groundstation.session.pipeline import DEFAULT_FILTERS
+
+MAX_GAP_S = 1.0
+UNIT_SLUG = re.compile(r"[^A-Za-z0-9]+")  # "m/s" -> "m_s", "cdeg" stays
+FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
+
+
+def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
+    """Read a ``.tlog``, ``.bin`` or ``.ulg`` and run ``filters`` (default: the pipeline's) with ``forced`` settings."""
+    return log_session(read_log(path, progress), filters or DEFAULT_FILTERS, forced or {})
+
+
+def log_session(log: FlightLog, filters, forced: dict) -> SessionData:
+    metadata = describe(log)
+    if log.imu is None:  # attitude only: the onboard estimate on its own rows
+        t_us = log.onboard.time_us
+        return SessionData(metadata=metadata, time_s=(t_us - t_us[0]) / 1e6, estimates={}, diagnostics={}, sensors={},
+                           onboard=log.onboard.stack(Q_COLUMNS), true_q=interpolated(t_us, log.truth), true_frame="NED")  # fmt: skip
+    t_us = log.imu.time_us
+    gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
+    mag = on_rows(t_us, log.mag, MAG_COLUMNS)
+    velocity = on_rows(t_us, log.gps, GPS_COLUMNS[3:6])
+    velocity[~np.isfinite(velocity).all(axis=1)] = np.nan
+    gps = np.column_stack([velocity, np.full(len(t_us), np.nan)])  # no heading from one antenna
+    dt_s = sample_periods_s(t_us / 1e6)
+    try:
+        runs = {name: create(name, forced.get(name)).run(gyr, acc, dt_s, mag, gps) for name in dict.fromkeys(filters)}
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    sensors = {name: log.imu.columns[name] for name in IMU_COLUMNS if name.startswith("acc")}
+    sensors.update({f"gyr_{a}_dps": np.degrees(gyr[:, i]) for i, a in enumerate("xyz")})
+    sensors.update({name: mag[:, i] for i, name in enumerate(MAG_COLUMNS)} if log.mag is not None else {})
+    for prefix, stream in (("baro", log.baro), ("gps", log.gps)):
+        if stream is not None:
+            values = on_rows(t_us, stream, list(stream.columns))
+            sensors.update({f"{prefix}_{name}": values[:, i] for i, name in enumerate(stream.columns)})
+    settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
+    diagnostics = {name: d for name, (_, d) in runs.items()}
+    tables, catalogue = catalogued(log, {name: q for name, (q, _) in runs.items()}, diagnostics)
+    return SessionData(
+        metadata=metadata, time_s=(t_us - t_us[0]) / 1e6,
+        estimates={name: q for name, (q, _) in runs.items()}, diagnostics=diagnostics,
+        sensors=sensors, onboard=interpolated(t_us, log.onboard), true_q=interpolated(t_us, log.truth), true_frame="NED",
+        settings_at_start=settings, settings_at_end=settings, tables=tables, catalogue=catalogue,
+    )  # fmt: skip
+
+
+def catalogued(log: FlightLog, estimates: dict, diagnostics: dict) -> tuple[dict, Catalogue]:
+    """The session's ``imu`` table (samples and estimates) and one table per other logged message type
+    (a tlog's VFR_HUD, SYS_STATUS, ...: "plot any channel"), with their catalogue; columns named
+    ``<field>_<unit>`` from pymavlink's units, on session time."""
+    t_us = log.imu.time_us
+    imu_info = session_catalogue({name: tuple(d) for name, d in diagnostics.items()})["imu"]
+    imu = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
+    for name, q in estimates.items():
+        imu.update({f"{name}_q{c}": q[:, i] for i, c in enumerate("wxyz")})
+        imu.update({f"{name}_{d}": values for d, values in diagnostics[name].items()})
+    nan = np.full(len(t_us), np.nan)
+    tables = {"imu": {c: imu.get(c, nan) for c in imu_info.column_names}}
+    infos = {"imu": imu_info}
+    for name, stream in log.tables.items():
+        units = log.units.get(name, {})
+        columns = {f: "_".join(filter(None, (f, UNIT_SLUG.sub("_", units.get(f, "").replace("%", "pct")).strip("_")))) for f in stream.columns}
+        key = name.lower()
+        infos[key] = TableInfo(key, f"{name} ({log.format})", (TIME, *(Column(c, units.get(f) or "1", f, 3) for f, c in columns.items())))
+        tables[key] = {"time_s": (stream.time_us - t_us[0]) / 1e6, **{c: stream.columns[f] for f, c in columns.items()}}
+    return tables, Catalogue(infos)
+
+
+def describe(log: FlightLog) -> dict:
+    """What the Session sheet and the commands show about the log."""
+    meta = {"source": f"{FORMAT_NAMES[log.format]} {log.path.name}", "autopilot": log.autopilot}
+    for name in ("imu", "onboard", "mag", "baro", "gps", "truth"):
+        stream: Series | None = getattr(log, name)
+        if stream is not None:
+            meta[f"{name} stream"] = f"{stream.source}, {len(stream)} samples at {stream.rate_hz:.1f} Hz"
+    if log.imu is not None:
+        meta["imu_rate_hz"] = round(log.imu.rate_hz, 2)
+        note = slow_imu_note(log.imu.rate_hz)
+        if note:
+            meta["imu_warning"] = note
+    if log.notes:
+        meta["notes"] = "; ".join(log.notes)
+    return meta
+
+
+def on_rows(t_rows_us: np.ndarray, stream: Series | None, columns) -> np.ndarray:
+    """(N, k) with each reading on the first row at or after it (the later one where two share a row),
+    NaN on the other rows; all NaN when the log lacks the stream."""
+    out = np.full((len(t_rows_us), len(columns)), np.nan)
+    if stream is None:
+        return out
+    at = np.searchsorted(t_rows_us, stream.time_us)
+    inside = at < len(t_rows_us)
+    out[at[inside]] = stream.stack(columns)[inside]
+    return out
+
+
+def interpolated(t_rows_us: np.ndarray, stream: Series | None) -> np.ndarray | None:
+    """Quaternions of ``stream`` at ``t_rows_us`` (normalised linear between neighbours; NaN across gaps)."""
+    if stream is None:
+        return None
+    q = stream.stack(Q_COLUMNS)
+    t = stream.time_us
+    out = np.full((len(t_rows_us), 4), np.nan)
+    after = np.searchsorted(t, t_rows_us)  # first sample at or after the row
+    exact = (after < len(t)) & (t[np.minimum(after, len(t) - 1)] == t_rows_us)
+    out[exact] = q[after[exact]]
+    between = (after > 0) & (after < len(t)) & ~exact
+    i1 = after[between]
+    i0 = i1 - 1
+    ok = (t[i1] - t[i0]) <= MAX_GAP_S * 1e6
+    rows = np.flatnonzero(between)[ok]
+    i0, i1 = i0[ok], i1[ok]
+    a = ((t_rows_us[rows] - t[i0]) / (t[i1] - t[i0]))[:, None]
+    q0, q1 = q[i0], q[i1]
+    q1 = np.where((np.sum(q0 * q1, axis=1) < 0)[:, None], -q1, q1)  # the shorter way round
+    blend = (1 - a) * q0 + a * q1
+    out[rows] = blend / np.linalg.norm(blend, axis=1, keepdims=True)
+    return out

@@ -1,0 +1,112 @@
+"""The only uplink a MAVLink session sends: requests for stream rates (and, on ``udpout``, a GCS
+heartbeat so the vehicle learns our address). Nothing here arms, changes mode or moves the aircraft.
+
+Two requests, because autopilots honour different ones: ``REQUEST_DATA_STREAM`` (ArduPilot; groups
+RAW_SENSORS = RAW_IMU, SCALED_PRESSURE, ... and EXTRA1 = ATTITUDE) and ``MAV_CMD_SET_MESSAGE_INTERVAL``
+per message (PX4 and current ArduPilot). The ground station sends as system 255, component 190
+(MAV_COMP_ID_MISSIONPLANNER), as GCSs do.
+
+``ImuRateMonitor`` says when the IMU arrives too slowly for host filtering to mean anything (many
+telemetry links send RAW_IMU at 2–10 Hz; the host filters integrate the gyro between samples).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
+from groundstation.autopilot.records import ImuSample, VehicleStatus
+
+GCS_SYSTEM, GCS_COMPONENT = 255, 190
+MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
+STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
+                     mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
+AUTOPILOTS = (MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4)
+STREAM_GROUPS = (mavlink.MAV_DATA_STREAM_RAW_SENSORS, mavlink.MAV_DATA_STREAM_EXTRA1)
+
+
+def gcs_encoder() -> mavlink.MAVLink:
+    return mavlink.MAVLink(None, srcSystem=GCS_SYSTEM, srcComponent=GCS_COMPONENT)
+
+
+def pack_next(encoder: mavlink.MAVLink, msg, mavlink1: bool = False) -> bytes:
+    """``msg`` packed with the sender's next sequence number (``MAVLink.send`` counts it; ``pack`` does not)."""
+    data = msg.pack(encoder, mavlink1)
+    encoder.seq = (encoder.seq + 1) % 256
+    return data
+
+
+def gcs_heartbeat(encoder: mavlink.MAVLink | None = None) -> bytes:
+    """A ground station's HEARTBEAT (MAV_TYPE_GCS): how a UDP peer learns where to send."""
+    encoder = encoder or gcs_encoder()
+    return pack_next(encoder, encoder.heartbeat_encode(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE))
+
+
+def stream_requests(target_system: int, target_component: int, rate_hz: float, encoder: mavlink.MAVLink | None = None) -> bytes:
+    """Bytes asking the autopilot for the IMU and attitude at ``rate_hz`` (both request kinds), packed
+    with ``encoder``'s sequence numbers (pass the session's own to keep them counting)."""
+    encoder = encoder or gcs_encoder()
+    messages = [encoder.request_data_stream_encode(target_system, target_component, group, int(round(rate_hz)), 1) for group in STREAM_GROUPS]
+    messages += [encoder.command_long_encode(target_system, target_component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
+                                             msg_id, 1e6 / rate_hz, 0, 0, 0, 0, 0) for msg_id in STREAMED_MESSAGES]  # fmt: skip
+    return b"".join(pack_next(encoder, msg) for msg in messages)
+
+
+class StreamRequester:
+    """Asks every autopilot that sends a heartbeat for the IMU and attitude at ``rate_hz``, and asks
+    again every ``retry_s`` while its IMU stays slower than ``MIN_FILTER_RATE_HZ`` (a request can be
+    lost on a radio link, and ArduPilot's SRx_ parameters may override it)."""
+
+    def __init__(self, rate_hz: float = 50.0, retry_s: float = 5.0):
+        self.rate_hz = rate_hz
+        self.retry_ns = int(retry_s * 1e9)
+        self.monitors: dict[int, ImuRateMonitor] = {}
+        self._asked_ns: dict[tuple[int, int], int] = {}
+        self._encoder = gcs_encoder()
+
+    def update(self, records, t_host_ns: int) -> bytes:
+        """The request bytes to send now (often none), given the records just decoded."""
+        out = b""
+        for r in records:
+            if isinstance(r, ImuSample):
+                self.monitors.setdefault(r.system, ImuRateMonitor()).add(r.time_us)
+            elif isinstance(r, VehicleStatus) and r.autopilot in AUTOPILOTS:
+                target = (r.system, r.component)
+                asked = self._asked_ns.get(target)
+                slow = r.system not in self.monitors or not self.monitors[r.system].rate_hz >= MIN_FILTER_RATE_HZ
+                if asked is None or (slow and t_host_ns - asked >= self.retry_ns):
+                    self._asked_ns[target] = t_host_ns
+                    out += stream_requests(*target, self.rate_hz, self._encoder)
+        return out
+
+
+class ImuRateMonitor:
+    """IMU rate from the autopilot's own timestamps (median interval of the last ``window`` samples)."""
+
+    def __init__(self, window: int = 50):
+        self._times_us: deque[int] = deque(maxlen=window)
+
+    def add(self, time_us: int) -> None:
+        if not self._times_us or time_us > self._times_us[-1]:
+            self._times_us.append(time_us)
+
+    @property
+    def rate_hz(self) -> float:
+        if len(self._times_us) < 3:
+            return float("nan")
+        return 1e6 / float(np.median(np.diff(np.array(self._times_us, dtype=float))))
+
+    @property
+    def too_slow(self) -> bool:
+        return self.rate_hz < MIN_FILTER_RATE_HZ  # NaN (no rate yet) compares False
+
+
+def slow_imu_note(rate_hz: float) -> str | None:
+    """The message the window, the importer and evaluate show; None when the rate is fine."""
+    if not rate_hz < MIN_FILTER_RATE_HZ:
+        return None
+    return (f"IMU at {rate_hz:.1f} Hz: too slow for host filtering (needs >= {MIN_FILTER_RATE_HZ:.0f} Hz); "
+            "the host estimates are shown but mean little; compare with the onboard attitude instead")

@@ -1,0 +1,245 @@
+"""The ``.tlog`` file Mission Planner and QGroundControl write and open: each MAVLink packet as
+received, preceded by its receive time as an 8-byte big-endian count of µs since 1970.
+
+Reading walks that layout (packet length from its header: MAVLink 1 ``0xFE``, MAVLink 2 ``0xFD``, with
+signature) and lets pymavlink decode and check each packet; where the bytes do not fit (junk, a
+truncated end), it resynchronises on the next plausible timestamp followed by a packet start.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections import defaultdict
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+
+import numpy as np
+
+from groundstation.autopilot import records as rec
+from groundstation.autopilot.decoder import new_parser
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, series
+from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
+from groundstation.errors import UserError
+
+STAMP = struct.Struct(">Q")
+MAGIC_V1, MAGIC_V2 = 0xFE, 0xFD
+SIGNED = 0x01
+RESYNC_WINDOW_US = 3 * 24 * 3600 * 1_000_000  # a timestamp this far from the last is junk
+UNIX_RANGE_US = (946_684_800_000_000, 4_102_444_800_000_000)  # 2000-01-01 .. 2100-01-01
+# Preferred IMU streams: the one the autopilot calls IMU 0 first.
+IMU_PREFERENCE = ("HIGHRES_IMU", "RAW_IMU", "SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3")
+AUTOPILOT_NAMES = {MAV_AUTOPILOT_ARDUPILOTMEGA: "ArduPilot", MAV_AUTOPILOT_PX4: "PX4"}
+
+
+def packet_length(data, at: int) -> int | None:
+    """Length of the packet starting at ``at`` from its header, None if no packet starts there."""
+    if at + 3 > len(data):
+        return None
+    magic, payload = data[at], data[at + 1]
+    if magic == MAGIC_V1:
+        return payload + 8
+    if magic == MAGIC_V2:
+        return payload + 12 + (13 if data[at + 2] & SIGNED else 0)
+    return None
+
+
+def packets(data: bytes) -> Iterator[tuple[int, bytes | None]]:
+    """(receive time µs since 1970, packet bytes) in file order; ``(skipped_bytes, None)`` for junk."""
+    at, last_us, end = 0, None, len(data)
+    while at + 8 < end:
+        (stamp_us,) = STAMP.unpack_from(data, at)
+        length = packet_length(data, at + 8)
+        plausible = _plausible(stamp_us, last_us)
+        if length is not None and plausible and at + 8 + length <= end:
+            yield stamp_us, data[at + 8 : at + 8 + length]
+            last_us, at = stamp_us, at + 8 + length
+            continue
+        start = at
+        at += 1
+        while at + 8 < end and not _looks_like_record(data, at, last_us):
+            at += 1
+        yield at - start if at + 8 < end else end - start, None
+
+
+def _looks_like_record(data, at: int, last_us: int | None) -> bool:
+    return data[at + 8] in (MAGIC_V1, MAGIC_V2) and _plausible(STAMP.unpack_from(data, at)[0], last_us)
+
+
+def _plausible(stamp_us: int, last_us: int | None) -> bool:
+    """A receive time: a date this century, within days of the previous record's."""
+    in_range = UNIX_RANGE_US[0] <= stamp_us <= UNIX_RANGE_US[1]
+    return in_range and (last_us is None or abs(stamp_us - last_us) <= RESYNC_WINDOW_US)
+
+
+def messages(path, progress=None) -> Iterator[tuple[int, object]]:
+    """(receive time µs since 1970, pymavlink message) of every valid packet, and (skipped byte count,
+    None) for each run of junk or packet that fails its check."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as error:
+        raise UserError(f"{path}: cannot read ({error.strerror})") from None
+    parser = new_parser()
+    for i, (stamp_us, packet) in enumerate(packets(data)):
+        if progress is not None and i % 8192 == 0:
+            progress(i, max(len(data) // 40, i + 1))  # ~40 B per record
+        if packet is None:
+            yield stamp_us, None
+            continue
+        try:
+            yield stamp_us, parser.decode(bytearray(packet))
+        except Exception:  # pymavlink raises MAVError (CRC, unknown id) and struct.error (short payload)
+            yield len(packet) + 8, None
+
+
+def read_tlog(path, progress=None) -> FlightLog:
+    mapper = MessageMapper()
+    records, bad_bytes, bad_runs = [], 0, 0
+    for stamp_us, msg in messages(path, progress):
+        if msg is None:
+            bad_bytes, bad_runs = bad_bytes + stamp_us, bad_runs + 1
+            continue
+        records.extend(mapper.map(msg, stamp_us * 1000))
+    if not records:
+        raise UserError(f"{path}: no MAVLink messages found; not a .tlog, or damaged from the start")
+    log = from_records(Path(path), records, mapper)
+    if bad_runs:
+        log.notes.append(f"{bad_runs} damaged or unparseable byte runs ({bad_bytes} bytes) skipped")
+    return log
+
+
+def from_records(path: Path, records: list, mapper: MessageMapper) -> FlightLog:
+    """The records of one vehicle (the first system whose heartbeat names an autopilot) as arrays."""
+    systems = list(mapper.autopilot)
+    system = systems[0] if systems else _busiest_system(records)
+    autopilot = AUTOPILOT_NAMES.get(mapper.autopilot.get(system), f"MAV_AUTOPILOT {mapper.autopilot.get(system)}")
+    mine = [r for r in records if r.system == system]
+    log = FlightLog(path, "tlog", autopilot)
+    if not systems:
+        log.notes.append("no autopilot heartbeat: RAW_IMU units unknown, kept as a generic table")
+    device_us = _device_clock(mine)
+    by_kind = defaultdict(list)
+    for r in mine:
+        by_kind[type(r)].append(r)
+    imu_source = _imu_source(by_kind[rec.ImuSample])
+    if imu_source is not None:
+        rows = [r for r in by_kind[rec.ImuSample] if r.source == imu_source]
+        log.imu = series([r.time_us for r in rows], dict(zip(IMU_COLUMNS, np.column_stack(
+            [[r.gyr_rad_s for r in rows], [r.acc_g for r in rows]]).T)), imu_source)  # fmt: skip
+        mags = [r for r in by_kind[rec.MagReading] if r.source == imu_source]
+        if mags and np.any([r.mag_uT for r in mags]):
+            log.mag = series([r.time_us for r in mags], dict(zip(MAG_COLUMNS, np.array([r.mag_uT for r in mags]).T)), imu_source)
+    attitude = by_kind[rec.OnboardAttitude]
+    sources = {r.source for r in attitude}
+    board_source = "ATTITUDE_QUATERNION" if "ATTITUDE_QUATERNION" in sources else "ATTITUDE"
+    rows = [r for r in attitude if r.source == board_source]
+    log.onboard = series([r.time_us for r in rows], dict(zip(Q_COLUMNS, np.array([r.q for r in rows]).reshape(-1, 4).T)), board_source)
+    baro = [r for r in by_kind[rec.BaroReading] if r.source in ("HIGHRES_IMU", "SCALED_PRESSURE")]
+    log.baro = series([r.time_us for r in baro], {"pressure_hpa": [r.pressure_hpa for r in baro],
+                                                  "temperature_c": [r.temperature_c for r in baro]}, "SCALED_PRESSURE")  # fmt: skip
+    fixes = [r for r in by_kind[rec.GpsReading] if r.fix_type >= 2 and r.time_us > 0]
+    log.gps = series([r.time_us for r in fixes], {c: [getattr(r, c) for r in fixes] for c in GPS_COLUMNS}, "GPS_RAW_INT")
+    log.tables, log.units = _tables(mine, by_kind, device_us)
+    modes = list(dict.fromkeys(r.mode for r in by_kind[rec.VehicleStatus] if r.autopilot != MAV_AUTOPILOT_INVALID))
+    if modes:
+        log.notes.append(f"modes: {', '.join(modes)}")
+    return log
+
+
+def _busiest_system(records) -> int:
+    counts = defaultdict(int)
+    for r in records:
+        counts[r.system] += 1
+    return max(counts, key=counts.get)
+
+
+def _imu_source(samples) -> str | None:
+    """The preferred IMU stream that carries data (ArduSub's SCALED_IMU2 can be all zeros: no second IMU)."""
+    live = {r.source for r in samples if any(r.acc_g)}
+    return next((s for s in IMU_PREFERENCE if s in live), None)
+
+
+def _device_clock(records):
+    """Host ns -> autopilot µs, interpolated between the messages that carry both (for those that carry
+    only the host time); None when no message carries a device time."""
+    pairs = sorted((r.t_host_ns, r.time_us) for r in records if getattr(r, "time_us", None))
+    if not pairs:
+        return None
+    host, device = np.array(pairs, dtype=float).T
+    device = np.maximum.accumulate(device)
+    return lambda t_host_ns: np.interp(t_host_ns, host, device)
+
+
+TABLE_KINDS = {rec.LinkHealth: "RADIO_STATUS", rec.Battery: "SYS_STATUS", rec.VehicleStatus: "HEARTBEAT"}
+RECORD_UNITS = {"voltage_v": "V", "current_a": "A", "remaining_pct": "%", "drop_rate_comm_pct": "%", "tx_buffer_pct": "%"}
+
+
+def _tables(mine, by_kind, device_us) -> tuple[dict[str, Series], dict[str, dict[str, str]]]:
+    """Every other message as a table per type (and link health, battery, status), on the device clock."""
+    if device_us is None:
+        return {}, {}
+    tables, units = {}, {}
+    generic = defaultdict(list)
+    for r in by_kind[rec.GenericMessage]:
+        generic[r.msg_type].append(r)
+    for name, rows in generic.items():
+        fields = list(rows[0].fields)
+        own = np.array([r.time_us or 0 for r in rows], dtype=float)
+        times = np.where(own > 0, own, device_us(np.array([r.t_host_ns for r in rows], dtype=float)))
+        values = np.array([list(r.fields.values()) for r in rows], dtype=float).reshape(len(rows), len(fields))  # one layout per type
+        tables[name] = series(times, dict(zip(fields, values.T)), name)
+        units[name] = dict(rows[0].units)
+    for kind, name in TABLE_KINDS.items():
+        rows = by_kind[kind]
+        if rows:
+            fields = [f for f in kind._fields if f not in ("system", "component", "t_host_ns", "mode")]
+            tables[name] = series(device_us(np.array([r.t_host_ns for r in rows], dtype=float)),
+                                  {f: [float(getattr(r, f)) for r in rows] for f in fields}, name)  # fmt: skip
+            units[name] = {f: RECORD_UNITS.get(f, "") for f in fields}
+    return tables, units
+
+
+def write_tlog(path, packets_with_time: Iterable[tuple[int, bytes]]) -> int:
+    """Write (unix time µs, raw packet) pairs as a .tlog; returns the number of packets written."""
+    count = 0
+    try:
+        with open(path, "xb") as out:
+            for stamp_us, packet in packets_with_time:
+                out.write(STAMP.pack(int(stamp_us)) + bytes(packet))
+                count += 1
+    except FileExistsError:
+        raise UserError(f"{path} exists; choose another name") from None
+    except OSError as error:
+        raise UserError(f"cannot write {path}: {error.strerror}") from None
+    return count
+
+
+def packets_of_chunks(chunks: Iterable[tuple[int, bytes]], unix_us_at_first: int) -> Iterator[tuple[int, bytes]]:
+    """A byte stream's packets, each stamped with the arrival time of the chunk that completed it
+    (chunks: (host monotonic ns, bytes), as a recording holds them) on the unix clock."""
+    parser = new_parser()
+    t0_ns = None
+    for t_host_ns, data in chunks:
+        t0_ns = t_host_ns if t0_ns is None else t0_ns
+        stamp_us = unix_us_at_first + (t_host_ns - t0_ns) // 1000
+        for msg in parser.parse_buffer(data) or ():
+            if msg.get_type() != "BAD_DATA":
+                yield stamp_us, msg.get_msgbuf()
+
+
+def recording_to_tlog(recording, out) -> int:
+    """A recorded MAVLink session (raw bytes with arrival times) as a standard .tlog: each packet
+    stamped with the wall-clock time its bytes arrived (the recording's ``start_utc`` plus the
+    monotonic time since it opened). Returns the number of packets; UserError if there are none."""
+    from datetime import datetime
+
+    if recording.chunk_count == 0:
+        raise UserError(f"{recording.path}: the recording holds no link bytes")
+    first_ns = int(recording.chunk_t_host_ns[0])
+    start = recording.metadata.get("start_utc")
+    unix_us = int(datetime.fromisoformat(start).timestamp() * 1e6) if start else 0
+    if start and recording.t_open_ns is not None:
+        unix_us += (first_ns - recording.t_open_ns) // 1000
+    packets = list(packets_of_chunks(recording.chunks(), unix_us))
+    if not packets:
+        raise UserError(f"{recording.path}: holds no MAVLink packets (a recording of this project's own protocol?)")
+    return write_tlog(out, packets)

@@ -1,0 +1,85 @@
+"""PX4 ``.ulg`` logs through ``pyulog`` (the autopilot's clock, ``timestamp`` µs since boot).
+
+Topics used, first instance: ``sensor_combined`` (``gyro_rad[3]`` rad/s, ``accelerometer_m_s2[3]``,
+body FRD, full rate; logs before ~2018 also carry ``magnetometer_ga[3]`` there), ``vehicle_attitude``
+(``q[4]`` w-first body -> NED: the onboard estimate), ``vehicle_magnetometer`` (``magnetometer_ga[3]``),
+``vehicle_air_data`` (``baro_pressure_pa``) or ``sensor_baro`` (``pressure``: hPa up to PX4 1.12, Pa
+after), ``vehicle_gps_position`` (``lat``/``lon`` 1e-7 degrees and ``alt`` mm, or ``latitude_deg``/
+``longitude_deg``/``altitude_msl_m`` from PX4 1.14; ``vel_{n,e,d}_m_s``), and in SITL logs
+``vehicle_attitude_groundtruth`` (the simulator's true attitude, kept as truth).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+
+import numpy as np
+from pyulog import ULog
+
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
+from groundstation.errors import UserError
+from groundstation.units import STANDARD_GRAVITY_M_S2
+
+MAGIC = b"ULog\x01\x12\x35"
+TOPICS = ["sensor_combined", "vehicle_attitude", "vehicle_attitude_groundtruth", "vehicle_magnetometer", "vehicle_air_data",
+          "sensor_baro", "vehicle_gps_position"]  # fmt: skip
+GAUSS_TO_UT = 100.0
+
+
+def read_ulog(path, progress=None) -> FlightLog:
+    with open(path, "rb") as f:
+        if f.read(7) != MAGIC:
+            raise UserError(f"{path}: not a PX4 ULog file (it does not start with 'ULog')")
+    chatter = io.StringIO()  # pyulog prints what it finds damaged: kept as a note
+    try:
+        with contextlib.redirect_stdout(chatter):
+            ulog = ULog(str(path), TOPICS)
+    except Exception as error:  # pyulog raises ULogException and struct/index errors on damaged files
+        raise UserError(f"{path}: cannot read this ULog file ({error})") from None
+    topics = {}
+    for data in ulog.data_list:
+        if data.multi_id == 0 and len(data.data["timestamp"]):
+            topics[data.name] = data.data
+    log = FlightLog(path, "ulog", ulog.msg_info_dict.get("sys_name", "PX4"))
+    log.notes += [line.strip() for line in chatter.getvalue().splitlines() if line.strip()]
+    if (sc := topics.get("sensor_combined")) is not None:
+        values = [*(sc[f"gyro_rad[{i}]"] for i in range(3)), *(sc[f"accelerometer_m_s2[{i}]"] / STANDARD_GRAVITY_M_S2 for i in range(3))]
+        log.imu = series(sc["timestamp"], dict(zip(IMU_COLUMNS, values)), "sensor_combined")
+    else:
+        log.notes.append("no sensor_combined topic: onboard attitude only")
+    for topic, target in (("vehicle_attitude", "onboard"), ("vehicle_attitude_groundtruth", "truth")):
+        if (att := topics.get(topic)) is not None:
+            setattr(log, target, series(att["timestamp"], {c: att[f"q[{i}]"] for i, c in enumerate(Q_COLUMNS)}, topic))
+    mag_topic = next((t for t in ("vehicle_magnetometer", "sensor_combined") if "magnetometer_ga[0]" in topics.get(t, {})), None)
+    if mag_topic is not None:
+        mag = topics[mag_topic]
+        log.mag = series(mag["timestamp"], {c: mag[f"magnetometer_ga[{i}]"] * GAUSS_TO_UT for i, c in enumerate(MAG_COLUMNS)}, mag_topic)
+    log.baro = _baro(topics)
+    log.gps = _gps(topics.get("vehicle_gps_position"))
+    return log
+
+
+def _baro(topics):
+    if (air := topics.get("vehicle_air_data")) is not None and "baro_pressure_pa" in air:
+        return series(air["timestamp"], {"pressure_hpa": air["baro_pressure_pa"] / 100.0,
+                                         "temperature_c": air.get("baro_temp_celcius", np.full(len(air["timestamp"]), np.nan))},
+                      "vehicle_air_data")  # fmt: skip
+    if (baro := topics.get("sensor_baro")) is not None:
+        pressure = baro["pressure"].astype(float)
+        if np.nanmedian(pressure) > 2000.0:  # Pa (PX4 1.13 on) rather than hPa
+            pressure = pressure / 100.0
+        return series(baro["timestamp"], {"pressure_hpa": pressure, "temperature_c": baro["temperature"]}, "sensor_baro")
+    return None
+
+
+def _gps(gps):
+    if gps is None:
+        return None
+    if "latitude_deg" in gps:
+        lat, lon, alt = gps["latitude_deg"], gps["longitude_deg"], gps["altitude_msl_m"]
+    else:
+        lat, lon, alt = gps["lat"] * 1e-7, gps["lon"] * 1e-7, gps["alt"] / 1000.0
+    fix = gps["fix_type"] >= 2
+    columns = [lat, lon, alt, gps["vel_n_m_s"], gps["vel_e_m_s"], gps["vel_d_m_s"], gps["fix_type"], gps["satellites_used"]]
+    return series(gps["timestamp"][fix], {c: np.asarray(v, dtype=float)[fix] for c, v in zip(GPS_COLUMNS, columns)}, "vehicle_gps_position")

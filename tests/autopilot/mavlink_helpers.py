@@ -1,0 +1,134 @@
+"""Shared by the autopilot tests: MAVLink streams made with pymavlink's own encoder, a ULog file
+written byte by byte from the ULog format specification, and where the shared flight logs live."""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from groundstation import geodesy
+from groundstation.autopilot.streams import pack_next
+from groundstation.sim.profiles import make_profile
+
+FLIGHTLOGS = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs"
+
+
+def flightlog(name: str) -> Path:
+    """The shared log ``name``, or skip with the reason."""
+    import pytest
+
+    path = FLIGHTLOGS / name
+    if not path.is_file():
+        pytest.skip(f"shared flight log {name} not present in {FLIGHTLOGS.resolve()} (../shared/datasets/flightlogs)")
+    return path
+
+
+class Sender:
+    """One MAVLink sender: pack with its own sequence numbers, as ``MAVLink.send`` does."""
+
+    def __init__(self, system: int = 1, component: int = 1, mavlink1: bool = False):
+        self.encoder = mavlink.MAVLink(None, srcSystem=system, srcComponent=component)
+        self.mavlink1 = mavlink1
+
+    def pack(self, msg) -> bytes:
+        return pack_next(self.encoder, msg, self.mavlink1)
+
+    def __getattr__(self, name):  # sender.heartbeat(...) -> bytes
+        encode = getattr(self.encoder, f"{name}_encode")
+        return lambda *args: self.pack(encode(*args))
+
+
+def ardupilot_heartbeat(sender: Sender) -> bytes:
+    return sender.heartbeat(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
+                            mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_SAFETY_ARMED, 5, mavlink.MAV_STATE_ACTIVE)
+
+
+# -- ULog (https://docs.px4.io/main/en/dev_log/ulog_file_format.html) ------------------------------
+
+ULOG_TYPES = {"uint64_t": "Q", "float": "f", "uint8_t": "B", "int32_t": "i"}
+
+
+def _message(kind: bytes, payload: bytes) -> bytes:
+    return struct.pack("<HB", len(payload), kind[0]) + payload
+
+
+def write_ulog(path, topics: dict[str, tuple[list[tuple[str, str]], dict[str, np.ndarray]]], info: dict[str, str] | None = None) -> None:
+    """``topics``: name -> (fields [(type, name)], columns name -> (N,) or (N, k) array). Version 1 file
+    with the flag-bits message, one format and one subscription per topic, data interleaved by time."""
+    out = bytearray(b"ULog\x01\x12\x35" + bytes([1]) + struct.pack("<Q", 0))
+    out += _message(b"B", bytes(16) + struct.pack("<3Q", 0, 0, 0))
+    for key, value in (info or {}).items():
+        name = f"char[{len(value)}] {key}".encode()
+        out += _message(b"I", bytes([len(name)]) + name + value.encode())
+    rows = []
+    for msg_id, (topic, (fields, columns)) in enumerate(topics.items()):
+        spec = "".join(f"{ftype} {fname};" for ftype, fname in fields)
+        out += _message(b"F", f"{topic}:{spec}".encode())
+    for msg_id, (topic, (fields, columns)) in enumerate(topics.items()):
+        out += _message(b"A", struct.pack("<BH", 0, msg_id) + topic.encode())
+        codes = [ULOG_TYPES[ftype.split("[")[0]] for ftype, _ in fields]
+        counts = [int(ftype.split("[")[1][:-1]) if "[" in ftype else 1 for ftype, _ in fields]
+        fmt = "<" + "".join(f"{n}{c}" for c, n in zip(codes, counts))
+        for i in range(len(columns["timestamp"])):
+            values = []
+            for (_, fname), code in zip(fields, codes):
+                cast = float if code == "f" else int
+                values.extend(cast(v) for v in np.atleast_1d(columns[fname][i]).tolist())
+            rows.append((int(columns["timestamp"][i]), msg_id, struct.pack(fmt, *values)))
+    for _, msg_id, payload in sorted(rows, key=lambda r: (r[0], r[1])):
+        out += _message(b"D", struct.pack("<H", msg_id) + payload)
+    Path(path).write_bytes(bytes(out))
+
+
+BOOT_US = 5_000_000
+
+
+def px4_flight(duration_s=12.0, imu_hz=200, att_hz=50):
+    """A PX4-like log of the simulator's flight profile: ideal IMU, its truth as both vehicle_attitude and
+    the SITL ground truth, GPS every 40 IMU samples; returns (topics for ``write_ulog``, IMU-rate truth)."""
+    profile = make_profile("flight", duration_s, seed=4)
+    t_imu = np.arange(int(duration_s * imu_hz)) / imu_hz
+    truth = profile.truth(t_imu)
+    t_att = np.arange(int(duration_s * att_hz)) / att_hz
+    att = profile.truth(t_att).q_body_to_ned
+    sensor_combined = ([("uint64_t", "timestamp"), ("float[3]", "gyro_rad"), ("float[3]", "accelerometer_m_s2")],
+                       {"timestamp": BOOT_US + np.rint(t_imu * 1e6), "gyro_rad": truth.rate_body_rad_s,
+                        "accelerometer_m_s2": truth.specific_force_body_m_s2()})
+    attitude = ([("uint64_t", "timestamp"), ("float[4]", "q")], {"timestamp": BOOT_US + np.rint(t_att * 1e6), "q": att})
+    t_gps = t_imu[::40]
+    lat, lon, alt = geodesy.geodetic_from_ned(profile.truth(t_gps).pos_ned_m, (47.0, 8.0, 400.0))
+    vel = profile.truth(t_gps).vel_ned_m_s
+    gps = ([("uint64_t", "timestamp"), ("int32_t", "lat"), ("int32_t", "lon"), ("int32_t", "alt"), ("float", "vel_n_m_s"),
+            ("float", "vel_e_m_s"), ("float", "vel_d_m_s"), ("uint8_t", "fix_type"), ("uint8_t", "satellites_used")],
+           {"timestamp": BOOT_US + np.rint(t_gps * 1e6), "lat": np.rint(lat * 1e7), "lon": np.rint(lon * 1e7), "alt": np.rint(alt * 1000),
+            "vel_n_m_s": vel[:, 0], "vel_e_m_s": vel[:, 1], "vel_d_m_s": vel[:, 2], "fix_type": np.full(len(t_gps), 3),
+            "satellites_used": np.full(len(t_gps), 11)})  # fmt: skip
+    return {"sensor_combined": sensor_combined, "vehicle_attitude": attitude, "vehicle_attitude_groundtruth": attitude,
+            "vehicle_gps_position": gps}, truth  # fmt: skip
+
+
+# -- ArduPilot DataFlash (.bin): records "A3 95 id payload", formats declared by FMT (id 128) records --
+
+def dataflash_record(msg_id: int, payload: bytes) -> bytes:
+    return b"\xa3\x95" + bytes([msg_id]) + payload
+
+
+def dataflash_fmt(msg_id: int, name: str, fmt: str, labels: str) -> bytes:
+    length = 3 + struct.calcsize("<" + fmt.replace("n", "4s").replace("N", "16s").replace("Z", "64s"))
+    return dataflash_record(128, struct.pack("<BB4s16s64s", msg_id, length, name.encode(), fmt.encode(), labels.encode()))
+
+
+def write_dataflash(path, messages: dict[str, tuple[str, str, list[tuple]]]) -> None:
+    """``messages``: name -> (struct format of the fields, labels, rows); rows of all types are written
+    in order of their first field (TimeUS)."""
+    out = bytearray(dataflash_fmt(128, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns"))
+    rows = []
+    for msg_id, (name, (fmt, labels, values)) in enumerate(messages.items(), start=130):
+        out += dataflash_fmt(msg_id, name, fmt, labels)
+        rows += [(row[0], msg_id, struct.pack("<" + fmt, *row)) for row in values]
+    for _, msg_id, payload in sorted(rows, key=lambda r: r[:2]):
+        out += dataflash_record(msg_id, payload)
+    Path(path).write_bytes(bytes(out))

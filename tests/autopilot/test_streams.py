@@ -1,0 +1,45 @@
+"""Stream-rate requests: only REQUEST_DATA_STREAM and SET_MESSAGE_INTERVAL go up, addressed to the
+autopilot that sent the heartbeat, repeated while its IMU stays slow; the slow-IMU note."""
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from groundstation.autopilot.decoder import MavlinkDecoder
+from groundstation.autopilot.records import ImuSample, VehicleStatus
+from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ, StreamRequester, slow_imu_note
+
+ARDUPILOT = VehicleStatus(1, 1, 0, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 2, "STABILIZE", False, 3)
+CAMERA = VehicleStatus(1, 100, 0, mavlink.MAV_AUTOPILOT_INVALID, 30, "Mode(0x00000000)", False, 3)
+
+
+def imu(t_us):
+    return ImuSample(1, 1, 0, t_us, "RAW_IMU", (0, 0, 0), (0, 0, -1), 25.0)
+
+
+def sent(data: bytes) -> list:
+    return MavlinkDecoder().messages(data)
+
+
+def test_requests_go_to_the_autopilot_only_and_repeat_while_the_imu_stays_slow():
+    requester = StreamRequester(rate_hz=50.0, retry_s=5.0)
+    first = sent(requester.update([CAMERA, ARDUPILOT], 0))
+    assert {m.get_type() for m in first} == {"REQUEST_DATA_STREAM", "COMMAND_LONG"}
+    assert all((m.target_system, m.target_component) == (1, 1) for m in first)
+    assert all(m.command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL and m.param2 == 20_000 for m in first if m.get_type() == "COMMAND_LONG")
+    assert {m.param1 for m in first if m.get_type() == "COMMAND_LONG"} >= {mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_ATTITUDE}
+    slow = [imu(i * 250_000) for i in range(10)]  # 4 Hz
+    assert requester.update([*slow, ARDUPILOT], 4_000_000_000) == b""  # not yet: retry after 5 s
+    again = requester.update([ARDUPILOT], 5_000_000_000)
+    assert again
+    fast = [imu(3_000_000 + i * 20_000) for i in range(60)]  # 50 Hz now
+    assert requester.update([*fast, ARDUPILOT], 20_000_000_000) == b""
+    assert requester.monitors[1].rate_hz == 50.0 and not requester.monitors[1].too_slow
+    decoder = MavlinkDecoder()
+    decoder.feed(b"".join(m.get_msgbuf() for m in first) + again)
+    assert decoder.senders[(255, 190)].lost == 0  # the GCS's sequence numbers keep counting
+    assert decoder.senders[(255, 190)].received == 2 * len(first)
+
+
+def test_slow_imu_note():
+    assert slow_imu_note(50.0) is None and slow_imu_note(float("nan")) is None
+    note = slow_imu_note(2.0)
+    assert "2.0 Hz" in note and f"{MIN_FILTER_RATE_HZ:.0f} Hz" in note

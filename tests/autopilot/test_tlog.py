@@ -1,0 +1,99 @@
+"""The .tlog file: what we write, pymavlink's own tlog reader reads back (timestamps and messages);
+what we read survives junk and a cut end; the autopilot's clock, not the receive time, is the time base."""
+
+import struct
+
+import numpy as np
+import pytest
+from pymavlink import mavutil
+
+from groundstation.autopilot.flightlog import read_log
+from groundstation.autopilot.tlog import packets_of_chunks, write_tlog
+from groundstation.errors import UserError
+
+from mavlink_helpers import Sender, ardupilot_heartbeat, flightlog
+
+T0_US = 1_700_000_000_000_000  # 2023-11-14
+
+
+def imu_packets(n: int, rate_hz: float = 50.0):
+    ap = Sender()
+    out = [(T0_US, ardupilot_heartbeat(ap))]
+    for i in range(n):
+        t_us = int(i * 1e6 / rate_hz)
+        out.append((T0_US + t_us + 1000, ap.raw_imu(10_000_000 + t_us, 0, 0, -1000, 10 * (i % 7), 0, 0, 1, 2, 3)))
+        out.append((T0_US + t_us + 1500, ap.attitude(10_000 + t_us // 1000, 0.01 * (i % 7), 0.0, 1.0, 0, 0, 0)))
+    return out
+
+
+def test_pymavlink_reads_our_tlog_with_the_same_times_and_messages(tmp_path):
+    packets = imu_packets(100)
+    path = tmp_path / "ours.tlog"
+    assert write_tlog(path, packets) == len(packets)
+    log = mavutil.mavlogfile(str(path))
+    got = []
+    while (msg := log.recv_msg()) is not None:
+        got.append((round(msg._timestamp * 1e6), bytes(msg.get_msgbuf())))
+    log.close()
+    assert got == [(t, bytes(p)) for t, p in packets]
+
+
+def test_write_refuses_to_overwrite(tmp_path):
+    path = tmp_path / "x.tlog"
+    path.write_bytes(b"")
+    with pytest.raises(UserError, match="exists"):
+        write_tlog(path, [])
+
+
+def test_a_byte_stream_saved_as_tlog_keeps_every_packet_and_arrival_time(tmp_path):
+    packets = imu_packets(50)
+    raw = b"".join(p for _, p in packets)
+    # Arbitrary chunks, as a serial port delivers them, each stamped on arrival (host monotonic ns).
+    cuts = list(range(0, len(raw), 37)) + [len(raw)]
+    chunks = [(5_000_000_000 + i * 1_000_000, raw[a:b]) for i, (a, b) in enumerate(zip(cuts, cuts[1:]))]
+    path = tmp_path / "saved.tlog"
+    write_tlog(path, packets_of_chunks(chunks, T0_US))
+    log = mavutil.mavlogfile(str(path))
+    saved = []
+    while (msg := log.recv_msg()) is not None:
+        saved.append((round(msg._timestamp * 1e6), bytes(msg.get_msgbuf())))
+    assert [p for _, p in saved] == [bytes(p) for _, p in packets]
+    # Each packet carries the arrival time of the chunk that completed it.
+    ends = np.cumsum([len(p) for _, p in packets])
+    chunk_of_end = np.searchsorted(cuts[1:], ends)
+    assert [t for t, _ in saved] == [T0_US + int(i) * 1000 for i in chunk_of_end]
+
+
+def test_reading_skips_junk_and_a_truncated_end_and_says_so(tmp_path):
+    packets = imu_packets(200)
+    clean = b"".join(struct.pack(">Q", t) + p for t, p in packets)
+    parts = [struct.pack(">Q", t) + p for t, p in packets]
+    junk = b"\x00\x11junk bytes\xfd\x09"  # includes a MAVLink 2 start byte that leads nowhere
+    damaged = b"".join(parts[:150]) + junk + b"".join(parts[150:])
+    damaged = damaged[:-7]  # the last record cut short, as by a crash
+    (tmp_path / "clean.tlog").write_bytes(clean)
+    (tmp_path / "damaged.tlog").write_bytes(damaged)
+    good, bad = read_log(tmp_path / "clean.tlog"), read_log(tmp_path / "damaged.tlog")
+    assert len(good.imu) == 200 and len(good.onboard) == 200 and not any("damaged" in n for n in good.notes)
+    assert len(bad.imu) == 200 and len(bad.onboard) == 199  # only the cut ATTITUDE is lost
+    assert any("damaged" in n for n in bad.notes)
+    assert np.array_equal(bad.imu.time_us, good.imu.time_us)
+
+
+def test_a_file_that_is_no_tlog_is_a_clear_error(tmp_path):
+    path = tmp_path / "text.tlog"
+    path.write_text("hello, this is not MAVLink\n" * 20)
+    with pytest.raises(UserError, match="no MAVLink messages"):
+        read_log(path)
+
+
+def test_sitl_tlog_uses_the_autopilot_clock_not_the_compressed_receive_time(tmp_path):
+    # ArduPilot's autotest ran ~25x faster than real time: 308 s of autopilot time in 12 s of receive
+    # time (README). The first 400 kB (a cut file, like a crash) keep the test short.
+    trimmed = tmp_path / "rover_start.tlog"
+    trimmed.write_bytes(flightlog("ardurover_boat_sitl_autotest.tlog").read_bytes()[:400_000])
+    log = read_log(trimmed)
+    assert log.autopilot == "ArduPilot" and log.imu.source == "RAW_IMU"
+    assert log.imu.rate_hz == pytest.approx(10.0, rel=0.02)  # README: 10 Hz on time_boot_ms / time_usec
+    assert log.onboard.rate_hz == pytest.approx(10.0, rel=0.02)
+    assert any("damaged" in note for note in log.notes)  # ~2.2 KB of non-packet bytes at the start
