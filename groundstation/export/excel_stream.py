@@ -8,8 +8,9 @@ XML written is the same as openpyxl writes for styled cells.
 Excel holds at most 1,048,576 rows per sheet and openpyxl does not check it in write-only mode, so
 ``write_table`` continues on ``TITLE (2)``, ``TITLE (3)``, ... by itself.
 
-``write_table_xlsxwriter`` writes the same table through XlsxWriter's ``constant_memory`` mode, about
-3x faster than openpyxl write-only for the same cells (bench/bench_excel.py), where it is installed.
+XlsxWriter's ``constant_memory`` mode would write the same cells about 3x faster than openpyxl
+write-only (bench/bench_excel.py), but the workbook's chart and Session sheet are openpyxl's; the
+export stays at about 1.1x a bare openpyxl write-only write of its rows.
 """
 
 from __future__ import annotations
@@ -131,33 +132,6 @@ def write_table(workbook, title: str, blocks: list[Block], max_rows: int, advanc
         for count, rows in row_chunks(columns, first, last):
             for row in rows:
                 sheet.append(row)
-            advance(count)
-    return titles
-
-
-def write_table_xlsxwriter(workbook, title: str, blocks: list[Block], max_rows: int, advance: Callable[[int], None]) -> list[str]:
-    """``write_table`` for an ``xlsxwriter.Workbook`` (``constant_memory``: rows are written in order
-    and flushed, so memory stays flat): the same cells, number formats, bold centred header, column
-    widths and frozen first row and column. XlsxWriter silently ignores rows past the sheet's last
-    (``write_row`` returns -1), so the split onto ``TITLE (2)``, ... is as necessary here."""
-    columns = layout(blocks)
-    header_format = workbook.add_format({"bold": True, "align": "center"})
-    # A column's format applies to every cell written there without its own: one lookup per column.
-    formats = [None if c is None else workbook.add_format({"num_format": c.number_format}) for c in columns]
-    titles = []
-    for sheet_title, first, last in sheet_pages(title, table_rows(blocks), max_rows):
-        titles.append(sheet_title)
-        sheet = workbook.add_worksheet(sheet_title)
-        for i, (column, number_format) in enumerate(zip(columns, formats)):
-            sheet.set_column(i, i, SEPARATOR_WIDTH if column is None else column.width, number_format)
-            if column is not None:
-                sheet.write_string(0, i, column.header, header_format)
-        sheet.freeze_panes(1, 1)  # "B2", as ColumnSheet
-        write_row, row_index = sheet.write_row, 1
-        for count, rows in row_chunks(columns, first, last):
-            for row in rows:
-                write_row(row_index, 0, row)
-                row_index += 1
             advance(count)
     return titles
 
