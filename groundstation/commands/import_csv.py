@@ -27,14 +27,15 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.export.files import atomic_recording
     from groundstation.recording import EXTENSION
 
-    if args.out.suffix.lower() != EXTENSION:
-        raise UserError(f"--out must end in {EXTENSION} (the import writes a recording), not {args.out.name}")
     if args.out.exists():
         raise UserError(f"{args.out} exists; choose another name")
     if Path(args.file).suffix.lower() in LOG_SUFFIXES:
         raise UserError(f"{args.file} is a flight log: no import needed; export, evaluate and the app's Open read it directly")
     if args.out.suffix.lower() == ".tlog":
         return save_tlog(Path(args.file), args.out)
+    if args.out.suffix.lower() != EXTENSION:
+        raise UserError(f"--out must end in {EXTENSION} (a recording) or .tlog (a recorded MAVLink session), "
+                        f"not {args.out.name}")
     try:
         read_csv(args.file)  # the same checks and messages as evaluate
     except DatasetError as error:
