@@ -225,7 +225,7 @@ class Pipeline:
             self.events.append({"t_host_ns": t_host_ns, "kind": "gyro_bias", "bias_rad_s": list(bias)})
         unbiased = gyr if bias is None else (gyr[0] - bias[0], gyr[1] - bias[1], gyr[2] - bias[2])
         for name, estimator in self.estimators.items():
-            q, diag = estimator.step(gyr if estimator.estimates_gyro_bias else unbiased, acc, dt_s, mag, gps)
+            q, diag = estimator.step(gyr if getattr(estimator, "estimates_gyro_bias", False) else unbiased, acc, dt_s, mag, gps)
             self._last_q[name] = q
             row += q
             row += diag

@@ -29,7 +29,7 @@ REDRAW_HZ = 30
 # (each repaint costs CPU under software rendering; people read numbers no faster).
 HORIZON_EVERY, FIGURES_EVERY = 2, 6
 # comparison estimators start switched off
-DEFAULT_HIDDEN = frozenset({"AHF", "AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
+DEFAULT_HIDDEN = frozenset({"AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
 # The curves of the versions that stored "hidden_curves" without "known_curves": any other label is new
 # to the user's settings and starts hidden if it is in DEFAULT_HIDDEN.
 FORMERLY_KNOWN = frozenset({"AHF", "onboard", "HF", "ECF"})
