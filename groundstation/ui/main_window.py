@@ -33,7 +33,7 @@ REDRAW_HZ = 30
 # rendering; people read numbers no faster).
 HORIZON_EVERY, BODY_EVERY, FIGURES_EVERY = 2, 6, 6
 # comparison estimators start switched off
-DEFAULT_HIDDEN = frozenset({"AHF", "AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
+DEFAULT_HIDDEN = frozenset({"AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
 STEP_S = 5.0  # ← and → in a replay
 PAN_FRACTION = 0.1  # of the window, ← and → live
 RECENT_RECORDINGS = 8  # listed in File > Recent recordings
