@@ -1,12 +1,10 @@
-"""Decoder throughput (frames/s) by chunk size and on the batch path, and the false-accept rate on random bytes.
+"""Decoder throughput (frames/s) by chunk size, and the false-accept rate on random bytes.
 
     python bench/bench_decoder.py [--frames N] [--random-mb MB]
 
 Prints medians of several repeats. The baseline measured in the same run is a bare loop that
 only finds sync bytes and checks the CRC (no unpacking, no counters): the ratio shows what the
-decoder's bookkeeping costs on this machine, whatever else the machine is doing. The columnar
-batch decode (``firmware_protocol.batch``) is measured on the same stream, whole (a recording's
-4 KiB chunks with their arrival times), beside the incremental decoder fed those chunks.
+decoder's bookkeeping costs on this machine, whatever else the machine is doing.
 """
 
 from __future__ import annotations
@@ -18,7 +16,6 @@ import time
 from binascii import crc_hqx
 
 from firmware_protocol import SPEC, StreamDecoder, encode, make_frame
-from firmware_protocol.batch import decode_chunks
 
 
 def telemetry_stream(n_frames: int, lose_every: int = 0) -> bytes:
@@ -90,11 +87,6 @@ def main() -> None:
     lossy = telemetry_stream(args.frames, lose_every=20)
     rate, _ = median_rate(decode_all, lossy, 4096, args.repeats)
     print(f"StreamDecoder, 4096-byte chunks, 5 % of frames lost: {rate / 1e6:6.2f} M frames/s  ({rate / base:.2f} x baseline)")
-
-    chunks = [(i, data[i : i + 4096]) for i in range(0, len(data), 4096)]
-    rate, count = median_rate(lambda d, c: decode_chunks(chunks).stats.frames, data, 0, args.repeats)
-    assert count == args.frames
-    print(f"batch decode (4 KiB chunks, whole):  {rate / 1e6:6.2f} M frames/s  ({rate / base:.2f} x baseline)")
 
     n_bytes = int(args.random_mb * 1e6)
     decoder = StreamDecoder()
