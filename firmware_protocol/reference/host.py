@@ -108,25 +108,31 @@ def _floats(*values: float):
 
 
 def ahf_settings(settings) -> ctypes.Array:
-    """groundstation's ``AhfSettings`` as the core's eight doubles."""
+    """groundstation's ``AhfSettings`` as the core's nine doubles (the order of gs_host.c's ahf_settings)."""
     s = settings
-    return _doubles(s.lambda_max, s.lambda_min, s.lowpass, s.error_gain, s.gyro_overrange_rad_s, s.acc_min_g, s.acc_max_g, s.max_gap_s)
+    return _doubles(s.lambda_max, s.lambda_min, s.lowpass, s.error_gain, s.gyro_overrange_rad_s, s.acc_min_g,
+                    s.acc_deviation_max_g, s.acc_window_s, s.max_gap_s)
 
 
 class Ahf32:
-    """The core's onboard AHF (gs_ahf.c) alone: ``step`` returns (status, q (4), lambda, e_a, err) as floats."""
+    """The core's onboard AHF (gs_ahf.c) alone: ``step`` returns (status, q (4), lambda, e_a, err) as floats;
+    ``acc_dev_g`` is then the low-passed accelerometer deviation from 1 g (base.py's ``_acc_dev``)."""
 
     def __init__(self, settings, q0=None, defines: tuple[str, ...] = ()):
         self._lib = lib = library(defines)
         self._state = ctypes.create_string_buffer(lib.gs_host_sizeof_ahf())
         if lib.gs_host_ahf_init(self._state, ahf_settings(settings), None if q0 is None else _floats(*q0)) != 0:
             raise ValueError(f"the C AHF rejects the settings {settings}")
-        self._out = (ctypes.c_float * 7)()
+        self._out = (ctypes.c_float * 8)()
 
     def step(self, gyr_rad_s, acc_g, dt_s):
         status = self._lib.gs_host_ahf_step(self._state, _floats(*gyr_rad_s), _floats(*acc_g), dt_s, self._out)
         out = list(self._out)
         return status, out[:4], out[4], out[5], out[6]
+
+    @property
+    def acc_dev_g(self) -> float:
+        return self._out[7]
 
 
 class FlightCore:

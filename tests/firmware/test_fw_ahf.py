@@ -9,6 +9,7 @@ import pytest
 
 from firmware_protocol.reference import host
 from groundstation.estimation.ahf import Ahf, AhfSettings
+from groundstation.estimation.base import ACC_SKIPPED
 from groundstation.sim.offline import simulate
 
 
@@ -17,7 +18,8 @@ def bits(values) -> list[int]:
 
 
 def run_both(settings: AhfSettings, gyr, acc, dt, q0=None):
-    """Steps both filters and asserts equal bits on every sample; returns the C (status, q) per sample."""
+    """Steps both filters and asserts equal bits on every sample (the outputs and the accelerometer gate's
+    low-passed deviation); returns the C (status, q) per sample."""
     python = Ahf(settings, dtype=np.float32)
     python.reset(q0=q0)
     c = host.Ahf32(settings, q0=None if q0 is None else [np.float32(v) for v in python._q])
@@ -25,8 +27,8 @@ def run_both(settings: AhfSettings, gyr, acc, dt, q0=None):
     for k, (g, a, d) in enumerate(zip(gyr, acc, dt)):
         q, diag = python.step(g, a, d)
         status, cq, lam, e_a, err = c.step(g, a, d)
-        expected = (diag.status, bits(q), bits([diag.lam, diag.e_a, diag.gravity_error]))
-        got = (status, bits(cq), bits([lam, e_a, err]))
+        expected = (diag.status, bits(q), bits([diag.lam, diag.e_a, diag.gravity_error, python._acc_dev]))
+        got = (status, bits(cq), bits([lam, e_a, err, c.acc_dev_g]))
         assert got == expected, f"sample {k}: C {got} != Python {expected} (inputs {g}, {a}, {d})"
         outputs.append((status, cq))
     return outputs
@@ -40,8 +42,14 @@ def test_a_whole_simulated_flight_agrees_bit_for_bit(c_core):
     assert len(outputs) == 12000 and max(tilt_deg) > 20.0
 
 
-def test_the_guards_agree_bit_for_bit(c_core):
-    """Waiting for gravity, NaN and Inf, dt <= 0, a gap (re-initialised, yaw kept), free fall, shocks, over-range."""
+GATE_OFF = {}  # the default: acc_deviation_max_g = inf
+GATE_ON = {"acc_deviation_max_g": 0.1, "acc_window_s": 0.5}
+
+
+@pytest.mark.parametrize("gate", [GATE_OFF, GATE_ON], ids=["gate-off", "gate-on"])
+def test_the_guards_agree_bit_for_bit(c_core, gate):
+    """Waiting for gravity, NaN and Inf, dt <= 0, a gap (re-initialised, yaw kept), free fall, a shock,
+    over-range, and 2 s of shaking, with the low-passed deviation gate off and on."""
     run = simulate("fast", 20.0, seed=2, accel_fs_g=8, gyro_fs_dps=250)
     gyr, acc, dt = run.gyr_rad_s.tolist(), run.acc_g.tolist(), [run.dt_s] * len(run)
     acc[:3] = [[0.0, 0.0, 0.0]] * 3  # no gravity yet: waiting
@@ -50,11 +58,22 @@ def test_the_guards_agree_bit_for_bit(c_core):
     dt[300], dt[301] = 0.0, -0.01
     dt[400] = 1.5  # a gap: pitch and roll from gravity, yaw kept
     acc[500] = [0.0, 0.01, -0.05]  # free fall
-    acc[600] = [0.0, 2.0, -3.5]  # a shock
-    settings = AhfSettings(gyro_overrange_rad_s=0.95 * math.radians(250), lambda_min=0.1, lowpass=0.8, error_gain=12.0)
+    acc[600] = [0.0, 2.0, -3.5]  # a shock: 4 g, one sample
+    shaking = range(800, 1000)  # 2 s of ±1.2 g along body z at 25 Hz: the norm swings from 0.2 to 2.2 g
+    for k in shaking:
+        acc[k][2] += 1.2 * math.sin(2 * math.pi * 25.0 * k * run.dt_s)
+    settings = AhfSettings(gyro_overrange_rad_s=0.95 * math.radians(250), lambda_min=0.1, lowpass=0.8, error_gain=12.0, **gate)
     outputs = run_both(settings, gyr, acc, dt)
     statuses = {s for s, _ in outputs}
     assert {1, 2, 4, 8, 16, 32} <= {bit for s in statuses for bit in (1, 2, 4, 8, 16, 32) if s & bit}
+    usable = [k for k, a in enumerate(acc) if 0.2 <= math.hypot(*a) < math.inf]  # above free fall, finite
+    skipped = {k for k in usable if outputs[k][0] & ACC_SKIPPED}
+    if gate is GATE_OFF:  # only free fall and non-finite readings are skipped, the shock and the shaking are used
+        assert not skipped
+    else:  # the shaking is rejected, on both halves of its swing, and the accelerometer is used again after it
+        assert len(skipped & set(shaking)) > 150 and not skipped - set(range(800, 1200))
+        assert any(math.hypot(*acc[k]) > 1.0 for k in skipped) and any(math.hypot(*acc[k]) < 1.0 for k in skipped)
+        assert 600 in usable and 600 not in skipped  # one 4 g sample moves the low-passed deviation by < 0.1 g
 
 
 def test_a_given_start_attitude_is_normalised_alike(c_core):
@@ -62,9 +81,19 @@ def test_a_given_start_attitude_is_normalised_alike(c_core):
     run_both(AhfSettings(), run.gyr_rad_s.tolist(), run.acc_g.tolist(), [run.dt_s] * len(run), q0=(0.9, 0.1, -0.3, 0.2))
 
 
-@pytest.mark.parametrize("settings", [AhfSettings(lambda_min=3.0), AhfSettings(lambda_min=-0.1), AhfSettings(acc_min_g=3.0)])
+@pytest.mark.parametrize("settings", [
+    AhfSettings(lambda_min=3.0), AhfSettings(lambda_min=-0.1), AhfSettings(acc_min_g=-0.1), AhfSettings(acc_min_g=1.0),
+    AhfSettings(acc_deviation_max_g=0.0), AhfSettings(acc_deviation_max_g=math.nan), AhfSettings(acc_window_s=0.0),
+    AhfSettings(acc_window_s=-1.0), AhfSettings(max_gap_s=0.0), AhfSettings(max_gap_s=-1.0), AhfSettings(max_gap_s=math.nan),
+], ids=lambda s: str({k: v for k, v in vars(s).items() if v != getattr(AhfSettings(), k)}))
 def test_invalid_settings_are_refused_by_both(c_core, settings):
     with pytest.raises(ValueError):
         Ahf(settings, dtype=np.float32)
     with pytest.raises(ValueError):
         host.Ahf32(settings)
+
+
+def test_the_edges_of_the_valid_settings_are_accepted_by_both(c_core):
+    settings = AhfSettings(acc_min_g=0.0, acc_deviation_max_g=1e-3, acc_window_s=math.inf, max_gap_s=1e-3)
+    Ahf(settings, dtype=np.float32)
+    host.Ahf32(settings)

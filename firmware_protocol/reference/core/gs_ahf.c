@@ -5,15 +5,18 @@
 #include <math.h>
 #include <stddef.h>
 
-/* x^-0.5 in float. The ground station's float32 model writes it x ** -0.5, which NumPy computes with
- * the C library's powf, so the core calls powf too: bit for bit with the model on the same C library.
+/* x^-0.5 and x^0.5 in float. The ground station's float32 model writes them x ** -0.5 and x ** 0.5,
+ * which NumPy computes with the C library's powf (not sqrtf: glibc's powf(x, 0.5f) is not always the
+ * correctly rounded root), so the core calls powf too: bit for bit with the model on the same C library.
  * C libraries round it differently: newlib's powf (the STM32 build) differs from glibc's in 9 % of
  * inputs, and the filter turns one ulp into degrees (docs/firmware.md). GS_AHF_PORTABLE_RSQRT builds
- * (float)(1.0 / sqrt((double)x)) instead: IEEE operations every platform computes alike. */
+ * both from sqrt in double instead: IEEE operations every platform computes alike. */
 #ifdef GS_AHF_PORTABLE_RSQRT
 static float rsqrt(float x) { return (float)(1.0 / sqrt((double)x)); }
+static float root(float x) { return (float)sqrt((double)x); }
 #else
 static float rsqrt(float x) { return powf(x, -0.5f); }
+static float root(float x) { return powf(x, 0.5f); }
 #endif
 
 void gs_ahf_default_settings(gs_ahf_settings *s)
@@ -24,7 +27,8 @@ void gs_ahf_default_settings(gs_ahf_settings *s)
     s->error_gain = 10.0;
     s->gyro_overrange_rad_s = HUGE_VAL;
     s->acc_min_g = 0.2;
-    s->acc_max_g = 3.0;
+    s->acc_deviation_max_g = HUGE_VAL;
+    s->acc_window_s = 1.0;
     s->max_gap_s = 1.0;
 }
 
@@ -44,7 +48,8 @@ static void set_from_gravity(gs_ahf *f, float ax, float ay, float az, double yaw
 int gs_ahf_init(gs_ahf *f, const gs_ahf_settings *s, const float *q0)
 {
     if (!(0.0 <= s->lambda_min && s->lambda_min <= s->lambda_max)) return -1;
-    if (!(0.0 <= s->acc_min_g && s->acc_min_g < s->acc_max_g)) return -1;
+    if (!(0.0 <= s->acc_min_g && s->acc_min_g < 1.0) || !(s->acc_deviation_max_g > 0.0) || !(s->acc_window_s > 0.0)) return -1;
+    if (!(s->max_gap_s > 0.0)) return -1; /* any dt would re-initialise: the filter would never integrate */
     f->settings = *s;
     f->lam_max = (float)s->lambda_max;
     f->lam_min = (float)s->lambda_min;
@@ -53,7 +58,10 @@ int gs_ahf_init(gs_ahf *f, const gs_ahf_settings *s, const float *q0)
     f->overrange = (float)s->gyro_overrange_rad_s;
     f->overrange_on = s->gyro_overrange_rad_s != HUGE_VAL;
     f->acc_min2 = (float)(s->acc_min_g * s->acc_min_g);
-    f->acc_max2 = (float)(s->acc_max_g * s->acc_max_g);
+    f->acc_dev_max = (float)s->acc_deviation_max_g;
+    f->acc_gated = s->acc_deviation_max_g != HUGE_VAL;
+    f->acc_window_s = (float)s->acc_window_s;
+    f->acc_dev = 0.0f;
     f->max_gap_s = (float)s->max_gap_s;
     f->e_a = 0.0f;
     f->lam = f->lam_max;
@@ -80,8 +88,15 @@ unsigned gs_ahf_step(gs_ahf *f, const float gyr_rad_s[3], const float acc_g[3], 
     float gx = gyr_rad_s[0], gy = gyr_rad_s[1], gz = gyr_rad_s[2];
     float ax = acc_g[0], ay = acc_g[1], az = acc_g[2];
     float n2 = ax * ax + ay * ay + az * az;
-    /* NaN fails every comparison and Inf exceeds acc_max, so this one test rejects both. */
-    int acc_ok = f->acc_min2 <= n2 && n2 <= f->acc_max2;
+    /* NaN fails every comparison, so this one test rejects NaN, Inf and free fall. */
+    int acc_ok = f->acc_min2 <= n2 && n2 < INFINITY;
+    if (acc_ok && f->acc_gated && dt_s > 0.0f) {
+        /* Sustained shaking or acceleration: the deviation from 1 g, low-passed over acc_window_s */
+        float dev = f->acc_dev;
+        dev = dev + (fabsf(root(n2) - 1.0f) - dev) * dt_s / (f->acc_window_s + dt_s);
+        f->acc_dev = dev;
+        acc_ok = dev <= f->acc_dev_max;
+    }
     unsigned status = 0;
     if (f->waiting) {
         if (!acc_ok) return GS_AHF_WAITING;
@@ -122,6 +137,13 @@ unsigned gs_ahf_step(gs_ahf *f, const float gyr_rad_s[3], const float acc_g[3], 
         float s2 = 2.0f * q4 * fx + 2.0f * q1 * fy - 4.0f * q2 * fz;
         float s3 = -2.0f * q1 * fx + 2.0f * q4 * fy - 4.0f * q3 * fz;
         float s4 = 2.0f * q2 * fx + 2.0f * q3 * fy;
+        /* Tangent projection grad f <- grad f - (q . grad f) q: the step no longer depends on the mounting
+         * (estimation/ahf.py's module docstring) */
+        float p = q1 * s1 + q2 * s2 + q3 * s3 + q4 * s4;
+        s1 = s1 - p * q1;
+        s2 = s2 - p * q2;
+        s3 = s3 - p * q3;
+        s4 = s4 - p * q4;
         /* (eq. 20) e = g x a; e_a low-passed; lambda = clamp(lambda_max - e_a) */
         float err = fabsf(vy * az - vz * ay) + fabsf(vz * ax - vx * az) + fabsf(vx * ay - vy * ax);
         float lam = f->lam_max;

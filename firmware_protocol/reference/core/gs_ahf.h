@@ -2,8 +2,8 @@
  *
  * The same constants and order of operations as groundstation/estimation/ahf.py run with
  * dtype=np.float32 (and the input guards of groundstation/estimation/base.py), so the two agree bit
- * for bit: every update is float arithmetic in the order the Python writes it, x^-0.5 is powf(x, -0.5f)
- * (NumPy's float32 power; see GS_AHF_PORTABLE_RSQRT in gs_ahf.c), and the few steps the Python does in double (initialisation from gravity,
+ * for bit: every update is float arithmetic in the order the Python writes it, x^-0.5 and x^0.5 are
+ * powf(x, -0.5f) and powf(x, 0.5f) (NumPy's float32 power; see GS_AHF_PORTABLE_RSQRT in gs_ahf.c), and the few steps the Python does in double (initialisation from gravity,
  * re-normalising a given attitude, the settings) are done in double here too. Build without
  * -ffast-math and without FMA contraction (-ffp-contract=off), or the last bits differ.
  *
@@ -16,7 +16,7 @@
 #define GS_AHF_WAITING 1u        /* no usable accelerometer sample yet: output is the identity */
 #define GS_AHF_INITIALISED 2u    /* attitude set from the accelerometer on this sample */
 #define GS_AHF_HELD 4u           /* bad gyro or dt: previous estimate unchanged */
-#define GS_AHF_ACC_SKIPPED 8u    /* accelerometer norm out of range: gyro only */
+#define GS_AHF_ACC_SKIPPED 8u    /* accelerometer unusable (NaN/Inf, free fall, sustained deviation): gyro only */
 #define GS_AHF_REINITIALISED 16u /* dt > max_gap_s: pitch and roll re-set from the accelerometer */
 #define GS_AHF_GYRO_OVERRANGE 32u /* a gyro axis at or above gyro_overrange_rad_s: lambda = lambda_max */
 
@@ -26,19 +26,22 @@ typedef struct {
     double lowpass;               /* weight of e_a(k-1), 0.9 (eq. 20) */
     double error_gain;            /* scale of |ex|+|ey|+|ez|, 10 (eq. 20) */
     double gyro_overrange_rad_s;  /* any |w_i| >= this forces lambda_max; HUGE_VAL = off */
-    double acc_min_g, acc_max_g;  /* accelerometer norm accepted: 0.2 .. 3 g */
+    double acc_min_g;             /* accelerometer norm below: free fall, skipped; 0.2 g */
+    double acc_deviation_max_g;   /* low-passed |norm - 1 g| above: skipped; HUGE_VAL = off (the default) */
+    double acc_window_s;          /* time constant of that low-pass, 1 s */
     double max_gap_s;             /* longer dt: re-initialise from gravity, 1 s */
 } gs_ahf_settings;
 
 typedef struct {
     gs_ahf_settings settings;
-    float lam_max, lam_min, lowpass, gain, overrange, acc_min2, acc_max2, max_gap_s;
-    int overrange_on;
+    float lam_max, lam_min, lowpass, gain, overrange, acc_min2, acc_dev_max, acc_window_s, max_gap_s;
+    int overrange_on, acc_gated;
     int waiting;   /* no attitude yet: the next usable accelerometer sample sets it */
     float q[4];    /* the estimate, w first */
     float lam;     /* lambda used on the last sample, rad/s */
     float e_a;     /* low-passed, scaled gravity error (eq. 20) */
     float err;     /* |ex| + |ey| + |ez| of the last sample (eq. 20) */
+    float acc_dev; /* low-passed |norm of acc - 1| (g), updated only while the gate is on */
 } gs_ahf;
 
 /* The paper's settings (the defaults of AhfSettings). */

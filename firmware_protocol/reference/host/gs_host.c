@@ -12,8 +12,9 @@ size_t gs_host_sizeof_flight(void) { return sizeof(gs_flight); }
 size_t gs_host_sizeof_deframer(void) { return sizeof(gs_deframer); }
 size_t gs_host_max_out(void) { return GS_FLIGHT_MAX_OUT; }
 
-/* settings: lambda_max, lambda_min, lowpass, error_gain, gyro_overrange_rad_s, acc_min_g, acc_max_g, max_gap_s */
-static void ahf_settings(gs_ahf_settings *s, const double v[8])
+/* settings: lambda_max, lambda_min, lowpass, error_gain, gyro_overrange_rad_s, acc_min_g, acc_deviation_max_g,
+ * acc_window_s, max_gap_s */
+static void ahf_settings(gs_ahf_settings *s, const double v[9])
 {
     s->lambda_max = v[0];
     s->lambda_min = v[1];
@@ -21,30 +22,32 @@ static void ahf_settings(gs_ahf_settings *s, const double v[8])
     s->error_gain = v[3];
     s->gyro_overrange_rad_s = v[4];
     s->acc_min_g = v[5];
-    s->acc_max_g = v[6];
-    s->max_gap_s = v[7];
+    s->acc_deviation_max_g = v[6];
+    s->acc_window_s = v[7];
+    s->max_gap_s = v[8];
 }
 
-int gs_host_ahf_init(gs_ahf *f, const double settings[8], const float *q0)
+int gs_host_ahf_init(gs_ahf *f, const double settings[9], const float *q0)
 {
     gs_ahf_settings s;
     ahf_settings(&s, settings);
     return gs_ahf_init(f, &s, q0);
 }
 
-/* out: q (4), lambda, e_a, err */
-unsigned gs_host_ahf_step(gs_ahf *f, const float gyr[3], const float acc[3], float dt_s, float out[7])
+/* out: q (4), lambda, e_a, err, acc_dev */
+unsigned gs_host_ahf_step(gs_ahf *f, const float gyr[3], const float acc[3], float dt_s, float out[8])
 {
     unsigned status = gs_ahf_step(f, gyr, acc, dt_s);
     for (int i = 0; i < 4; i++) out[i] = f->q[i];
     out[4] = f->lam;
     out[5] = f->e_a;
     out[6] = f->err;
+    out[7] = f->acc_dev;
     return status;
 }
 
 /* config: rate_hz, accel_fs_g, gyro_fs_dps, mounting, mode, fw major, minor, patch */
-int gs_host_flight_init(gs_flight *f, const unsigned config[8], double boot_calibration_s, const double settings[8])
+int gs_host_flight_init(gs_flight *f, const unsigned config[8], double boot_calibration_s, const double settings[9])
 {
     gs_flight_config c = {
         .rate_hz = (uint16_t)config[0], .accel_fs_g = (uint8_t)config[1], .gyro_fs_dps = (uint16_t)config[2],
