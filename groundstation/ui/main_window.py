@@ -37,6 +37,7 @@ DEFAULT_HIDDEN = frozenset({"AHF", "AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+
 STEP_S = 5.0  # ← and → in a replay
 PAN_FRACTION = 0.1  # of the window, ← and → live
 RECENT_RECORDINGS = 8  # listed in File > Recent recordings
+RECENT_SOURCES = 8  # listed in the source box below the ports found
 # The curves of the versions that stored "hidden_curves" without "known_curves": any other label is new
 # to the user's settings and starts hidden if it is in DEFAULT_HIDDEN.
 FORMERLY_KNOWN = frozenset({"AHF", "onboard", "HF", "ECF"})
@@ -53,6 +54,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
         self.replay_setup: tuple[tuple[str, ...] | None, dict | None] = (None, None)  # estimators, forced settings
         self.bar = ConnectionBar()
+        self.bar.set_recent(self.recent_sources())
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
         self.bar.connectRequested.connect(self.connect_serial)
         self.bar.disconnectRequested.connect(self.disconnect)
@@ -127,10 +129,22 @@ class MainWindow(QtWidgets.QMainWindow):
                                          recordings_dir=self.recordings_dir).start(), note)
 
     def connect_serial(self, port: str, baud: int) -> None:
+        """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the banner)."""
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
         self._start(lambda: open_session(port, settings=self._stored_estimator_settings(), recordings_dir=self.recordings_dir,
                                          baud=baud).start())
+        if self.session is not None:
+            recent = [port, *(s for s in self.recent_sources() if s != port)][:RECENT_SOURCES]
+            self.settings.setValue("recent_sources", recent)
+            self.bar.set_recent(recent)
+
+    def recent_sources(self) -> list[str]:
+        return self._stored_list("recent_sources")
+
+    def _stored_list(self, key: str) -> list[str]:
+        stored = self.settings.value(key) or []
+        return [stored] if isinstance(stored, str) else list(stored)  # QSettings gives one item as a str
 
     def open_recording(self, path) -> None:
         self.replay_setup = (None, None)  # the recorded estimators and settings
@@ -155,8 +169,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.open_recording(dialog.selectedFiles()[0])
 
     def recent_recordings(self) -> list[str]:
-        stored = self.settings.value("recent_recordings") or []
-        return [stored] if isinstance(stored, str) else list(stored)  # QSettings gives one item as a str
+        return self._stored_list("recent_recordings")
 
     def _remember_recent(self, path: Path) -> None:
         recent = [str(path), *(p for p in self.recent_recordings() if p != str(path))][:RECENT_RECORDINGS]
