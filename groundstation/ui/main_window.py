@@ -115,7 +115,15 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recording_label = QtWidgets.QLabel("not recording")
         self.statusBar().addWidget(self.source_label, 1)
         self.statusBar().addPermanentWidget(self.recording_label)
+        self.record_action = QtGui.QAction("Start recording", self, shortcut=QtGui.QKeySequence("Ctrl+R"))
+        self.record_action.setShortcutContext(QtCore.Qt.ApplicationShortcut)
+        self.record_action.setToolTip("Start or stop recording the live source into a new file (replays are not re-recorded)")
+        self.record_action.triggered.connect(lambda _=False: self.toggle_recording())
+        record_button = QtWidgets.QToolButton()
+        record_button.setDefaultAction(self.record_action)
+        self.statusBar().addPermanentWidget(record_button)
         self._build_menus()
+        self._sync_record_action()
         self.resize(1280, 800)
         self._restore_layout()
         self.ticks = 0
@@ -246,6 +254,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.uplink_panel.set_session(session)
         self.event_console.set_session(session)
         self.bar.set_connected(True)
+        self._sync_record_action()
 
     def disconnect(self) -> None:
         if self.seeking is not None:
@@ -260,6 +269,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.estimator_panel.set_session(None, set())
         self.uplink_panel.set_session(None)
         self.bar.set_connected(False)
+        self._sync_record_action()
 
     def _stop_session(self) -> None:
         session, self.session = self.session, None
@@ -283,6 +293,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu = file.addMenu("Recent recordings")
         self._fill_recent_menu()
         self._action(file, "&Export…", "Ctrl+E", self.export)
+        file.addAction(self.record_action)
         file.addSeparator()
         self._action(file, "&Quit", "Ctrl+Q", self.close)
         view = self.menuBar().addMenu("&View")
@@ -360,6 +371,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.event_console.refresh()
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
+            self._sync_record_action()
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")
 
@@ -370,7 +382,30 @@ class MainWindow(QtWidgets.QMainWindow):
         path = session.recording_path
         if path is None:
             return "not recording (replay)" if session.source.is_replay else "not recording"
-        return f"● recording {path}  ({session.recorder.bytes_written / 1e6:.1f} MB)"
+        doing = "● recording" if session.recorder.state == "recording" else "not recording; last file"
+        return f"{doing} {path}  ({session.recorder.bytes_written / 1e6:.1f} MB)"
+
+    # -- recording ------------------------------------------------------------------------------
+
+    def toggle_recording(self) -> None:
+        """Stop the live session's recording, or start a new file; replays are not re-recorded."""
+        session = self.session
+        if session is None or session.source.is_replay:
+            return
+        if session.recorder.state == "recording":
+            with session.lock:  # the reader thread writes under it
+                session.recorder.stop()
+        elif session.resume_recording() and session.source.can_send:
+            session.send_command("request_config")  # a new file needs a CONFIG frame of its own to replay
+        self.recording_banner.refresh(session)  # a file that cannot be made is explained there
+        self.recording_label.setText(self._recording_text(session))
+        self._sync_record_action()
+
+    def _sync_record_action(self) -> None:
+        session = self.session
+        live = session is not None and not session.source.is_replay
+        self.record_action.setEnabled(live)
+        self.record_action.setText("Stop recording" if live and session.recorder.state == "recording" else "Start recording")
 
     # -- settings -------------------------------------------------------------------------------
 
