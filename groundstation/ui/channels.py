@@ -104,8 +104,8 @@ class ChannelsView(QtWidgets.QWidget):
             parents: dict[str, QtWidgets.QTreeWidgetItem] = {}
             for table, column in session.pipeline.catalogue.channels():
                 if table.name not in parents:
-                    parents[table.name] = QtWidgets.QTreeWidgetItem([table.label])
-                    parents[table.name].setToolTip(0, table.name)
+                    parents[table.name] = QtWidgets.QTreeWidgetItem([table.name])  # the label is a sentence
+                    parents[table.name].setToolTip(0, table.label)
                     self.tree.addTopLevelItem(parents[table.name])
                 child = QtWidgets.QTreeWidgetItem([column.header])
                 child.setData(0, QtCore.Qt.UserRole, f"{table.name}.{column.name}")
