@@ -60,3 +60,12 @@ def test_port_errors_say_what_to_do():
     if sys.platform.startswith("linux"):
         assert "dialout" in denied
     assert "in use by another program" in busy
+
+
+def test_no_link_figure_stands_after_disconnect(window, qtbot):
+    window.start_demo()
+    qtbot.waitUntil(lambda: window.link_panel.values["frames/s"].text() not in ("—", "0"), timeout=8000)
+    window.bar.disconnect_button.click()
+    qtbot.wait(600)  # a few figure refreshes of the redraw timer
+    assert window.link_panel.headline.text() == "no source"
+    assert {label.text() for label in window.link_panel.values.values()} == {"—"}
