@@ -3,7 +3,7 @@
     xvfb-run -s "-screen 0 1400x860x24" python docs/screenshots/take.py docs/screenshots
 
 (QT_QPA_PLATFORM=offscreen works too: every picture is the widget's own rendering.) The tour: the
-simulated bridge live with one comparison estimator shown (live.png), the attitude panel with its
+simulated bridge typed into the Source box, live with one comparison estimator shown (live.png), the attitude panel with its
 horizon and 3D view (3d-view.png), the event console (events.png), the Channels tab with two panes
 (channels.png), the export dialog after an export (export-dialog.png), the flight just recorded
 replayed (replay.png), and a bridge on a pseudo-terminal unplugged (port-gone.png).
@@ -61,7 +61,8 @@ def bridge_on_a_pty(stop: threading.Event) -> str:
 
 
 def tour() -> None:
-    window.start_demo("no port given: streaming from the simulated bridge")
+    window.bar.port_box.setEditText("sim:?scenario=flight&seed=1")  # typed into the Source box, as a user would
+    window.bar.connect_button.click()
     window.live_view.set_visible("ECF", True)  # one comparison estimator, as a user would add it
     window.estimator_panel.sync_shown(window.live_view.attitude.visible_labels())
     wait(LIVE_S)

@@ -90,7 +90,9 @@ class SerialSource(PortSource):
             return serial.serial_for_url(name, baudrate=self.baud, timeout=READ_TIMEOUT_S)
         except (serial.SerialException, ValueError, OSError) as error:
             what = f"the {self._named}" if self._named else f"serial port {name}"
-            raise SourceError(explain_port_error(f"cannot open {what}: {error}")) from None
+            # pyserial's text already quotes the OS error with its [Errno N]; say the system's reason once
+            reason = f"[Errno {error.errno}] {os.strerror(error.errno)}" if getattr(error, "errno", None) else error
+            raise SourceError(explain_port_error(f"cannot open {what}: {reason}")) from None
 
     def _ports(self) -> list:
         try:

@@ -3,7 +3,8 @@ fills from it (double-click a channel, or "Add to pane"); the panes share the li
 axis and window. The layout (which channels in which pane) is kept as a list of lists of
 "table.column" names, which the window remembers in its settings.
 
-``catalogue`` is the one place the channels are discovered.
+The channels are the session's catalogue (``Pipeline.catalogue``, derived from the protocol spec and
+the estimators): each listed by its label and unit.
 """
 
 from __future__ import annotations
@@ -14,17 +15,15 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
-from groundstation.session.table import Table
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
 
 PREFIX = "channel:"  # the series of a table's plotted columns, beside the live view's own series
 
 
-def catalogue(pipeline: Pipeline) -> dict[str, tuple[Table, tuple[str, ...]]]:
-    """Every table of the session with its plottable columns (all but the time)."""
-    tables = {"imu": pipeline.imu, "onboard": pipeline.onboard, **pipeline.tables}
-    return {name: (table, tuple(c for c in table.columns if c != "time_s")) for name, table in tables.items()}
+def channel_names(pipeline: Pipeline) -> set[str]:
+    """Every "table.column" the session can plot (all columns but the time)."""
+    return {f"{table.name}.{column.name}" for table, column in pipeline.catalogue.channels()}
 
 
 def pane_plots(panes: list[list[str]]) -> tuple[Plot, ...]:
@@ -102,13 +101,16 @@ class ChannelsView(QtWidgets.QWidget):
         self.session = session
         self.tree.clear()
         if session is not None:
-            for name, (table, columns) in catalogue(session.pipeline).items():
-                parent = QtWidgets.QTreeWidgetItem([name])
-                for column in columns:
-                    child = QtWidgets.QTreeWidgetItem([column])
-                    child.setData(0, QtCore.Qt.UserRole, f"{name}.{column}")
-                    parent.addChild(child)
-                self.tree.addTopLevelItem(parent)
+            parents: dict[str, QtWidgets.QTreeWidgetItem] = {}
+            for table, column in session.pipeline.catalogue.channels():
+                if table.name not in parents:
+                    parents[table.name] = QtWidgets.QTreeWidgetItem([table.name])  # the label is a sentence
+                    parents[table.name].setToolTip(0, table.label)
+                    self.tree.addTopLevelItem(parents[table.name])
+                child = QtWidgets.QTreeWidgetItem([column.header])
+                child.setData(0, QtCore.Qt.UserRole, f"{table.name}.{column.name}")
+                child.setToolTip(0, column.description or f"{table.name}.{column.name}")
+                parents[table.name].addChild(child)
         self.stacked.clear_data()  # the same panes: only their data is new (plots are slow to build)
         self._make_series()
 
@@ -184,12 +186,11 @@ class ChannelsView(QtWidgets.QWidget):
         self.series = {}
         if self.session is None:
             return
-        tables = catalogue(self.session.pipeline)
+        known = channel_names(self.session.pipeline)
         wanted: dict[str, list[str]] = {}
-        for channel in (c for pane in self.panes for c in pane):
+        for channel in (c for pane in self.panes for c in pane if c in known):
             table, column = channel.split(".", 1)
-            if table in tables and column in tables[table][1]:
-                wanted.setdefault(table, []).append(column)
+            wanted.setdefault(table, []).append(column)
         for table, columns in wanted.items():
-            self.series[PREFIX + table] = Series(tables[table][0], lambda rows, names, columns=tuple(columns): {
-                c: rows[:, names.index(c)] for c in columns})
+            self.series[PREFIX + table] = Series(self.session.pipeline.tables[table], lambda rows, names, columns=tuple(
+                columns): {c: rows[:, names.index(c)] for c in columns})

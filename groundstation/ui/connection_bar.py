@@ -1,5 +1,6 @@
-"""The connection bar: serial port (refreshed as devices come and go), baud, Connect/Disconnect,
-the simulated bridge, "Open recording…" and "Export…". It only asks; the window acts.
+"""The connection bar: the source box (any string ``open_source`` accepts, with the serial ports
+found, refreshed as devices come and go, and the recent sources), baud, Connect/Disconnect, the
+simulated bridge, "Open recording…" and "Export…". It only asks; the window acts.
 """
 
 from __future__ import annotations
@@ -11,10 +12,12 @@ from groundstation.sources import list_ports
 BAUD_RATES = (9600, 57600, 115200, 230400, 460800, 921600, 1000000, 2000000)
 DEFAULT_BAUD = 115200
 PORT_REFRESH_MS = 1000
+SOURCE_HINT = ("A serial port (COM3, /dev/ttyUSB0), socket://HOST:PORT, udp://HOST:PORT, tcp://HOST:PORT, "
+               "sim:?scenario=NAME, mavlink:..., or a recording file")
 
 
 class ConnectionBar(QtWidgets.QWidget):
-    connectRequested = QtCore.Signal(str, int)  # port, baud
+    connectRequested = QtCore.Signal(str, int)  # source string, baud
     disconnectRequested = QtCore.Signal()
     demoRequested = QtCore.Signal()
     recordingRequested = QtCore.Signal()
@@ -23,8 +26,16 @@ class ConnectionBar(QtWidgets.QWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.port_box = QtWidgets.QComboBox()
+        self.port_box.setEditable(True)  # a pty, socket://, udp://, sim:, a recording: anything open_source takes
+        self.port_box.setInsertPolicy(QtWidgets.QComboBox.NoInsert)
+        self.port_box.setCompleter(None)  # the list's lines carry descriptions; completing with them garbles the text
+        self.port_box.lineEdit().setPlaceholderText(SOURCE_HINT)
+        self.port_box.setToolTip(SOURCE_HINT)
         self.port_box.setMinimumContentsLength(28)
         self.port_box.setSizeAdjustPolicy(QtWidgets.QComboBox.AdjustToMinimumContentsLengthWithIcon)
+        self.port_box.activated.connect(self._take_listed)
+        self.port_box.editTextChanged.connect(self._enable_connect)
+        self.port_box.lineEdit().returnPressed.connect(self._connect)
         self.baud_box = QtWidgets.QComboBox()
         self.baud_box.setEditable(True)  # any rate the adapter supports
         self.baud_box.addItems([str(b) for b in BAUD_RATES])
@@ -42,7 +53,7 @@ class ConnectionBar(QtWidgets.QWidget):
         self.open_button.clicked.connect(self.recordingRequested)
         layout = QtWidgets.QHBoxLayout(self)
         layout.setContentsMargins(4, 4, 4, 4)
-        for widget in (QtWidgets.QLabel("Port"), self.port_box, QtWidgets.QLabel("Baud"), self.baud_box,
+        for widget in (QtWidgets.QLabel("Source"), self.port_box, QtWidgets.QLabel("Baud"), self.baud_box,
                        self.connect_button, self.disconnect_button):
             layout.addWidget(widget)
         layout.addSpacing(16)
@@ -50,34 +61,69 @@ class ConnectionBar(QtWidgets.QWidget):
         layout.addWidget(self.open_button)
         layout.addWidget(self.export_button)
         layout.addStretch(1)
+        self._ports: list[dict[str, str]] = []
+        self._recent: list[str] = []
+        self._unfilled = False
         self.set_connected(False)
         self.refresh_ports()
         self._timer = QtCore.QTimer(self, interval=PORT_REFRESH_MS, timeout=self.refresh_ports)
         self._timer.start()
 
+    @property
+    def source(self) -> str:
+        """What the user typed or picked: the string handed to ``open_source``."""
+        return self.port_box.currentText().strip()
+
+    def listed(self) -> list[str]:
+        """The source strings in the box's list: the ports found, then the recent sources."""
+        return [self.port_box.itemData(i) for i in range(self.port_box.count()) if self.port_box.itemData(i)]
+
     def refresh_ports(self) -> None:
-        """Re-list the ports, keeping the selection when that port is still there."""
+        """Re-list the ports when they changed; what the user typed or picked stays as it is."""
         ports = list_ports()
-        listed = [self.port_box.itemData(i) for i in range(self.port_box.count())]
-        if [p["device"] for p in ports] == listed:
+        if ports != self._ports or self._unfilled:
+            self._ports = ports
+            self._fill()
+
+    def set_recent(self, recent: list[str]) -> None:
+        """The sources connected to lately, newest first, listed below the ports."""
+        if list(recent) != self._recent:
+            self._recent = list(recent)
+            self._fill()
+
+    def _fill(self) -> None:
+        if self.port_box.view().isVisible():
+            self._unfilled = True  # the user is choosing from the open list: rebuild it on the next refresh
             return
-        selected = self.port_box.currentData()
+        self._unfilled = False
+        edit = self.port_box.lineEdit()
+        text, cursor = edit.text(), edit.cursorPosition()
+        self.port_box.blockSignals(True)
         self.port_box.clear()
-        for port in ports:
+        for port in self._ports:
             details = ", ".join(x for x in (port["description"], port["vid_pid"]) if x and x != "n/a")
             self.port_box.addItem(f"{port['device']} — {details}" if details else port["device"], port["device"])
-        if not ports:
-            self.port_box.setPlaceholderText("no serial ports found")
-        index = self.port_box.findData(selected)
-        if index >= 0:
-            self.port_box.setCurrentIndex(index)
-        self.connect_button.setEnabled(bool(ports) and not self.disconnect_button.isEnabled())
+        recent = [r for r in self._recent if r not in (p["device"] for p in self._ports)]
+        if self._ports and recent:
+            self.port_box.insertSeparator(self.port_box.count())
+        for spec in recent:
+            self.port_box.addItem(spec, spec)
+            self.port_box.setItemData(self.port_box.count() - 1, "used recently", QtCore.Qt.ToolTipRole)
+        self.port_box.setCurrentIndex(-1)
+        edit.setText(text)
+        edit.setCursorPosition(cursor)
+        self.port_box.blockSignals(False)
 
-    def select(self, port: str | None, baud: int | None) -> None:
-        """Preselect a remembered port and baud rate."""
-        index = self.port_box.findData(port)
-        if index >= 0:
-            self.port_box.setCurrentIndex(index)
+    def _take_listed(self, index: int) -> None:
+        """A line of the list picked: the box holds its source string, not its description."""
+        spec = self.port_box.itemData(index)
+        if spec:
+            self.port_box.setEditText(spec)
+
+    def select(self, source: str | None, baud: int | None) -> None:
+        """Preselect a remembered source and baud rate."""
+        if source:
+            self.port_box.setEditText(source)
         if baud:
             self.baud_box.setCurrentText(str(baud))
 
@@ -90,9 +136,11 @@ class ConnectionBar(QtWidgets.QWidget):
 
     def set_connected(self, connected: bool) -> None:
         self.disconnect_button.setEnabled(connected)
-        self.connect_button.setEnabled(not connected and self.port_box.count() > 0)
+        self._enable_connect()
+
+    def _enable_connect(self) -> None:
+        self.connect_button.setEnabled(not self.disconnect_button.isEnabled() and bool(self.source))
 
     def _connect(self) -> None:
-        port = self.port_box.currentData()
-        if port:
-            self.connectRequested.emit(port, self.baud)
+        if self.connect_button.isEnabled():
+            self.connectRequested.emit(self.source, self.baud)

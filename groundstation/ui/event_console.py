@@ -22,7 +22,7 @@ def event_time_s(pipeline: Pipeline, event: dict) -> float:
     the session's first chunk (to a few ms the session time of the samples that came with it)."""
     if "session_time_s" in event:
         return float(event["session_time_s"])
-    t0_ns = getattr(pipeline, "_t0_host_ns", None)  # no public origin yet; the Excel export reads it so too
+    t0_ns = pipeline.t0_host_ns
     if t0_ns is None or not event.get("t_host_ns"):
         return 0.0
     return max((event["t_host_ns"] - t0_ns) / 1e9, 0.0)

@@ -86,8 +86,10 @@ class LinkPanel(QtWidgets.QGroupBox):
             self.headline.setStyleSheet(STYLES[state])
 
     def refresh(self, session: LiveSession | None) -> None:
-        if session is None:
+        if session is None:  # disconnected: no figure of the stopped session stands
             self._show_state("idle", "no source")
+            for label in self.values.values():
+                label.setText("—")
             return
         # A replay's link times are the recorded ones: measure "since" against the newest chunk.
         replay = session.source.is_replay

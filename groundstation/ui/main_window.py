@@ -37,6 +37,7 @@ DEFAULT_HIDDEN = frozenset({"AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "
 STEP_S = 5.0  # ← and → in a replay
 PAN_FRACTION = 0.1  # of the window, ← and → live
 RECENT_RECORDINGS = 8  # listed in File > Recent recordings
+RECENT_SOURCES = 8  # listed in the source box below the ports found
 # The curves of the versions that stored "hidden_curves" without "known_curves": any other label is new
 # to the user's settings and starts hidden if it is in DEFAULT_HIDDEN.
 FORMERLY_KNOWN = frozenset({"AHF", "onboard", "HF", "ECF"})
@@ -53,6 +54,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
         self.replay_setup: tuple[tuple[str, ...] | None, dict | None] = (None, None)  # estimators, forced settings
         self.bar = ConnectionBar()
+        self.bar.set_recent(self.recent_sources())
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
         self.bar.connectRequested.connect(self.connect_serial)
         self.bar.disconnectRequested.connect(self.disconnect)
@@ -113,7 +115,15 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recording_label = QtWidgets.QLabel("not recording")
         self.statusBar().addWidget(self.source_label, 1)
         self.statusBar().addPermanentWidget(self.recording_label)
+        self.record_action = QtGui.QAction("Start recording", self, shortcut=QtGui.QKeySequence("Ctrl+R"))
+        self.record_action.setShortcutContext(QtCore.Qt.ApplicationShortcut)
+        self.record_action.setToolTip("Start or stop recording the live source into a new file (replays are not re-recorded)")
+        self.record_action.triggered.connect(lambda _=False: self.toggle_recording())
+        record_button = QtWidgets.QToolButton()
+        record_button.setDefaultAction(self.record_action)
+        self.statusBar().addPermanentWidget(record_button)
         self._build_menus()
+        self._sync_record_action()
         self.resize(1280, 800)
         self._restore_layout()
         self.ticks = 0
@@ -127,10 +137,22 @@ class MainWindow(QtWidgets.QMainWindow):
                                          recordings_dir=self.recordings_dir).start(), note)
 
     def connect_serial(self, port: str, baud: int) -> None:
+        """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the banner)."""
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
         self._start(lambda: open_session(port, settings=self._stored_estimator_settings(), recordings_dir=self.recordings_dir,
                                          baud=baud).start())
+        if self.session is not None:
+            recent = [port, *(s for s in self.recent_sources() if s != port)][:RECENT_SOURCES]
+            self.settings.setValue("recent_sources", recent)
+            self.bar.set_recent(recent)
+
+    def recent_sources(self) -> list[str]:
+        return self._stored_list("recent_sources")
+
+    def _stored_list(self, key: str) -> list[str]:
+        stored = self.settings.value(key) or []
+        return [stored] if isinstance(stored, str) else list(stored)  # QSettings gives one item as a str
 
     def open_recording(self, path) -> None:
         self.replay_setup = (None, None)  # the recorded estimators and settings
@@ -155,8 +177,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.open_recording(dialog.selectedFiles()[0])
 
     def recent_recordings(self) -> list[str]:
-        stored = self.settings.value("recent_recordings") or []
-        return [stored] if isinstance(stored, str) else list(stored)  # QSettings gives one item as a str
+        return self._stored_list("recent_recordings")
 
     def _remember_recent(self, path: Path) -> None:
         recent = [str(path), *(p for p in self.recent_recordings() if p != str(path))][:RECENT_RECORDINGS]
@@ -233,6 +254,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.uplink_panel.set_session(session)
         self.event_console.set_session(session)
         self.bar.set_connected(True)
+        self._sync_record_action()
 
     def disconnect(self) -> None:
         if self.seeking is not None:
@@ -247,6 +269,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.estimator_panel.set_session(None, set())
         self.uplink_panel.set_session(None)
         self.bar.set_connected(False)
+        self._sync_record_action()
 
     def _stop_session(self) -> None:
         session, self.session = self.session, None
@@ -270,6 +293,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu = file.addMenu("Recent recordings")
         self._fill_recent_menu()
         self._action(file, "&Export…", "Ctrl+E", self.export)
+        file.addAction(self.record_action)
         file.addSeparator()
         self._action(file, "&Quit", "Ctrl+Q", self.close)
         view = self.menuBar().addMenu("&View")
@@ -347,6 +371,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.event_console.refresh()
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
+            self._sync_record_action()
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")
 
@@ -357,7 +382,30 @@ class MainWindow(QtWidgets.QMainWindow):
         path = session.recording_path
         if path is None:
             return "not recording (replay)" if session.source.is_replay else "not recording"
-        return f"● recording {path}  ({session.recorder.bytes_written / 1e6:.1f} MB)"
+        doing = "● recording" if session.recorder.state == "recording" else "not recording; last file"
+        return f"{doing} {path}  ({session.recorder.bytes_written / 1e6:.1f} MB)"
+
+    # -- recording ------------------------------------------------------------------------------
+
+    def toggle_recording(self) -> None:
+        """Stop the live session's recording, or start a new file; replays are not re-recorded."""
+        session = self.session
+        if session is None or session.source.is_replay:
+            return
+        if session.recorder.state == "recording":
+            with session.lock:  # the reader thread writes under it
+                session.recorder.stop()
+        elif session.resume_recording() and session.source.can_send:
+            session.send_command("request_config")  # a new file needs a CONFIG frame of its own to replay
+        self.recording_banner.refresh(session)  # a file that cannot be made is explained there
+        self.recording_label.setText(self._recording_text(session))
+        self._sync_record_action()
+
+    def _sync_record_action(self) -> None:
+        session = self.session
+        live = session is not None and not session.source.is_replay
+        self.record_action.setEnabled(live)
+        self.record_action.setText("Stop recording" if live and session.recorder.state == "recording" else "Start recording")
 
     # -- settings -------------------------------------------------------------------------------
 

@@ -95,10 +95,15 @@ class Series:
         if old == 0:
             return  # all recent: the buffer grows instead
         times = r.time_s[:old].reshape(-1, BIN_ROWS)
+        # A restart's gap row (NaN in every quantity) keeps its bin NaN, so the older curve breaks there
+        # too; other NaN (a quantity missing in some rows) are left out of the min and max.
+        restart = np.logical_and.reduce([np.isnan(c[:old]) for c in r.values.values()]).reshape(-1, BIN_ROWS).any(axis=1)
         binned = {}
         for name, column in r.values.items():
             bins = column[:old].reshape(-1, BIN_ROWS)
-            binned[name] = np.column_stack([np.fmin.reduce(bins, axis=1), np.fmax.reduce(bins, axis=1)]).ravel()
+            pairs = np.column_stack([np.fmin.reduce(bins, axis=1), np.fmax.reduce(bins, axis=1)])
+            pairs[restart] = np.nan
+            binned[name] = pairs.ravel()
         self.history.append(np.column_stack([times[:, 0], times[:, -1]]).ravel(), binned)
         r.drop_front(old)
 

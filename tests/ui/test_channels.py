@@ -12,12 +12,21 @@ def listed(view) -> set[str]:
             for j in range(tree.topLevelItem(i).childCount())}
 
 
+def shown_texts(view) -> dict[str, str]:
+    tree = view.channels.tree
+    return {item.data(0, 0x0100): item.text(0) for i in range(tree.topLevelItemCount())
+            for item in (tree.topLevelItem(i).child(j) for j in range(tree.topLevelItem(i).childCount()))}
+
+
 def test_channels_are_listed_plotted_in_panes_and_remembered(window, qtbot, tmp_path):
     window.start_demo()
     view = window.live_view
     pipeline = window.session.pipeline
     tables = {"imu": pipeline.imu, "onboard": pipeline.onboard, **pipeline.tables}
     assert listed(view) == {f"{n}.{c}" for n, t in tables.items() for c in t.columns if c != "time_s"}
+    shown = shown_texts(view)  # a person's label and unit, from the session's catalogue (the spec's units)
+    assert shown["imu.gyr_x_rad_s"] == "gyro x (rad/s)" and shown["baro.pressure_Pa"] == "pressure (Pa)"
+    assert shown["baro.temperature_degC"] == "temperature (°C)" and shown["onboard.lambda"] == "onboard λ"
     view.tabs.setCurrentWidget(view.channels)
     view.channels.add("imu.gyr_x_rad_s")
     view.channels.new_pane()

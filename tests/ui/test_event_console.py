@@ -26,3 +26,15 @@ def test_events_are_listed_with_their_times_and_a_click_moves_the_view(window, q
     low, high = window.live_view.attitude.items[0].getViewBox().viewRange()[0]
     assert window.live_view.paused and (low + high) / 2 == pytest.approx(t_s)
     assert "config" in console.table.item(next(r for r, e in enumerate(events) if e["kind"] == "config"), 1).text()
+
+
+def test_an_event_late_in_the_session_is_placed_at_its_time_not_at_the_start(window, qtbot):
+    """Events without a clock time are placed by host time since the session's first chunk (the
+    pipeline's public ``t0_host_ns``); the IMU table's host_time_s column is the independent measure."""
+    window.start_demo()
+    session = window.session
+    qtbot.waitUntil(lambda: len(session.pipeline.imu) > 250, timeout=10000)
+    session.send_command("request_config")
+    command = next(e for e in reversed(session.pipeline.events) if e["kind"] == "command")
+    host_s = session.pipeline.imu.column("host_time_s")[-1]
+    assert event_time_s(session.pipeline, command) == pytest.approx(host_s, abs=0.3)

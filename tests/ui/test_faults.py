@@ -1,5 +1,6 @@
 """Bad inputs and lost ports show a message in the window, never an exception."""
 
+import errno
 import os
 import subprocess
 import sys
@@ -24,6 +25,8 @@ def test_a_port_that_cannot_be_opened_shows_why(window):
     window.connect_serial("/dev/no-such-serial-port", 115200)
     assert window.banner.isVisible() and "/dev/no-such-serial-port" in window.banner.text()
     assert window.session is None
+    reason = os.strerror(errno.ENOENT)  # the system's words, said once (pyserial repeats the OS error in its own)
+    assert window.banner.text().count(reason) == 1 and window.banner.text().count("[Errno") == 1
 
 
 @pytest.mark.skipif(os.name != "posix", reason="the simulated bridge's pseudo-terminal is POSIX")
@@ -57,3 +60,12 @@ def test_port_errors_say_what_to_do():
     if sys.platform.startswith("linux"):
         assert "dialout" in denied
     assert "in use by another program" in busy
+
+
+def test_no_link_figure_stands_after_disconnect(window, qtbot):
+    window.start_demo()
+    qtbot.waitUntil(lambda: window.link_panel.values["frames/s"].text() not in ("—", "0"), timeout=8000)
+    window.bar.disconnect_button.click()
+    qtbot.wait(600)  # a few figure refreshes of the redraw timer
+    assert window.link_panel.headline.text() == "no source"
+    assert {label.text() for label in window.link_panel.values.values()} == {"—"}

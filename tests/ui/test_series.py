@@ -29,3 +29,26 @@ def test_old_samples_become_min_max_bins_and_recent_ones_stay_exact():
     assert series.recent.time_s[0] >= t[-1] - 2 * RECENT_S  # binned as it went, not at the end
     assert series.gaps == [(t[t <= 702.0][-1], t[t > 702.0][0])]
     assert series.value_at("v", t[-1]) == np.float32(v[-1])
+
+
+def test_a_restart_gap_row_still_breaks_the_line_once_binned():
+    """The pipeline writes a row of NaN (all but time) where the device restarted; once those rows are
+    old enough to be binned, the bin holding it must stay NaN, or the older curve joins the restart."""
+    table = Table(("time_s", "v", "w"))
+    series = Series(table, lambda rows, columns: {"v": rows[:, 1], "w": rows[:, 2]})
+    t = np.arange(0, 1500.0, 0.01)
+    v = np.cos(t)
+    w = np.where(np.arange(len(t)) % 2, np.nan, 1.0)  # a quantity only every other row: no gap
+    reset = np.searchsorted(t, 300.0)
+    rows = np.column_stack([t, v, w])
+    rows[reset, 1:] = np.nan  # the pipeline's gap row
+    for part in np.array_split(rows, 40):
+        table.append(part.ravel().tolist())
+        series.take(threading.Lock())
+    older_t, older_v = series.older("v", None)
+    assert older_t[-1] > 300.0
+    broken = np.flatnonzero(np.isnan(older_v))
+    assert older_t[broken].min() <= 300.0 <= older_t[broken].max()  # the bin of the restart is NaN
+    assert len(broken) == 2  # that bin's two points only
+    _, older_w = series.older("w", None)
+    assert np.isnan(older_w).sum() == 2  # a quantity missing in some rows keeps its bins, except the restart's

@@ -1,0 +1,49 @@
+"""Defect 5 of issue 12: a bridge that reboots (``sim:?reboot_after=S``) leaves a gap in the plots, not
+a line across the restart, and the link panel shows no latency or loss for it."""
+
+import math
+
+import numpy as np
+from PySide6 import QtGui
+
+REBOOT_AFTER_S = 3.0  # the uptime must exceed the reboot's outage, else the restart cannot be told (clock.py)
+
+
+def drawn_segments(curve):
+    """(x0, x1) of every line segment the curve's painter path strokes, in data coordinates."""
+    path = curve.curve.getPath()
+    segments, last = [], None
+    for i in range(path.elementCount()):
+        e = path.elementAt(i)
+        if e.type == QtGui.QPainterPath.ElementType.LineToElement and last is not None:
+            segments.append((last, e.x))
+        last = e.x
+    return segments
+
+
+def test_a_device_reboot_breaks_every_curve_and_the_link_panel_shows_no_restart_figures(window, qtbot):
+    window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
+    session = window.session
+    events = session.pipeline.events
+    qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=10000)
+    reset = next(e for e in events if e["kind"] == "device_reset")
+    before_s, after_s = reset["session_time_before_s"], reset["session_time_s"]
+    qtbot.waitUntil(lambda: window.live_view.attitude.curves[0][1].xData is not None
+                    and window.live_view.attitude.curves[0][1].xData[-1] > after_s + 1.5, timeout=10000)
+    window.live_view.window_box.setCurrentText("whole session")
+    window.live_view.redraw()
+    shown = [(spec, c) for spec, c in window.live_view.attitude.curves if c.isVisible() and c.xData is not None]
+    assert len(shown) >= 2
+    for spec, curve in shown:
+        t = curve.xData
+        assert t[0] < before_s and t[-1] > after_s  # both sides of the restart are drawn
+        across = [(a, b) for a, b in drawn_segments(curve) if a <= before_s and b >= after_s]
+        assert across == [], f"{spec.label} {spec.quantity}: a line across the restart {before_s:.2f}-{after_s:.2f} s"
+    qtbot.wait(1200)  # a complete second after the restart in the link statistics
+    window.tick()
+    latency = window.link_panel.values["latency p50 / p99"].text()
+    loss = window.link_panel.values["loss"].text()
+    p99_ms = float(latency.split("/")[1].split()[0])
+    assert p99_ms < 200, latency  # a restart is no latency (the issue saw 38,403 ms)
+    assert float(loss.split("%")[0]) < 2, loss  # nor loss (the issue saw 61%)
+    assert window.link_panel.headline.text() == "LINK OK"
