@@ -29,17 +29,24 @@ ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Ahf2, H
 GPS_AIDED = ("ukf", "sssrukf")  # need GPS velocity and heading to be more than slow tilt filters
 
 
+def setting_names(name: str) -> frozenset[str]:
+    """The settings an estimator has (none for a name that is not an estimator)."""
+    cls = ESTIMATORS.get(name)
+    return frozenset(f.name for f in dataclasses.fields(cls.Settings)) if cls else frozenset()
+
+
 def create(name: str, overrides: dict[str, float] | None = None) -> Estimator:
     """An estimator by name with some settings replaced; ValueError names what is wrong."""
     try:
         cls = ESTIMATORS[name]
     except KeyError:
         raise ValueError(f"unknown estimator {name!r}; choose from {', '.join(ESTIMATORS)}") from None
-    fields = {f.name for f in dataclasses.fields(cls.Settings)}
+    defaults = dataclasses.asdict(cls.Settings())
     for param, value in (overrides or {}).items():
-        if param not in fields:
-            raise ValueError(f"{name} has no setting {param!r}; its settings: {', '.join(sorted(fields))}")
-        if math.isnan(value):  # inf can be meant ("no limit"); NaN never is
+        if param not in defaults:
+            raise ValueError(f"{name} has no setting {param!r}; its settings: {', '.join(sorted(defaults))}")
+        # inf can be meant ("no limit"); NaN only where the default is NaN ("from the data", e.g. mcf's dip)
+        if math.isnan(value) and not math.isnan(defaults[param]):
             raise ValueError(f"{name}.{param} must be a number, not NaN")
     return cls(dataclasses.replace(cls.Settings(), **(overrides or {})))
 

@@ -5,14 +5,22 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from groundstation.errors import UserError
+from groundstation.estimation import setting_names
 from groundstation.recording import Recording
 from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
 
 
 def recorded_settings(recording: Recording) -> dict[str, dict[str, float]]:
-    """The estimator settings in the header (``Pipeline.settings_json``), as numbers again."""
+    """The estimator settings in the header (``Pipeline.settings_json``), as numbers again; those the
+    estimators of this version no longer have (a recording from an older one) are left out and named
+    by ``outdated_settings``."""
     recorded = recording.metadata.get("estimator_settings", {})
-    return {name: {k: float(v) for k, v in settings.items()} for name, settings in recorded.items()}
+    return {name: {k: float(v) for k, v in settings.items() if k in setting_names(name)} for name, settings in recorded.items()}
+
+
+def outdated_settings(recording: Recording) -> list[str]:
+    recorded = recording.metadata.get("estimator_settings", {})
+    return [f"{name}.{k}" for name, settings in recorded.items() for k in settings if k not in setting_names(name)]
 
 
 def check_forced(filters, forced) -> None:
@@ -28,7 +36,12 @@ def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
     if filters is None:
         filters = recording.metadata.get("filters", DEFAULT_FILTERS)
     check_forced(filters, forced)
-    return Pipeline(filters, recorded_settings(recording), forced)
+    pipeline = Pipeline(filters, recorded_settings(recording), forced)
+    outdated = outdated_settings(recording)
+    if outdated:
+        pipeline.events.append({"t_host_ns": 0, "kind": "warning", "message": "recorded settings this version's "
+                                f"estimators no longer have, left out (their defaults apply): {', '.join(outdated)}"})
+    return pipeline
 
 
 def apply_event(pipeline: Pipeline, event: dict) -> None:

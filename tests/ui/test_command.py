@@ -36,7 +36,7 @@ def test_app_demo_streams_and_records(tmp_path):
         _, stderr = process.communicate(timeout=10)
     assert process.returncode == 0 and "Traceback" not in stderr
     recording = open_recording(next((tmp_path / "recordings").glob("*.gsrec")))
-    assert recording.closed_cleanly and sum(len(data) for _, data in recording.chunks()) > 15_000  # chunk sizes vary with load
+    assert recording.closed_cleanly and sum(len(data) for _, data in recording.chunks()) > 10_000  # some 2 s of the link
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="only X11/Wayland need a display variable")
