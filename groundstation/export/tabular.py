@@ -29,7 +29,10 @@ def write_csv(columns: dict, path, overwrite: bool = False) -> None:
         for start in range(0, len(values[0]) if values else 0, _CSV_ROWS_PER_WRITE):
             rows = zip(*(v[start : start + _CSV_ROWS_PER_WRITE].tolist() for v in values))
             # "%.10g" % nan is "nan", the only token that can contain those letters; pandas writes "".
-            out.write("".join(map(row_format.__mod__, rows)).replace("nan", ""))
+            text = "".join(map(row_format.__mod__, rows)).replace("nan", "")
+            if len(values) == 1:  # a lone empty field would be a blank line, which readers skip: quoted, as pandas does
+                text = "".join('""\n' if line == "\n" else line for line in text.splitlines(keepends=True))
+            out.write(text)
 
 
 def _csv_format(name: str, dtype: np.dtype) -> str:
