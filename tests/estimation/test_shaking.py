@@ -56,3 +56,11 @@ def test_fast_real_motion_does_not_wind_them_up(broad_dir, name):
     trial = read_csv(broad_dir / "21_undisturbed_fast_combined.csv.gz")
     figures = evaluate_trial(trial, [name])[name]
     assert figures["incl_rmse_deg"] < 12.0 and figures["incl_max_deg"] < 20.0, figures
+
+
+def test_hard_shaking_does_not_bias_the_accelerometer_correction(broad_dir):
+    """BROAD dev trial 16 (fast translation): skipping the accelerometer whenever its norm passed 3 g
+    dropped the large-norm half of every shake, so hf leaned toward the other half (12.4° RMS; 3.0°
+    without the gate). Rejection now judges a low-passed deviation, and is off by default."""
+    trial = read_csv(broad_dir / "16_undisturbed_fast_translation_B.csv.gz")
+    assert evaluate_trial(trial, ["hf"])["hf"]["incl_rmse_deg"] < 4.0
