@@ -14,7 +14,6 @@ the rows they arrived at, so export and evaluate treat it like any session.
 from __future__ import annotations
 
 import dataclasses
-import re
 
 import numpy as np
 
@@ -23,12 +22,11 @@ from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
-from groundstation.session.catalogue import TIME, Catalogue, Column, TableInfo, session_catalogue
+from groundstation.session.catalogue import Catalogue, message_table, session_catalogue
 from groundstation.session.data import SessionData
 from groundstation.session.pipeline import DEFAULT_FILTERS
 
 MAX_GAP_S = 1.0
-UNIT_SLUG = re.compile(r"[^A-Za-z0-9]+")  # "m/s" -> "m_s", "cdeg" stays
 FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
 
 
@@ -86,11 +84,10 @@ def catalogued(log: FlightLog, estimates: dict, diagnostics: dict) -> tuple[dict
     tables = {"imu": {c: imu.get(c, nan) for c in imu_info.column_names}}
     infos = {"imu": imu_info}
     for name, stream in log.tables.items():
-        units = log.units.get(name, {})
-        columns = {f: "_".join(filter(None, (f, UNIT_SLUG.sub("_", units.get(f, "").replace("%", "pct")).strip("_")))) for f in stream.columns}
-        key = name.lower()
-        infos[key] = TableInfo(key, f"{name} ({log.format})", (TIME, *(Column(c, units.get(f) or "1", f, 3) for f, c in columns.items())))
-        tables[key] = {"time_s": (stream.time_us - t_us[0]) / 1e6, **{c: stream.columns[f] for f, c in columns.items()}}
+        info = message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {}))
+        infos[info.name] = info
+        columns = zip(info.column_names[1:], stream.columns.values())
+        tables[info.name] = {"time_s": (stream.time_us - t_us[0]) / 1e6, **dict(columns)}
     return tables, Catalogue(infos)
 
 

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 from firmware_protocol.spec import SPEC, TIMESTAMP_FIELD, Field, FrameType, Spec
 
@@ -28,7 +29,7 @@ _UNIT_SHOWN = {"1": "", "enum": "enum", "bits": "bits", "index": "index", "uT": 
 # Tables whose export columns carry another prefix than the table's name (kept from earlier exports).
 EXPORT_PREFIX = {"mag_raw": "mag", "position": "fused"}
 # Frames whose tables belong to the link's health rather than to the sensors (the workbook's Link sheet).
-LINK_TABLES = ("status",)
+LINK_TABLES = ("status", "radio_status", "sys_status")  # the last two: a MAVLink session's (session/mavlink_front.py)
 # Frames decoded into a computed table instead of a table of their own.
 COMPUTED_FROM = {"IMU_RAW": "imu", "ATTITUDE": "onboard"}
 
@@ -96,6 +97,22 @@ def frame_table(frame_type: FrameType) -> TableInfo:
     fields = [f for f in frame_type.fields if f.name != TIMESTAMP_FIELD]
     return TableInfo(frame_type.name.lower(), frame_type.description, (TIME, *map(field_column, fields)),
                      frame_type.name, frame_type.has_timestamp)
+
+
+_UNIT_SLUG = re.compile(r"[^A-Za-z0-9]+")  # "m/s" -> "m_s", "cdeg" stays
+
+
+def message_table(name: str, label: str, fields, units: dict[str, str]) -> TableInfo:
+    """The table of a message of another protocol (an autopilot's MAVLink message, live or logged):
+    ``time_s``, then one column per field named ``<field>_<unit>`` with the unit its definition gives
+    (``m/s`` -> ``_m_s``, ``%`` -> ``_pct``; none -> the bare field name)."""
+
+    def column(field: str) -> Column:
+        unit = units.get(field) or ""
+        slug = _UNIT_SLUG.sub("_", unit.replace("%", "pct")).strip("_")
+        return Column(f"{field}_{slug}" if slug else field, unit or "1", field, 3)
+
+    return TableInfo(name.lower(), label, (TIME, *map(column, fields)))
 
 
 def _columns(*specs: tuple) -> tuple[Column, ...]:

@@ -37,8 +37,8 @@ def open_session(spec: str, *, filters=LIVE_FILTERS, settings: dict | None = Non
     source = open_source(spec, **defaults)
     if source.is_replay:
         return replay_session(source)
-    return LiveSession(source, Pipeline(filters, settings), record=record, recordings_dir=recordings_dir,
-                       metadata={"source_spec": spec})
+    pipeline = Pipeline(filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
+    return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata={"source_spec": spec})
 
 
 def replay_session(source: ReplaySource, filters=None, forced=None) -> LiveSession:

@@ -46,6 +46,7 @@ class LiveSession:
             recordings_dir if recordings_dir is not None else default_recordings_dir(),
             lambda: {  # each file's header has the settings in force when it starts
                 "source": source.description,
+                "protocol": self.pipeline.protocol,  # how a replay decodes the chunks
                 **(metadata or {}),
                 "filters": list(self.pipeline.filters),
                 "estimator_settings": self.pipeline.settings_json(),
@@ -58,8 +59,7 @@ class LiveSession:
 
     def start(self) -> LiveSession:
         self._thread.start()
-        if self.source.can_send:
-            self.send_command("request_config")  # the full scales, in case the start-up CONFIG was missed
+        self._request_config()  # the full scales, in case the start-up CONFIG was missed
         return self
 
     def stop(self) -> None:
@@ -105,7 +105,7 @@ class LiveSession:
                 self._take(chunk.t_host_ns, chunk.data)
             if self._config_wanted:  # a resumed recording needs a CONFIG frame of its own to replay
                 self._config_wanted = False
-                self.send_command("request_config")
+                self._request_config()
 
     def _take(self, t_host_ns: int, data: bytes) -> None:
         with self.lock:
@@ -114,6 +114,19 @@ class LiveSession:
                 self._schedule.apply_before(self.pipeline, t_host_ns)
             self.pipeline.feed(t_host_ns, data)
             self._last_chunk_ns = t_host_ns
+            uplink = self.pipeline.take_uplink()  # MAVLink stream-rate requests: nothing that arms or moves it
+        if uplink and self.source.can_send:
+            self._send(uplink)
+
+    def _request_config(self) -> None:
+        if self.source.can_send and self.pipeline.protocol == "gs":  # an autopilot gets stream requests instead
+            self.send_command("request_config")
+
+    def _send(self, data: bytes) -> None:
+        try:
+            self.source.write(data)
+        except SourceError as error:
+            self._note({"kind": "warning", "message": str(error)})
 
     def _reconnect(self, reason: str) -> bool:
         """Keep trying to reopen a port that went away; False when it cannot be reopened at all."""
@@ -129,7 +142,7 @@ class LiveSession:
                 continue
             self.connected = True
             self._note({"kind": "reconnected", "source": self.source.description})  # perhaps under a new name
-            self.send_command("request_config")
+            self._request_config()
             return True
         return False
 
@@ -147,16 +160,18 @@ class LiveSession:
             self.recorder.write_event(self._last_chunk_ns, self.pipeline.events[-1])
 
     def send_command(self, command: str, param: int = 0, value: float = 0.0) -> int:
-        """Send a COMMAND to the aircraft; returns its seq (the ACK carries it back)."""
+        """Send a COMMAND to the aircraft; returns its seq (the ACK carries it back). An autopilot on
+        MAVLink gets none (a warning event says so; returns -1): this project's commands are not its own."""
+        if self.pipeline.protocol != "gs":
+            self._note({"kind": "warning", "message": f"command {command} not sent: the aircraft speaks MAVLink, "
+                        "and this ground station sends an autopilot only stream-rate requests"})
+            return -1
         with self.lock:
             seq = self._uplink_seq
             self._uplink_seq = (seq + 1) & 0xFF
             frame = make_frame("COMMAND", seq, command=COMMANDS[command], param=param, value=value)
             self._note_locked({"kind": "command", "command": command, "param": param, "value": value, "seq": seq})
-        try:
-            self.source.write(encode(frame))
-        except SourceError as error:
-            self._note({"kind": "warning", "message": str(error)})
+        self._send(encode(frame))
         return seq
 
     def _note(self, event: dict) -> None:

@@ -15,6 +15,11 @@ position. ``CONFIG`` and ``ACK`` are events as well.
 Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames are held (up to
 ``HOLD_FOR_CONFIG_US`` of device time); after that the assumed ``SensorConfig`` is used and a
 warning event is recorded. A later ``CONFIG`` takes effect from its position in the stream.
+
+Two protocol front-ends turn bytes into the stages' input: the project's own frames (``GsFrontEnd``,
+the dispatcher above) and an autopilot's MAVLink (``session/mavlink_front.py``: records already in
+body axes and physical units, placed on the same ``SessionClock``). ``protocol`` picks one; the
+stages, the tables and the catalogue are the same.
 """
 
 from __future__ import annotations
@@ -30,10 +35,12 @@ from groundstation.session.catalogue import session_catalogue
 from groundstation.session.clock import SessionClock
 from groundstation.session.estimators import EstimatorBank
 from groundstation.session.link import LinkStats
+from groundstation.session.mavlink_front import MavlinkFrontEnd
 from groundstation.session.table import Table
 from groundstation.units import ACCEL_LSB_PER_G, GYRO_LSB_PER_DPS
 
 DEFAULT_FILTERS = ("ahf",)
+PROTOCOLS = ("gs", "mavlink")  # what a source speaks (``source.protocol``): the project's frames, an autopilot's MAVLink
 HOLD_FOR_CONFIG_US = 1_000_000
 _Q_SCALE = SPEC.frame("ATTITUDE").fields[1].scale
 _LAMBDA_SCALE = SPEC.frame("ATTITUDE").fields[5].scale
@@ -66,14 +73,18 @@ class Pipeline:
     """
 
     def __init__(self, filters=DEFAULT_FILTERS, settings=None, forced=None, assumed_sensor: SensorConfig | None = None,
-                 spec: Spec = SPEC):
+                 spec: Spec = SPEC, protocol: str = "gs"):
+        if protocol not in PROTOCOLS:
+            raise ValueError(f"unknown protocol {protocol!r} (known: {', '.join(PROTOCOLS)})")
+        self.protocol = protocol
         self.bank = EstimatorBank(filters, settings, forced)
         self.filters = self.bank.filters
         self.assumed_sensor = assumed_sensor or SensorConfig()
-        self.decoder = StreamDecoder(spec)
         self.clock = SessionClock()
         self.link = LinkStats()
-        self.catalogue = session_catalogue(self.bank.diagnostics(), spec)
+        self.front = GsFrontEnd(self, spec) if protocol == "gs" else MavlinkFrontEnd(self)
+        self.decoder = self.front.decoder  # ``decoder.stats``: the link's counters (firmware_protocol.DecoderStats)
+        self.catalogue = self.front.catalogue(session_catalogue(self.bank.diagnostics(), spec))
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
         self.imu, self.onboard = self.tables["imu"], self.tables["onboard"]
         self.aiding = Aiding()
@@ -86,7 +97,8 @@ class Pipeline:
         self._time_s = math.nan  # session time of the newest timestamped frame
         self._device_us = 0  # its device time, unwrapped within the clock's segment
         self._mag_m = folded(mounting.matrix(self.assumed_sensor.mounting), _MAG_SCALES)  # until CONFIG says
-        self._handlers = {t.id: self._frame_handler(t) for t in spec.frames if t.direction == "down"}
+        if protocol == "gs":  # the frame handlers write to the spec's tables, which a MAVLink session lacks
+            self._handlers = {t.id: self._frame_handler(t) for t in spec.frames if t.direction == "down"}
 
     @property
     def estimators(self):
@@ -98,19 +110,21 @@ class Pipeline:
         """Decode one chunk that arrived at ``t_host_ns``; returns the IMU samples it completed."""
         if self.t0_host_ns is None:
             self.t0_host_ns = t_host_ns
-        frames = self.decoder.feed(data, t_host_ns)
-        self.link.on_chunk(t_host_ns, self.decoder.stats, len(frames))
         before = len(self.imu)
-        handlers, clock = self._handlers, self.clock
-        for frame in frames:
-            t_us = frame[3]
-            if t_us is not None:
-                self._time_s = clock.place(t_host_ns, t_us)
-                if clock.event is not None:
-                    self._discontinuity(clock.event)
-                self._device_us = clock.device_us  # dt never spans a discontinuity
-            handlers[frame[0].id](t_host_ns, frame)
+        self.front.feed(t_host_ns, data)
         return len(self.imu) - before
+
+    def take_uplink(self) -> bytes:
+        """Bytes the front-end wants sent to the aircraft now (MAVLink stream-rate requests; else none)."""
+        return self.front.take_uplink()
+
+    def place(self, t_host_ns: int, t_us: int) -> None:
+        """A device timestamp on the session clock: sets the session time of what follows."""
+        clock = self.clock
+        self._time_s = clock.place(t_host_ns, t_us)
+        if clock.event is not None:
+            self._discontinuity(clock.event)
+        self._device_us = clock.device_us  # dt never spans a discontinuity
 
     def change_settings(self, name: str, overrides: dict[str, float], t_host_ns: int = 0) -> None:
         """Change an estimator's settings from this point of the stream, keeping its attitude."""
@@ -148,7 +162,7 @@ class Pipeline:
         self.config = frame.values
         self.tables["config"].append(self._row(frame, self._value_scales(frame[0])))
         self.events.append({"t_host_ns": t_host_ns, "kind": "config", **self.config})
-        if self.decoder.schema_matches is False:
+        if self.front.decoder.schema_matches is False:
             self._warn(t_host_ns, "the firmware was built from another protocol spec (schema fingerprint "
                        f"0x{frame['schema_fingerprint']:08X}); its frames may be mis-decoded")
         try:
@@ -198,9 +212,15 @@ class Pipeline:
         (g0, g1, g2), (g3, g4, g5), (g6, g7, g8) = self._gyr_m
         acc = (a0 * cx + a1 * cy + a2 * cz, a3 * cx + a4 * cy + a5 * cz, a6 * cx + a7 * cy + a8 * cz)
         gyr = (g0 * rx + g1 * ry + g2 * rz, g3 * rx + g4 * ry + g5 * rz, g6 * rx + g7 * ry + g8 * rz)
-        dt_s = 1.0 / self.sensor.rate_hz if self._last_us is None else (t_us - self._last_us) * 1e-6
+        self.imu_stage(t_host_ns, time_s, t_us, acc, gyr, temperature * 0.01, 1.0 / self.sensor.rate_hz)
+
+    def imu_stage(self, t_host_ns: int, time_s: float, t_us: int, acc: tuple, gyr: tuple, temperature_c: float,
+                  first_dt_s: float) -> None:
+        """One IMU sample in body axes (g, rad/s) through the estimators into ``imu``; ``dt`` from the
+        device times, ``first_dt_s`` for the first sample of a segment."""
+        dt_s = first_dt_s if self._last_us is None else (t_us - self._last_us) * 1e-6
         self._last_us = t_us
-        row = [time_s, t_us, (t_host_ns - self.t0_host_ns) * 1e-9, *acc, *gyr, temperature * 0.01]
+        row = [time_s, t_us, (t_host_ns - self.t0_host_ns) * 1e-9, *acc, *gyr, temperature_c]
         mag, gps = self.aiding.take_for_estimators()
         row += self.bank.step(gyr, acc, dt_s, mag, gps)
         self.imu.append(row)
@@ -212,28 +232,42 @@ class Pipeline:
         self.link.on_sample(t_host_ns, t_us)
 
     def _magnetometer(self, t_host_ns: int, frame: Frame) -> None:
-        """Table row with the compass heading from the first estimator's tilt; the body-axis field for the estimators."""
         _, mx, my, mz = frame[2]
         (m0, m1, m2), (m3, m4, m5), (m6, m7, m8) = self._mag_m
         body = (m0 * mx + m1 * my + m2 * mz, m3 * mx + m4 * my + m5 * mz, m6 * mx + m7 * my + m8 * mz)
-        heading = self.aiding.magnetometer(body, self.bank.first_q())
         sx, sy, sz = _MAG_SCALES
-        self.tables["mag_raw"].append((self._time_s, mx * sx, my * sy, mz * sz, heading))
+        self.magnetometer_stage(body, (mx * sx, my * sy, mz * sz))
+
+    def magnetometer_stage(self, body_ut: tuple, shown_ut: tuple) -> None:
+        """Table row (``shown_ut``: the sensor's axes) with the compass heading from the first estimator's
+        tilt; the body-axis field for the estimators."""
+        heading = self.aiding.magnetometer(body_ut, self.bank.first_q())
+        self.tables["mag_raw"].append((self._time_s, *shown_ut, heading))
 
     def _barometer(self, t_host_ns: int, frame: Frame) -> None:
         row = self._row(frame, self._value_scales(frame[0]))
-        self.tables["baro"].append(row)
-        self.aiding.barometer(row[1])
+        self.barometer_stage(*row[1:])
+
+    def barometer_stage(self, pressure_pa: float, temperature_c: float) -> None:
+        self.tables["baro"].append((self._time_s, pressure_pa, temperature_c))
+        self.aiding.barometer(pressure_pa)
 
     def _gps(self, t_host_ns: int, frame: Frame) -> None:
-        values = frame.scaled()
+        self.gps_stage(frame.scaled())
+
+    def gps_stage(self, values: dict) -> None:
+        """A GPS reading as the GPS frame's physical values (``lat``, ``lon``, ``alt``, ``vel_n`` ...)."""
         self.tables["gps"].append([self._time_s, *list(values.values())[1:]])
         self.aiding.gps(values)
 
     def _attitude(self, t_host_ns: int, frame: Frame) -> None:
         _, qw, qx, qy, qz, lam, flags = frame[2]
         s = _Q_SCALE
-        self.onboard.append((self._time_s, self._device_us, qw * s, qx * s, qy * s, qz * s, lam * _LAMBDA_SCALE, flags))
+        self.onboard_stage((qw * s, qx * s, qy * s, qz * s), lam * _LAMBDA_SCALE, flags)
+
+    def onboard_stage(self, q: tuple, lam: float, flags: float) -> None:
+        """The aircraft's own attitude (w-first, body -> NED) at the current session time."""
+        self.onboard.append((self._time_s, self._device_us, *q, lam, flags))
 
     def _discontinuity(self, event: dict) -> None:
         """The device clock restarted or jumped: record it, start the estimators over, break every table."""
@@ -249,3 +283,31 @@ class Pipeline:
 
     def _warn(self, t_host_ns: int, message: str) -> None:
         self.events.append({"t_host_ns": t_host_ns, "kind": "warning", "message": message})
+
+
+class GsFrontEnd:
+    """The project's own frames (``firmware_protocol``): each timestamped frame on the session clock,
+    then the pipeline's handler for its type."""
+
+    def __init__(self, pipeline: Pipeline, spec: Spec):
+        self.pipeline = pipeline
+        self.decoder = StreamDecoder(spec)
+
+    @staticmethod
+    def catalogue(catalogue):
+        return catalogue
+
+    def feed(self, t_host_ns: int, data: bytes) -> None:
+        p = self.pipeline
+        frames = self.decoder.feed(data, t_host_ns)
+        p.link.on_chunk(t_host_ns, self.decoder.stats, len(frames))
+        handlers = p._handlers
+        for frame in frames:
+            if frame[3] is not None:
+                p.place(t_host_ns, frame[3])
+            handlers[frame[0].id](t_host_ns, frame)
+
+    @staticmethod
+    def take_uplink() -> bytes:
+        return b""  # the live session sends this protocol's commands itself
+

@@ -7,7 +7,7 @@ from collections.abc import Callable
 from groundstation.errors import UserError
 from groundstation.estimation import setting_names
 from groundstation.recording import Recording
-from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
+from groundstation.session.pipeline import DEFAULT_FILTERS, PROTOCOLS, Pipeline
 
 
 def recorded_settings(recording: Recording) -> dict[str, dict[str, float]]:
@@ -32,11 +32,15 @@ def check_forced(filters, forced) -> None:
 
 
 def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
-    """A pipeline set up as the recorded session was (estimators and settings), plus ``forced``."""
+    """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``."""
     if filters is None:
         filters = recording.metadata.get("filters", DEFAULT_FILTERS)
     check_forced(filters, forced)
-    pipeline = Pipeline(filters, recorded_settings(recording), forced)
+    protocol = recording.metadata.get("protocol", "gs")  # recordings from before MAVLink: the project's frames
+    if protocol not in PROTOCOLS:
+        raise UserError(f"{recording.path}: recorded from a {protocol!r} link, which this version cannot decode "
+                        f"(it knows {', '.join(PROTOCOLS)})")
+    pipeline = Pipeline(filters, recorded_settings(recording), forced, protocol=protocol)
     outdated = outdated_settings(recording)
     if outdated:
         pipeline.events.append({"t_host_ns": 0, "kind": "warning", "message": "recorded settings this version's "

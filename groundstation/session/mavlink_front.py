@@ -1,0 +1,202 @@
+"""The pipeline's MAVLink front-end: an autopilot's bytes into the session's stages and tables.
+
+``MavlinkDecoder`` (groundstation/autopilot) gives records already in this project's units and body
+axes (FRD). They go where the project's own frames go:
+
+- ``ImuSample`` -> the IMU stage (the same ``EstimatorBank``, table ``imu``), ``dt`` from the
+  autopilot's ``time_us``; only the first IMU stream of the vehicle (``RAW_IMU``, or ``HIGHRES_IMU``...)
+  feeds the estimators, a second one (``SCALED_IMU2``) gets a table of its own;
+- ``OnboardAttitude`` -> ``onboard`` (no λ or flags: NaN);
+- ``MagReading`` / ``BaroReading`` / ``GpsReading`` -> ``mag_raw`` / ``baro`` / ``gps`` and Aiding
+  (GPS velocity aids only when all three NED components are known: GPS_RAW_INT has no vertical speed);
+- ``VehicleStatus`` / ``Battery`` / ``LinkHealth`` -> ``heartbeat`` / ``sys_status`` / ``radio_status``
+  (the mode and arming are events when they change);
+- ``GenericMessage`` -> one table per message type, added to the catalogue when the first one
+  arrives (a message from another system than the vehicle: ``<type>_<system>_<component>``).
+
+Time: the vehicle's timestamps (µs since boot) of IMU, attitude, magnetometer and barometer go through
+the session's ``SessionClock``, so an autopilot reboot is a ``device_reset`` as for the project's
+aircraft. GPS and generic messages take the current session time: their ``time_usec`` is often GPS or
+UNIX time, not time since boot. The vehicle is the first system whose HEARTBEAT says ArduPilot or
+PX4 (or, before any, the first to send an IMU sample or attitude).
+
+Uplink: ``StreamRequester``'s stream-rate requests only (``take_uplink``); when the IMU is still
+slower than host filtering needs ``SLOW_WARNING_S`` after the first request, a warning event
+(``slow_imu_note``) — in the pipeline's events, so a replay shows it at the same point.
+"""
+
+from __future__ import annotations
+
+import math
+
+from firmware_protocol import DecoderStats
+from groundstation.autopilot import records as rec
+from groundstation.autopilot.decoder import MavlinkDecoder
+from groundstation.autopilot.streams import AUTOPILOTS, StreamRequester, slow_imu_note
+from groundstation.session.catalogue import Catalogue, message_table
+from groundstation.session.table import Table
+
+REQUESTED_RATE_HZ = 50.0
+SLOW_WARNING_S = 5.0  # the requester's retry interval: one retry's chance before the warning
+KEPT_TABLES = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the project's tables a MAVLink session fills
+_NAN = math.nan
+# The mapped records' tables: name, label, and per record attribute its column's field and unit.
+RECORD_TABLES = {
+    rec.VehicleStatus: ("heartbeat", "HEARTBEAT: what the vehicle is and does",
+                        {"autopilot": ("autopilot", ""), "vehicle_type": ("vehicle_type", ""), "armed": ("armed", ""),
+                         "system_status": ("system_status", "")}),
+    rec.Battery: ("sys_status", "SYS_STATUS: battery and the autopilot's view of the link",
+                  {"voltage_v": ("voltage", "V"), "current_a": ("current", "A"), "remaining_pct": ("remaining", "%"),
+                   "drop_rate_comm_pct": ("drop_rate_comm", "%"), "errors_comm": ("errors_comm", "")}),
+    rec.LinkHealth: ("radio_status", "RADIO_STATUS: both radios' signal (SiK units)",
+                     {"rssi": ("rssi", ""), "remote_rssi": ("remote_rssi", ""), "noise": ("noise", ""),
+                      "remote_noise": ("remote_noise", ""), "rx_errors": ("rx_errors", ""), "fixed": ("fixed", ""),
+                      "tx_buffer_pct": ("tx_buffer", "%")}),
+}  # fmt: skip
+IMU_UNITS = {"acc_x": "g", "acc_y": "g", "acc_z": "g", "gyr_x": "rad/s", "gyr_y": "rad/s", "gyr_z": "rad/s"}
+
+
+class MavlinkFrontEnd:
+    def __init__(self, pipeline, rate_hz: float = REQUESTED_RATE_HZ):
+        self.pipeline = pipeline
+        self.mavlink = MavlinkDecoder()
+        self.decoder = self  # the pipeline's ``decoder``: ``stats`` in the project's counters
+        self.stats = DecoderStats()
+        self.requester = StreamRequester(rate_hz)
+        self.vehicle: int | None = None  # MAVLink system id of the autopilot
+        self._imu_source: str | None = None
+        self._uplink = b""
+        self._first_request_ns: int | None = None
+        self._slow_warned = False
+        self._status: tuple | None = None  # (mode, armed) last seen
+        self._route = {rec.ImuSample: self._imu, rec.OnboardAttitude: self._attitude, rec.MagReading: self._mag,
+                       rec.BaroReading: self._baro, rec.GpsReading: self._gps, rec.GenericMessage: self._generic,
+                       rec.VehicleStatus: self._vehicle_status, rec.Battery: self._record_row, rec.LinkHealth: self._record_row}  # fmt: skip
+
+    @staticmethod
+    def catalogue(catalogue: Catalogue) -> Catalogue:
+        """The project's tables a MAVLink session fills, and the tables of the mapped records."""
+        tables = {name: catalogue[name] for name in KEPT_TABLES}
+        for name, label, columns in RECORD_TABLES.values():
+            tables[name] = message_table(name, label, *_fields_units(columns))
+        return Catalogue(tables)
+
+    def feed(self, t_host_ns: int, data: bytes) -> None:
+        records = self.mavlink.feed(data, t_host_ns)
+        self._count()
+        self.pipeline.link.on_chunk(t_host_ns, self.stats, len(records))
+        for record in records:
+            self._route[type(record)](t_host_ns, record)
+        uplink = self.requester.update(records, t_host_ns)
+        if uplink:
+            self._uplink += uplink
+            self._first_request_ns = self._first_request_ns or t_host_ns
+        self._check_rate(t_host_ns)
+
+    def take_uplink(self) -> bytes:
+        uplink, self._uplink = self._uplink, b""
+        return uplink
+
+    def _count(self) -> None:
+        """The MAVLink decoder's counters as the project's link counters (``LinkStats``, the link panel)."""
+        m, s = self.mavlink.stats, self.stats
+        s.bytes_in, s.frames, s.bytes_skipped = m.bytes_in, m.messages, m.bad_bytes
+        s.crc_errors = m.bad_runs  # runs of bytes that were no valid message: CRC failures and junk
+        s.frame_bytes = m.bytes_in - m.bad_bytes
+        s.frames_lost = sum(c.lost for c in self.mavlink.senders.values())
+
+    def _check_rate(self, t_host_ns: int) -> None:
+        monitor = self.requester.monitors.get(self.vehicle)
+        if monitor is None or self._first_request_ns is None:
+            return
+        note = slow_imu_note(monitor.rate_hz)
+        if note is None:
+            self._slow_warned = False
+        elif not self._slow_warned and t_host_ns - self._first_request_ns >= SLOW_WARNING_S * 1e9:
+            self._slow_warned = True
+            self.pipeline._warn(t_host_ns, note)
+
+    # -- records ----------------------------------------------------------------------------------
+
+    def _from_vehicle(self, record, may_choose: bool = False) -> bool:
+        """Whether ``record`` comes from the vehicle (an IMU sample or attitude chooses it if no HEARTBEAT did)."""
+        if self.vehicle is None and may_choose:
+            self.vehicle = record.system
+        return record.system == self.vehicle
+
+    def _place(self, t_host_ns: int, record) -> None:
+        if record.time_us is not None:
+            self.pipeline.place(t_host_ns, record.time_us)
+
+    def _imu(self, t_host_ns: int, r: rec.ImuSample) -> None:
+        if not self._from_vehicle(r, may_choose=True) or self._imu_source not in (None, r.source):
+            label = f"{r.source} of system {r.system} (not the IMU the estimators use)"
+            self._table_row(f"{r.source}_{r.system}".lower(), label, list(IMU_UNITS), IMU_UNITS, (*r.acc_g, *r.gyr_rad_s))
+            return
+        self._imu_source = r.source
+        p = self.pipeline
+        self._place(t_host_ns, r)
+        p.imu_stage(t_host_ns, p._time_s, p._device_us, r.acc_g, r.gyr_rad_s, r.temperature_c, 1.0 / self.requester.rate_hz)
+
+    def _attitude(self, t_host_ns: int, r: rec.OnboardAttitude) -> None:
+        if self._from_vehicle(r, may_choose=True):
+            self._place(t_host_ns, r)
+            self.pipeline.onboard_stage(r.q, _NAN, _NAN)
+
+    def _mag(self, t_host_ns: int, r: rec.MagReading) -> None:
+        if self._from_vehicle(r):
+            self._place(t_host_ns, r)
+            self.pipeline.magnetometer_stage(r.mag_uT, r.mag_uT)  # already body axes
+
+    def _baro(self, t_host_ns: int, r: rec.BaroReading) -> None:
+        if self._from_vehicle(r):
+            self._place(t_host_ns, r)
+            self.pipeline.barometer_stage(r.pressure_hpa * 100.0, r.temperature_c)
+
+    def _gps(self, t_host_ns: int, r: rec.GpsReading) -> None:
+        if not self._from_vehicle(r):
+            return
+        velocity = (r.vel_n_m_s, r.vel_e_m_s, r.vel_d_m_s)
+        values = {"time_us": r.time_us, "lat": r.lat_deg, "lon": r.lon_deg, "alt": r.alt_m, "vel_n": r.vel_n_m_s,
+                  "vel_e": r.vel_e_m_s, "vel_d": r.vel_d_m_s, "heading": _NAN, "fix_type": r.fix_type,
+                  "satellites": r.satellites}  # fmt: skip
+        if all(map(math.isfinite, velocity)):
+            self.pipeline.gps_stage(values)
+        else:  # no aiding from an incomplete velocity: the row only
+            self.pipeline.tables["gps"].append([self.pipeline._time_s, *list(values.values())[1:]])
+
+    def _vehicle_status(self, t_host_ns: int, r: rec.VehicleStatus) -> None:
+        if self.vehicle is None and r.autopilot in AUTOPILOTS:
+            self.vehicle = r.system
+        if r.system != self.vehicle:
+            return
+        self._record_row(t_host_ns, r)
+        if (r.mode, r.armed) != self._status:
+            self._status = (r.mode, r.armed)
+            self.pipeline.events.append({"t_host_ns": t_host_ns, "kind": "vehicle_status", "mode": r.mode, "armed": r.armed})
+
+    def _record_row(self, t_host_ns: int, r) -> None:
+        name, label, columns = RECORD_TABLES[type(r)]
+        self._table_row(name, label, *_fields_units(columns), tuple(float(getattr(r, a)) for a in columns))
+
+    def _generic(self, t_host_ns: int, r: rec.GenericMessage) -> None:
+        name = r.msg_type if self.vehicle in (None, r.system) else f"{r.msg_type}_{r.system}_{r.component}"
+        self._table_row(name.lower(), f"MAVLink {r.msg_type} from system {r.system}", list(r.fields), r.units,
+                        tuple(r.fields.values()))
+
+    def _table_row(self, name: str, label: str, fields: list, units: dict, values: tuple) -> None:
+        """A row of table ``name``, catalogued on its first row (copy on write: readers in other threads
+        keep a consistent catalogue and table dictionary)."""
+        p = self.pipeline
+        table = p.tables.get(name)
+        if table is None:
+            info = message_table(name, label, fields, units)
+            p.catalogue = Catalogue({**p.catalogue.tables, name: info})
+            table = Table(info.column_names)
+            p.tables = {**p.tables, name: table}
+        table.append((p._time_s, *values))
+
+
+def _fields_units(columns: dict) -> tuple[list, dict]:
+    fields = [field for field, _ in columns.values()]
+    return fields, {field: unit for field, unit in columns.values() if unit}
