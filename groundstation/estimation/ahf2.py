@@ -53,6 +53,7 @@ import math
 from typing import NamedTuple
 
 from groundstation.estimation.base import CommonSettings, Estimator
+from groundstation.estimation.tilt import quaternion_product
 
 _new_tuple = tuple.__new__
 
@@ -83,17 +84,6 @@ class Ahf2Diagnostics(NamedTuple):
     bias_x_rad_s: float
     bias_y_rad_s: float
     bias_z_rad_s: float
-
-
-def _mul(p, q):
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
-    return (
-        pw * qw - px * qx - py * qy - pz * qz,
-        pw * qx + px * qw + py * qz - pz * qy,
-        pw * qy - px * qz + py * qw + pz * qx,
-        pw * qz + px * qy - py * qx + pz * qw,
-    )
 
 
 def _rotate(q, x, y, z):
@@ -138,7 +128,7 @@ class Ahf2(Estimator):
         if rate > 0.0:
             half = 0.5 * rate * dt_s
             k = math.sin(half) / rate
-            q1, q2, q3, q4 = _mul(q_g, (math.cos(half), wx * k, wy * k, wz * k))
+            q1, q2, q3, q4 = quaternion_product(q_g, (math.cos(half), wx * k, wy * k, wz * k))
             r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
             q_g = self._q_g = (q1 * r, q2 * r, q3 * r, q4 * r)
         q_c = self._q_c
@@ -172,17 +162,17 @@ class Ahf2(Estimator):
                 delta = min(phi, lam * dt_s)
                 ux, uy = -ey / horiz, ex / horiz  # a_E × (0, 0, -1), normalised
                 sh = math.sin(0.5 * delta)
-                q_c = self._q_c = _mul((math.cos(0.5 * delta), ux * sh, uy * sh, 0.0), q_c)
+                q_c = self._q_c = quaternion_product((math.cos(0.5 * delta), ux * sh, uy * sh, 0.0), q_c)
                 # 7. bias in motion: the correction rate in body axes drives the integral
                 if s.motion_bias_ki > 0.0 and not self._rest:
-                    q = _mul(q_c, q_g)
+                    q = quaternion_product(q_c, q_g)
                     cx, cy, cz = _rotate((q[0], -q[1], -q[2], -q[3]), ux * delta, uy * delta, 0.0)
                     ki, m = s.motion_bias_ki, s.bias_max_rad_s
                     bx = min(max(bx - ki * cx, -m), m)
                     by = min(max(by - ki * cy, -m), m)
                     bz = min(max(bz - ki * cz, -m), m)
                     self._bias = (bx, by, bz)
-        self._q = _mul(q_c, q_g)
+        self._q = quaternion_product(q_c, q_g)
         return self._q, _new_tuple(Ahf2Diagnostics, (status, self._lam, self._e_a, self._rest, *self._bias))
 
     def _detect_rest(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s):

@@ -1,4 +1,4 @@
-"""Scalar helpers for the Euler-angle filters (cf1, kf) and for initialisation from gravity.
+"""Scalar helpers for the per-sample filters: Euler angles (cf1, kf), initialisation from gravity, products.
 
 Body axes FRD, earth NED, ZYX Euler angles (docs/conventions.md). Per-sample code, so plain ``math``.
 """
@@ -53,3 +53,15 @@ def quaternion_of(yaw_rad, pitch_rad, roll_rad):
     cp, sp = math.cos(0.5 * pitch_rad), math.sin(0.5 * pitch_rad)
     cr, sr = math.cos(0.5 * roll_rad), math.sin(0.5 * roll_rad)
     return (cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr, cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr)
+
+
+def quaternion_product(p, q):
+    """``p ⊗ q`` (Hamilton, w first) as a tuple: ``quaternion.multiply`` for one sample on plain floats."""
+    pw, px, py, pz = p
+    qw, qx, qy, qz = q
+    return (
+        pw * qw - px * qx - py * qy - pz * qz,
+        pw * qx + px * qw + py * qz - pz * qy,
+        pw * qy - px * qz + py * qw + pz * qx,
+        pw * qz + px * qy - py * qx + pz * qw,
+    )

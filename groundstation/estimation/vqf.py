@@ -35,6 +35,7 @@ import vqf as vqf_package
 
 from groundstation import quaternion
 from groundstation.estimation.base import INITIALISED, CommonSettings, Estimator
+from groundstation.estimation.tilt import quaternion_product
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 _H = math.sqrt(0.5)
@@ -60,17 +61,6 @@ class VqfDiagnostics(NamedTuple):
     bias_z_rad_s: float
     bias_std_rad_s: float  # its uncertainty
     mag_disturbed: float  # 1.0 when the magnetometer is judged disturbed (no reading: 0)
-
-
-def _multiply(p, q):
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
-    return (
-        pw * qw - px * qx - py * qy - pz * qz,
-        pw * qx + px * qw + py * qz - pz * qy,
-        pw * qy - px * qz + py * qw + pz * qx,
-        pw * qz + px * qy - py * qx + pz * qw,
-    )
 
 
 class Vqf(Estimator):
@@ -127,7 +117,7 @@ class Vqf(Estimator):
             self._mag_seen = True
             f.updateMag(np.array(mag, dtype=float))
         q_vqf = f.getQuat9D() if self._mag_seen else f.getQuat6D()
-        self._q = _multiply(self._frame(), q_vqf.tolist())
+        self._q = quaternion_product(self._frame(), q_vqf.tolist())
         bias, bias_std = f.getBiasEstimate()
         self._diag = (float(f.getRestDetected()), *bias.tolist(), float(bias_std), float(f.getMagDistDetected()))
         return self._q, VqfDiagnostics(status, *self._diag)

@@ -3,7 +3,7 @@
 import numpy as np
 
 from groundstation import quaternion
-from groundstation.estimation.tilt import euler_of, quaternion_of
+from groundstation.estimation.tilt import euler_of, quaternion_of, quaternion_product
 
 
 def test_scalar_euler_helpers_equal_the_quaternion_module():
@@ -13,3 +13,10 @@ def test_scalar_euler_helpers_equal_the_quaternion_module():
     ypr = quaternion.to_euler_zyx(q)
     np.testing.assert_allclose([euler_of(tuple(r)) for r in q.tolist()], ypr, atol=1e-12)
     np.testing.assert_allclose([quaternion_of(*r) for r in ypr.tolist()], quaternion.from_euler_zyx(*ypr.T), atol=1e-12)
+
+
+def test_quaternion_product_is_the_array_product():
+    rng = np.random.default_rng(3)
+    p, q = rng.normal(size=(2, 200, 4))
+    got = np.array([quaternion_product(tuple(a), tuple(b)) for a, b in zip(p.tolist(), q.tolist())])
+    np.testing.assert_allclose(got, quaternion.multiply(p, q), rtol=0, atol=1e-12)
