@@ -15,7 +15,7 @@ from groundstation.recording import Recording
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
-from groundstation.sources import ReplaySource, open_source
+from groundstation.sources import ReplaySource, SourceError, open_source
 
 # The comparison estimators run on every live session (and so on its recording's replays), so showing one is a legend click or
 # a check box, not a restart: the IMU filters (HF, ECF), those with the magnetometer (HF+mag, ECF+mag,
@@ -36,6 +36,10 @@ def open_session(spec: str, *, filters=LIVE_FILTERS, settings: dict | None = Non
     """
     source = open_source(spec, **defaults)
     if source.is_replay:
+        if not isinstance(source, ReplaySource):  # mavlink:FILE.tlog: no recording to pace, seek and re-run
+            source.close()
+            raise SourceError(f"{spec}: groundstation export and evaluate read a .tlog; "
+                              "the app does not open flight logs yet")
         return replay_session(source)
     pipeline = Pipeline(filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
     return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata={"source_spec": spec})

@@ -109,6 +109,9 @@ def parse_spec(text: str, **defaults) -> Spec:
     if COM_PORT.match(target) or _is_device(target):
         return Spec(text, "serial", target, _query(text, query), defaults)
     if os.path.isfile(target):
+        if os.path.splitext(target)[1].lower() in (".tlog", ".bin", ".ulg"):
+            raise SourceError(f"{target} is an autopilot's flight log: groundstation export and evaluate read it "
+                              "(CSV, Parquet, the workbook, every estimator); the app and replay do not open flight logs yet")
         return Spec(text, "recording", target, _query(text, query), defaults)
     if os.path.isdir(target):
         raise SourceError(f"{target} is a folder; give a recording file (.gsrec) or a port")
