@@ -7,8 +7,10 @@ rows, with at most one growing chunk of slack; a column is read without copying 
 and ``extend`` adds a whole array of rows at once (the batch path).
 
 One writer thread may append while other threads read: the blocks and the growing chunk are
-published together as one tuple, and each append and each copy holds the GIL, so a reader sees
-whole rows, in order.
+published together as one tuple, and each append and each slice of the growing chunk holds the GIL,
+so a reader sees whole rows, in order. Readers copy the growing chunk by slicing it (a C copy) and
+never take a buffer on it: while a buffer is exported the array cannot grow, and ``append`` in the
+reader thread would raise BufferError.
 """
 
 from __future__ import annotations
@@ -58,7 +60,7 @@ class Table:
     def _parts(self) -> list[np.ndarray]:
         """The blocks and a copy of the growing chunk, a consistent snapshot."""
         blocks, growing = self._state
-        return [*blocks, np.array(growing, dtype=float).reshape(-1, self._width)]
+        return [*blocks, np.frombuffer(growing[:], dtype=float).reshape(-1, self._width)]
 
     def array(self) -> np.ndarray:
         """All rows as an (N, len(columns)) float64 array (a copy)."""
@@ -68,7 +70,7 @@ class Table:
         """The newest ``rows`` rows (fewer if the table is shorter), as a copy."""
         blocks, growing = self._state
         n = min(rows, len(growing) // self._width) * self._width
-        newest = [np.array(growing[len(growing) - n :], dtype=float).reshape(-1, self._width)]
+        newest = [np.frombuffer(growing[len(growing) - n :], dtype=float).reshape(-1, self._width)]
         have = n // self._width
         for block in reversed(blocks):
             if have >= rows:

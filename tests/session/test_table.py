@@ -92,3 +92,26 @@ def test_reader_thread_sees_whole_rows_in_order_while_a_writer_appends():
     done.set()
     reader.join()
     assert not bad and len(table) == 20_000
+
+
+def test_a_reader_copying_a_large_growing_chunk_never_stops_the_writer():
+    """The live view copies the tables while the reader thread appends: a copy that held the growing
+    chunk's buffer made ``append`` raise BufferError, which ended the reader thread (decoding stopped)."""
+    table = Table([f"c{i}" for i in range(100)], chunk_rows=200_000)  # the imu table with ten estimators is ~100 wide
+    done = threading.Event()
+
+    def read():
+        while not done.is_set():
+            table.array()
+            table.column("c0")
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    try:
+        row = tuple(range(100))
+        for _ in range(30_000):
+            table.append(row)
+    finally:
+        done.set()
+        reader.join()
+    assert len(table) == 30_000
