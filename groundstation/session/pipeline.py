@@ -98,6 +98,8 @@ class Pipeline:
         self._device_us = 0  # its device time, unwrapped within the clock's segment
         self._mag_m = folded(mounting.matrix(self.assumed_sensor.mounting), _MAG_SCALES)  # until CONFIG says
         if protocol == "gs":  # the frame handlers write to the spec's tables, which a MAVLink session lacks
+            # Each frame type's value scales (timestamp excluded), looked up once: rows are value x scale.
+            self._scales = {t.id: tuple(f.scale for f in t.fields[1 if t.has_timestamp else 0 :]) for t in spec.frames}
             self._handlers = {t.id: self._frame_handler(t) for t in spec.frames if t.direction == "down"}
 
     @property
@@ -146,21 +148,16 @@ class Pipeline:
         if special is not None:
             return special
         table = self.tables[frame_type.name.lower()]
-        scales = self._value_scales(frame_type)
-        return lambda t_host_ns, frame: table.append(self._row(frame, scales))
+        return lambda t_host_ns, frame: table.append(self._row(frame))
 
-    @staticmethod
-    def _value_scales(frame_type) -> tuple[float, ...]:
-        return tuple(f.scale for f in frame_type.fields[1 if frame_type.has_timestamp else 0 :])
-
-    def _row(self, frame: Frame, scales: tuple[float, ...]) -> list[float]:
+    def _row(self, frame: Frame) -> list[float]:
         """Session time, then the frame's values (timestamp excluded) in physical units."""
         raw = frame[2][1:] if frame[3] is not None else frame[2]
-        return [self._time_s, *(r * s for r, s in zip(raw, scales))]
+        return [self._time_s, *(r * s for r, s in zip(raw, self._scales[frame[0].id]))]
 
     def _config(self, t_host_ns: int, frame: Frame) -> None:
         self.config = frame.values
-        self.tables["config"].append(self._row(frame, self._value_scales(frame[0])))
+        self.tables["config"].append(self._row(frame))
         self.events.append({"t_host_ns": t_host_ns, "kind": "config", **self.config})
         if self.front.decoder.schema_matches is False:
             self._warn(t_host_ns, "the firmware was built from another protocol spec (schema fingerprint "
@@ -175,7 +172,7 @@ class Pipeline:
 
     def _ack(self, t_host_ns: int, frame: Frame) -> None:
         """The aircraft's answer to a COMMAND (``LiveSession.send_command``)."""
-        self.tables["ack"].append(self._row(frame, self._value_scales(frame[0])))
+        self.tables["ack"].append(self._row(frame))
         self.events.append({"t_host_ns": t_host_ns, "kind": "ack", **frame.values})
 
     def _use_sensor(self, sensor: SensorConfig) -> None:
@@ -245,7 +242,7 @@ class Pipeline:
         self.tables["mag_raw"].append((self._time_s, *shown_ut, heading))
 
     def _barometer(self, t_host_ns: int, frame: Frame) -> None:
-        row = self._row(frame, self._value_scales(frame[0]))
+        row = self._row(frame)
         self.barometer_stage(*row[1:])
 
     def barometer_stage(self, pressure_pa: float, temperature_c: float) -> None:

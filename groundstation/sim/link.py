@@ -90,6 +90,33 @@ class Chunk:
     t_us: tuple[int, ...]  # device timestamps of the intact frames in ``data`` (for latency)
 
 
+class InFlight:
+    """Chunks the link has carried that have not reached the host's port yet, in arrival order."""
+
+    def __init__(self) -> None:
+        self._chunks: list[Chunk] = []
+
+    def add(self, chunks: list[Chunk]) -> None:
+        self._chunks += chunks
+
+    def due(self, t_s: float) -> list[Chunk]:
+        """The chunks at the host's port by simulated time ``t_s``, in order."""
+        n = 0
+        while n < len(self._chunks) and self._chunks[n].t_s <= t_s:
+            n += 1
+        due, self._chunks = self._chunks[:n], self._chunks[n:]
+        return due
+
+    def flush(self) -> list[Chunk]:
+        """Every chunk still in flight (for the end of a recording: everything sent arrives)."""
+        due, self._chunks = self._chunks, []
+        return due
+
+    def next_arrival_s(self, otherwise_s: float) -> float:
+        """When the next chunk arrives, or ``otherwise_s`` if sooner (or none is in flight)."""
+        return min(otherwise_s, self._chunks[0].t_s) if self._chunks else otherwise_s
+
+
 class Link:
     def __init__(self, settings: LinkSettings = LinkSettings(), seed: int = 0):
         self.settings = s = settings

@@ -30,7 +30,7 @@ from groundstation.autopilot.decoder import new_parser
 from groundstation.autopilot.streams import pack_next
 from groundstation.sim.extra_sensors import origin
 from groundstation.sim.firmware import SentFrame
-from groundstation.sim.link import Chunk, Link
+from groundstation.sim.link import Chunk, InFlight, Link
 from groundstation.sim.profiles import make_profile
 from groundstation.sim.seeds import stream
 from groundstation.sim.stream import Scenario
@@ -60,7 +60,7 @@ class MavlinkAircraft:
         self._rng = stream(scenario.seed, "mavlink_imu")
         self._uplink = new_parser()
         self._next = 0  # the next base sample to send
-        self._pending: list[Chunk] = []
+        self._in_flight = InFlight()
         self._replies: list[SentFrame] = []
         self.requests: list[tuple[str, float]] = []  # (message, interval s) as asked by the ground
         self.refused: list[int] = []  # MAV_CMD numbers of commands that were not stream requests
@@ -73,20 +73,15 @@ class MavlinkAircraft:
         frames, self._replies = self._replies, []
         while self._next / self.base_rate_hz <= t_s:
             frames += self._block(min(t_s, self._next / self.base_rate_hz + BLOCK_S))
-        self._pending += self.link.carry(frames)
-        n = 0
-        while n < len(self._pending) and self._pending[n].t_s <= t_s:
-            n += 1
-        due, self._pending = self._pending[:n], self._pending[n:]
-        return due
+        self._in_flight.add(self.link.carry(frames))
+        return self._in_flight.due(t_s)
 
     def flush(self) -> list[Chunk]:
-        due, self._pending = self._pending, []
-        return due
+        return self._in_flight.flush()
 
     def next_event_s(self) -> float:
         next_sample = self._next / self.base_rate_hz
-        return min(next_sample, self._pending[0].t_s) if self._pending else next_sample
+        return self._in_flight.next_arrival_s(next_sample)
 
     def receive(self, data: bytes) -> None:
         """Uplink bytes: stream-rate requests are honoured; every other command is refused."""

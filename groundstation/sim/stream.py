@@ -13,7 +13,7 @@ from groundstation.estimation.ahf import AhfSettings
 from groundstation.sim.extra_sensors import AuxSettings
 from groundstation.sim.firmware import Firmware, FirmwareSettings
 from groundstation.sim.imu import MPU6050Settings
-from groundstation.sim.link import Chunk, Link, LinkSettings
+from groundstation.sim.link import Chunk, InFlight, Link, LinkSettings
 from groundstation.sim.profiles import make_profile
 
 
@@ -46,7 +46,7 @@ class SimStream:
         self.firmware = board(self.profile, scenario.firmware, scenario.imu, scenario.ahf, scenario.extra, scenario.seed, on_samples)
         self.link = Link(scenario.link, scenario.seed)
         self.uplink = fp.StreamDecoder()
-        self._pending: list[Chunk] = []
+        self._in_flight = InFlight()
 
     @property
     def end_s(self) -> float:
@@ -55,22 +55,17 @@ class SimStream:
 
     def advance(self, t_s: float) -> list[Chunk]:
         """Chunks due at the host's port by simulated time ``t_s``, in order."""
-        self._pending += self.link.carry(self.firmware.run_until(t_s))
-        n = 0
-        while n < len(self._pending) and self._pending[n].t_s <= t_s:
-            n += 1
-        due, self._pending = self._pending[:n], self._pending[n:]
-        return due
+        self._in_flight.add(self.link.carry(self.firmware.run_until(t_s)))
+        return self._in_flight.due(t_s)
 
     def flush(self) -> list[Chunk]:
         """The chunks still in flight (for the end of a recording: everything sent arrives)."""
-        due, self._pending = self._pending, []
-        return due
+        return self._in_flight.flush()
 
     def next_event_s(self) -> float:
         """When something next happens: a sample is taken or a chunk falls due."""
         next_sample = self.firmware.true_time_s(self.firmware.next_sample)
-        return min(next_sample, self._pending[0].t_s) if self._pending else next_sample
+        return self._in_flight.next_arrival_s(next_sample)
 
     def receive(self, data: bytes) -> None:
         """Uplink bytes from the host: COMMAND frames reach the firmware (before its next sample)."""
