@@ -86,8 +86,8 @@ class LinkPanel(QtWidgets.QGroupBox):
             self.headline.setStyleSheet(STYLES[state])
 
     def refresh(self, session: LiveSession | None) -> None:
-        if session is None:  # disconnected: no figure of the stopped session stands
-            self._show_state("idle", "no source")
+        if session is None or session.pipeline.link is None:  # disconnected, or a file with no link in it
+            self._show_state("idle", "no source" if session is None else "NO LINK (a log or dataset)")
             for label in self.values.values():
                 label.setText("—")
             return
