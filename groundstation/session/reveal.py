@@ -30,6 +30,14 @@ MIN_SPEED, MAX_SPEED = 0.25, 64.0
 ONBOARD_COLUMNS = ("time_s", "qw", "qx", "qy", "qz", "lambda")  # what the window plots of the aircraft's estimate
 SENSOR_COLUMNS = tuple(f"{s}_{a}_{u}" for s, u in (("acc", "g"), ("gyr", "rad_s")) for a in "xyz")
 TOTALS = ("frames", "crc_errors", "frames_lost", "bytes_skipped")  # the decoder's counters a replay shows
+PLAY_INTERVAL_S = 0.02  # how often a session started on its own (the CLI's) moves its clock
+
+
+def check_speed(value: float) -> float:
+    """``value``, a multiple of real time; ValueError when outside 0.25x-64x."""
+    if not MIN_SPEED <= value <= MAX_SPEED:
+        raise ValueError(f"replay speed must be between {MIN_SPEED:g}x and {MAX_SPEED:g}x, not {value:g}x")
+    return value
 
 
 def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:
@@ -191,8 +199,7 @@ class Playback:
 
     @speed.setter
     def speed(self, value: float) -> None:
-        if not MIN_SPEED <= value <= MAX_SPEED:
-            raise ValueError(f"replay speed must be between {MIN_SPEED:g}x and {MAX_SPEED:g}x, not {value:g}x")
+        check_speed(value)
         self.advance()
         self._speed = value
         self._anchor = None
@@ -248,13 +255,32 @@ class RevealSession:
         self.error: str | None = None
         self.recorder = None  # a replay is not re-recorded
         self.recording_path = None
+        self._stop = threading.Event()
+        self._player: threading.Thread | None = None
         self._reveal()
 
     def start(self) -> RevealSession:
+        """Let the clock run by itself in a thread (the CLI's paced replay); the window moves it on its
+        timer instead (``advance``), so only one thread ever moves it."""
+        self._player = threading.Thread(target=self._play, name="groundstation-playback", daemon=True)
+        self._player.start()
         return self
 
+    def _play(self) -> None:
+        while self.running and not self._stop.wait(PLAY_INTERVAL_S):
+            self.advance()
+
     def stop(self) -> None:
+        self._stop.set()
+        if self._player is not None:
+            self._player.join()
         self.source.pause(True)
+
+    def __enter__(self) -> RevealSession:
+        return self.start()
+
+    def __exit__(self, *exc_info) -> None:
+        self.stop()
 
     @property
     def running(self) -> bool:
