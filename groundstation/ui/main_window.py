@@ -254,7 +254,6 @@ class MainWindow(QtWidgets.QMainWindow):
         time, the views that only ever add rows start over."""
         session = self.session
         if isinstance(session, RevealSession) and session.seek(t_s):
-            self.attitude_panel.clear()
             self.live_view.set_session(session)
             self.event_console.set_session(session)
 
@@ -306,11 +305,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels())
         self.uplink_panel.set_session(session)
         self.event_console.set_session(session)
+        self.link_panel.refresh(session)
         self.bar.set_connected(True)
         self._sync_record_action()
 
     def disconnect(self) -> None:
         self.cancel_loading()
+        self.attitude_panel.clear()  # no attitude of a stopped session stands
         if self.session is not None:
             description = self.session.source.description
             self._stop_session()
