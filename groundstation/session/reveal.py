@@ -53,13 +53,14 @@ def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None
 class RevealedTable:
     """One table of a computed session, up to the clock: ``len``, ``tail``, ``column``, ``array`` and
     ``to_dict`` as a ``Table`` gives them. A row shows once the clock reaches ``reveal_at`` (its time;
-    rows out of order wait for the ones before them)."""
+    rows out of order wait for the ones before them; a row with no time, such as a CONFIG frame
+    before the first sample, shows from the start)."""
 
     def __init__(self, columns: dict[str, np.ndarray], reveal_at: np.ndarray | None = None):
         self.columns = tuple(columns)
         self._values = [np.asarray(v, dtype=float) for v in columns.values()]
         times = self._values[self.columns.index("time_s")] if reveal_at is None else np.asarray(reveal_at, dtype=float)
-        self._reveal_at = np.fmax.accumulate(times) if len(times) else times
+        self._reveal_at = np.maximum.accumulate(np.where(np.isnan(times), -np.inf, times)) if len(times) else times
         self.shown = 0
 
     def reveal(self, t_s: float) -> None:
@@ -72,8 +73,8 @@ class RevealedTable:
 
     @property
     def last_s(self) -> float:
-        """When the last row shows (NaN for no rows)."""
-        return float(self._reveal_at[-1]) if len(self._reveal_at) else float("nan")
+        """When the last row shows (-inf for no rows)."""
+        return float(self._reveal_at[-1]) if len(self._reveal_at) else -np.inf
 
     def __len__(self) -> int:
         return self.shown
@@ -178,20 +179,23 @@ class Revealed:
 
 class Playback:
     """The clock of a replay, in session seconds: it runs at ``speed`` while not paused, from 0 to
-    ``duration_s``, where it stops. Also what the window asks a session's source: a file cannot send."""
+    ``duration_s``, where it stops; ``clock`` gives the wall-clock time in seconds. Also what the window
+    asks a session's source: a file cannot send."""
 
     is_replay = True
     can_send = False
     can_reopen = False
 
-    def __init__(self, path: Path, duration_s: float, speed: float = 1.0, paused: bool = False, position_s: float = 0.0):
+    def __init__(self, path: Path, duration_s: float, speed: float = 1.0, paused: bool = False, position_s: float = 0.0,
+                 clock=time.monotonic):
         self.path = Path(path)
+        self._clock = clock
         self.description = f"replay of {self.path.name}"
         self.duration_s = duration_s
         self._position_s = min(max(position_s, 0.0), duration_s)
         self._paused = paused
         self._anchor: tuple[float, float] | None = None  # (wall clock, position) the running clock counts from
-        self.speed = speed
+        self._speed = check_speed(speed)
 
     @property
     def speed(self) -> float:
@@ -203,6 +207,7 @@ class Playback:
         self.advance()
         self._speed = value
         self._anchor = None
+        self.advance()  # the new pace counts from now
 
     @property
     def paused(self) -> bool:
@@ -212,6 +217,7 @@ class Playback:
         self.advance()
         self._paused = paused
         self._anchor = None
+        self.advance()  # playing again counts from now
 
     @property
     def position_s(self) -> float:
@@ -222,9 +228,9 @@ class Playback:
     def ended(self) -> bool:
         return self._position_s >= self.duration_s
 
-    def advance(self, now_s: float | None = None) -> float:
-        """Move the clock to the wall-clock time ``now_s`` (default: now); returns the position."""
-        now_s = time.monotonic() if now_s is None else now_s
+    def advance(self) -> float:
+        """Move the clock to the wall-clock time now; returns the position."""
+        now_s = self._clock()
         if self._paused or self.ended:
             self._anchor = None
         elif self._anchor is None:
@@ -237,6 +243,7 @@ class Playback:
     def move_to(self, t_s: float) -> None:
         self._position_s = min(max(t_s, 0.0), self.duration_s)
         self._anchor = None
+        self.advance()  # playing on counts from now
 
 
 class RevealSession:
@@ -297,7 +304,7 @@ class RevealSession:
 
     def seek(self, t_s: float) -> bool:
         """Move the clock to ``t_s``: immediate, nothing is recomputed. True when it moved back."""
-        back = t_s < self.source.position_s
+        back = bool(t_s < self.source.position_s)
         self.source.move_to(t_s)
         self._reveal()
         return back

@@ -19,7 +19,7 @@ from groundstation.recording import default_recordings_dir
 from groundstation.session.factory import DEMO_SPEC, LIVE_FILTERS, open_session
 from groundstation.session.live import LiveSession
 from groundstation.session.reveal import Loading, RevealSession, estimators_for
-from groundstation.sources.spec import whole_file
+from groundstation.sources import whole_file
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
@@ -278,12 +278,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.source_label.setText(f"{session.source.description}{'  —  ' + note if note else ''}")
 
     def export(self) -> ExportDialog | None:
-        """The export dialog on the current session's recording (or the last one's)."""
+        """The export dialog on the current session's file (or the last one's), with the estimators shown."""
         file = self._session_file(self.session) if self.session is not None else self.last_file
         if file is None:
             self.show_error("Nothing to export yet: connect, start the simulated bridge or open a recording first.")
             return None
-        dialog = ExportDialog(*file, parent=self)
+        setup = self.session.setup if isinstance(self.session, RevealSession) else (None, None)
+        dialog = ExportDialog(*file, parent=self, setup=setup)
         dialog.setModal(False)  # the live view goes on while it exports
         dialog.show()
         return dialog

@@ -194,3 +194,20 @@ def test_a_file_typed_as_the_source_opens_whole(window, qtbot, recording):
     window.connect_serial(str(recording), 115200)
     qtbot.waitUntil(lambda: window.loading is None, timeout=20000)
     assert window.session.source.path == recording and window.replay_bar.isVisible()
+
+
+def test_the_export_dialog_writes_the_estimators_a_flight_log_is_shown_with(window, qtbot, tmp_path):
+    path = flightlog("px4_fmuv5_quad_hop.ulg")
+    open_file(window, qtbot, path)
+    dialog = window.export()
+    qtbot.addWidget(dialog)
+    out = tmp_path / "hop.csv"
+    dialog.path_edit.setText(str(out))
+    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
+    dialog.path_edit.setText(str(out))
+    dialog.export_button.click()
+    qtbot.waitUntil(lambda: dialog.job.done, timeout=60000)
+    assert dialog.job.error is None, dialog.job.error
+    header = out.read_text().splitlines()[0].split(",")
+    for name in window.session.pipeline.filters:  # the window's estimators, not the CLI's default
+        assert f"{name}_pitch_deg" in header, name
