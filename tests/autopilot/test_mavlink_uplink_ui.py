@@ -2,37 +2,10 @@
 autopilot only stream-rate requests, and a request at another rate changes the rate the aircraft
 sends; the link panel shows both radios' signal and the battery as the simulated aircraft reports them."""
 
-import threading
-
 import numpy as np
 import pytest
 
-from groundstation.sim.mavlink_aircraft import BATTERY, RADIO_STATUS, MavlinkAircraft
-from groundstation.sim.udp_bridge import UdpBridge
-from tests.autopilot.test_mavlink_app import free_udp_port
-
-
-@pytest.fixture
-def mavlink_window(qtbot, tmp_path):
-    from PySide6 import QtCore
-
-    from groundstation.ui.main_window import MainWindow
-
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    window = MainWindow(settings, recordings_dir=tmp_path / "recordings")
-    qtbot.addWidget(window)
-    window.show()
-    port = free_udp_port()
-    window.connect_serial(f"mavlink:udpin:127.0.0.1:{port}")
-    assert not window.banner.isVisible(), window.banner.text()
-    bridge = UdpBridge(MavlinkAircraft(), ("127.0.0.1", port))
-    stop = threading.Event()
-    thread = threading.Thread(target=bridge.run, args=(stop.is_set,), daemon=True)
-    thread.start()
-    yield window
-    stop.set()
-    thread.join()
-    bridge.close()
+from groundstation.sim.mavlink_aircraft import BATTERY, RADIO_STATUS
 
 
 def imu_period_us(window, last: int) -> float:
