@@ -22,6 +22,7 @@ from groundstation.autopilot.records import ImuSample, VehicleStatus
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
+MAX_REQUEST_RATE_HZ = 400.0  # the fastest IMU loop ArduPilot and PX4 stream; REQUEST_DATA_STREAM takes whole Hz
 STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
                      mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
 AUTOPILOTS = (MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4)
@@ -80,6 +81,18 @@ class StreamRequester:
                 if asked is None or (slow and t_host_ns - asked >= self.retry_ns):
                     self._asked_ns[target] = t_host_ns
                     out += stream_requests(*target, self.rate_hz, self._encoder)
+        return out
+
+    def request_now(self, rate_hz: float, t_host_ns: int) -> bytes:
+        """The user's request: every autopilot heard so far asked for ``rate_hz`` now, and later ones at
+        that rate (none heard yet: the first HEARTBEAT gets it)."""
+        if not 0.0 < rate_hz <= MAX_REQUEST_RATE_HZ:
+            raise ValueError(f"a stream rate must be above 0 and at most {MAX_REQUEST_RATE_HZ:g} Hz, not {rate_hz:g}")
+        self.rate_hz = rate_hz
+        out = b""
+        for target in self._asked_ns:
+            self._asked_ns[target] = t_host_ns
+            out += stream_requests(*target, rate_hz, self._encoder)
         return out
 
 

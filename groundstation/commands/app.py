@@ -19,7 +19,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--port", metavar="SPEC",
                         help="connect to this source: COM3, /dev/ttyUSB0, udp://HOST:PORT, tcp://HOST:PORT, sim:?scenario=NAME, "
                              "a pyserial URL, a recording (docs/sources.md)")
-    parser.add_argument("--baud", type=int, default=115200, metavar="N", help="serial baud rate unless the spec gives ?baud= (default: 115200)")
+    parser.add_argument("--baud", type=int, default=None, metavar="N",
+                        help="serial baud rate unless the spec gives ?baud= (default: 115200, or 57600 for mavlink:PORT)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -26,7 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the source: COM3, /dev/ttyUSB0, udp://HOST:PORT, tcp://HOST:PORT, sim:?scenario=NAME, "
                              "a pyserial URL (docs/sources.md)")
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds (default: at Ctrl-C)")
-    parser.add_argument("--baud", type=int, default=115200, metavar="N", help="serial baud rate unless the spec gives ?baud= (default: 115200)")
+    parser.add_argument("--baud", type=int, default=None, metavar="N",
+                        help="serial baud rate unless the spec gives ?baud= (default: 115200, or 57600 for mavlink:PORT)")
     parser.add_argument("--recordings", type=Path, default=None, metavar="DIR",
                         help="record into DIR (default: $GROUNDSTATION_RECORDINGS or the platform's recordings folder)")
     add_estimator_options(parser, ",".join(LIVE_FILTERS))
@@ -44,7 +45,8 @@ def run(args: argparse.Namespace) -> int:
     if parse_spec(args.port).scheme == "recording":
         raise UserError(f"{args.port} is a recording already: 'groundstation replay {args.port}' plays it")
     folder = writable_folder(args.recordings or default_recordings_dir())
-    session = open_session(args.port, filters=filters, settings=overrides, recordings_dir=folder, baud=args.baud)
+    session = open_session(args.port, filters=filters, settings=overrides, recordings_dir=folder,
+                           **({"baud": args.baud} if args.baud else {}))
     print(f"recording {session.source.description} to {session.recording_path}", flush=True)
     stopping: list[int] = []
     previous = {signum: signal.signal(signum, lambda signum, _: stopping.append(signum))

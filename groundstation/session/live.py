@@ -174,6 +174,18 @@ class LiveSession:
         self._send(encode(frame))
         return seq
 
+    def request_streams(self, rate_hz: float) -> None:
+        """Ask an autopilot on MAVLink for its IMU and attitude at ``rate_hz`` (the only uplink it gets;
+        ValueError for a rate it cannot stream, or on the project's own protocol)."""
+        if self.pipeline.protocol != "mavlink":
+            raise ValueError("stream-rate requests are for an autopilot on MAVLink")
+        with self.lock:
+            self.pipeline.front.request_streams(rate_hz, self._last_chunk_ns)
+            self._note_locked({"kind": "command", "command": "request_streams", "rate_hz": rate_hz})
+            uplink = self.pipeline.take_uplink()
+        if uplink and self.source.can_send:
+            self._send(uplink)
+
     def _note(self, event: dict) -> None:
         with self.lock:
             self._note_locked(event)

@@ -93,6 +93,12 @@ class MavlinkFrontEnd:
             self._first_request_ns = self._first_request_ns or t_host_ns
         self._check_rate(t_host_ns)
 
+    def request_streams(self, rate_hz: float, t_host_ns: int) -> None:
+        """The user asked for the IMU and attitude at ``rate_hz``: queued for ``take_uplink``."""
+        self._uplink += self.requester.request_now(rate_hz, t_host_ns)
+        self._first_request_ns = t_host_ns  # the slow-IMU warning gives this request its time too
+        self._slow_warned = False
+
     def take_uplink(self) -> bytes:
         uplink, self._uplink = self._uplink, b""
         return uplink

@@ -141,6 +141,8 @@ class Revealed:
         self.catalogue = data.catalogue if data.catalogue is not None else Catalogue({})  # no table of its own
         self.config = data.config
         self.t0_host_ns = None  # every event carries its session time
+        # What the link spoke: a recording says; a flight log is an autopilot's
+        self.protocol = data.metadata.get("protocol", "mavlink" if "autopilot" in data.metadata else "gs")
         self._settings = data.settings_at_end
         tables = {name: RevealedTable(columns) for name, columns in data.tables.items()}
         nan = np.full(len(data.time_s), np.nan)

@@ -43,6 +43,9 @@ STREAM_GROUP_MESSAGES = {mavlink.MAV_DATA_STREAM_RAW_SENSORS: ("RAW_IMU", "SCALE
 MESSAGE_NAMES = {mavlink.MAVLINK_MSG_ID_RAW_IMU: "RAW_IMU", mavlink.MAVLINK_MSG_ID_ATTITUDE: "ATTITUDE",
                  mavlink.MAVLINK_MSG_ID_SCALED_PRESSURE: "SCALED_PRESSURE", mavlink.MAVLINK_MSG_ID_GPS_RAW_INT: "GPS_RAW_INT"}  # fmt: skip
 BLOCK_S = 0.1  # truth is evaluated for this much time at once
+# What the simulated SiK radio pair and battery report (RADIO_STATUS in the radio's units, SYS_STATUS)
+RADIO_STATUS = {"rssi": 180, "remrssi": 175, "txbuf": 95, "noise": 40, "remnoise": 42, "rxerrors": 3, "fixed": 0}
+BATTERY = {"voltage_battery": 12_600, "current_battery": 150, "battery_remaining": 80}  # mV, cA, %
 
 
 class MavlinkAircraft:
@@ -152,9 +155,10 @@ class MavlinkAircraft:
             return a, a.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
                                          mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0, mavlink.MAV_STATE_STANDBY)  # fmt: skip
         if name == "SYS_STATUS":
-            return a, a.sys_status_encode(0, 0, 0, 150, 12_600, 150, 80, 0, 0, 0, 0, 0, 0)
+            return a, a.sys_status_encode(0, 0, 0, 150, **BATTERY, drop_rate_comm=0, errors_comm=0, errors_count1=0,
+                                          errors_count2=0, errors_count3=0, errors_count4=0)
         if name == "RADIO_STATUS":
-            return self._radio, self._radio.radio_status_encode(180, 175, 95, 40, 42, 0, 0)
+            return self._radio, self._radio.radio_status_encode(**RADIO_STATUS)
         aux = self.scenario.extra
         if name == "SCALED_PRESSURE":
             pressure_pa = float(geodesy.pressure_pa(-truth.pos_ned_m[i, 2], aux.ground_pressure_pa, aux.ground_temperature_c))

@@ -76,8 +76,7 @@ def open_spec(spec: Spec) -> MavlinkSource:
     if not spec.target:
         raise SourceError(f"{spec.text}: name a serial port, udpin:, udpout:, tcp: or a .tlog file after 'mavlink:'")
     spec.check_options({"baud"})
-    # The app's baud box is for this project's bridge (115200); MAVLink radios want ?baud= or 57600.
-    baud = spec.option("baud", int, SIK_BAUD) if "baud" in spec.options else SIK_BAUD
+    baud = spec.option("baud", int, SIK_BAUD)  # ?baud=, else the app's baud box or --baud, else a SiK radio's rate
     return MavlinkSource(SerialSource(spec.target, baud), f"MAVLink on {spec.target} @ {baud} baud")
 
 

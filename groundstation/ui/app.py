@@ -18,7 +18,7 @@ def check_display() -> None:
                         "or under Xvfb (xvfb-run groundstation app)")
 
 
-def run(port: str | None, baud: int, recording: str | None) -> int:
+def run(port: str | None, baud: int | None, recording: str | None) -> int:
     """Open the window on ``recording``, else ``port``, else the simulated bridge."""
     check_display()
     import pyqtgraph as pg
@@ -39,7 +39,7 @@ def run(port: str | None, baud: int, recording: str | None) -> int:
     if recording:
         window.open_recording(recording)
     elif port:
-        window.connect_serial(port, baud)
+        window.connect_serial(port, baud or 0)
     else:
         window.start_demo("no port given: streaming from the simulated bridge")
     return app.exec()

@@ -10,14 +10,14 @@ from PySide6 import QtCore, QtWidgets
 from groundstation.sources import list_ports
 
 BAUD_RATES = (9600, 57600, 115200, 230400, 460800, 921600, 1000000, 2000000)
-DEFAULT_BAUD = 115200
+AUTO_BAUD = "auto"  # the source's own default: 115200 for the project's bridge, 57600 for a MAVLink radio
 PORT_REFRESH_MS = 1000
 SOURCE_HINT = ("A serial port (COM3, /dev/ttyUSB0), socket://HOST:PORT, udp://HOST:PORT, tcp://HOST:PORT, "
                "sim:?scenario=NAME, mavlink:..., or a recording file")
 
 
 class ConnectionBar(QtWidgets.QWidget):
-    connectRequested = QtCore.Signal(str, int)  # source string, baud
+    connectRequested = QtCore.Signal(str, int)  # source string, baud (0: the source's default)
     disconnectRequested = QtCore.Signal()
     demoRequested = QtCore.Signal()
     recordingRequested = QtCore.Signal()
@@ -38,8 +38,9 @@ class ConnectionBar(QtWidgets.QWidget):
         self.port_box.lineEdit().returnPressed.connect(self._connect)
         self.baud_box = QtWidgets.QComboBox()
         self.baud_box.setEditable(True)  # any rate the adapter supports
-        self.baud_box.addItems([str(b) for b in BAUD_RATES])
-        self.baud_box.setCurrentText(str(DEFAULT_BAUD))
+        self.baud_box.addItems([AUTO_BAUD, *map(str, BAUD_RATES)])
+        self.baud_box.setToolTip("auto: 115200 for the project's bridge, 57600 for a MAVLink radio (mavlink:PORT); "
+                                 "a ?baud= in the source string wins")
         self.connect_button = QtWidgets.QPushButton("Connect")
         self.disconnect_button = QtWidgets.QPushButton("Disconnect")
         self.demo_button = QtWidgets.QPushButton("Simulated bridge (demo)")
@@ -129,10 +130,11 @@ class ConnectionBar(QtWidgets.QWidget):
 
     @property
     def baud(self) -> int:
+        """The chosen rate; 0 for "auto" (anything not a whole number is auto too)."""
         try:
-            return int(self.baud_box.currentText())
+            return max(int(self.baud_box.currentText()), 0)
         except ValueError:
-            return DEFAULT_BAUD
+            return 0
 
     def set_connected(self, connected: bool) -> None:
         self.disconnect_button.setEnabled(connected)

@@ -78,7 +78,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.shown = {}
         if session is None:
             return
-        self.send_button.setEnabled(session.source.can_send)
+        self.send_button.setEnabled(session.source.can_send and session.pipeline.protocol == "gs")  # an autopilot has no AHF
         filters = session.pipeline.filters
         offered = [*filters[1:], *(n for n in ESTIMATORS if n not in filters)] if self.replay else filters[1:]
         for index, name in enumerate(offered):

@@ -1,4 +1,5 @@
-"""Link health: frames/s, loss, CRC failures, bytes/s, time since the last frame, latency.
+"""Link health: frames/s, loss, CRC failures, bytes/s, time since the last frame, latency; on a
+MAVLink link also both radios' signal (RADIO_STATUS) and the battery (SYS_STATUS) when they arrive.
 
 The headline turns amber when the link degrades (losses, CRC failures, a late frame) and red when
 frames stop or the port is gone. Figures of the last complete second, from the pipeline's
@@ -24,6 +25,15 @@ STYLES = {
     "idle": "background:#9e9e9e; color:white; padding:4px; font-weight:bold",
 }
 FIELDS = ("frames/s", "loss", "CRC failures", "bytes/s", "since last frame", "latency p50 / p99")
+# A MAVLink session's radio and battery (session/mavlink_front.py tables), shown once they have a row:
+# row label -> (table, format of its last row's columns). RSSI and noise are in the radio's own units
+# (SiK: about 1.9 per dB above -127 dBm), as Mission Planner and QGroundControl show them.
+RADIO_FIELDS = {
+    "RSSI ground / air": ("radio_status", "{rssi:.0f} / {remote_rssi:.0f}"),
+    "noise ground / air": ("radio_status", "{noise:.0f} / {remote_noise:.0f}"),
+    "radio rx errors": ("radio_status", "{rx_errors:.0f}"),
+    "battery": ("sys_status", "{voltage_V:.2f} V, {remaining_pct:.0f} %"),
+}
 
 
 def link_figures(session: LiveSession, now_ns: int) -> dict[str, float]:
@@ -64,6 +74,19 @@ def link_state(session: LiveSession, figures: dict[str, float]) -> tuple[str, st
     return "ok", "LINK OK"
 
 
+def radio_figures(session: LiveSession) -> dict[str, str]:
+    """RADIO_FIELDS' text for the tables that have a row (none on the project's own link)."""
+    tables = session.pipeline.tables
+    shown = {}
+    with session.lock:
+        last = {name: tables[name].tail(1) for name in {t for t, _ in RADIO_FIELDS.values()} if name in tables}
+    for label, (name, text) in RADIO_FIELDS.items():
+        rows = last.get(name)
+        if rows is not None and len(rows):
+            shown[label] = text.format(**dict(zip(tables[name].columns, rows[0].tolist())))
+    return shown
+
+
 def _number(value: float, fmt: str) -> str:
     return "—" if value is None or math.isnan(value) or math.isinf(value) else format(value, fmt)
 
@@ -73,11 +96,12 @@ class LinkPanel(QtWidgets.QGroupBox):
         super().__init__("Link", parent)
         self.headline = QtWidgets.QLabel("no source")
         self.headline.setStyleSheet(STYLES["idle"])
-        self.values = {name: QtWidgets.QLabel("—") for name in FIELDS}
-        layout = QtWidgets.QFormLayout(self)
-        layout.addRow(self.headline)
+        self.values = {name: QtWidgets.QLabel("—") for name in (*FIELDS, *RADIO_FIELDS)}
+        self.form = QtWidgets.QFormLayout(self)
+        self.form.addRow(self.headline)
         for name, label in self.values.items():
-            layout.addRow(name, label)
+            self.form.addRow(name, label)
+        self._show_radio({})
 
     def _show_state(self, state: str, text: str) -> None:
         self.headline.setText(text)
@@ -85,12 +109,19 @@ class LinkPanel(QtWidgets.QGroupBox):
             self.headline.setProperty("state", state)
             self.headline.setStyleSheet(STYLES[state])
 
+    def _show_radio(self, figures: dict[str, str]) -> None:
+        for name in RADIO_FIELDS:
+            self.form.setRowVisible(self.values[name], name in figures)
+            self.values[name].setText(figures.get(name, "—"))
+
     def refresh(self, session: LiveSession | None) -> None:
         if session is None or session.pipeline.link is None:  # disconnected, or a file with no link in it
             self._show_state("idle", "no source" if session is None else "NO LINK (a log or dataset)")
             for label in self.values.values():
                 label.setText("—")
+            self._show_radio({})
             return
+        self._show_radio(radio_figures(session))
         # A replay's link times are the recorded ones: measure "since" against the newest chunk.
         replay = session.source.is_replay
         now_ns = (session.pipeline.link.last_chunk_ns or 0) if replay else time.monotonic_ns()

@@ -151,17 +151,19 @@ class MainWindow(QtWidgets.QMainWindow):
         self._start(lambda: open_session(DEMO_SPEC, settings=self._stored_estimator_settings(),
                                          recordings_dir=self.recordings_dir).start(), note)
 
-    def connect_serial(self, port: str, baud: int) -> None:
+    def connect_serial(self, port: str, baud: int = 0) -> None:
         """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the
-        banner); a file typed there (a recording, ``mavlink:FILE.tlog``, a flight log) is opened whole."""
+        banner), at ``baud`` if it is a serial port (0: the source's default); a file typed there (a
+        recording, ``mavlink:FILE.tlog``, a flight log) is opened whole."""
         file = whole_file(port)
         if file is not None:
             self.open_recording(file)
             return
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
+        rate = {"baud": baud} if baud else {}
         self._start(lambda: open_session(port, settings=self._stored_estimator_settings(), recordings_dir=self.recordings_dir,
-                                         baud=baud).start())
+                                         **rate).start())
         if self.session is not None:
             recent = [port, *(s for s in self.recent_sources() if s != port)][:RECENT_SOURCES]
             self.settings.setValue("recent_sources", recent)

@@ -1,6 +1,8 @@
 """The uplink: firmware mode (raw, estimated, both), AHF parameters, CONFIG request, gyro bias
 calibration at rest; each command's ACK (result and round trip) or its timeout, and the
-firmware's configuration as its last CONFIG frame gave it.
+firmware's configuration as its last CONFIG frame gave it. An autopilot on MAVLink gets only what
+makes sense for it: a request for its IMU and attitude streams at a chosen rate (nothing that arms
+or moves it).
 """
 
 from __future__ import annotations
@@ -11,7 +13,9 @@ from dataclasses import dataclass
 from PySide6 import QtWidgets
 
 from firmware_protocol import SPEC
+from groundstation.autopilot.streams import MAX_REQUEST_RATE_HZ
 from groundstation.session.live import LiveSession
+from groundstation.session.mavlink_front import REQUESTED_RATE_HZ
 
 ACK_TIMEOUT_S = 1.0
 HISTORY = 4  # commands listed
@@ -50,11 +54,29 @@ class UplinkPanel(QtWidgets.QGroupBox):
         self.config_label.setWordWrap(True)
         self.answers = QtWidgets.QLabel()
         self.answers.setWordWrap(True)
-        layout = QtWidgets.QFormLayout(self)
-        layout.addRow(self._row(self.mode_box, self.mode_button, self.config_button))
-        layout.addRow(self._row(QtWidgets.QLabel("at rest for"), self.calibration_s, self.calibrate_button))
-        layout.addRow("firmware", self.config_label)
-        layout.addRow("answers", self.answers)
+        self.gs_controls = QtWidgets.QWidget()  # the project's firmware
+        rows = QtWidgets.QFormLayout(self.gs_controls)
+        rows.setContentsMargins(0, 0, 0, 0)
+        rows.addRow(self._row(self.mode_box, self.mode_button, self.config_button))
+        rows.addRow(self._row(QtWidgets.QLabel("at rest for"), self.calibration_s, self.calibrate_button))
+        rows.addRow("firmware", self.config_label)
+        rows.addRow("answers", self.answers)
+        self.stream_rate_hz = QtWidgets.QDoubleSpinBox(decimals=0, minimum=1.0, maximum=MAX_REQUEST_RATE_HZ,
+                                                       value=REQUESTED_RATE_HZ, suffix=" Hz")
+        self.streams_button = QtWidgets.QPushButton("Request streams")
+        self.streams_button.setToolTip("Ask the autopilot for its IMU and attitude at this rate "
+                                       "(REQUEST_DATA_STREAM and SET_MESSAGE_INTERVAL)")
+        self.streams_button.clicked.connect(self.request_streams)
+        self.mavlink_controls = QtWidgets.QWidget()  # an autopilot
+        rows = QtWidgets.QFormLayout(self.mavlink_controls)
+        rows.setContentsMargins(0, 0, 0, 0)
+        rows.addRow(self._row(QtWidgets.QLabel("IMU and attitude at"), self.stream_rate_hz, self.streams_button))
+        rows.addRow(QtWidgets.QLabel("An autopilot gets only stream-rate requests: nothing that arms or moves it."))
+        layout = QtWidgets.QVBoxLayout(self)
+        layout.addWidget(self.gs_controls)
+        layout.addWidget(self.mavlink_controls)
+        layout.addStretch()
+        self.mavlink_controls.hide()
         self.setEnabled(False)
 
     @staticmethod
@@ -69,6 +91,9 @@ class UplinkPanel(QtWidgets.QGroupBox):
         can_send = session is not None and session.source.can_send
         self.session = session if can_send else None
         self.setEnabled(can_send)
+        mavlink = session is not None and session.pipeline.protocol == "mavlink"
+        self.gs_controls.setVisible(not mavlink)
+        self.mavlink_controls.setVisible(mavlink)
         self.sent = []
         self._events_seen = 0
         self.answers.setText("")
@@ -80,6 +105,10 @@ class UplinkPanel(QtWidgets.QGroupBox):
         seq = self.session.send_command(command, param, value)
         self.sent = [*self.sent, Sent(seq, text or command, time.monotonic_ns())][-HISTORY:]
         self._show_answers()
+
+    def request_streams(self) -> None:
+        if self.session is not None:
+            self.session.request_streams(self.stream_rate_hz.value())
 
     def send_ahf(self, values: dict[str, float]) -> None:
         """AHF settings to the onboard filter, one set_filter_param each."""

@@ -132,3 +132,31 @@ def write_dataflash(path, messages: dict[str, tuple[str, str, list[tuple]]]) -> 
     for _, msg_id, payload in sorted(rows, key=lambda r: r[:2]):
         out += dataflash_record(msg_id, payload)
     Path(path).write_bytes(bytes(out))
+
+
+def free_udp_port() -> int:
+    import socket
+
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+class Flying:
+    """A simulated aircraft's bridge (pty or UDP) streaming in a thread for the ``with`` block; closed after."""
+
+    def __init__(self, bridge):
+        import threading
+
+        self.bridge = bridge
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=bridge.run, args=(self._stop.is_set,), daemon=True)
+
+    def __enter__(self):
+        self._thread.start()
+        return self.bridge
+
+    def __exit__(self, *exc_info) -> None:
+        self._stop.set()
+        self._thread.join()
+        self.bridge.close()

@@ -6,7 +6,6 @@ import dataclasses
 import os
 import subprocess
 import sys
-import threading
 import time
 
 import numpy as np
@@ -22,6 +21,7 @@ from groundstation.sim.mavlink_aircraft import ACC_NOISE_G, GYR_NOISE_RAD_S, Mav
 from groundstation.sim.stream import Scenario
 from groundstation.sources import SourceClosed, SourceError, open_source
 from groundstation.units import STANDARD_GRAVITY_M_S2
+from mavlink_helpers import Flying
 
 SCENARIO = dataclasses.replace(Scenario(), profile="flight", duration_s=60.0, seed=3)
 
@@ -44,13 +44,6 @@ def session(source, seconds: float, quiet_s: float = 1.2):
         if uplink:
             source.write(uplink)
     return chunks, records, requester, decoder
-
-
-def running(bridge):
-    stop = threading.Event()
-    thread = threading.Thread(target=bridge.run, args=(stop.is_set,), daemon=True)
-    thread.start()
-    return stop, thread
 
 
 def check_against_truth(aircraft: MavlinkAircraft, records):
@@ -85,14 +78,11 @@ def test_pty_live_session_requests_rates_matches_truth_and_saves_a_tlog(tmp_path
     bridge = PtyBridge(aircraft)
     source = open_source(f"mavlink:{bridge.path}?baud=57600")
     assert (source.is_replay, source.can_send, source.can_reopen) == (False, True, True) and "57600" in source.description
-    stop, thread = running(bridge)
     try:
-        chunks, records, requester, decoder = session(source, 3.0)
+        with Flying(bridge):
+            chunks, records, requester, decoder = session(source, 3.0)
     finally:
-        stop.set()
-        thread.join()
         source.close()
-        bridge.close()
     imu = check_against_truth(aircraft, records)
     check_rates_requested(aircraft, requester, imu)
     assert decoder.senders[(1, 1)].lost == 0 and decoder.stats.bad_bytes == 0
@@ -121,14 +111,11 @@ def test_udp_live_session_mavlink1():
     aircraft = MavlinkAircraft(SCENARIO, mavlink1=True)
     source = open_source("mavlink:udpin:127.0.0.1:0")
     bridge = UdpBridge(aircraft, ("127.0.0.1", source.transport.local_address[1]))
-    stop, thread = running(bridge)
     try:
-        chunks, records, requester, decoder = session(source, 3.0)
+        with Flying(bridge):
+            chunks, records, requester, decoder = session(source, 3.0)
     finally:
-        stop.set()
-        thread.join()
         source.close()
-        bridge.close()
     assert all(c.data[0] == 0xFE for c in chunks)  # MAVLink 1 packets, one datagram each
     imu = check_against_truth(aircraft, records)
     check_rates_requested(aircraft, requester, imu)

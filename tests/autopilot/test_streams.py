@@ -43,3 +43,19 @@ def test_slow_imu_note():
     assert slow_imu_note(50.0) is None and slow_imu_note(float("nan")) is None
     note = slow_imu_note(2.0)
     assert "2.0 Hz" in note and f"{MIN_FILTER_RATE_HZ:.0f} Hz" in note
+
+
+def test_the_users_request_goes_to_every_autopilot_heard_and_sets_the_rate_for_later_ones():
+    import pytest
+
+    requester = StreamRequester(rate_hz=50.0)
+    assert requester.request_now(10.0, 0) == b""  # none heard yet: the first heartbeat gets 10 Hz
+    first = sent(requester.update([ARDUPILOT], 1))
+    assert {m.req_message_rate for m in first if m.get_type() == "REQUEST_DATA_STREAM"} == {10}
+    asked = sent(requester.request_now(25.0, 2))
+    assert {m.req_message_rate for m in asked if m.get_type() == "REQUEST_DATA_STREAM"} == {25}
+    assert {m.param2 for m in asked if m.get_type() == "COMMAND_LONG"} == {40_000}  # µs between messages
+    assert all((m.target_system, m.target_component) == (1, 1) for m in asked)
+    for bad in (0.0, -5.0, float("nan"), 1e4):
+        with pytest.raises(ValueError, match="stream rate"):
+            requester.request_now(bad, 3)

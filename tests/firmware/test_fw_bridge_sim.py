@@ -5,23 +5,15 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
 import pytest
 import serial
 
 import firmware_protocol as fp
 from groundstation.sim.stream import Scenario, SimStream
+from tests.sim.sim_helpers import ENUM, read_for
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
-ENUM = {name: enum.values for name, enum in fp.SPEC.enums.items()}
-
-
-def read_for(port: serial.Serial, decoder: fp.StreamDecoder, seconds: float) -> list:
-    frames, end = [], time.monotonic() + seconds
-    while time.monotonic() < end:
-        frames += decoder.feed(port.read(port.in_waiting or 1))
-    return frames
 
 
 def test_the_bridge_runs_the_c_core_live_and_it_obeys_commands(c_core):

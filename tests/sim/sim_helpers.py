@@ -1,5 +1,7 @@
 """Shared by the simulator tests: run a scenario offline, and what a decoder must count."""
 
+import time
+
 import firmware_protocol as fp
 from groundstation.sim.stream import Scenario, SimStream
 
@@ -31,3 +33,14 @@ def assert_decoder_agrees_with_link(decoder: fp.StreamDecoder, frames: list, str
     # frames can add candidates, never remove one.
     assert stats.crc_errors >= report.damaged_with_header
     assert stats.duplicates == 0
+
+
+ENUM = {name: enum.values for name, enum in fp.SPEC.enums.items()}  # the spec's enums: name -> value
+
+
+def read_for(port, decoder: fp.StreamDecoder, seconds: float) -> list:
+    """The frames a pyserial ``port`` delivers in ``seconds``."""
+    frames, end = [], time.monotonic() + seconds
+    while time.monotonic() < end:
+        frames += decoder.feed(port.read(port.in_waiting or 1))
+    return frames

@@ -14,17 +14,9 @@ import firmware_protocol as fp
 from groundstation.sim.link import LinkSettings
 from groundstation.sim.stream import Scenario, SimStream
 
-from sim_helpers import assert_decoder_agrees_with_link
+from sim_helpers import ENUM, assert_decoder_agrees_with_link, read_for
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
-ENUM = {name: enum.values for name, enum in fp.SPEC.enums.items()}
-
-
-def read_for(port: serial.Serial, decoder: fp.StreamDecoder, seconds: float) -> list:
-    frames, end = [], time.monotonic() + seconds
-    while time.monotonic() < end:
-        frames += decoder.feed(port.read(port.in_waiting or 1))
-    return frames
 
 
 def test_pyserial_reads_what_the_link_model_says_it_delivered():

@@ -2,6 +2,7 @@
 garbled or impossible spec says what is wrong and which forms exist."""
 
 import importlib
+import os
 import time
 from pathlib import Path
 
@@ -167,3 +168,25 @@ def test_udp_listens_where_asked():
             open_source(f"udp://127.0.0.1:{port}")  # taken
     finally:
         source.close()
+
+
+def test_a_mavlink_serial_port_takes_the_apps_baud_rate_unless_the_spec_names_one():
+    """A SiK radio's 57600 when nothing says otherwise; the app's baud box (or --baud) when set; ?baud= over both."""
+    import pty
+
+    from groundstation.sources.mavlink import SIK_BAUD
+
+    master, slave = pty.openpty()
+    path = os.ttyname(slave)
+    try:
+        for spec, defaults, expected in ((f"mavlink:{path}", {}, SIK_BAUD),
+                                         (f"mavlink:{path}", {"baud": 921600}, 921600),
+                                         (f"mavlink:{path}?baud=115200", {"baud": 921600}, 115200)):
+            source = open_source(spec, **defaults)
+            try:
+                assert source.description.endswith(f"@ {expected} baud"), source.description
+            finally:
+                source.close()
+    finally:
+        os.close(master)
+        os.close(slave)

@@ -65,7 +65,7 @@ def test_ports_are_listed_with_description_and_vid_pid_and_picking_one_gives_its
     assert bar.source == "/dev/ttyUSB7"
     with qtbot.waitSignal(bar.connectRequested) as asked:
         qtbot.mouseClick(bar.connect_button, QtCore.Qt.LeftButton)
-    assert asked.args == ["/dev/ttyUSB7", 115200]
+    assert asked.args == ["/dev/ttyUSB7", 0]  # baud "auto": the source's own default
 
 
 def test_devices_coming_and_going_never_change_what_the_user_typed_or_picked(qtbot, ports):
