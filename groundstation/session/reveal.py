@@ -25,19 +25,12 @@ from groundstation.estimation import GPS_AIDED
 from groundstation.session.catalogue import Catalogue
 from groundstation.session.data import DATASET_SUFFIXES, LinkSummary, SessionData, load_session
 from groundstation.session.link import PER_SECOND_COLUMNS
+from groundstation.sources.replay import check_speed
 
-MIN_SPEED, MAX_SPEED = 0.25, 64.0
 ONBOARD_COLUMNS = ("time_s", "qw", "qx", "qy", "qz", "lambda")  # what the window plots of the aircraft's estimate
 SENSOR_COLUMNS = tuple(f"{s}_{a}_{u}" for s, u in (("acc", "g"), ("gyr", "rad_s")) for a in "xyz")
 TOTALS = ("frames", "crc_errors", "frames_lost", "bytes_skipped")  # the decoder's counters a replay shows
 PLAY_INTERVAL_S = 0.02  # how often a session started on its own (the CLI's) moves its clock
-
-
-def check_speed(value: float) -> float:
-    """``value``, a multiple of real time; ValueError when outside 0.25x-64x."""
-    if not MIN_SPEED <= value <= MAX_SPEED:
-        raise ValueError(f"replay speed must be between {MIN_SPEED:g}x and {MAX_SPEED:g}x, not {value:g}x")
-    return value
 
 
 def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:

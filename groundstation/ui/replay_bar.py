@@ -11,7 +11,8 @@ import math
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.reveal import MAX_SPEED, MIN_SPEED, Playback, RevealSession
+from groundstation.session.reveal import Playback, RevealSession
+from groundstation.sources.replay import MAX_SPEED, MIN_SPEED
 
 SPEEDS = tuple(MIN_SPEED * 2.0**i for i in range(round(math.log2(MAX_SPEED / MIN_SPEED)) + 1))  # 0.25x, 0.5x ... 64x
 SLIDER_STEPS_PER_S = 10
