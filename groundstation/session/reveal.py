@@ -162,7 +162,9 @@ class Revealed:
     def reveal(self, t_s: float) -> None:
         for table in self.tables.values():
             table.reveal(t_s)
-        self.events = self._events[: bisect.bisect_right(self._event_times, t_s)]
+        shown = bisect.bisect_right(self._event_times, t_s)
+        if shown != len(self.events):  # a new list only when it changes (the console reads it every few ticks)
+            self.events = self._events[:shown]
         if self.link is not None:
             self.link.per_second.reveal(t_s)
             self.link.reveal(t_s, t_s >= self.end_s)

@@ -211,3 +211,37 @@ def test_the_export_dialog_writes_the_estimators_a_flight_log_is_shown_with(wind
     header = out.read_text().splitlines()[0].split(",")
     for name in window.session.pipeline.filters:  # the window's estimators, not the CLI's default
         assert f"{name}_pitch_deg" in header, name
+
+
+def test_a_tlogs_messages_are_channels_revealed_with_the_clock(window, qtbot):
+    path = flightlog("arduplane_quadplane_sitl.tlog")
+    open_file(window, qtbot, path)
+    view, data = window.live_view, window.session.data
+    channel = "vfr_hud.airspeed_m_s"  # a message type of its own: "plot any channel"
+    assert channel in {f"{t.name}.{c.name}" for t, c in data.catalogue.channels()}
+    view.tabs.setCurrentWidget(view.channels)
+    view.channels.add(channel)
+    window.live_view.window_box.setCurrentText("whole session")
+    window.replay_bar.play_button.click()
+    window.seek(120.0)
+    curve = next(c for s, c in view.channels.stacked.curves if s.label == channel)
+    table = data.tables["vfr_hud"]
+    rows = table["time_s"] <= 120.0
+    qtbot.waitUntil(lambda: points(curve) == rows.sum(), timeout=3000)
+    np.testing.assert_array_equal(curve.xData, table["time_s"][rows])
+    np.testing.assert_array_equal(curve.yData, table["airspeed_m_s"][rows].astype(np.float32))
+
+
+def test_a_dataset_csv_plays_as_a_recording_does(window, qtbot, tmp_path):
+    from groundstation.cli import main
+
+    assert main(["simulate", "--scenario", "flight", "--duration", "12", "--seed", "5", "--out", str(tmp_path / "f.bin")]) == 0
+    csv = tmp_path / "f.truth.csv.gz"  # the truth and sensor values in the dataset CSV layout
+    open_file(window, qtbot, csv)
+    data = window.session.data
+    assert window.banner.isHidden() and window.session.pipeline.filters[0] == "vqf" and data.true_q is not None
+    window.live_view.window_box.setCurrentText("whole session")
+    window.replay_bar.play_button.click()
+    window.seek(6.0)
+    check_plotted_up_to(window, qtbot, data, "vqf", 6.0)
+    assert window.link_panel.headline.text().startswith("NO LINK")
