@@ -46,10 +46,16 @@ def test_the_clock_runs_at_its_speed_pauses_and_stops_at_the_end():
         check_speed(0.1)
 
 
-def test_a_revealed_table_reads_as_the_table_of_the_same_rows():
+@pytest.mark.parametrize("layout", ["separate columns", "a Table's to_dict (views of one array: rows are sliced)"])
+def test_a_revealed_table_reads_as_the_table_of_the_same_rows(layout):
     rows = np.column_stack([np.arange(10) * 0.1, np.arange(10) ** 2, -np.arange(10)]).astype(float)
     table = Table(("time_s", "a", "b"))
-    revealed = RevealedTable({"time_s": rows[:, 0], "a": rows[:, 1], "b": rows[:, 2]})
+    if layout == "separate columns":
+        revealed = RevealedTable({"time_s": rows[:, 0].copy(), "a": rows[:, 1].copy(), "b": rows[:, 2].copy()})
+    else:
+        whole = Table(("time_s", "a", "b"))
+        whole.extend(rows)
+        revealed = RevealedTable(whole.to_dict())
     revealed.reveal(0.45)
     table.extend(rows[:5])  # what a live table holds at 0.45 s
     assert len(revealed) == len(table) == 5
