@@ -24,7 +24,7 @@ from groundstation.errors import UserError
 from groundstation.estimation import GPS_AIDED
 from groundstation.session.catalogue import Catalogue
 from groundstation.session.data import DATASET_SUFFIXES, LinkSummary, SessionData, load_session
-from groundstation.session.link import PER_SECOND_COLUMNS
+from groundstation.session.link import LATENCY_WINDOW, PER_SECOND_COLUMNS, clock_figures
 from groundstation.sources.replay import check_speed
 
 ONBOARD_COLUMNS = ("time_s", "qw", "qx", "qy", "qz", "lambda")  # what the window plots of the aircraft's estimate
@@ -111,9 +111,11 @@ class RevealedTable:
 
 class RevealedLink:
     """The link figures of a recording up to the clock: its seconds closed so far, the decoder's
-    counters summed over them (the whole session's at the end), no latency (a replay's is not live)."""
+    counters summed over them (the whole session's at the end), the latency of the last samples from
+    their recorded arrival and device times (as the live session measured it)."""
 
-    def __init__(self, summary: LinkSummary, frames: list[RevealedTable]):
+    def __init__(self, summary: LinkSummary, imu: RevealedTable, frames: list[RevealedTable]):
+        self._imu = imu
         t_s = np.asarray(summary.per_second["t_s"], dtype=float)
         self.per_second = RevealedTable({c: summary.per_second[c] for c in PER_SECOND_COLUMNS}, reveal_at=t_s + 1.0)
         self._sums = {c: np.cumsum(summary.per_second[c]) for c in TOTALS}
@@ -132,7 +134,11 @@ class RevealedLink:
         self.last_frame_ns = int(max(newest) * 1e9) if newest else None
 
     def clock(self) -> dict[str, float]:
-        return {"clock_offset_s": float("nan"), "latency_p50_ms": float("nan"), "latency_p99_ms": float("nan")}
+        columns = self._imu.columns
+        rows = self._imu.tail(LATENCY_WINDOW)
+        diffs = rows[:, columns.index("host_time_s")] * 1e9 - rows[:, columns.index("device_time_us")] * 1e3
+        restarts = np.flatnonzero(np.isnan(diffs))  # a reboot's gap row: the offset starts over after it
+        return clock_figures(diffs[restarts[-1] + 1 :] if len(restarts) else diffs)
 
     def rates(self) -> dict[str, float]:
         last = self.per_second.tail(1)
@@ -165,7 +171,7 @@ class Revealed:
                                                "lambda": nan})
         self.tables = tables
         self.imu, self.onboard = tables["imu"], tables["onboard"]
-        self.link = RevealedLink(data.link, [self.imu, self.onboard]) if data.link is not None else None
+        self.link = RevealedLink(data.link, self.imu, [self.imu, self.onboard]) if data.link is not None else None
         self.decoder = SimpleNamespace(stats=self.link.stats) if self.link is not None else None
         notes = [*data.damage, *(data.metadata[k] for k in ("imu_warning", "notes") if data.metadata.get(k))]
         timed = [{**{k: v for k, v in e.items() if k != "t_s"}, "session_time_s": float(e.get("session_time_s", e["t_s"]))}

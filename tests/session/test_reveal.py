@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from groundstation.recording import open_recording
 from groundstation.session.data import load_session
+from groundstation.session.replay import replay
 from groundstation.session.reveal import Playback, RevealedTable, RevealSession, check_speed
 from groundstation.session.table import Table
 
@@ -83,6 +85,10 @@ def test_a_recording_played_to_the_end_shows_every_row_and_the_decoders_totals()
         assert len(session.pipeline.tables[name]) == len(table["time_s"]), name
     stats = session.pipeline.decoder.stats
     assert (stats.frames, stats.frames_lost, stats.crc_errors) == tuple(data.link.counters[k] for k in ("frames", "frames_lost", "crc_errors"))
+    live = replay(open_recording(LOSSY)).link.clock()  # the live path's latency over the same last samples
+    shown = session.pipeline.link.clock()
+    for figure in ("latency_p50_ms", "latency_p99_ms"):
+        assert shown[figure] == pytest.approx(live[figure], abs=1e-3), figure  # µs: host_time_s is a float
     assert session.seek(1.0) is True  # back in time: the views start over
     session.step()
     assert session.source.position_s == data.time_s[int((data.time_s <= 1.0).sum())]
