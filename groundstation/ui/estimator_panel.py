@@ -105,11 +105,11 @@ class EstimatorPanel(QtWidgets.QGroupBox):
     def _shown_changed(self, name: str, on: bool) -> None:
         self.visibilityChanged.emit(LABELS.get(name, name), on)
         filters = self.session.pipeline.filters
-        if on and name not in filters:  # only a replay offers it: re-run it with this estimator too
+        if on and name not in filters:  # only a replay offers it: compute it again with this estimator too
             self.replayAsked.emit((*filters, name), self._forced())
 
     def _forced(self) -> dict[str, dict[str, float]]:
-        """The fields of every estimator the session runs: the settings a re-run replay is to use."""
+        """The fields of every estimator the session runs: the settings a recomputed replay is to use."""
         return {name: self.values(name) for name in TUNABLE if name in self.session.pipeline.filters}
 
     def sync_shown(self, visible_labels: set[str]) -> None:
@@ -123,7 +123,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         return {setting: self.boxes[name, setting].value() for setting, _, _ in TUNABLE[name]}
 
     def apply(self) -> None:
-        """Change every estimator whose fields differ from the settings in effect (a replay: re-run it)."""
+        """Change every estimator whose fields differ from the settings in effect (a replay: compute it again)."""
         current = self.session.pipeline.settings()
         if self.replay:
             if any(v != current[name][k] for name, values in self._forced().items() for k, v in values.items()):

@@ -245,3 +245,14 @@ def test_a_dataset_csv_plays_as_a_recording_does(window, qtbot, tmp_path):
     window.seek(6.0)
     check_plotted_up_to(window, qtbot, data, "vqf", 6.0)
     assert window.link_panel.headline.text().startswith("NO LINK")
+
+
+def test_cancel_while_computing_leaves_no_session(window, qtbot):
+    window.open_recording(flightlog("px4_fmuv5_quad_hop.ulg"))
+    assert window.loading_row.isVisible()
+    loading = window.loading
+    window.loading_cancel.click()
+    assert window.loading is None and not window.loading_row.isVisible()
+    loading.wait(30)  # the worker ends (or is dropped); nothing is adopted
+    qtbot.wait(200)
+    assert window.session is None and window.banner.isHidden()
