@@ -122,3 +122,15 @@ def test_replay_command_reads_flight_logs(name):
     assert done.returncode == 0, done.stderr
     last = done.stdout.splitlines()[-1]
     assert last == (f"{len(data)} IMU samples" if data.estimates else f"{len(data)} onboard attitude samples, no IMU")
+
+
+def test_a_flight_logs_progress_moves_through_its_estimators():
+    """The app's progress bar while a log is computed: the reading, then one step per estimator, to the end."""
+    path = FLIGHTLOGS / "px4_fmuv5_quad_hop.ulg"  # its reader reports nothing itself
+    if not path.exists():
+        pytest.skip(f"{path} is absent (the shared flight logs)")
+    reports = []
+    filters = ("ahf", "hf", "ecf", "cf1")
+    load_session(path, filters, progress=lambda done, total: reports.append(done / total))
+    assert reports == sorted(reports) and reports[-1] == 1.0
+    assert len([r for r in reports if r > 0.3]) == len(filters)  # one report after each estimator's run
