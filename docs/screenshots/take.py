@@ -96,9 +96,12 @@ def tour() -> None:
     shoot(dialog, "export-dialog.png")
     dialog.close()
 
-    window.open_recording(recording)
+    window.open_recording(recording)  # computed in the background, then played back
+    while window.loading is not None:
+        wait(0.2)
+    window.seek(10.0)  # a seek only moves the playback clock
     window.replay_bar.speed_box.setCurrentIndex(window.replay_bar.speed_box.findData(4.0))
-    wait(5)
+    wait(3)
     shoot(window, "replay.png")
 
     stop = threading.Event()

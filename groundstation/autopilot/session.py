@@ -27,15 +27,21 @@ from groundstation.session.data import SessionData
 from groundstation.session.pipeline import DEFAULT_FILTERS
 
 MAX_GAP_S = 1.0
+READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
+PROGRESS_STEPS = 1000
 FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
 
 
 def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
-    """Read a ``.tlog``, ``.bin`` or ``.ulg`` and run ``filters`` (default: the pipeline's) with ``forced`` settings."""
-    return log_session(read_log(path, progress), filters or DEFAULT_FILTERS, forced or {})
+    """Read a ``.tlog``, ``.bin`` or ``.ulg`` and run ``filters`` (default: the pipeline's) with ``forced``
+    settings; ``progress(done, total)`` through the reading, then after each estimator."""
+    share = None if progress is None else lambda fraction: progress(round(PROGRESS_STEPS * fraction), PROGRESS_STEPS)
+    reading = None if share is None else lambda done, total: share(READ_SHARE * min(done / max(total, 1), 1.0))
+    return log_session(read_log(path, reading), filters or DEFAULT_FILTERS, forced or {}, share)
 
 
-def log_session(log: FlightLog, filters, forced: dict) -> SessionData:
+def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionData:
+    """``share(fraction)``: told after each estimator's run, from ``READ_SHARE`` to 1."""
     metadata = describe(log)
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
@@ -48,8 +54,12 @@ def log_session(log: FlightLog, filters, forced: dict) -> SessionData:
     velocity[~np.isfinite(velocity).all(axis=1)] = np.nan
     gps = np.column_stack([velocity, np.full(len(t_us), np.nan)])  # no heading from one antenna
     dt_s = sample_periods_s(t_us / 1e6)
+    names, runs = list(dict.fromkeys(filters)), {}
     try:
-        runs = {name: create(name, forced.get(name)).run(gyr, acc, dt_s, mag, gps) for name in dict.fromkeys(filters)}
+        for i, name in enumerate(names, start=1):
+            runs[name] = create(name, forced.get(name)).run(gyr, acc, dt_s, mag, gps)
+            if share is not None:
+                share(READ_SHARE + (1.0 - READ_SHARE) * i / len(names))
     except ValueError as error:
         raise UserError(str(error)) from None
     sensors = {name: log.imu.columns[name] for name in IMU_COLUMNS if name.startswith("acc")}

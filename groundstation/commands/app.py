@@ -1,6 +1,6 @@
 """``groundstation app``: the desktop window (live monitoring, replay, export).
 
-Without a port or a recording it opens on the built-in simulated bridge, as ``--demo`` does, so the
+Without a port or a file it opens on the built-in simulated bridge, as ``--demo`` does, so the
 first command of the README shows a live flight on a machine with no hardware.
 """
 
@@ -12,7 +12,8 @@ from groundstation.errors import UserError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("recording", nargs="?", metavar="RECORDING", help="open this recording (.gsrec) for replay")
+    parser.add_argument("recording", nargs="?", metavar="FILE",
+                        help="open this file for replay: a recording (.gsrec), a dataset CSV or a flight log (.tlog, .bin, .ulg)")
     parser.add_argument("--demo", action="store_true",
                         help="stream from the built-in simulated radio bridge (also the default without --port or RECORDING)")
     parser.add_argument("--port", metavar="SPEC",

@@ -1,4 +1,5 @@
-"""``groundstation replay``: a recording through the decoder and estimators, with a live one-line summary."""
+"""``groundstation replay``: a file computed whole (a recording, a dataset CSV, a .tlog, .bin or .ulg),
+then its totals; with ``--speed``, played back at that pace with a live one-line summary first."""
 
 from __future__ import annotations
 
@@ -8,24 +9,34 @@ from groundstation.commands.options import add_estimator_options, estimator_opti
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec)")
+    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec), a dataset CSV, or a flight log (.tlog, .bin, .ulg)")
     parser.add_argument("--speed", type=float, default=None, metavar="X",
-                        help="pace at X times real time (0.25-64); default: as fast as possible")
+                        help="play it back at X times real time (0.25-64) with a live summary; default: the totals at once")
     add_estimator_options(parser, None)
 
 
 def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from groundstation.commands.progress import ProgressBar
     from groundstation.commands.summary import follow, totals_line
-    from groundstation.session.live import LiveSession
-    from groundstation.session.replay import pipeline_for
-    from groundstation.sources.replay import open_replay
+    from groundstation.errors import UserError
+    from groundstation.session.data import load_session
+    from groundstation.session.reveal import RevealSession, check_speed
 
     filters, overrides = estimator_options(args)
-    source = open_replay(args.file, args.speed)  # the opener of open_source's recording specs
-    for finding in source.recording.damage:
+    try:
+        paced = None if args.speed is None else check_speed(args.speed)
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    progress = ProgressBar(f"computing {Path(args.file).name}")
+    data = load_session(args.file, filters, overrides, progress)
+    progress.done()
+    for finding in data.damage:
         print(f"warning: {finding}")
-    session = LiveSession(source, pipeline_for(source.recording, filters, overrides), record=False)
-    with session:
-        follow(session)
+    session = RevealSession(data, args.file, (filters, overrides), speed=paced or 1.0, position_s=0.0 if paced else float("inf"))
+    if paced:
+        with session:
+            follow(session)
     print(totals_line(session))
     return 0

@@ -16,12 +16,16 @@ SILENT_AFTER_S = 1.0  # a live link with no frame for this long is said to be si
 
 
 def summary_line(session: LiveSession) -> str:
+    """A replay of a file with no link in it (a flight log, a dataset: ``pipeline.link`` None) says no link figures."""
     p = session.pipeline
     with session.lock:
         last = p.imu.tail(1)
-        stats = p.decoder.stats
-        rates = p.link.rates()
-        silent_s = p.link.since_last_frame_s(time.monotonic_ns())
+        if p.link is None:
+            stats, rates, silent_s = None, None, 0.0
+        else:
+            stats = p.decoder.stats
+            rates = p.link.rates()
+            silent_s = p.link.since_last_frame_s(time.monotonic_ns())
     if not session.connected:
         return f"PORT GONE: {session.source.description}, reconnecting…"
     if not len(last):
@@ -29,12 +33,16 @@ def summary_line(session: LiveSession) -> str:
     if not session.source.is_replay and silent_s > SILENT_AFTER_S:  # a replay's times are the recorded ones
         return f"NO DATA for {silent_s:.0f} s from {session.source.description} (radio out of range? aircraft off?)"
     row = dict(zip(p.imu.columns, last[0]))
-    name = p.filters[0]
-    _, pitch, roll = np.degrees(quaternion.to_euler_zyx(np.array([row[f"{name}_q{c}"] for c in "wxyz"])))
+    attitude = ""
+    if p.filters:  # a log with the aircraft's estimate only has none of its own
+        name = p.filters[0]
+        _, pitch, roll = np.degrees(quaternion.to_euler_zyx(np.array([row[f"{name}_q{c}"] for c in "wxyz"])))
+        attitude = f"  {name} pitch {pitch:+6.1f}° roll {roll:+6.1f}°"
+    if stats is None:
+        return f"t {row['time_s']:8.2f} s{attitude}"
     fps = rates["frames_per_s"]
     fps_text = "-" if math.isnan(fps) else f"{fps:.0f}"
-    return (f"t {row['time_s']:8.2f} s  {name} pitch {pitch:+6.1f}° roll {roll:+6.1f}°  "
-            f"{fps_text} frames/s  lost {stats.frames_lost}  CRC errors {stats.crc_errors}")
+    return f"t {row['time_s']:8.2f} s{attitude}  {fps_text} frames/s  lost {stats.frames_lost}  CRC errors {stats.crc_errors}"
 
 
 def totals_line(session: LiveSession) -> str:
@@ -42,6 +50,8 @@ def totals_line(session: LiveSession) -> str:
     recording and its replay)."""
     p = session.pipeline
     with session.lock:
+        if p.decoder is None:  # a flight log or a dataset: no link was decoded
+            return f"{len(p.imu)} IMU samples" if p.filters else f"{len(p.onboard)} onboard attitude samples, no IMU"
         stats = p.decoder.stats
         return (f"{len(p.imu)} IMU samples, {stats.frames} frames, {stats.frames_lost} lost, "
                 f"{stats.crc_errors} CRC errors, {stats.bytes_skipped} bytes skipped")

@@ -20,6 +20,19 @@ _COUNTERS = ("frames", "bytes_in", "crc_errors", "frames_lost", "bytes_skipped")
 LATENCY_WINDOW = 1000  # samples (10 s at 100 Hz): short enough that clock drift stays under 1 ms
 
 
+def clock_figures(host_minus_device_ns: np.ndarray) -> dict[str, float]:
+    """The clock offset and latency (p50, p99) of samples whose (host - device) time differences these are.
+
+    The smallest difference is taken as the clock offset (the fastest delivery); each sample's
+    latency is its difference minus that offset.
+    """
+    if not len(host_minus_device_ns):
+        return {"clock_offset_s": float("nan"), "latency_p50_ms": float("nan"), "latency_p99_ms": float("nan")}
+    offset = host_minus_device_ns.min()
+    p50, p99 = np.percentile(host_minus_device_ns - offset, [50, 99]) / 1e6
+    return {"clock_offset_s": offset / 1e9, "latency_p50_ms": float(p50), "latency_p99_ms": float(p99)}
+
+
 class LinkStats:
     def __init__(self) -> None:
         self.per_second = Table(PER_SECOND_COLUMNS)
@@ -52,17 +65,8 @@ class LinkStats:
         self._host_minus_device_ns.clear()
 
     def clock(self) -> dict[str, float]:
-        """Device-to-host clock offset and per-sample latency (p50, p99) over the last samples.
-
-        The smallest (host - device) difference in the window is taken as the clock offset (the
-        fastest delivery); each sample's latency is its difference minus that offset.
-        """
-        if not self._host_minus_device_ns:
-            return {"clock_offset_s": float("nan"), "latency_p50_ms": float("nan"), "latency_p99_ms": float("nan")}
-        diffs = np.array(self._host_minus_device_ns, dtype=float)
-        offset = diffs.min()
-        p50, p99 = np.percentile(diffs - offset, [50, 99]) / 1e6
-        return {"clock_offset_s": offset / 1e9, "latency_p50_ms": float(p50), "latency_p99_ms": float(p99)}
+        """Device-to-host clock offset and per-sample latency (p50, p99) over the last samples."""
+        return clock_figures(np.array(self._host_minus_device_ns, dtype=float))
 
     def rates(self) -> dict[str, float]:
         """Frames and bytes in the last complete second."""

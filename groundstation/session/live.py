@@ -148,11 +148,6 @@ class LiveSession:
 
     # -- from other threads -----------------------------------------------------------------------
 
-    def feed_chunk(self, t_host_ns: int, data: bytes) -> None:
-        """Feed a chunk that did not come through the reader: a paused replay's step, or the chunks a
-        seek skipped (filters have memory, so the estimates after a seek need everything before it)."""
-        self._take(t_host_ns, data)
-
     def change_settings(self, name: str, overrides: dict[str, float]) -> None:
         """Change a host estimator's settings now; recorded, so a replay changes them at the same point."""
         with self.lock:

@@ -10,7 +10,7 @@ clock at arrival (the I/O edge), and declares what it can do (``is_replay``, ``c
 from groundstation.sources.base import Chunk, Source, SourceClosed, SourceError
 from groundstation.sources.replay import ReplaySource
 from groundstation.sources.serial_port import SerialSource, list_ports
-from groundstation.sources.spec import SCHEMES, open_source, parse_spec
+from groundstation.sources.spec import SCHEMES, open_source, parse_spec, whole_file
 
 __all__ = ["SCHEMES", "Chunk", "ReplaySource", "SerialSource", "Source", "SourceClosed", "SourceError", "list_ports",
-           "open_source", "parse_spec"]
+           "open_source", "parse_spec", "whole_file"]

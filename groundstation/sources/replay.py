@@ -1,7 +1,9 @@
 """A recording played back as a source: as fast as possible, or paced at 0.25x-64x real time.
 
 Chunks keep their recorded arrival times, so the link statistics of a replay are those of the
-flight. Pause, seek and step act on the position; ``read`` paces against the wall clock.
+flight; ``read`` paces against the wall clock. This feeds a recording through the live path (what
+``open_session`` on a recording, the live-path benchmarks and tests do); the app and ``replay``
+compute a file whole and play the result back instead (``session.reveal``), seeking included.
 """
 
 from __future__ import annotations
@@ -9,14 +11,19 @@ from __future__ import annotations
 import threading
 import time
 
-import numpy as np
-
 from groundstation.errors import UserError
 from groundstation.recording import Recording, open_recording
 from groundstation.sources.base import Chunk, SourceClosed, SourceError, refuse_reopen, refuse_uplink
 
-MIN_SPEED, MAX_SPEED = 0.25, 64.0
+MIN_SPEED, MAX_SPEED = 0.25, 64.0  # the replay speeds, here and in the app's playback (session.reveal)
 IDLE_WAIT_S = 0.05
+
+
+def check_speed(value: float) -> float:
+    """``value``, a multiple of real time; ValueError when outside 0.25x-64x."""
+    if not MIN_SPEED <= value <= MAX_SPEED:
+        raise ValueError(f"replay speed must be between {MIN_SPEED:g}x and {MAX_SPEED:g}x, not {value:g}x")
+    return value
 
 
 class ReplaySource:
@@ -32,7 +39,6 @@ class ReplaySource:
         self._t0 = int(self._times[0]) if len(self._times) else 0
         self._index = 0
         self._lock = threading.Lock()
-        self._paused = False
         self._anchor: tuple[float, int] | None = None  # (wall clock, recorded time) the pace is set from
         self.speed = speed
 
@@ -42,8 +48,8 @@ class ReplaySource:
 
     @speed.setter
     def speed(self, value: float | None) -> None:
-        if value is not None and not MIN_SPEED <= value <= MAX_SPEED:
-            raise ValueError(f"replay speed must be between {MIN_SPEED}x and {MAX_SPEED}x, not {value}x")
+        if value is not None:
+            check_speed(value)
         with self._lock:
             self._speed = value
             self._anchor = None  # re-anchor: the new pace starts now, from where we are
@@ -52,65 +58,23 @@ class ReplaySource:
     def duration_s(self) -> float:
         return (int(self._times[-1]) - self._t0) / 1e9 if len(self._times) else 0.0
 
-    @property
-    def position_s(self) -> float:
-        """Recorded time of the next chunk, seconds from the first."""
-        with self._lock:
-            if self._index >= len(self._times):
-                return self.duration_s
-            return (int(self._times[self._index]) - self._t0) / 1e9
-
-    @property
-    def index(self) -> int:
-        return self._index
-
-    def pause(self, paused: bool = True) -> None:
-        with self._lock:
-            self._paused = paused
-            self._anchor = None
-
-    @property
-    def paused(self) -> bool:
-        return self._paused
-
-    def seek(self, t_s: float) -> int:
-        """Continue from the first chunk at or after ``t_s``; returns its index.
-
-        The caller decides what seeking means for the estimates (a session re-runs its pipeline
-        from the start up to here, since filters have memory).
-        """
-        with self._lock:
-            self._index = int(np.searchsorted(self._times, self._t0 + int(t_s * 1e9)))
-            self._anchor = None
-            return self._index
-
-    def step(self) -> Chunk | None:
-        """The next chunk now, whatever the pace or pause (None at the end)."""
-        with self._lock:
-            return self._take()
-
     def read(self) -> Chunk | None:
         with self._lock:
             if self._index >= len(self._times):
                 raise SourceClosed(self.description)
-            if self._paused:
-                wait = IDLE_WAIT_S
-            elif self._speed is None:
+            if self._speed is None:
                 return self._take()
-            else:
-                recorded = int(self._times[self._index])
-                if self._anchor is None:
-                    self._anchor = (time.monotonic(), recorded)
-                wall0, rec0 = self._anchor
-                wait = wall0 + (recorded - rec0) / 1e9 / self._speed - time.monotonic()
-                if wait <= 0:
-                    return self._take()
+            recorded = int(self._times[self._index])
+            if self._anchor is None:
+                self._anchor = (time.monotonic(), recorded)
+            wall0, rec0 = self._anchor
+            wait = wall0 + (recorded - rec0) / 1e9 / self._speed - time.monotonic()
+            if wait <= 0:
+                return self._take()
         time.sleep(min(wait, IDLE_WAIT_S))
         return None
 
-    def _take(self) -> Chunk | None:
-        if self._index >= len(self._times):
-            return None
+    def _take(self) -> Chunk:
         t_host_ns, data = self.recording.chunk(self._index)
         self._index += 1
         return Chunk(t_host_ns, data)

@@ -21,8 +21,10 @@ import os
 import re
 import stat
 from dataclasses import dataclass, field
+from pathlib import Path
 from urllib.parse import parse_qsl, urlsplit
 
+from groundstation.autopilot import LOG_SUFFIXES
 from groundstation.sources.base import Source, SourceError
 
 # scheme -> (module providing open_spec(spec), the form the user types, what it is).
@@ -109,14 +111,24 @@ def parse_spec(text: str, **defaults) -> Spec:
     if COM_PORT.match(target) or _is_device(target):
         return Spec(text, "serial", target, _query(text, query), defaults)
     if os.path.isfile(target):
-        if os.path.splitext(target)[1].lower() in (".tlog", ".bin", ".ulg"):
-            raise SourceError(f"{target} is an autopilot's flight log: groundstation export and evaluate read it "
-                              "(CSV, Parquet, the workbook, every estimator); the app and replay do not open flight logs yet")
+        if target.lower().endswith(LOG_SUFFIXES):
+            raise SourceError(f"{target} is an autopilot's flight log, not a link: open it whole (groundstation app FILE, "
+                              "the app's File > Open, or replay, export and evaluate FILE)")
         return Spec(text, "recording", target, _query(text, query), defaults)
     if os.path.isdir(target):
         raise SourceError(f"{target} is a folder; give a recording file (.gsrec) or a port")
     raise SourceError(f"{target}: no such file or serial port (groundstation ports lists the ports); "
                       f"the accepted forms are:{accepted_forms()}")
+
+
+def whole_file(text: str):
+    """The file a spec names when it is to be opened whole (a recording, a flight log, ``mavlink:FILE.tlog``),
+    as a ``Path``; None for a link (or no file)."""
+    text = text.strip() if isinstance(text, str) else ""
+    if text.lower().startswith("mavlink:"):
+        text = text[len("mavlink:"):]
+    path = text if os.path.exists(text) else text.partition("?")[0]
+    return Path(path) if path and os.path.isfile(path) else None
 
 
 def open_source(text: str, **defaults) -> Source:

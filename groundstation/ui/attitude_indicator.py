@@ -95,15 +95,16 @@ class AttitudePanel(QtWidgets.QGroupBox):
     def show_session(self, session: LiveSession, body: bool = True) -> None:
         """The newest estimate of ``session``'s first estimator (AHF, unless a recording says otherwise);
         ``body``: the 3D view too."""
-        name = session.pipeline.filters[0]
+        filters = session.pipeline.filters
+        name = filters[0] if filters else "onboard"  # a log with the aircraft's estimate only
         self.setTitle(f"Attitude ({name.upper()})")
         heading = heading_now(session.pipeline)
         self.readouts["heading"].setText("—" if heading is None else f"{heading[0]:5.1f}° {heading[1]}")
-        imu = session.pipeline.imu
-        last = imu.tail(1)
+        table, prefix = (session.pipeline.imu, f"{name}_q") if filters else (session.pipeline.onboard, "q")
+        last = table.tail(1)
         if not len(last):
             return
-        q = last[0][[imu.columns.index(f"{name}_q{c}") for c in "wxyz"]]
+        q = last[0][[table.columns.index(f"{prefix}{c}") for c in "wxyz"]]
         self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
         if body:
             self.body_view.set_attitude(q)

@@ -1,6 +1,6 @@
 """The connection bar: the source box (any string ``open_source`` accepts, with the serial ports
 found, refreshed as devices come and go, and the recent sources), baud, Connect/Disconnect, the
-simulated bridge, "Open recording…" and "Export…". It only asks; the window acts.
+simulated bridge, "Open file…" (a recording or a flight log) and "Export…". It only asks; the window acts.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ class ConnectionBar(QtWidgets.QWidget):
         self.connect_button = QtWidgets.QPushButton("Connect")
         self.disconnect_button = QtWidgets.QPushButton("Disconnect")
         self.demo_button = QtWidgets.QPushButton("Simulated bridge (demo)")
-        self.open_button = QtWidgets.QPushButton("Open recording…")
+        self.open_button = QtWidgets.QPushButton("Open file…")
         self.export_button = QtWidgets.QPushButton("Export…")
         self.export_button.setToolTip("The current or last session's recording to Excel, CSV or Parquet")
         self.export_button.clicked.connect(self.exportRequested)

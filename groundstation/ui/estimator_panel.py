@@ -3,8 +3,9 @@ HF+mag's β and ECF's and ECF+mag's Kp/Ki live, back to the defaults, or send AH
 
 Live, a change goes through ``LiveSession.change_settings``: it applies from the next sample, keeps
 the attitude, and is written to the recording, so a replay changes it at the same point. In a replay
-every estimator can be shown, those the recording lacks too, and a change is a what-if (the CLI's
-``--set``): the window re-runs the replay from the start with the estimators and settings asked.
+every estimator can be shown, those the file lacks too, and a change is a what-if (the CLI's
+``--set``): the window computes the file again with the estimators and settings asked, and the
+replay goes on from where it was.
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.estimation import ESTIMATORS
 from groundstation.session.live import LiveSession
-from groundstation.sources import ReplaySource
 from groundstation.ui.live_view import LABELS
 
 # estimator -> (setting, label, unit); units as in the settings dataclasses.
@@ -100,16 +100,16 @@ class EstimatorPanel(QtWidgets.QGroupBox):
 
     @property
     def replay(self) -> bool:
-        return self.session is not None and isinstance(self.session.source, ReplaySource)
+        return self.session is not None and self.session.source.is_replay
 
     def _shown_changed(self, name: str, on: bool) -> None:
         self.visibilityChanged.emit(LABELS.get(name, name), on)
         filters = self.session.pipeline.filters
-        if on and name not in filters:  # only a replay offers it: re-run it with this estimator too
+        if on and name not in filters:  # only a replay offers it: compute it again with this estimator too
             self.replayAsked.emit((*filters, name), self._forced())
 
     def _forced(self) -> dict[str, dict[str, float]]:
-        """The fields of every estimator the session runs: the settings a re-run replay is to use."""
+        """The fields of every estimator the session runs: the settings a recomputed replay is to use."""
         return {name: self.values(name) for name in TUNABLE if name in self.session.pipeline.filters}
 
     def sync_shown(self, visible_labels: set[str]) -> None:
@@ -123,11 +123,11 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         return {setting: self.boxes[name, setting].value() for setting, _, _ in TUNABLE[name]}
 
     def apply(self) -> None:
-        """Change every estimator whose fields differ from the settings in effect (a replay: re-run it)."""
+        """Change every estimator whose fields differ from the settings in effect (a replay: compute it again)."""
         current = self.session.pipeline.settings()
         if self.replay:
             if any(v != current[name][k] for name, values in self._forced().items() for k, v in values.items()):
-                self.message.setText("re-running the replay from the start with these settings…")
+                self.message.setText("recomputing the session with these settings…")
                 self.replayAsked.emit(self.session.pipeline.filters, self._forced())
             else:
                 self.message.setText("nothing changed")

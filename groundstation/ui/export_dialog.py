@@ -15,10 +15,13 @@ MIN_WIDTH_PX = 560
 
 
 class ExportDialog(QtWidgets.QDialog):
-    def __init__(self, source: Path, duration_s: float, parent=None):
+    def __init__(self, source: Path, duration_s: float, parent=None, setup: tuple = (None, None)):
+        """``setup``: the estimators and forced settings the file is computed with (None: its own),
+        those the window shows."""
         super().__init__(parent)
         self.setWindowTitle(f"Export {source.name}")
         self.source = Path(source)
+        self.setup = setup
         self.job: ExportJob | None = None
         self.format_box = QtWidgets.QComboBox()
         for suffix, (label, _) in FORMATS.items():
@@ -86,7 +89,7 @@ class ExportDialog(QtWidgets.QDialog):
         try:
             self.job = ExportJob(self.source, Path(self.path_edit.text()), None if whole else self.t_from.value(),
                                  None if whole else self.t_to.value(), self.rate.value() or None,
-                                 self.overwrite.isChecked()).start()
+                                 self.overwrite.isChecked(), *self.setup).start()
         except UserError as error:
             self.status.setText(str(error))
             return

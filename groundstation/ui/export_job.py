@@ -23,8 +23,9 @@ FORMATS = {suffix: (label, DECODE_SHARE[suffix]) for suffix, label in export.FOR
 
 class ExportJob:
     def __init__(self, source: Path, out: Path, t_from: float | None = None, t_to: float | None = None,
-                 rate_hz: float | None = None, overwrite: bool = False):
-        self.request = export.export_request(source, out, t_from=t_from, t_to=t_to, rate_hz=rate_hz, overwrite=overwrite)
+                 rate_hz: float | None = None, overwrite: bool = False, filters=None, overrides=None):
+        self.request = export.export_request(source, out, filters=filters, overrides=overrides, t_from=t_from, t_to=t_to,
+                                             rate_hz=rate_hz, overwrite=overwrite)
         self.source, self.out = self.request.source, self.request.out
         self.fraction = 0.0
         self.done = False

@@ -115,8 +115,8 @@ class LinkPanel(QtWidgets.QGroupBox):
             self.values[name].setText(figures.get(name, "—"))
 
     def refresh(self, session: LiveSession | None) -> None:
-        if session is None:  # disconnected: no figure of the stopped session stands
-            self._show_state("idle", "no source")
+        if session is None or session.pipeline.link is None:  # disconnected, or a file with no link in it
+            self._show_state("idle", "no source" if session is None else "NO LINK (a log or dataset)")
             for label in self.values.values():
                 label.setText("—")
             self._show_radio({})

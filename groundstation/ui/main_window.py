@@ -1,8 +1,10 @@
 """The main window: connection bar, live view, side panels, status bar; owns the current session.
 
 One ``QTimer`` (``REDRAW_HZ``) pulls from the session's tables and redraws; the session's reader
-thread never touches a widget. Problems (a busy port, an unreadable recording, a lost port) appear
-in the red banner under the connection bar, never as a traceback.
+thread never touches a widget. A file (a recording, a dataset CSV, a .tlog, .bin or .ulg) is computed
+whole in a worker thread, its progress under the connection bar, then played back by revealing it
+(``session.reveal``): seeking only moves the playback clock. Problems (a busy port, an unreadable
+file, a lost port) appear in the red banner under the connection bar, never as a traceback.
 """
 
 from __future__ import annotations
@@ -13,9 +15,11 @@ from pathlib import Path
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.errors import UserError
-from groundstation.session.factory import DEMO_SPEC, ReplaySeek, open_session
 from groundstation.recording import default_recordings_dir
+from groundstation.session.factory import DEMO_SPEC, LIVE_FILTERS, open_session
 from groundstation.session.live import LiveSession
+from groundstation.session.reveal import Loading, RevealSession, estimators_for
+from groundstation.sources import whole_file
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
@@ -41,6 +45,7 @@ RECENT_SOURCES = 8  # listed in the source box below the ports found
 # The curves of the versions that stored "hidden_curves" without "known_curves": any other label is new
 # to the user's settings and starts hidden if it is in DEFAULT_HIDDEN.
 FORMERLY_KNOWN = frozenset({"AHF", "onboard", "HF", "ECF"})
+FILES = "Recordings and flight logs (*.gsrec *.tlog *.bin *.ulg *.csv *.csv.gz);;All files (*)"
 
 
 class MainWindow(QtWidgets.QMainWindow):
@@ -49,10 +54,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.setWindowTitle("groundstation")
         self.settings = settings
         self.recordings_dir = recordings_dir
-        self.session: LiveSession | None = None
-        self.seeking: ReplaySeek | None = None
+        self.session: LiveSession | RevealSession | None = None
+        self.loading: Loading | None = None  # a file being computed
+        self._recomputing = False  # the loading is a what-if of the session shown: it keeps the position
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
-        self.replay_setup: tuple[tuple[str, ...] | None, dict | None] = (None, None)  # estimators, forced settings
         self.bar = ConnectionBar()
         self.bar.set_recent(self.recent_sources())
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
@@ -70,6 +75,15 @@ class MainWindow(QtWidgets.QMainWindow):
         self.replay_bar = ReplayBar()
         self.replay_bar.seekRequested.connect(self.seek)
         self.replay_bar.hide()
+        self.loading_bar = QtWidgets.QProgressBar(maximum=1000)
+        self.loading_cancel = QtWidgets.QPushButton("Cancel")
+        self.loading_cancel.clicked.connect(self.cancel_loading)
+        self.loading_row = QtWidgets.QWidget()
+        loading_layout = QtWidgets.QHBoxLayout(self.loading_row)
+        loading_layout.setContentsMargins(4, 0, 4, 0)
+        loading_layout.addWidget(self.loading_bar, 1)
+        loading_layout.addWidget(self.loading_cancel)
+        self.loading_row.hide()
         self.live_view = LiveView(self._stored_hidden_curves())
         self.live_view.channels.restore_layout(settings.value("channel_panes"))
         self.link_panel = LinkPanel()
@@ -108,6 +122,7 @@ class MainWindow(QtWidgets.QMainWindow):
         layout.addWidget(self.bar)
         layout.addWidget(self.banner)
         layout.addWidget(self.recording_banner)
+        layout.addWidget(self.loading_row)
         layout.addWidget(self.replay_bar)
         layout.addWidget(self.splitter, 1)
         self.setCentralWidget(central)
@@ -138,7 +153,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def connect_serial(self, port: str, baud: int = 0) -> None:
         """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the
-        banner), at ``baud`` if it is a serial port (0: the source's default)."""
+        banner), at ``baud`` if it is a serial port (0: the source's default); a file typed there (a
+        recording, ``mavlink:FILE.tlog``, a flight log) is opened whole."""
+        file = whole_file(port)
+        if file is not None:
+            self.open_recording(file)
+            return
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
         rate = {"baud": baud} if baud else {}
@@ -157,10 +177,46 @@ class MainWindow(QtWidgets.QMainWindow):
         return [stored] if isinstance(stored, str) else list(stored)  # QSettings gives one item as a str
 
     def open_recording(self, path) -> None:
-        self.replay_setup = (None, None)  # the recorded estimators and settings
-        self._start(lambda: open_session(str(path)).start())
-        if self.session is not None:
-            self._remember_recent(Path(path).resolve())
+        """Open a file whole: a recording (its recorded estimators), a dataset CSV or a flight log (the
+        app's estimators); computed in a worker, then played from the start (``tick`` adopts it)."""
+        self.disconnect()
+        path = Path(path)
+        self._load(path, estimators_for(path, LIVE_FILTERS), None, f"computing {path.name}")
+
+    def _load(self, path: Path, filters, forced, text: str, recompute: bool = False) -> None:
+        if self.loading is not None:
+            self.loading.cancel()
+        self.show_error(None)
+        self.loading = Loading(path, filters, forced)
+        self._recomputing = recompute
+        self.loading_bar.setFormat(f"{text}… %p %")
+        self.loading_bar.setValue(0)
+        self.loading_row.show()
+
+    def cancel_loading(self) -> None:
+        if self.loading is not None:
+            self.loading.cancel()
+            self.loading = None
+        self.loading_row.hide()
+
+    def _loaded(self) -> None:
+        """The file is computed: play it (from where the session shown was, for a what-if), or say why not."""
+        loading, self.loading = self.loading, None
+        self.loading_row.hide()
+        if loading.error is not None:
+            self.show_error(loading.error)
+            return
+        shown = self.session if self._recomputing and isinstance(self.session, RevealSession) else None
+        if shown is not None:
+            shown.advance()
+            playback = {"paused": shown.source.paused, "position_s": shown.source.position_s}
+            self._stop_session()
+        else:
+            playback = {}
+        self._adopt(RevealSession(loading.data, loading.path, loading.setup, speed=self.replay_bar.speed, **playback))
+        self.source_label.setText(self.session.source.description)
+        if shown is None:
+            self._remember_recent(loading.path.resolve())
 
     def recording_dialog(self) -> QtWidgets.QFileDialog:
         """A file dialog in the folder live sessions record to, where yesterday's flight is."""
@@ -169,7 +225,7 @@ class MainWindow(QtWidgets.QMainWindow):
             folder.mkdir(parents=True, exist_ok=True)
         except OSError:
             pass  # the dialog then starts where it can
-        dialog = QtWidgets.QFileDialog(self, "Open recording", str(folder), "Recordings (*.gsrec);;All files (*)")
+        dialog = QtWidgets.QFileDialog(self, "Open recording or flight log", str(folder), FILES)
         dialog.setFileMode(QtWidgets.QFileDialog.ExistingFile)
         return dialog
 
@@ -196,24 +252,20 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
 
     def seek(self, t_s: float) -> None:
-        """Restart the replay at ``t_s``, keeping its pause, speed, estimators and settings; the new
-        session is adopted by ``tick`` once the estimates before ``t_s`` are computed."""
-        if self.seeking is not None:
-            self.seeking.cancel()
-            source = self.seeking.session.source
-        elif self.session is not None:
-            source = self.session.source
-            self._stop_session()
-        else:
-            return
-        self.seeking = ReplaySeek(source.recording, self.replay_bar.speed, source.paused, t_s, *self.replay_setup)
+        """Move the replay's clock to ``t_s`` (nothing is recomputed); its pause and speed stay. Back in
+        time, the views that only ever add rows start over."""
+        session = self.session
+        if isinstance(session, RevealSession) and session.seek(t_s):
+            self.live_view.set_session(session)
+            self.event_console.set_session(session)
 
     def rerun_replay(self, filters: tuple[str, ...], forced: dict) -> None:
-        """The replay again with ``filters`` and ``forced`` settings, from the start to where it is."""
-        if self.session is None and self.seeking is None:
-            return
-        self.replay_setup = (tuple(filters), forced)
-        self.seek((self.seeking.session if self.seeking else self.session).source.position_s)
+        """The what-if: the file computed again with ``filters`` and ``forced`` settings, in a worker;
+        the replay goes on meanwhile and continues from where it is."""
+        session = self.session
+        if isinstance(session, RevealSession):
+            self._load(session.source.path, tuple(filters), forced, f"recomputing {session.source.path.name} with "
+                       f"{', '.join(filters)}", recompute=True)
 
     def _start(self, start, note: str = "") -> None:
         """Stop the current session, then start another; a failure leaves none and says why."""
@@ -228,20 +280,21 @@ class MainWindow(QtWidgets.QMainWindow):
         self.source_label.setText(f"{session.source.description}{'  —  ' + note if note else ''}")
 
     def export(self) -> ExportDialog | None:
-        """The export dialog on the current session's recording (or the last one's)."""
+        """The export dialog on the current session's file (or the last one's), with the estimators shown."""
         file = self._session_file(self.session) if self.session is not None else self.last_file
         if file is None:
             self.show_error("Nothing to export yet: connect, start the simulated bridge or open a recording first.")
             return None
-        dialog = ExportDialog(*file, parent=self)
+        setup = self.session.setup if isinstance(self.session, RevealSession) else (None, None)
+        dialog = ExportDialog(*file, parent=self, setup=setup)
         dialog.setModal(False)  # the live view goes on while it exports
         dialog.show()
         return dialog
 
     @staticmethod
-    def _session_file(session: LiveSession) -> tuple[Path, float] | None:
-        if session.source.is_replay:
-            return session.source.recording.path, session.source.duration_s
+    def _session_file(session: LiveSession | RevealSession) -> tuple[Path, float] | None:
+        if isinstance(session, RevealSession):
+            return session.source.path, session.source.duration_s
         if session.recording_path is None:
             return None
         last = session.pipeline.imu.tail(1)
@@ -255,13 +308,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels())
         self.uplink_panel.set_session(session)
         self.event_console.set_session(session)
+        self.link_panel.refresh(session)
         self.bar.set_connected(True)
         self._sync_record_action()
 
     def disconnect(self) -> None:
-        if self.seeking is not None:
-            self.seeking.cancel()
-            self.seeking = None
+        self.cancel_loading()
+        self.attitude_panel.clear()  # no attitude of a stopped session stands
         if self.session is not None:
             description = self.session.source.description
             self._stop_session()
@@ -291,7 +344,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _build_menus(self) -> None:
         """File and View menus whose actions carry the keyboard shortcuts, and Help listing them."""
         file = self.menuBar().addMenu("&File")
-        self._action(file, "&Open recording…", "Ctrl+O", self.choose_recording)
+        self._action(file, "&Open recording or flight log…", "Ctrl+O", self.choose_recording)
         self.recent_menu = file.addMenu("Recent recordings")
         self._fill_recent_menu()
         self._action(file, "&Export…", "Ctrl+E", self.export)
@@ -350,13 +403,13 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- the redraw timer -----------------------------------------------------------------------
 
     def tick(self) -> None:
-        if self.seeking is not None:
-            if not self.seeking.done:
-                self.replay_bar.position.setText(f"seeking… {100 * self.seeking.fraction:.0f} %")
-                return
-            self._adopt(self.seeking.session.start())
-            self.seeking = None
+        if self.loading is not None:
+            self.loading_bar.setValue(int(1000 * self.loading.fraction))
+            if self.loading.done:
+                self._loaded()
         session = self.session
+        if isinstance(session, RevealSession):
+            session.advance()
         self.ticks += 1
         figures = self.ticks % FIGURES_EVERY == 0
         if figures:
@@ -378,12 +431,14 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_error(f"The session stopped: {session.error}")
 
     @staticmethod
-    def _recording_text(session: LiveSession) -> str:
+    def _recording_text(session: LiveSession | RevealSession) -> str:
+        if session.recorder is None:
+            return "not recording (replay)"
         if session.recorder.state == "failed":
             return "⚠ NOT RECORDING (see the red banner)"
         path = session.recording_path
         if path is None:
-            return "not recording (replay)" if session.source.is_replay else "not recording"
+            return "not recording"
         doing = "● recording" if session.recorder.state == "recording" else "not recording; last file"
         return f"{doing} {path}  ({session.recorder.bytes_written / 1e6:.1f} MB)"
 

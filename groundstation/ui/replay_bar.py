@@ -1,17 +1,20 @@
 """The replay transport: play/pause (Replay at the end), step, speed, a seek slider and the position.
 
-It drives the ``ReplaySource`` directly for pause, speed and step; a seek restarts the replay (see
-``ReplaySeek``), which the window does, so the bar only emits ``seekRequested``.
+It moves the playback clock of a ``RevealSession`` (``session.reveal.Playback``) for pause, speed and
+step; a seek is the window's (views that only add rows start over when it goes back), so the bar
+only emits ``seekRequested``.
 """
 
 from __future__ import annotations
 
+import math
+
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.live import LiveSession
-from groundstation.sources import ReplaySource
+from groundstation.session.reveal import Playback, RevealSession
+from groundstation.sources.replay import MAX_SPEED, MIN_SPEED
 
-SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+SPEEDS = tuple(MIN_SPEED * 2.0**i for i in range(round(math.log2(MAX_SPEED / MIN_SPEED)) + 1))  # 0.25x, 0.5x ... 64x
 SLIDER_STEPS_PER_S = 10
 
 
@@ -29,7 +32,7 @@ class ReplayBar(QtWidgets.QWidget):
 
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.session: LiveSession | None = None
+        self.session: RevealSession | None = None
         self.play_button = QtWidgets.QPushButton("Pause")
         self.play_button.clicked.connect(self.toggle)
         self.step_button = QtWidgets.QPushButton("Step")
@@ -56,12 +59,12 @@ class ReplayBar(QtWidgets.QWidget):
         layout.addWidget(self.position)
 
     @property
-    def source(self) -> ReplaySource:
+    def source(self) -> Playback:
         return self.session.source
 
-    def set_session(self, session: LiveSession | None) -> None:
-        """Show the bar for a replay (hidden otherwise); a restarted replay keeps the pause and speed."""
-        replay = session is not None and isinstance(session.source, ReplaySource)
+    def set_session(self, session) -> None:
+        """Show the bar for a replay (hidden otherwise); a recomputed replay keeps the pause and speed."""
+        replay = isinstance(session, RevealSession)
         self.session = session if replay else None
         self.setVisible(replay)
         if replay:
@@ -82,6 +85,7 @@ class ReplayBar(QtWidgets.QWidget):
         if self.ended:
             self.source.pause(False)
             self.seekRequested.emit(0.0)
+            self._show_paused(False)
             return
         self.source.pause(not self.source.paused)
         self._show_paused(self.source.paused)
@@ -100,14 +104,8 @@ class ReplayBar(QtWidgets.QWidget):
             QtCore.QTimer.singleShot(0, lambda: self.seekRequested.emit(self.slider.value() / SLIDER_STEPS_PER_S))
 
     def step(self) -> None:
-        """Feed chunks until one more IMU sample is in (the reader is idle while paused)."""
-        imu = self.session.pipeline.imu
-        before = len(imu)
-        while len(imu) == before:
-            chunk = self.source.step()
-            if chunk is None:
-                return
-            self.session.feed_chunk(*chunk)
+        """One more IMU sample (while paused)."""
+        self.session.step()
 
     def refresh(self) -> None:
         if self.session is None:

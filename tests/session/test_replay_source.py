@@ -1,4 +1,4 @@
-"""Replay pacing, pause, seek and step, and replaying damaged recordings."""
+"""Replay pacing, and replaying damaged recordings."""
 
 import subprocess
 import sys
@@ -44,18 +44,6 @@ def test_paced_replay_is_not_faster_than_asked():
 def test_speed_outside_the_range_is_refused():
     with pytest.raises(ValueError, match="between"):
         ReplaySource(open_recording(SAMPLE), speed=100.0)
-
-
-def test_pause_seek_and_step():
-    source = ReplaySource(open_recording(SAMPLE), speed=1.0)
-    source.pause()
-    assert source.read() is None  # paused: nothing, however long we ask
-    index = source.seek(10.0)
-    assert source.position_s == pytest.approx(10.0, abs=0.05)
-    chunk = source.step()
-    assert chunk is not None and source.index == index + 1
-    source.seek(0.0)
-    assert source.position_s == 0.0
 
 
 def test_a_recording_cut_off_mid_record_replays_what_it_holds(tmp_path):

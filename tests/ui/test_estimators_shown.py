@@ -17,6 +17,8 @@ from groundstation.ui.estimator_panel import SHOWN_COLUMNS
 from groundstation.ui.live_view import LABELS
 from groundstation.ui.main_window import MainWindow
 
+from tests.ui.helpers import open_file
+
 NEW = ("hfm", "ecfm", "mcf", "ukf", "sssrukf")
 COMPARED = LIVE_FILTERS[1:]  # the first is shown; the others get a "show" box
 
@@ -114,7 +116,7 @@ def app_recording(tmp_path_factory):
 
 
 def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_recording, tmp_path):
-    window.open_recording(app_recording)
+    open_file(window, qtbot, app_recording)
     window.replay_bar.speed_box.setCurrentIndex(window.replay_bar.speed_box.findData(64.0))
     qtbot.waitUntil(lambda: not window.session.running, timeout=20000)
     assert window.session.pipeline.filters == LIVE_FILTERS

@@ -4,9 +4,11 @@ import pandas as pd
 
 from groundstation.ui.export_dialog import ExportDialog
 
+from tests.ui.helpers import open_file
+
 
 def test_export_dialog_writes_the_selected_range(window, qtbot, recording, tmp_path):
-    window.open_recording(recording)
+    open_file(window, qtbot, recording)
     dialog = window.export()
     qtbot.addWidget(dialog)
     out = tmp_path / "flight.csv"

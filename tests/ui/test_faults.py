@@ -10,13 +10,15 @@ import pytest
 
 from groundstation.sources.serial_port import explain_port_error
 
+from tests.ui.helpers import open_file
 
-def test_missing_or_damaged_recording_shows_a_message(window, tmp_path):
-    window.open_recording(tmp_path / "missing.gsrec")
+
+def test_missing_or_damaged_recording_shows_a_message(window, qtbot, tmp_path):
+    open_file(window, qtbot, tmp_path / "missing.gsrec")
     assert window.banner.isVisible() and "no such file" in window.banner.text()
     damaged = tmp_path / "damaged.gsrec"
     damaged.write_bytes(b"this is not a recording at all" * 10)
-    window.open_recording(damaged)
+    open_file(window, qtbot, damaged)
     assert window.banner.isVisible() and "damaged.gsrec" in window.banner.text()
     assert window.session is None
 

@@ -13,6 +13,8 @@ from groundstation.sim.extra_sensors import AuxSettings
 from groundstation.sim.profiles import make_profile
 from groundstation.ui.navigation import heading_now, newest_row
 
+from tests.ui.helpers import open_file
+
 DURATION_S, SEED = 20, 3
 GPS_NOISE_M = AuxSettings().gps_position_noise_m
 
@@ -30,7 +32,7 @@ def aided_recording(tmp_path_factory):
 
 
 def replay_to_the_end(window, qtbot, path) -> Pipeline:
-    window.open_recording(path)
+    open_file(window, qtbot, path)
     bar = window.replay_bar
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(64.0))
     qtbot.waitUntil(lambda: not window.session.running, timeout=15000)
@@ -93,7 +95,7 @@ def test_readouts_and_plots_follow_the_tables_and_the_truth(window, qtbot, aided
 
 
 def test_a_session_without_aiding_sensors_shows_a_dash(window, qtbot, recording):
-    window.open_recording(recording)
+    open_file(window, qtbot, recording)
     view, panel = window.live_view, window.attitude_panel
     qtbot.waitUntil(lambda: view.frames_drawn > 5 and panel.readouts["yaw"].text() != "—", timeout=5000)
     assert panel.readouts["heading"].text() == "—"

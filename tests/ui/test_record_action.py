@@ -4,6 +4,8 @@ cannot be re-recorded."""
 from groundstation.recording import open_recording
 from groundstation.session.pipeline import Pipeline
 
+from tests.ui.helpers import open_file
+
 
 def test_recording_stops_and_starts_a_new_file_that_replays(window, qtbot):
     window.start_demo()
@@ -34,8 +36,8 @@ def test_recording_stops_and_starts_a_new_file_that_replays(window, qtbot):
     assert pipeline.config and len(pipeline.imu) > 100
 
 
-def test_a_replay_offers_no_recording(window, recording):
-    window.open_recording(recording)
+def test_a_replay_offers_no_recording(window, qtbot, recording):
+    open_file(window, qtbot, recording)
     assert window.session is not None and not window.record_action.isEnabled()
     window.toggle_recording()
     assert window.session.recording_path is None

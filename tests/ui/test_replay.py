@@ -1,40 +1,258 @@
-"""A recording in the window: the transport pauses, steps, changes speed and seeks; a seek shows the
-estimates the whole flight leads to at that point, exactly as a headless replay computes them."""
+"""Any file in the window, one way: computed whole by ``load_session`` in a worker (a progress bar
+meanwhile), then played back by revealing the computed rows up to a clock. The plots show exactly
+the computed session's rows up to the clock; pause, step and seek move the clock and never compute
+again; a what-if (an estimator added, a setting changed) computes again and keeps the position;
+a bad file is a message in the banner."""
+
+import os
+from pathlib import Path
 
 import numpy as np
+import pytest
 
-from groundstation.recording import open_recording
-from groundstation.session.replay import replay
+from groundstation import quaternion
+from groundstation.session import reveal
+from groundstation.session.data import load_session
+from groundstation.session.factory import LIVE_FILTERS
+
+from tests.ui.helpers import open_file
+
+FLIGHTLOGS = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs"
+# Small ones, one per format: a 208 s ArduPlane SITL tlog (4 Hz IMU), a 98 s ArduCopter DataFlash log
+# (25 Hz IMU), a 9 s PX4 hop (200 Hz IMU).
+LOGS = ("arduplane_quadplane_sitl.tlog", "arducopter_cubeorange_2023-07-06_10-12-18.bin", "px4_fmuv5_quad_hop.ulg")
 
 
-def samples(window):
-    return len(window.session.pipeline.imu)
+def flightlog(name: str) -> Path:
+    path = FLIGHTLOGS / name
+    if not path.exists():
+        pytest.skip(f"{path} is absent (the shared flight logs, ../shared/datasets/flightlogs)")
+    return path
 
 
-def test_transport_pause_step_speed_and_seek(window, qtbot, recording):
-    window.open_recording(recording)
-    bar = window.replay_bar
-    assert bar.isVisible() and window.banner.isHidden()
-    qtbot.waitUntil(lambda: window.live_view.frames_drawn > 3 and samples(window) > 20, timeout=5000)
+@pytest.fixture
+def loads(monkeypatch):
+    """Every ``load_session`` the window runs, counted."""
+    calls = []
 
-    bar.play_button.click()  # pause: nothing more arrives
-    paused_at = samples(window)
-    qtbot.wait(300)
-    assert samples(window) == paused_at and bar.play_button.text() == "Play"
-    bar.step_button.click()
-    assert samples(window) == paused_at + 1
+    def counted(*args, **kwargs):
+        calls.append(args[1:3])
+        return load_session(*args, **kwargs)
+
+    monkeypatch.setattr(reveal, "load_session", counted)
+    return calls
+
+
+def pitch_curve(window, name: str):
+    return next(c for s, c in window.live_view.attitude.curves if s.quantity == f"{name}_pitch_deg")
+
+
+def points(curve) -> int:
+    return 0 if curve.xData is None else len(curve.xData)  # pyqtgraph keeps None for no data
+
+
+def pitch_deg(q: np.ndarray) -> np.ndarray:
+    return np.degrees(quaternion.to_euler_zyx(q))[:, 1]
+
+
+def check_plotted_up_to(window, qtbot, data, name: str, t_s: float) -> None:
+    """The plotted pitch of ``name`` is the computed session's, every row up to ``t_s`` and none after."""
+    rows = data.time_s <= t_s
+    curve = pitch_curve(window, name)
+    qtbot.waitUntil(lambda: points(curve) == rows.sum(), timeout=3000)
+    np.testing.assert_array_equal(curve.xData, data.time_s[rows])
+    expected = pitch_deg(data.estimates[name][rows] if name != "onboard" else data.onboard[rows])
+    np.testing.assert_allclose(curve.yData, expected, atol=1e-4)  # the plot keeps float32
+
+
+def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recording, loads):
+    open_file(window, qtbot, recording)
+    assert len(loads) == 1 and window.banner.isHidden()
+    session, bar = window.session, window.replay_bar
+    data = load_session(recording)  # the export's and evaluate's session, computed apart
+    assert session.pipeline.filters == tuple(data.estimates) == ("ahf",)
+    window.live_view.window_box.setCurrentText("whole session")
+    qtbot.waitUntil(lambda: session.source.position_s > 0.5, timeout=5000)
+
+    bar.play_button.click()  # pause: the clock stops
+    assert session.source.paused and bar.play_button.text() == "Play"
+    paused_at = session.source.position_s
+    qtbot.wait(200)
+    assert session.source.position_s == paused_at
+    shown = len(session.pipeline.imu)
+    bar.step_button.click()  # one more sample
+    assert len(session.pipeline.imu) == shown + 1 and session.source.position_s == data.time_s[shown]
 
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(4.0))
-    assert window.session.source.speed == 4.0
+    assert session.source.speed == 4.0
+    window.seek(20.0)  # forward, then back: the clock moves, nothing is computed again
+    check_plotted_up_to(window, qtbot, data, "ahf", 20.0)
+    window.seek(7.5)
+    check_plotted_up_to(window, qtbot, data, "ahf", 7.5)
+    assert window.session is session and window.loading is None and len(loads) == 1
+    assert session.source.paused and session.source.speed == 4.0  # kept across the seeks
+    shown = session.pipeline.imu.to_dict()
+    for column, values in data.tables["imu"].items():  # every column, bit for bit, up to the clock
+        np.testing.assert_array_equal(shown[column], values[data.time_s <= 7.5], err_msg=column)
+    times = [e.get("session_time_s", e["t_s"]) for e in data.events]
+    assert [e["session_time_s"] for e in session.pipeline.events] == sorted(t for t in times if t <= 7.5)
 
-    window.seek(20.0)
-    qtbot.waitUntil(lambda: window.seeking is None, timeout=10000)
-    session = window.session
-    assert session.source.paused and session.source.speed == 4.0  # kept across the seek
-    assert abs(session.source.position_s - 20.0) < 0.05
-    imu = session.pipeline.imu.array()
-    headless = replay(open_recording(recording)).imu.array()
-    np.testing.assert_array_equal(imu, headless[: len(imu)])  # the flight up to the seek, bit for bit
     bar.play_button.click()
-    ahf = next(c for s, c in window.live_view.attitude.curves if s.quantity == "ahf_pitch_deg")
-    qtbot.waitUntil(lambda: ahf.xData is not None and len(ahf.xData) and ahf.xData[-1] > 21.0, timeout=3000)
+    qtbot.waitUntil(lambda: session.source.position_s > 8.5, timeout=3000)  # 4x from 7.5 s
+    assert session.pipeline.link.stats.frames > 0 and window.link_panel.values["frames/s"].text() not in ("—", "")
+
+
+@pytest.mark.parametrize("name", LOGS)
+def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot, loads, name):
+    path = flightlog(name)
+    window.open_recording(path)
+    assert window.loading_row.isVisible() and "computing" in window.loading_bar.format()  # progress while computing
+    qtbot.waitUntil(lambda: window.loading is None, timeout=60000)
+    assert window.banner.isHidden() and not window.loading_row.isVisible()
+    session, bar = window.session, window.replay_bar
+    filters = tuple(n for n in LIVE_FILTERS if n not in ("ukf", "sssrukf"))
+    assert loads == [(filters, None)] and session.pipeline.filters == filters
+    data = session.data
+    assert len(data) > 100 and data.link is None
+    assert not window.uplink_panel.isEnabled() and not window.estimator_panel.send_button.isEnabled()  # no uplink
+    assert window.link_panel.headline.text().startswith("NO LINK")
+    window.live_view.window_box.setCurrentText("whole session")
+
+    bar.speed_box.setCurrentIndex(bar.speed_box.findData(8.0))
+    qtbot.waitUntil(lambda: points(pitch_curve(window, "vqf")) > 3, timeout=5000)  # playing
+    bar.play_button.click()
+    assert session.source.paused
+    middle = float(data.time_s[len(data) // 2])
+    window.seek(middle)
+    check_plotted_up_to(window, qtbot, data, "vqf", middle)
+    window.seek(middle / 3)  # back
+    check_plotted_up_to(window, qtbot, data, "vqf", middle / 3)
+    last = np.flatnonzero(data.time_s <= middle / 3)[-1]  # the horizon shows the newest estimate shown
+    newest = f"{pitch_deg(data.estimates['vqf'][last:last + 1])[0]:+7.1f}°"
+    qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=3000)
+    assert len(loads) == 1  # seeking computed nothing
+
+    window.estimator_panel.shown["cf1"].setChecked(True)  # a what-if: one more estimator
+    qtbot.waitUntil(lambda: window.loading is None and "cf1" in window.session.pipeline.filters, timeout=60000)
+    assert loads[-1][0] == (*filters, "cf1")
+    session = window.session
+    assert session.source.position_s == middle / 3 and session.source.paused  # the position kept
+    window.live_view.set_visible("CF1", True)
+    check_plotted_up_to(window, qtbot, session.data, "cf1", middle / 3)
+    alone = load_session(path, ("cf1",))  # the same estimator computed by itself
+    np.testing.assert_array_equal(session.data.estimates["cf1"], alone.estimates["cf1"])
+
+
+def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
+    path = flightlog("arduplane_omnibusf4_ground_pilot_0004.bin")
+    open_file(window, qtbot, path)
+    session = window.session
+    assert session.pipeline.filters == () and session.data.onboard is not None
+    assert any("IMU" in e["message"] for e in session.pipeline.events if e["kind"] == "warning")  # said, at 0 s
+    window.live_view.window_box.setCurrentText("whole session")
+    window.replay_bar.play_button.click()
+    window.seek(30.0)
+    check_plotted_up_to(window, qtbot, session.data, "onboard", 30.0)
+    qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() != "—", timeout=3000)
+
+
+def bad_files(tmp_path: Path) -> list[tuple[Path, str]]:
+    """(file, what the banner must say) for a truncated file of each kind, non-logs and unreadable paths."""
+    samples = Path(__file__).resolve().parents[2] / "recordings" / "samples"
+    cut_gsrec = tmp_path / "cut.gsrec"
+    cut_gsrec.write_bytes((samples / "hover-raw.gsrec").read_bytes()[:40])
+    text = b"these are not the bytes of a flight log\n" * 20
+    cases = [(cut_gsrec, "cut.gsrec"), (tmp_path / "folder.ulg", "folder.ulg"), (tmp_path / "no" / "such.tlog", "such.tlog")]
+    (tmp_path / "folder.ulg").mkdir()
+    for suffix in (".ulg", ".bin", ".tlog", ".gsrec"):
+        (tmp_path / f"text{suffix}").write_bytes(text)
+        cases.append((tmp_path / f"text{suffix}", f"text{suffix}"))
+    ulg = FLIGHTLOGS / "px4_fmuv5_quad_hop.ulg"
+    if ulg.exists():
+        (tmp_path / "cut.ulg").write_bytes(ulg.read_bytes()[:3000])
+        cases.append((tmp_path / "cut.ulg", "cut.ulg"))
+    return cases
+
+
+def test_bad_files_say_why_in_the_banner(window, qtbot, tmp_path, recording):
+    for path, named in bad_files(tmp_path):
+        open_file(window, qtbot, recording)
+        assert window.session is not None
+        open_file(window, qtbot, path)
+        text = window.banner.text()
+        assert window.banner.isVisible() and named in text and "Traceback" not in text, (path, text)
+        assert window.session is None and window.replay_bar.isHidden() and not window.loading_row.isVisible()
+    if os.geteuid() != 0:  # root reads any file
+        locked = tmp_path / "locked.gsrec"
+        locked.write_bytes(recording.read_bytes())
+        locked.chmod(0)
+        open_file(window, qtbot, locked)
+        assert window.banner.isVisible() and "locked.gsrec" in window.banner.text()
+
+
+def test_a_file_typed_as_the_source_opens_whole(window, qtbot, recording):
+    window.connect_serial(str(recording), 115200)
+    qtbot.waitUntil(lambda: window.loading is None, timeout=20000)
+    assert window.session.source.path == recording and window.replay_bar.isVisible()
+
+
+def test_the_export_dialog_writes_the_estimators_a_flight_log_is_shown_with(window, qtbot, tmp_path):
+    path = flightlog("px4_fmuv5_quad_hop.ulg")
+    open_file(window, qtbot, path)
+    dialog = window.export()
+    qtbot.addWidget(dialog)
+    out = tmp_path / "hop.csv"
+    dialog.path_edit.setText(str(out))
+    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
+    dialog.path_edit.setText(str(out))
+    dialog.export_button.click()
+    qtbot.waitUntil(lambda: dialog.job.done, timeout=60000)
+    assert dialog.job.error is None, dialog.job.error
+    header = out.read_text().splitlines()[0].split(",")
+    for name in window.session.pipeline.filters:  # the window's estimators, not the CLI's default
+        assert f"{name}_pitch_deg" in header, name
+
+
+def test_a_tlogs_messages_are_channels_revealed_with_the_clock(window, qtbot):
+    path = flightlog("arduplane_quadplane_sitl.tlog")
+    open_file(window, qtbot, path)
+    view, data = window.live_view, window.session.data
+    channel = "vfr_hud.airspeed_m_s"  # a message type of its own: "plot any channel"
+    assert channel in {f"{t.name}.{c.name}" for t, c in data.catalogue.channels()}
+    view.tabs.setCurrentWidget(view.channels)
+    view.channels.add(channel)
+    window.live_view.window_box.setCurrentText("whole session")
+    window.replay_bar.play_button.click()
+    window.seek(120.0)
+    curve = next(c for s, c in view.channels.stacked.curves if s.label == channel)
+    table = data.tables["vfr_hud"]
+    rows = table["time_s"] <= 120.0
+    qtbot.waitUntil(lambda: points(curve) == rows.sum(), timeout=3000)
+    np.testing.assert_array_equal(curve.xData, table["time_s"][rows])
+    np.testing.assert_array_equal(curve.yData, table["airspeed_m_s"][rows].astype(np.float32))
+
+
+def test_a_dataset_csv_plays_as_a_recording_does(window, qtbot, tmp_path):
+    from groundstation.cli import main
+
+    assert main(["simulate", "--scenario", "flight", "--duration", "12", "--seed", "5", "--out", str(tmp_path / "f.bin")]) == 0
+    csv = tmp_path / "f.truth.csv.gz"  # the truth and sensor values in the dataset CSV layout
+    open_file(window, qtbot, csv)
+    data = window.session.data
+    assert window.banner.isHidden() and window.session.pipeline.filters[0] == "vqf" and data.true_q is not None
+    window.live_view.window_box.setCurrentText("whole session")
+    window.replay_bar.play_button.click()
+    window.seek(6.0)
+    check_plotted_up_to(window, qtbot, data, "vqf", 6.0)
+    assert window.link_panel.headline.text().startswith("NO LINK")
+
+
+def test_cancel_while_computing_leaves_no_session(window, qtbot):
+    window.open_recording(flightlog("px4_fmuv5_quad_hop.ulg"))
+    assert window.loading_row.isVisible()
+    loading = window.loading
+    window.loading_cancel.click()
+    assert window.loading is None and not window.loading_row.isVisible()
+    loading.wait(30)  # the worker ends (or is dropped); nothing is adopted
+    qtbot.wait(200)
+    assert window.session is None and window.banner.isHidden()

@@ -4,6 +4,8 @@ import numpy as np
 
 from groundstation.ui.plots import Plot
 
+from tests.ui.helpers import open_file
+
 
 def test_magnetometer_and_barometer_appear_on_the_sensors_tab(window, qtbot, recording):
     window.start_demo()  # the demo craft carries a magnetometer and a barometer
@@ -20,5 +22,5 @@ def test_magnetometer_and_barometer_appear_on_the_sensors_tab(window, qtbot, rec
     assert pressure.yData[-1] == np.float32(baro.column("pressure_Pa")[row] / 100.0)
     assert [p.title for p in view.sensors._specs] == ["accelerometer", "gyroscope", "magnetometer", "pressure"]
     assert all(isinstance(p, Plot) for p in view.sensors._specs)
-    window.open_recording(recording)  # an IMU-only flight: back to two plots
+    open_file(window, qtbot, recording)  # an IMU-only flight: back to two plots
     assert len(view.sensors.items) == 2

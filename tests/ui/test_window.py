@@ -7,12 +7,15 @@ import os
 import threading
 import time
 
+import numpy as np
 import pytest
 from PySide6 import QtCore, QtWidgets
 
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.main_window import MainWindow
+
+from tests.ui.helpers import open_file, play_to_the_end
 
 
 def new_window(qtbot, tmp_path, recordings_dir):
@@ -24,7 +27,7 @@ def new_window(qtbot, tmp_path, recordings_dir):
 
 
 def test_no_uplink_control_is_enabled_when_the_source_cannot_send(window, qtbot, recording):
-    window.open_recording(recording)
+    open_file(window, qtbot, recording)
     assert window.session.source.can_send is False
     send = window.estimator_panel.send_button
     assert not send.isEnabled() and not window.uplink_panel.isEnabled()
@@ -44,13 +47,14 @@ def test_open_recording_starts_in_the_recordings_folder(qtbot, tmp_path, monkeyp
 
 
 def test_recent_recordings_are_listed_and_remembered(window, qtbot, tmp_path, recording):
-    window.open_recording(recording)
+    open_file(window, qtbot, recording)
     window.close()
     again = new_window(qtbot, tmp_path, tmp_path / "recordings")
     actions = again.recent_menu.actions()
     assert [a.text() for a in actions][0].endswith(recording.name) and actions[0].data() == str(recording)
     actions[0].trigger()
-    assert again.session.source.recording.path == recording
+    qtbot.waitUntil(lambda: again.loading is None, timeout=20000)
+    assert again.session.source.path == recording
 
 
 def write_flight(fd: int, stop: threading.Event) -> None:
@@ -84,24 +88,25 @@ def test_a_new_session_does_not_show_the_previous_ones_attitude(window, qtbot, r
     window.start_demo()
     panel = window.attitude_panel
     qtbot.waitUntil(lambda: panel.readouts["pitch"].text() != "—", timeout=5000)
-    window.open_recording(recording)
+    window.open_recording(recording)  # computed in a worker meanwhile
     assert panel.readouts["pitch"].text() == "—" and panel.indicator.pitch_deg != panel.indicator.pitch_deg  # NaN
 
 
 def test_the_replay_ends_with_a_replay_button_that_plays_it_again(window, qtbot, recording):
-    window.open_recording(recording)
+    open_file(window, qtbot, recording)
     bar = window.replay_bar
-    bar.speed_box.setCurrentIndex(bar.speed_box.findData(64.0))
-    qtbot.waitUntil(lambda: not window.session.running, timeout=10000)
+    play_to_the_end(window, qtbot)
     qtbot.waitUntil(lambda: bar.play_button.text() == "Replay", timeout=2000)
+    assert len(window.session.pipeline.imu) == len(window.session.data.tables["imu"]["time_s"])  # every row shown
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(1.0))
     bar.play_button.click()
-    qtbot.waitUntil(lambda: window.seeking is None and window.session is not None and window.session.running, timeout=10000)
-    assert window.session.source.position_s < 10.0 and bar.play_button.text() == "Pause"
+    assert window.session.running and window.session.source.position_s == 0.0 and bar.play_button.text() == "Pause"
+    qtbot.waitUntil(lambda: window.session.source.position_s > 0.2, timeout=3000)  # playing again
+    assert len(window.session.pipeline.imu) < 100
 
 
 def test_a_click_on_the_slider_track_seeks_there(window, qtbot, recording):
-    window.open_recording(recording)
+    open_file(window, qtbot, recording)
     bar = window.replay_bar
     duration = window.session.source.duration_s
     with qtbot.waitSignal(bar.seekRequested, timeout=2000) as seek:
@@ -120,31 +125,36 @@ def test_the_export_dialog_keeps_its_fields_when_the_result_appears(qtbot, recor
     assert {w: w.height() for w in before} == before
 
 
-def test_fields_of_an_estimator_the_session_lacks_show_no_number(window, recording):
-    window.open_recording(recording)  # the recording holds AHF only
+def test_fields_of_an_estimator_the_session_lacks_show_no_number(window, qtbot, recording):
+    open_file(window, qtbot, recording)  # the recording holds AHF only
     box = window.estimator_panel.boxes["hf", "beta"]
     assert not box.isEnabled() and box.text() in ("", "—")
     assert window.estimator_panel.boxes["ahf", "lambda_min"].text().endswith("rad/s")
 
 
-def test_an_estimator_added_to_a_replay_reruns_it_with_the_settings_asked(window, qtbot, recording):
-    from groundstation.recording import open_recording
-    from groundstation.session.replay import replay
+def test_an_estimator_added_to_a_replay_recomputes_it_with_the_settings_asked(window, qtbot, recording):
+    from groundstation.session.data import load_session
 
-    window.open_recording(recording)
+    open_file(window, qtbot, recording)
     panel = window.estimator_panel
     assert "hf" in panel.shown and "hf" not in window.session.pipeline.filters
-    panel.shown["hf"].setChecked(True)  # add HF to the replay: it restarts with it
-    qtbot.waitUntil(lambda: window.seeking is None and "hf" in window.session.pipeline.filters, timeout=10000)
+    window.replay_bar.play_button.click()  # paused: the what-if keeps the position
+    window.seek(12.0)
+    panel.shown["hf"].setChecked(True)  # add HF to the replay: the file is computed again with it
+    assert window.loading_row.isVisible()
+    qtbot.waitUntil(lambda: window.loading is None and "hf" in window.session.pipeline.filters, timeout=20000)
+    assert window.session.source.position_s == 12.0 and window.session.source.paused
     panel = window.estimator_panel
     assert panel.boxes["hf", "beta"].isEnabled()
     panel.boxes["hf", "beta"].setValue(0.2)
-    panel.apply()  # the what-if: re-run from the start with HF's beta forced
-    qtbot.waitUntil(lambda: window.seeking is None and window.session.pipeline.estimators["hf"].settings.beta == 0.2,
-                    timeout=10000)
-    window.replay_bar.speed_box.setCurrentIndex(window.replay_bar.speed_box.findData(64.0))
-    qtbot.waitUntil(lambda: not window.session.running, timeout=10000)
-    shown = window.session.pipeline.imu.array()
-    headless = replay(open_recording(recording), ("ahf", "hf"), {"hf": {"beta": 0.2}}).imu.array()
-    assert shown.shape == headless.shape and (shown == headless).all()  # as the CLI's --set computes it
+    panel.apply()  # the what-if: computed again with HF's beta forced
+    qtbot.waitUntil(lambda: window.loading is None and window.session.pipeline.settings()["hf"]["beta"] == 0.2,
+                    timeout=20000)
+    assert window.session.source.position_s == 12.0
+    play_to_the_end(window, qtbot)
+    shown = window.session.pipeline.imu.to_dict()
+    headless = load_session(recording, ("ahf", "hf"), {"hf": {"beta": 0.2}}).tables["imu"]  # the CLI's --set
+    assert list(shown) == list(headless)
+    for name, column in headless.items():
+        np.testing.assert_array_equal(shown[name], column, err_msg=name)
     assert "HF" in window.live_view.attitude.visible_labels()
