@@ -169,7 +169,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._older_drawn: list[tuple | None] = []
         self.heads: list[Heads] = []  # each plot's curves' newest samples (see the module's doc)
         self._heads_of: list[Heads] = []  # by curve index
-        self._curve_end_s: list[float | None] = []  # time of each curve's last sample: where its head starts
+        # Each curve's series and time of its last sample, where its head starts (another series: none).
+        self._curve_end: list[tuple[Series, float] | None] = []
         # The legend sits above the plots, not over them: new data then never repaints it.
         labels = list(dict.fromkeys(c.label for spec in plots for c in spec.curves))
         self.legend = pg.LegendItem(colCount=max(1, min(len(labels), LEGEND_COLUMNS)), labelTextColor="#222")
@@ -201,7 +202,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 self.older.append(older)
                 self._older_drawn.append(None)
                 self._heads_of.append(heads)
-                self._curve_end_s.append(None)
+                self._curve_end.append(None)
                 if spec_curve.label not in in_legend:
                     in_legend[spec_curve.label] = curve
                     self.legend.addItem(curve, spec_curve.label)
@@ -270,7 +271,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             heads.drop(i)
             heads.commit()
         self._older_drawn = [None] * len(self.older)
-        self._curve_end_s = [None] * len(self.curves)
+        self._curve_end = [None] * len(self.curves)
         for item in self.items:
             for region in [i for i in item.items if isinstance(i, pg.LinearRegionItem)]:
                 item.removeItem(region)
@@ -304,7 +305,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             if s is None or not s.has(spec.quantity):
                 continue
             t, values = s.data(spec.quantity, window_s)
-            self._set_curve(i, t, values, head_s if grown and not everything else 0.0)
+            self._set_curve(i, s, t, values, head_s if grown and not everything else 0.0)
             if not grown:
                 continue
             t, older = s.older(spec.quantity, window_s)
@@ -319,17 +320,17 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         for heads in self.heads:
             heads.commit()
 
-    def _set_curve(self, i: int, t: np.ndarray, values: np.ndarray, head_s: float) -> None:
-        """Curve ``i`` shows ``t``, ``values``: its head the samples since its last one while they span
-        at most ``head_s``, else the curve all of them (a copy: the series shifts its buffers in place)."""
+    def _set_curve(self, i: int, series: Series, t: np.ndarray, values: np.ndarray, head_s: float) -> None:
+        """Curve ``i`` shows ``t``, ``values`` of ``series``: its head the samples since its last one while
+        they span at most ``head_s``, else the curve all of them (a copy: the series shifts its buffers in place)."""
         spec, curve = self.curves[i]
-        end_s = self._curve_end_s[i]
-        if end_s is not None and len(t) and t[-1] - end_s <= head_s:
+        drawn, end_s = self._curve_end[i] or (None, None)
+        if head_s > 0.0 and drawn is series and len(t) and end_s <= t[-1] <= end_s + head_s:
             joined = int(np.searchsorted(t, end_s))  # the curve's last sample: the head starts there
             self._heads_of[i].set(i, spec, curve.opts["pen"], t[joined:], values[joined:])
             return
         curve.setData(t.copy(), values.copy(), **spec.connect(values))
-        self._curve_end_s[i] = float(t[-1]) if len(t) else None
+        self._curve_end[i] = (series, float(t[-1])) if len(t) else None
         self._heads_of[i].drop(i)
 
     def _follow_time(self, imu: Series, window_s: float | None) -> float | None:

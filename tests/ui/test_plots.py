@@ -170,3 +170,7 @@ def test_frames_add_only_the_newest_samples_and_a_stopped_series_is_drawn_whole(
     plots.draw(series, 30.0, set())
     assert not plots.stale and not heads.pending
     np.testing.assert_array_equal(pitch.xData, expected_t)  # the curve took its head's samples
+    _, restarted = growing_series(41.9)  # a replay restarted by a seek: new series, ending just after the curve
+    plots.draw(restarted, 30.0, {"imu"})
+    assert not heads.pending  # nothing joined to the previous series' curve
+    np.testing.assert_array_equal(pitch.xData, restarted["imu"].data("ahf_pitch_deg", 30.0)[0])
