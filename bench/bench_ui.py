@@ -1,6 +1,6 @@
 """UI figures (offscreen Qt, software rendering): redraw cost, live CPU, memory over a long replay.
 
-    python bench/bench_ui.py [--live-seconds S] [--hours H] [--skip-redraw] [--skip-memory]
+    python bench/bench_ui.py [--live-seconds S] [--hours H] [--skip-redraw] [--skip-live] [--skip-memory]
 
 1. Redraw: the attitude plots (4 curves: AHF and onboard pitch and roll; 8 curves: with HF and ECF
    too) over a 60 s and a 10 min window of 100 Hz data from the simulator; per frame, as in the app:
@@ -251,6 +251,7 @@ def main() -> None:
     parser.add_argument("--live-seconds", type=float, default=60.0)
     parser.add_argument("--hours", type=float, default=2.0)
     parser.add_argument("--skip-redraw", action="store_true")
+    parser.add_argument("--skip-live", action="store_true")
     parser.add_argument("--skip-memory", action="store_true")
     parser.add_argument("--memory-child", nargs=2, metavar=("KIND", "RECORDING"), help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -261,7 +262,8 @@ def main() -> None:
     print(f"{os.cpu_count()} cores, Python {sys.version.split()[0]}, Qt platform {app.platformName()}")
     if not args.skip_redraw:
         bench_redraw()
-    bench_live(args.live_seconds)
+    if not args.skip_live:
+        bench_live(args.live_seconds)
     if not args.skip_memory:
         bench_memory(args.hours)
 

@@ -1,20 +1,21 @@
 """Stacked time plots on one shared time axis, fed from ``Series`` buffers.
 
 Each curve is created once and updated with ``setData`` only when its series grew (or the window
-changed); peak downsampling and clipping to the view keep long windows cheap. The newest
-samples of every curve of a plot are drawn apart by one item (``Heads``), each joined to its curve at
-the curve's last sample: a frame then adds a few points and Qt repaints only the strip they cover,
-where setting the whole curves would repaint every plot (and each pyqtgraph ``setData`` costs more
-than the drawing); the curve takes its head's samples (one whole repaint) once they span a
-``HEAD_STEPS``-th of the time axis' step, when the axis steps, or when its series stops growing
-(``stale``). The axes move in steps, not every frame: under software rendering re-laying an axis costs more than drawing the
-curves, so the time axis advances by a fraction of the window and the value axes change only when
-the data leaves them or shrinks well inside them; a window longer than the session shows it from 0.
-The legend above the plots has one entry per label and toggles a curve on every plot that carries
-that label. A crosshair follows the mouse and reads every visible curve at the nearest sample under
-it, in an overlay over the plots (a label in the layout would widen the plots as it grows). A
-circular quantity (a heading, 0..360°) is not joined across its jumps from one end of the circle to
-the other. A reference curve (the aircraft's own estimate) is dashed and drawn beneath the others.
+changed); peak downsampling and clipping to the view keep long windows cheap. A frame does not set
+the curves: the newest samples of every curve of a plot are drawn by one item (``Heads``), each
+joined to its curve at the curve's last sample, so Qt repaints only the strip they cover, from the
+curves' cached pixmaps (setting whole curves would repaint every plot, and each pyqtgraph
+``setData`` costs more than the drawing). A curve takes its head's samples (one whole repaint) once
+they span a ``HEAD_STEPS``-th of the time axis' step, when the axis steps, or when its series stops
+growing (``stale``). The axes move in steps, not every frame: under software rendering re-laying an
+axis costs more than drawing the curves, so the time axis advances by a fraction of the window and
+the value axes change only when the data leaves them or shrinks well inside them; a window longer
+than the session shows it from 0. The legend above the plots has one entry per label and toggles a
+curve on every plot that carries that label. A crosshair follows the mouse and reads every visible
+curve at the nearest sample under it, in an overlay over the plots (a label in the layout would
+widen the plots as it grows). A circular quantity (a heading, 0..360°) is not joined across its
+jumps from one end of the circle to the other. A reference curve (the aircraft's own estimate) is
+dashed and drawn beneath the others.
 """
 
 from __future__ import annotations
