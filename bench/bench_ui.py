@@ -48,7 +48,7 @@ from groundstation.ui.main_window import MainWindow  # noqa: E402
 from groundstation.ui.plots import StackedPlots  # noqa: E402
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities  # noqa: E402
 
-FRAMES = 120  # 4 s of frames: the curves take their heads' samples in them (every 2 s of a 60 s window)
+FRAMES = 120  # 4 s of frames: the curves take their heads' samples in them (every second)
 
 
 def rss_mb() -> float:

@@ -6,8 +6,7 @@ the curves: the newest samples of every curve of a plot are drawn by one item (`
 joined to its curve at the curve's last sample, so Qt repaints only the strip they cover, from the
 curves' cached pixmaps (setting whole curves would repaint every plot, and each pyqtgraph
 ``setData`` costs more than the drawing). A curve takes its head's samples (one whole repaint) once
-they span a ``HEAD_STEPS``-th of the time axis' step, when the axis steps, or when its series stops
-growing (``stale``). The axes move in steps, not every frame: under software rendering re-laying an
+they span ``HEAD_S``, when the time axis steps, or when its series stops growing (``stale``). The axes move in steps, not every frame: under software rendering re-laying an
 axis costs more than drawing the curves, so the time axis advances by a fraction of the window and
 the value axes change only when the data leaves them or shrinks well inside them; a window longer
 than the session shows it from 0. The legend above the plots has one entry per label and toggles a
@@ -34,7 +33,7 @@ PALETTE = ("#332288", "#882255", "#117733", "#44AA99", "#CC6677", "#999933", "#8
 LEFT_AXIS_PX = 60
 GAP_BRUSH = (220, 60, 60, 50)
 FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a time
-HEAD_STEPS = 4  # a curve takes its head's samples when these span a quarter of the axis' step (1 s of a 30 s window)
+HEAD_S = 1.0  # a curve takes its head's samples when these span this: one whole repaint a second
 Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
 LEGEND_COLUMNS = 6  # more entries (eight estimators, compass and GPS) wrap onto a second legend row
@@ -291,13 +290,10 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         """Update the visible curves whose series grew (all of them when ``grew`` is None) and
         follow the newest ``window_s`` seconds (the whole session when None)."""
         everything, self._stale = grew is None or self._stale, False
-        head_s = 0.0  # without the IMU's clock: no heads
         imu = series.get("imu")
         if imu is not None and imu.end_s is not None:
             self._mark_gaps(imu.gaps)
-            step_s = self._follow_time(imu, window_s)
-            everything |= step_s is None  # the time axis moved: every plot is repainted anyway
-            head_s = (step_s or 0.0) / HEAD_STEPS
+            everything |= self._follow_time(imu, window_s)  # the time axis moved: every plot is repainted anyway
         for i, (spec, curve) in enumerate(self.curves):
             grown = everything or spec.series in grew
             if not curve.isVisible() or not (grown or self._heads_of[i].has(i)):
@@ -306,7 +302,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             if s is None or not s.has(spec.quantity):
                 continue
             t, values = s.data(spec.quantity, window_s)
-            self._set_curve(i, s, t, values, head_s if grown and not everything else 0.0)
+            self._set_curve(i, s, t, values, HEAD_S if grown and not everything else 0.0)
             if not grown:
                 continue
             t, older = s.older(spec.quantity, window_s)
@@ -334,9 +330,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._curve_end[i] = (series, float(t[-1])) if len(t) else None
         self._heads_of[i].drop(i)
 
-    def _follow_time(self, imu: Series, window_s: float | None) -> float | None:
+    def _follow_time(self, imu: Series, window_s: float | None) -> bool:
         """Step the time axis along; a window longer than the session shows it from 0 until full.
-        The step (s), or None when the axis moved."""
+        True when it moved."""
         first, end = imu.start_s, imu.end_s
         span = end - first if window_s is None else window_s
         step = 2.0 ** math.ceil(math.log2(max(span, 1.0) / FOLLOW_STEPS))
@@ -348,9 +344,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             x_range = (left, left + window_s)
         # Compared with the range shown, not the last one set: the user may have zoomed since.
         if x_range == tuple(self.items[0].getViewBox().viewRange()[0]):
-            return step
+            return False
         self.items[0].setXRange(*x_range, padding=0)
-        return None
+        return True
 
     def _fit_values(self, item: pg.PlotItem, heads: Heads) -> None:
         lows, highs = [], []
