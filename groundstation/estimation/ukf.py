@@ -100,17 +100,15 @@ class GpsUkfDiagnostics(NamedTuple):
     p_trace: float  # trace of the quaternion covariance
 
 
-def euler_angles(q) -> tuple[float, float, float]:
-    """ZYX Euler angles (pitch, roll, yaw) of a quaternion (w, x, y, z) of any norm, plain floats."""
+def euler_angles(q, yaw: bool = True) -> tuple[float, ...]:
+    """ZYX Euler angles (pitch, roll, yaw) of a quaternion (w, x, y, z) of any norm, plain floats;
+    (pitch, roll) only without ``yaw`` (a tilt-only update needs no third atan2 per sigma point)."""
     w, x, y, z = q
     n2 = w * w + x * x + y * y + z * z
     sin_pitch = 2.0 * (w * y - x * z) / n2
     sin_pitch = -1.0 if sin_pitch < -1.0 else 1.0 if sin_pitch > 1.0 else sin_pitch
-    return (
-        math.asin(sin_pitch),
-        math.atan2(2.0 * (w * x + y * z), w * w - x * x - y * y + z * z),
-        math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z),
-    )
+    pitch_roll = math.asin(sin_pitch), math.atan2(2.0 * (w * x + y * z), w * w - x * x - y * y + z * z)
+    return pitch_roll + (math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z),) if yaw else pitch_roll
 
 
 def euler_of(chi: np.ndarray) -> np.ndarray:
@@ -265,7 +263,7 @@ class _GpsUkf(Estimator):
             return x, cov
         factor = cov if sr else sl.cholesky(cov)
         chi = sp.points_lists(x, factor, sigma)
-        angles = list(zip(*map(euler_angles, chi)))  # pitch, roll, yaw rows
+        angles = list(zip(*[euler_angles(p, 2 in rows) for p in chi]))  # pitch, roll (, yaw) rows
         y_sigma = [angles[i] for i in rows]
         if sr:
             x, cov, innovation = sp.sqrt_measurement_update_lists(x, cov, chi, y_sigma, y, sl.diag([math.sqrt(v) for v in var]), sigma)

@@ -1,15 +1,20 @@
 """Stacked time plots on one shared time axis, fed from ``Series`` buffers.
 
 Each curve is created once and updated with ``setData`` only when its series grew (or the window
-changed); peak downsampling and clipping to the view keep long windows cheap. The axes move in
-steps, not every frame: under software rendering re-laying an axis costs more than drawing the
-curves, so the time axis advances by a fraction of the window and the value axes change only when
-the data leaves them or shrinks well inside them; a window longer than the session shows it from 0.
-The legend above the plots has one entry per label and toggles a curve on every plot that carries
-that label. A crosshair follows the mouse and reads every visible curve at the nearest sample under
-it, in an overlay over the plots (a label in the layout would widen the plots as it grows). A
-circular quantity (a heading, 0..360°) is not joined across its jumps from one end of the circle to
-the other. A reference curve (the aircraft's own estimate) is dashed and drawn beneath the others.
+changed); peak downsampling and clipping to the view keep long windows cheap. A frame does not set
+the curves: the newest samples of every curve of a plot are drawn by one item (``Heads``), each
+joined to its curve at the curve's last sample, so Qt repaints only the strip they cover, from the
+curves' cached pixmaps (setting whole curves would repaint every plot, and each pyqtgraph
+``setData`` costs more than the drawing). A curve takes its head's samples (one whole repaint) once
+they span ``HEAD_S``, when the time axis steps, or when its series stops growing (``stale``). The axes move in steps, not every frame: under software rendering re-laying an
+axis costs more than drawing the curves, so the time axis advances by a fraction of the window and
+the value axes change only when the data leaves them or shrinks well inside them; a window longer
+than the session shows it from 0. The legend above the plots has one entry per label and toggles a
+curve on every plot that carries that label. A crosshair follows the mouse and reads every visible
+curve at the nearest sample under it, in an overlay over the plots (a label in the layout would
+widen the plots as it grows). A circular quantity (a heading, 0..360°) is not joined across its
+jumps from one end of the circle to the other. A reference curve (the aircraft's own estimate) is
+dashed and drawn beneath the others.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.ui.series import Series
 
@@ -28,6 +33,7 @@ PALETTE = ("#332288", "#882255", "#117733", "#44AA99", "#CC6677", "#999933", "#8
 LEFT_AXIS_PX = 60
 GAP_BRUSH = (220, 60, 60, 50)
 FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a time
+HEAD_S = 1.0  # a curve takes its head's samples when these span this: one whole repaint a second
 Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
 LEGEND_COLUMNS = 6  # more entries (eight estimators, compass and GPS) wrap onto a second legend row
@@ -76,6 +82,75 @@ class Plot:
         return f"{self.title} ({self.unit})" if self.unit else self.title
 
 
+class Heads(pg.GraphicsObject):
+    """The newest samples of the curves of one plot, as one item in its view (data coordinates)."""
+
+    PAD_PX = 2.0  # around the samples' bounds: the one-pixel pens' width, so nothing is left behind
+
+    def __init__(self):
+        super().__init__()
+        self._samples: dict[int, tuple[Curve, QtGui.QPen, np.ndarray, np.ndarray]] = {}  # by curve index
+        self._bounds: dict[int, tuple[float, float, float, float]] = {}  # t0, t1, lowest and highest value
+        self._rect = QtCore.QRectF()
+        self._changed = False
+
+    @property
+    def pending(self) -> bool:
+        return bool(self._samples)
+
+    def has(self, index: int) -> bool:
+        return index in self._samples
+
+    def samples(self, index: int) -> tuple[np.ndarray, np.ndarray]:
+        entry = self._samples.get(index)
+        return (np.empty(0), np.empty(0, dtype=np.float32)) if entry is None else entry[2:]
+
+    def set(self, index: int, curve: Curve, pen: QtGui.QPen, t: np.ndarray, values: np.ndarray) -> None:
+        """Curve ``index``'s head: copies (the series shifts its buffers in place)."""
+        finite = values[np.isfinite(values)]
+        self._samples[index] = (curve, pen, t.copy(), values.copy())
+        low, high = (float(finite.min()), float(finite.max())) if len(finite) else (math.nan, math.nan)
+        self._bounds[index] = (float(t[0]), float(t[-1]), low, high)
+        self._changed = True
+
+    def drop(self, index: int) -> None:
+        if self._samples.pop(index, None) is not None:
+            del self._bounds[index]
+            self._changed = True
+
+    def value_range(self) -> tuple[float, float] | None:
+        finite = [b for b in self._bounds.values() if math.isfinite(b[2])]
+        return (min(b[2] for b in finite), max(b[3] for b in finite)) if finite else None
+
+    def commit(self) -> None:
+        """Schedule the repaint of what changed since the last call: the old and the new bounds."""
+        if not self._changed:
+            return
+        self._changed = False
+        self.prepareGeometryChange()
+        if not self._bounds:
+            self._rect = QtCore.QRectF()
+            return
+        t0, t1 = min(b[0] for b in self._bounds.values()), max(b[1] for b in self._bounds.values())
+        low, high = self.value_range() or (0.0, 0.0)
+        px, py = self.pixelVectors()
+        pad_x, pad_y = (0.0, 0.0) if px is None else (self.PAD_PX * px.length(), self.PAD_PX * py.length())
+        self._rect = QtCore.QRectF(t0 - pad_x, low - pad_y, t1 - t0 + 2 * pad_x, high - low + 2 * pad_y)
+
+    def boundingRect(self) -> QtCore.QRectF:
+        return self._rect
+
+    def path(self, index: int) -> QtGui.QPainterPath:
+        """Curve ``index``'s head as drawn: broken at gap rows (NaN) and, circular, across a wrap."""
+        curve, _, t, values = self._samples[index]
+        return pg.arrayToQPath(t, values, connect=curve.connect(values).get("connect", "finite"))
+
+    def paint(self, painter, *args) -> None:
+        for index in sorted(self._samples, key=lambda i: not self._samples[i][0].reference):
+            painter.setPen(self._samples[index][1])  # the references first: beneath the others, as their curves
+            painter.drawPath(self.path(index))
+
+
 class StackedPlots(pg.GraphicsLayoutWidget):
     """``hidden``: labels whose curves start switched off (shown greyed in the legend)."""
 
@@ -92,6 +167,10 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self.curves: list[tuple[Curve, pg.PlotDataItem]] = []
         self.older: list[pg.PlotDataItem] = []  # each curve's binned history (``Series.older``)
         self._older_drawn: list[tuple | None] = []
+        self.heads: list[Heads] = []  # each plot's curves' newest samples (see the module's doc)
+        self._heads_of: list[Heads] = []  # by curve index
+        # Each curve's series and time of its last sample, where its head starts (another series: none).
+        self._curve_end: list[tuple[Series, float] | None] = []
         # The legend sits above the plots, not over them: new data then never repaints it.
         labels = list(dict.fromkeys(c.label for spec in plots for c in spec.curves))
         self.legend = pg.LegendItem(colCount=max(1, min(len(labels), LEGEND_COLUMNS)), labelTextColor="#222")
@@ -108,6 +187,9 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             item.getViewBox().sigRangeChangedManually.connect(self.userInteracted)
             if self.items:
                 item.setXLink(self.items[0])
+            heads = Heads()
+            item.addItem(heads, ignoreBounds=True)
+            self.heads.append(heads)
             for spec_curve in spec.curves:
                 # One-pixel pens: Qt's raster engine strokes them several times faster than wider ones.
                 curve = item.plot(pen=spec_curve.pen())
@@ -115,8 +197,12 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 for c in (curve, older):
                     c.setVisible(spec_curve.label not in hidden)
                     c.setZValue(-1 if spec_curve.reference else 0)
+                    # Kept as a pixmap between their updates: the heads' strip repaints from it.
+                    c.curve.setCacheMode(QtWidgets.QGraphicsItem.CacheMode.DeviceCoordinateCache)
                 self.older.append(older)
                 self._older_drawn.append(None)
+                self._heads_of.append(heads)
+                self._curve_end.append(None)
                 if spec_curve.label not in in_legend:
                     in_legend[spec_curve.label] = curve
                     self.legend.addItem(curve, spec_curve.label)
@@ -144,20 +230,33 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             curve.visibleChanged.connect(lambda c=curve, label=label: self._mirror(label, c.isVisible()))
 
     def _mirror(self, label: str, visible: bool) -> None:
-        for (spec, curve), older in zip(self.curves, self.older):
+        for i, ((spec, curve), older) in enumerate(zip(self.curves, self.older)):
             if spec.label == label:
                 older.setVisible(visible)
+                if not visible:
+                    self._heads_of[i].drop(i)
                 if curve.isVisible() != visible:
                     curve.setVisible(visible)
         for sample, text in self.legend.items:  # its eye: pyqtgraph repaints it only when clicked
             if text.text == label:
                 sample.update()
+        for heads in self.heads:
+            heads.commit()
         self._stale = True
 
     @property
     def stale(self) -> bool:
-        """A curve was switched on since the last draw: it needs its data even if nothing grew."""
-        return self._stale
+        """A curve was switched on since the last draw, or holds samples in its head: it needs drawing
+        even if nothing grew (a stopped series' curve then takes its head's samples)."""
+        return self._stale or any(heads.pending for heads in self.heads)
+
+    def drawn(self, curve: pg.PlotDataItem) -> tuple[np.ndarray, np.ndarray]:
+        """(time, values) of the samples drawn for ``curve`` (one of ``curves``): its own and its head's."""
+        i = next(i for i, (_, c) in enumerate(self.curves) if c is curve)
+        if curve.xData is None:
+            return np.empty(0), np.empty(0, dtype=np.float32)
+        t, values = self._heads_of[i].samples(i)  # from the curve's last sample on
+        return np.concatenate([curve.xData, t[1:]]), np.concatenate([curve.yData, values[1:]])
 
     def visible_labels(self) -> set[str]:
         return {spec.label for spec, curve in self.curves if curve.isVisible()}
@@ -168,7 +267,11 @@ class StackedPlots(pg.GraphicsLayoutWidget):
     def clear_data(self) -> None:
         for curve in [c for _, c in self.curves] + self.older:
             curve.setData([], [])
+        for i, heads in enumerate(self._heads_of):
+            heads.drop(i)
+            heads.commit()
         self._older_drawn = [None] * len(self.older)
+        self._curve_end = [None] * len(self.curves)
         for item in self.items:
             for region in [i for i in item.items if isinstance(i, pg.LinearRegionItem)]:
                 item.removeItem(region)
@@ -187,29 +290,49 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         """Update the visible curves whose series grew (all of them when ``grew`` is None) and
         follow the newest ``window_s`` seconds (the whole session when None)."""
         everything, self._stale = grew is None or self._stale, False
+        imu = series.get("imu")
+        if imu is not None and imu.end_s is not None:
+            self._mark_gaps(imu.gaps)
+            everything |= self._follow_time(imu, window_s)  # the time axis moved: every plot is repainted anyway
         for i, (spec, curve) in enumerate(self.curves):
-            if not curve.isVisible() or not (everything or spec.series in grew):
+            grown = everything or spec.series in grew
+            if not curve.isVisible() or not (grown or self._heads_of[i].has(i)):
                 continue
             s = series.get(spec.series)
             if s is None or not s.has(spec.quantity):
                 continue
             t, values = s.data(spec.quantity, window_s)
-            curve.setData(t, values, **spec.connect(values))
+            self._set_curve(i, s, t, values, HEAD_S if grown and not everything else 0.0)
+            if not grown:
+                continue
             t, older = s.older(spec.quantity, window_s)
             key = (len(t), t[0] if len(t) else None)
             if key != self._older_drawn[i]:  # changes only when rows are binned or the window moves past them
                 self.older[i].setData(t, older, **spec.connect(older))
                 self._older_drawn[i] = key
         self._series = series
-        imu = series.get("imu")
         if imu is not None and imu.end_s is not None:
-            self._mark_gaps(imu.gaps)
-            self._follow_time(imu, window_s)
-            for item in self.items:
-                self._fit_values(item)
+            for item, heads in zip(self.items, self.heads):
+                self._fit_values(item, heads)
+        for heads in self.heads:
+            heads.commit()
 
-    def _follow_time(self, imu: Series, window_s: float | None) -> None:
-        """Step the time axis along; a window longer than the session shows it from 0 until full."""
+    def _set_curve(self, i: int, series: Series, t: np.ndarray, values: np.ndarray, head_s: float) -> None:
+        """Curve ``i`` shows ``t``, ``values`` of ``series``: its head the samples since its last one while
+        they span at most ``head_s``, else the curve all of them (a copy: the series shifts its buffers in place)."""
+        spec, curve = self.curves[i]
+        drawn, end_s = self._curve_end[i] or (None, None)
+        if head_s > 0.0 and drawn is series and len(t) and end_s <= t[-1] <= end_s + head_s:
+            joined = int(np.searchsorted(t, end_s))  # the curve's last sample: the head starts there
+            self._heads_of[i].set(i, spec, curve.opts["pen"], t[joined:], values[joined:])
+            return
+        curve.setData(t.copy(), values.copy(), **spec.connect(values))
+        self._curve_end[i] = (series, float(t[-1])) if len(t) else None
+        self._heads_of[i].drop(i)
+
+    def _follow_time(self, imu: Series, window_s: float | None) -> bool:
+        """Step the time axis along; a window longer than the session shows it from 0 until full.
+        True when it moved."""
         first, end = imu.start_s, imu.end_s
         span = end - first if window_s is None else window_s
         step = 2.0 ** math.ceil(math.log2(max(span, 1.0) / FOLLOW_STEPS))
@@ -220,15 +343,22 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             left = max(right - window_s, min(first, 0.0))
             x_range = (left, left + window_s)
         # Compared with the range shown, not the last one set: the user may have zoomed since.
-        if x_range != tuple(self.items[0].getViewBox().viewRange()[0]):
-            self.items[0].setXRange(*x_range, padding=0)
+        if x_range == tuple(self.items[0].getViewBox().viewRange()[0]):
+            return False
+        self.items[0].setXRange(*x_range, padding=0)
+        return True
 
-    def _fit_values(self, item: pg.PlotItem) -> None:
+    def _fit_values(self, item: pg.PlotItem, heads: Heads) -> None:
         lows, highs = [], []
+        head_range = heads.value_range()
+        if head_range is not None:
+            lows.append(head_range[0])
+            highs.append(head_range[1])
         for curve in item.listDataItems():
-            if curve.isVisible() and curve.yData is not None and len(curve.yData):
-                lows.append(float(np.nanmin(curve.yData)))  # float32 scalars would overflow in pyqtgraph
-                highs.append(float(np.nanmax(curve.yData)))
+            bounds = curve.dataRect() if curve.isVisible() else None  # computed once per setData
+            if bounds is not None and math.isfinite(bounds.top()) and math.isfinite(bounds.bottom()):
+                lows.append(bounds.top())
+                highs.append(bounds.bottom())
         low, high = (min(lows), max(highs)) if lows else (math.nan, math.nan)
         y_range = refit(low, high, item.getViewBox().viewRange()[1])
         if y_range is not None:

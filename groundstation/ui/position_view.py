@@ -99,6 +99,10 @@ class PositionView(QtWidgets.QWidget):
             label.setText("—")
         self.note.show()
 
+    @property
+    def stale(self) -> bool:
+        return self.height.stale  # as ``StackedPlots.stale``
+
     def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None) -> None:
         """As ``StackedPlots.draw`` (everything when ``grew`` is None); the track and the numbers
         after ``TRACK_EVERY_S`` more of position samples."""

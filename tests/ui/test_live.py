@@ -18,7 +18,7 @@ def test_plotted_pitch_is_the_pipelines_ahf_pitch(window, qtbot):
     q = [row[session.pipeline.imu.columns.index(f"ahf_q{c}")] for c in "wxyz"]
     assert pitch == np.float32(np.degrees(quaternion.to_euler_zyx(np.array(q))[1]))
     assert f"AHF {pitch:+.2f}" in window.live_view.attitude.read_at(t)  # the crosshair's readout
-    assert len(onboard.xData) > 100  # the aircraft's own estimate is drawn too
+    assert len(window.live_view.attitude.drawn(onboard)[0]) > 100  # the aircraft's own estimate is drawn too
     assert window.link_panel.headline.text() == "LINK OK"
     assert str(session.recording_path) in window.recording_label.text()
 

@@ -6,7 +6,7 @@ import threading
 
 import numpy as np
 import pytest
-from PySide6 import QtCore
+from PySide6 import QtCore, QtGui
 
 from groundstation.session.table import Table
 from groundstation.ui.live_view import COLORS, PALETTE, attitude_plots, diagnostic_plots
@@ -119,3 +119,58 @@ def test_a_dimensionless_axis_carries_no_unit_or_scale_factor(qtbot):
     qtbot.waitExposed(plots)
     qtbot.wait(50)
     assert axis.labelString().find("(1)") < 0 and "x0.001" not in axis.labelString()
+
+
+def growing_series(end_s: float) -> tuple[Table, dict[str, Series]]:
+    """One estimator's pitch at 100 Hz up to ``end_s``, in a table the test goes on appending to."""
+    imu = Table(("time_s", "ahf_pitch_deg", "ahf_roll_deg"))
+    series = {"imu": Series(imu, lambda rows, names: {n: rows[:, i] for i, n in enumerate(names) if n != "time_s"})}
+    append(imu, series, 0.0, end_s)
+    return imu, series
+
+
+def append(table: Table, series: dict[str, Series], start_s: float, end_s: float, gap_at_s: float | None = None) -> None:
+    t = np.round(np.arange(start_s, end_s - 1e-9, 0.01), 6)
+    pitch = np.sin(t) * 10
+    pitch[np.isclose(t, gap_at_s or -1.0)] = np.nan  # a restart's gap row
+    table.append(np.column_stack([t, pitch, np.cos(t)]).ravel().tolist())
+    for s in series.values():
+        s.take(threading.Lock())
+
+
+def test_frames_add_only_the_newest_samples_and_a_stopped_series_is_drawn_whole(qtbot):
+    """A frame hands the curves nothing: the newest samples go to the plot's heads (a narrow strip to
+    repaint), joined to the curves; every sample is drawn once; a series that stops is drawn whole."""
+    plots = StackedPlots(attitude_plots(("ahf",)))
+    qtbot.addWidget(plots)
+    plots.resize(900, 600)
+    plots.show()
+    qtbot.waitExposed(plots)
+    table, series = growing_series(41.0)  # the time axis shows 14..44 s: no step in these frames
+    plots.draw(series, 30.0, None)
+    pitch = next(c for s, c in plots.curves if s.quantity == "ahf_pitch_deg")
+    before = pitch.xData
+    for frame in range(20):  # 0.6 s of frames, 3 rows each; one of them a gap row
+        append(table, series, 41.0 + 0.03 * frame, 41.0 + 0.03 * (frame + 1), gap_at_s=41.2)
+        plots.draw(series, 30.0, {"imu"})
+    assert pitch.xData is before  # the curve was not set again
+    t, values = plots.drawn(pitch)
+    expected_t, expected = series["imu"].data("ahf_pitch_deg", 30.0)
+    np.testing.assert_array_equal(t[-len(expected_t) :], expected_t)  # each sample once, in order, up to the newest
+    np.testing.assert_array_equal(values[-len(expected) :], expected)
+    heads = plots.heads[0]
+    strip = heads.mapRectToScene(heads.boundingRect()).width()
+    assert 0 < strip < 0.05 * plots.items[0].getViewBox().sceneBoundingRect().width()
+    index = next(i for i, (s, _) in enumerate(plots.curves) if s.quantity == "ahf_pitch_deg")
+    path = heads.path(index)
+    lines = [(path.elementAt(i - 1).x, path.elementAt(i).x) for i in range(1, path.elementCount())
+             if path.elementAt(i).type == QtGui.QPainterPath.ElementType.LineToElement]
+    assert lines and not [(a, b) for a, b in lines if a < 41.2 < b]  # broken at the gap row
+    assert plots.stale  # nothing grew, but the heads hold samples: the next tick draws
+    plots.draw(series, 30.0, set())
+    assert not plots.stale and not heads.pending
+    np.testing.assert_array_equal(pitch.xData, expected_t)  # the curve took its head's samples
+    _, restarted = growing_series(41.9)  # a replay restarted by a seek: new series, ending just after the curve
+    plots.draw(restarted, 30.0, {"imu"})
+    assert not heads.pending  # nothing joined to the previous series' curve
+    np.testing.assert_array_equal(pitch.xData, restarted["imu"].data("ahf_pitch_deg", 30.0)[0])
