@@ -145,7 +145,8 @@ class _Builder:
         return 4.0 * np.asarray(positions, dtype=float) + HANDLER
 
     def add(self, table: str, keys, rows) -> None:
-        self.rows[table].append((np.asarray(keys, dtype=float), np.asarray(rows, dtype=float).reshape(len(keys), -1)))
+        if len(keys):
+            self.rows[table].append((np.asarray(keys, dtype=float), np.asarray(rows, dtype=float).reshape(len(keys), -1)))
 
     def segment(self, keys) -> np.ndarray:
         """How many discontinuities happened before each key."""

@@ -18,6 +18,8 @@ from firmware_protocol import SPEC, StreamDecoder, crc16, encode, make_frame
 from firmware_protocol.batch import CHUNK_COUNTERS, decode_batch, decode_chunks, payload_dtype
 from firmware_protocol.codec import new_frame
 
+from tests.simulated import simulated_chunks
+
 from .strategies import any_frame
 
 SYNC = SPEC.sync
@@ -217,18 +219,6 @@ def test_raw_values_are_the_wire_values_bit_for_bit():
     for field in frame_type.fields:  # physical values: the same numbers as Frame.scaled
         expected = [f.scaled()[field.name] for f in frames]
         np.testing.assert_array_equal(result.frames["GPS"].scaled(field.name), expected)
-
-
-def simulated_chunks(duration_s: float, **options) -> list[tuple[int, bytes]]:
-    from groundstation.sim.firmware import FirmwareSettings
-    from groundstation.sim.link import LinkSettings
-    from groundstation.sim.stream import Scenario, SimStream
-
-    firmware = {k: v for k, v in options.items() if k in FirmwareSettings.__dataclass_fields__}
-    link = {k: v for k, v in options.items() if k in LinkSettings.__dataclass_fields__}
-    stream = SimStream(Scenario(duration_s=duration_s, seed=7, firmware=FirmwareSettings(**firmware), link=LinkSettings(**link)))
-    chunks = stream.advance(duration_s) + stream.flush()
-    return [(int(c.t_s * 1e9), c.data) for c in chunks]
 
 
 def test_simulated_sessions_with_reboots_clock_jumps_and_a_bad_link():
