@@ -29,7 +29,7 @@ from collections.abc import Callable
 import numpy as np
 
 from firmware_protocol import SPEC
-from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_chunks
+from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_batch
 from firmware_protocol.decoder import DecoderStats
 from groundstation import geodesy
 from groundstation.estimation.compass import reading_heading_rad
@@ -104,7 +104,7 @@ def batch_replay(recording: Recording, filters=None, forced=None,
             progress(int(total * (_DECODE_SHARE + (1 - _DECODE_SHARE) * done / max(samples, 1))), total)
 
     session = BatchSession(setup)
-    decoded = decode_chunks(recording.chunks(), progress=decoding)
+    decoded = decode_batch(*recording.stream(), progress=decoding)
     _Builder(session, decoded, SettingsSchedule(recording).changes(), estimating).build()
     if progress is not None:
         progress(total, total)
@@ -166,17 +166,11 @@ class _Builder:
         order = np.argsort(timed)
         timed = timed[order]
         device = np.concatenate(time_parts)[order] if time_parts else np.zeros(0, dtype=np.int64)
-        clock = SessionClock()
-        place = clock.place
-        times, unwrapped, discontinuities = [], [], []
-        for position, t_host_ns, t_us in zip(timed.tolist(), self.t_host[timed].tolist(), device.tolist()):
-            times.append(place(t_host_ns, t_us))
-            unwrapped.append(clock.device_us)
-            if clock.event is not None:
-                discontinuities.append((position, clock.event))
+        times, unwrapped, events = SessionClock().place_many(self.t_host[timed], device)
+        discontinuities = [(int(timed[i]), event) for i, event in events]
         last = np.searchsorted(timed, np.arange(n), side="right") - 1
-        self.time_s = np.where(last >= 0, np.array(times + [math.nan])[last], math.nan)
-        self.device_us = np.where(last >= 0, np.array(unwrapped + [0], dtype=np.int64)[last], 0)
+        self.time_s = np.where(last >= 0, np.append(times, math.nan)[last], math.nan)
+        self.device_us = np.where(last >= 0, np.append(unwrapped, 0)[last], 0)
         self.discontinuities = discontinuities
         self.disc_keys = np.array([4.0 * p + DISCONTINUITY for p, _ in discontinuities])
         for key, (_, event) in zip(self.disc_keys.tolist(), discontinuities):
@@ -361,9 +355,10 @@ class _Builder:
         calibrator = bank.gyro_calibration
         step = calibrator.step
         measured_at = None
-        for i, (g, a, d) in enumerate(zip(gyr.tolist(), acc.tolist(), dt.tolist())):
-            if step(g, a, d) is not None:
-                measured_at = i
+        for start in range(0, n, 4096):  # usually measured in the first seconds: convert in blocks
+            block = zip(gyr[start : start + 4096].tolist(), acc[start : start + 4096].tolist(), dt[start : start + 4096].tolist())
+            measured_at = next((start + i for i, (g, a, d) in enumerate(block) if step(g, a, d) is not None), None)
+            if measured_at is not None:
                 break
         unbiased = gyr
         if measured_at is not None:
