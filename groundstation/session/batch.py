@@ -353,13 +353,7 @@ class _Builder:
         s, bank = self.s, self.s.bank
         n = len(keys)
         calibrator = bank.gyro_calibration
-        step = calibrator.step
-        measured_at = None
-        for start in range(0, n, 4096):  # usually measured in the first seconds: convert in blocks
-            block = zip(gyr[start : start + 4096].tolist(), acc[start : start + 4096].tolist(), dt[start : start + 4096].tolist())
-            measured_at = next((start + i for i, (g, a, d) in enumerate(block) if step(g, a, d) is not None), None)
-            if measured_at is not None:
-                break
+        measured_at = calibrator.measure(gyr, acc, dt)
         unbiased = gyr
         if measured_at is not None:
             bias = calibrator.bias_rad_s
