@@ -126,7 +126,7 @@ def medians(kind: str, recording: Path, repeats: int, out: str = "-") -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--hours", type=float, default=1.0)
-    parser.add_argument("--long-hours", type=float, default=4.0)
+    parser.add_argument("--long-hours", type=float, default=4.0, help="0: skip the linearity run")
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as folder:
@@ -167,6 +167,8 @@ def main() -> None:
                   f"session + {name}: {(whole['session_seconds'] + whole[name]) / (whole['session_seconds'] + whole[bare]):.2f}x "
                   f"(session + bare write)")
 
+        if not args.long_hours:
+            return
         print(f"\n## {args.long_hours:g} h against {args.hours:g} h (load_session, ahf+hf+ecf)")
         t0 = time.perf_counter()
         long_s = make_recording(long, args.long_hours)

@@ -133,11 +133,17 @@ class _Builder:
         self._imu()
         self._gaps()
         self._link()
-        for name, parts in self.rows.items():
-            if parts:
-                keys = np.concatenate([k for k, _ in parts])
-                rows = np.concatenate([r for _, r in parts])
-                s.tables[name].extend(rows[np.argsort(keys, kind="stable")])
+        for name in list(self.rows):
+            parts = self.rows.pop(name)  # each table's rows are freed once in their table (memory: one copy at a time)
+            if not parts:
+                continue
+            keys = np.concatenate([k for k, _ in parts]) if len(parts) > 1 else parts[0][0]
+            rows = np.concatenate([r for _, r in parts]) if len(parts) > 1 else parts[0][1]
+            del parts
+            if (np.diff(keys) < 0).any():
+                rows = rows[np.argsort(keys, kind="stable")]
+            s.tables[name].extend(rows)
+            del rows
         order = sorted(range(len(s._keyed_events)), key=lambda i: s._keyed_events[i][0])
         s.events = [s._keyed_events[i][1] for i in order]
 
@@ -268,10 +274,10 @@ class _Builder:
         first[1:] = segment[1:] != segment[:-1]
         dt = np.where(first, first_dt, sample_dt_s(device_us, np.concatenate(([0], device_us[:-1]))))
         mag, gps = self._aiding_for_estimators(keys, segment)
-        q, diag_rows = self._estimate(keys, gyr, acc, dt, mag, gps, self.t_host[positions])
-        rows = [self.time_s[positions], device_us, (self.t_host[positions] - s.t0_host_ns) * 1e-9, *acc.T, *gyr.T,
-                raw["temperature"] * TEMPERATURE_SCALE, *diag_rows]
-        self.add("imu", keys, np.column_stack(rows))
+        q, estimated = self._estimate(keys, gyr, acc, dt, mag, gps, self.t_host[positions])
+        self.add("imu", keys, np.column_stack([self.time_s[positions], device_us, (self.t_host[positions] - s.t0_host_ns) * 1e-9,
+                                               *acc.T, *gyr.T, raw["temperature"] * TEMPERATURE_SCALE, *estimated]))
+        del estimated, mag, gps
         self._position(keys, segment, acc, dt, q, self.time_s[positions])
         self._magnetometer(keys, segment, q)
 
