@@ -1,6 +1,7 @@
 """Gyro bias from rest, rest detection and stored accelerometer calibration on synthetic data."""
 
 import math
+import random
 
 import numpy as np
 import pytest
@@ -79,10 +80,11 @@ def test_rest_bias_calibrator_restarts_on_motion_and_on_command():
 
 @settings(max_examples=60, deadline=None, derandomize=True)
 @given(st.lists(st.tuples(st.integers(1, 150), st.sampled_from(["still", "moving", "tilted", "nan", "bad_dt", "drifting"])),
-                min_size=1, max_size=12), st.randoms(use_true_random=False))
-def test_measure_is_step_sample_for_sample(stretches, rng):
+                min_size=1, max_size=12), st.integers(0, 2**32))
+def test_measure_is_step_sample_for_sample(stretches, seed):
     """The batch path's calibrator: where it measures and the bias, bit for bit as step, over stretches
     at rest, moving, tilted (the accelerometer off 1 g), with NaN, with bad dt, and slowly drifting."""
+    rng = random.Random(seed)  # the samples' noise: drawn here, not by hypothesis (too many draws)
     gyr, acc, dt = [], [], []
     bias = [rng.uniform(-0.3, 0.3) for _ in range(3)]
     for length, kind in stretches:
