@@ -180,15 +180,9 @@ class StreamDecoder:
                 ref_next, ref_t32, ref_t64, fast_us = self._ref_next, self._ref_t32, self._ref_t64, self._fast_us
                 t64_before = ref_t64
                 continue
-            # No timestamp: the sequence goes on; the next timestamped frame checks the time (slow path).
-            if ref_next is not None:
-                gap = (seq - ref_next) & 0xFF
-                lost += gap
-                self._untimed_lost += gap
-                self._untimed_advance += gap + 1
-            ref_next, fast_us = (seq + 1) & 0xFF, 0
-            if type_id == _CONFIG_ID:
-                self._config(raw, stats.frames + len(out) + stats.frames_lost + lost)
+            self._ref_next, self._ref_t32, self._ref_t64 = ref_next, ref_t32, ref_t64
+            lost += self._untimed(type_id, seq, raw, stats.frames + len(out) + stats.frames_lost + lost)
+            ref_next, fast_us = self._ref_next, 0
             append(new(frame_class, (types[type_id], seq, raw, None)))
         self._pending = data[pos:]
         self._last_seq, self._last_raw = last_seq, last_raw
@@ -260,6 +254,19 @@ class StreamDecoder:
         self._held = (frame_type, seq, raw, t32)
         self._fast_us = 0
         return 0
+
+    def _untimed(self, type_id: int, seq: int, raw: tuple, advances: int) -> int:
+        """A frame without timestamp: the sequence goes on (the next timestamped frame checks the time,
+        on the slow path); returns the frames lost before it."""
+        lost = 0
+        if self._ref_next is not None:
+            lost = (seq - self._ref_next) & 0xFF
+            self._untimed_lost += lost
+            self._untimed_advance += lost + 1
+        self._ref_next, self._fast_us = (seq + 1) & 0xFF, 0
+        if type_id == _CONFIG_ID:
+            self._config(raw, advances + lost)
+        return lost
 
     def _move(self, seq: int, t32: int, t64: int, t_host_ns: int | None) -> None:
         self._ref_next, self._ref_t32, self._ref_t64, self._ref_host_ns = (seq + 1) & 0xFF, t32, t64, t_host_ns

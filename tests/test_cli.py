@@ -4,7 +4,7 @@ import os
 import subprocess
 import sys
 
-from groundstation.cli import COMMANDS
+from groundstation.cli import COMMANDS, main
 
 
 def run_cli(*args: str) -> subprocess.CompletedProcess:
@@ -40,3 +40,46 @@ def test_a_garbled_port_spec_is_refused_before_any_window_opens():
     for form in ("udp://HOST:PORT", "tcp://HOST:PORT", "sim:", "FILE.gsrec", "COM3"):
         assert form in result.stderr  # the message lists what would have worked
     assert "no display" not in result.stderr  # said before the app looked for a display (on Linux it has none here)
+
+
+def test_evaluate_and_export_of_a_recording_report_real_progress(tmp_path, capsys, monkeypatch):
+    """The bars of the batch path's progress (shown at once here instead of after a second), to 100 %."""
+    import groundstation.commands.progress as progress
+
+    monkeypatch.setattr(progress, "SHOW_AFTER_S", 0.0)
+    path = tmp_path / "flight.gsrec"
+    assert main(["simulate", "--duration", "5", "--out", str(path)]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(path), "--filters", "ahf"]) == 0
+    bars = capsys.readouterr().err.split("\r")
+    assert any(b.startswith("computing [") for b in bars) and "100%" in bars[-1]
+    fractions = [int(b.split("]")[1].split("%")[0]) for b in bars if b.startswith("computing [")]
+    assert fractions == sorted(fractions) and len(set(fractions)) > 2  # it moves, never back
+    assert main(["export", str(path), "--out", str(tmp_path / "out.csv")]) == 0
+    assert "decoding [" in capsys.readouterr().err
+
+
+def test_import_reports_progress_and_keeps_every_value(tmp_path, capsys, monkeypatch):
+    import gzip
+
+    import numpy as np
+    import pandas as pd
+
+    import groundstation.commands.progress as progress
+    from groundstation.recording import open_recording
+
+    import groundstation.commands.import_csv as import_csv
+
+    monkeypatch.setattr(progress, "SHOW_AFTER_S", 0.0)
+    monkeypatch.setattr(import_csv, "ROWS_PER_BLOCK", 500)
+    assert main(["simulate", "--duration", "30", "--scenario", "static", "--out", str(tmp_path / "raw.bin")]) == 0
+    truth = tmp_path / "raw.truth.csv.gz"
+    capsys.readouterr()
+    assert main(["import", str(truth), "--out", str(tmp_path / "trial.gsrec")]) == 0
+    bars = [b for b in capsys.readouterr().err.split("\r") if b.startswith("importing [")]
+    assert len(bars) > 1 and "100%" in bars[-1]  # more than one block of rows: it moved
+    with gzip.open(truth) as f:
+        expected = pd.read_csv(f)
+    samples = open_recording(tmp_path / "trial.gsrec").samples
+    for name in expected.columns:
+        assert np.array_equal(samples[name], expected[name].to_numpy(dtype=float), equal_nan=True), name

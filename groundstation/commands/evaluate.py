@@ -33,10 +33,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundstation.autopilot.agreement import agreement
+    from groundstation.commands.progress import ProgressBar
     from groundstation.session.data import load_session
 
     names, overrides = estimator_options(args)
-    data = load_session(args.file, names, overrides)
+    bar = ProgressBar("computing")  # shown after a second: a long recording or log
+    try:
+        data = load_session(args.file, names, overrides, bar)
+    finally:
+        bar.done()
     if data.true_q is None and data.onboard is not None:
         if not data.estimates:
             raise UserError(f"{args.file}: no IMU samples, so no host estimator ran; only the onboard estimate is there")

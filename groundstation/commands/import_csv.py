@@ -9,7 +9,10 @@ and evaluate read them as they are.
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
+
+ROWS_PER_BLOCK = 50_000  # rows read between progress reports
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -22,6 +25,7 @@ def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
     from groundstation.autopilot import LOG_SUFFIXES
+    from groundstation.commands.progress import ProgressBar
     from groundstation.datasets import DatasetError, read_csv
     from groundstation.errors import UserError
     from groundstation.export.files import atomic_recording
@@ -40,12 +44,34 @@ def run(args: argparse.Namespace) -> int:
         read_csv(args.file)  # the same checks and messages as evaluate
     except DatasetError as error:
         raise UserError(str(error)) from None
-    frame = pd.read_csv(args.file, compression="infer")
+    bar = ProgressBar("importing")
+    try:
+        frame = read_with_progress(Path(args.file), bar)
+    finally:
+        bar.done()
     columns = {name: pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float) for name in frame.columns}
     with atomic_recording(args.out, {"source": f"imported from {Path(args.file).name}"}) as writer:
         writer.write_samples(columns)
     print(f"wrote {args.out}: {len(frame)} samples, columns {', '.join(frame.columns)}")
     return 0
+
+
+def read_with_progress(path: Path, progress):
+    """The CSV (gzip or not) as one DataFrame, read in blocks of rows; ``progress(bytes read, file size)``."""
+    import gzip
+
+    import pandas as pd
+
+    with open(path, "rb") as raw:
+        size = os.fstat(raw.fileno()).st_size
+        handle = gzip.GzipFile(fileobj=raw) if raw.read(2) == b"\x1f\x8b" else raw
+        raw.seek(0)
+        parts = []
+        for part in pd.read_csv(handle, chunksize=ROWS_PER_BLOCK):
+            parts.append(part)
+            progress(raw.tell(), size)
+    progress(size, size)
+    return pd.concat(parts, ignore_index=True)
 
 
 def save_tlog(recording_path: Path, out: Path) -> int:

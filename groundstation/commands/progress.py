@@ -6,13 +6,16 @@ import sys
 import time
 
 
+SHOW_AFTER_S = 1.0  # a job that ends sooner shows no bar
+
+
 class ProgressBar:
     WIDTH = 30
 
-    def __init__(self, label: str, stream=sys.stderr, delay_s: float = 1.0):
-        self.label, self.stream = label, stream
+    def __init__(self, label: str, stream=None, delay_s: float | None = None):
+        self.label, self.stream = label, stream or sys.stderr  # looked up now: tests may have replaced it
         self._start = time.monotonic()
-        self._delay_s = delay_s
+        self._delay_s = SHOW_AFTER_S if delay_s is None else delay_s
         self._shown = False
 
     def __call__(self, done: float, total: float) -> None:

@@ -9,6 +9,7 @@ bias and scale come from a stored calibration (e.g. a six-position calibration d
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -87,6 +88,48 @@ class RestBiasCalibrator:
         self._n = 0
         self._still_s = 0.0
 
+    def measure(self, gyr_rad_s: np.ndarray, acc_g: np.ndarray, dt_s: np.ndarray) -> int | None:
+        """``step`` over (N, 3), (N, 3), (N,) float64 arrays from a fresh start, stopping where the bias is
+        measured: returns that sample's index (``bias_rad_s`` is then set, bit for bit as ``step`` sets
+        it), or None. The sums are running sums (``np.cumsum`` adds in order, as ``step`` does) from the
+        last restart of the count; where a sample restarts it, the next one starts over.
+        """
+        if self._n or self.bias_rad_s is not None:
+            raise ValueError("measure() starts from a fresh calibrator")
+        n = len(dt_s)
+        ax, ay, az = acc_g[:, 0], acc_g[:, 1], acc_g[:, 2]
+        with np.errstate(invalid="ignore", over="ignore"):
+            norm = np.sqrt(ax * ax + ay * ay + az * az)  # correctly rounded, as math.sqrt in step
+            acc_still = (np.abs(norm - 1.0) <= self.acc_dev_max_g) & (dt_s > 0)
+        candidates = np.flatnonzero(acc_still)
+        start, window = 0, 64
+        while True:
+            i = np.searchsorted(candidates, start)
+            if i == len(candidates):
+                return None
+            start = int(candidates[i])
+            end = min(n, start + window)
+            block = acc_still[start:end]
+            end = start + (int(np.argmin(block)) if not block.all() else len(block))  # the acc-still run
+            sums = np.cumsum(gyr_rad_s[start:end], axis=0)
+            counts = np.arange(1, end - start)[:, None]
+            with np.errstate(invalid="ignore"):
+                deviation = np.abs(gyr_rad_s[start + 1 : end] - sums[:-1] / counts)
+                still = np.concatenate(([True], (deviation <= self.gyro_dev_max_rad_s).all(axis=1)))
+            stop = int(np.argmin(still)) if not still.all() else end - start  # the first sample that moved
+            still_s = np.cumsum(dt_s[start : start + stop])
+            done = np.flatnonzero(still_s >= self.duration_s)
+            if len(done):
+                k = int(done[0])
+                self._n, self._still_s = k + 1, float(still_s[k])
+                self._sum = sums[k].tolist()
+                self.bias_rad_s = tuple((sums[k] / (k + 1)).tolist())
+                return start + k
+            if stop == end - start and end < n and acc_still[end - 1] and end - start == window:
+                window *= 2  # still going at the window's end: look further at once
+                continue
+            start, window = start + stop + (stop < end - start), 64
+
     def step(self, gyr_rad_s, acc_g, dt_s):
         if self.bias_rad_s is not None:
             return self.bias_rad_s
@@ -94,7 +137,7 @@ class RestBiasCalibrator:
         ax, ay, az = acc_g
         n2 = ax * ax + ay * ay + az * az
         # NaN fails every comparison: a bad sample is not still.
-        still = abs(n2**0.5 - 1.0) <= self.acc_dev_max_g and dt_s > 0
+        still = abs(math.sqrt(n2) - 1.0) <= self.acc_dev_max_g and dt_s > 0
         if still and self._n:
             m = self.gyro_dev_max_rad_s
             sx, sy, sz = (s / self._n for s in self._sum)

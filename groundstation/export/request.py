@@ -56,10 +56,6 @@ def export_request(source, out, *, filters=None, overrides=None, t_from=None, t_
         raise UserError(f"{request.source}: no such file")
     if request.out.resolve() == request.source.resolve():
         raise UserError(f"{request.out} is the file being exported; choose another name")
-    if request.format == ".parquet":
-        from groundstation.export.tabular import require_pyarrow
-
-        require_pyarrow()
     check_destination(request.out, overwrite)
     return request
 

@@ -65,6 +65,18 @@ class Recording:
         offset = self._chunk_offsets[index]
         return self._chunk_t_host_ns[index], self._buffer[offset:offset + self._chunk_lengths[index]]
 
+    def stream(self) -> tuple[bytes, np.ndarray, np.ndarray]:
+        """Every chunk's bytes joined, each chunk's end offset in them and its arrival time (the batch path)."""
+        buffer = np.frombuffer(self._buffer, dtype=np.uint8)
+        offsets = np.array(self._chunk_offsets, dtype=np.int64)
+        lengths = np.array(self._chunk_lengths, dtype=np.int64)
+        # Chunks lie in file order between record headers: keep the bytes inside [offset, offset + length).
+        edges = np.zeros(len(buffer) + 1, dtype=np.int8)
+        np.add.at(edges, offsets, 1)
+        np.add.at(edges, offsets + lengths, -1)
+        data = buffer[np.cumsum(edges[:-1], dtype=np.int8).view(bool)].tobytes()
+        return data, np.cumsum(lengths), self.chunk_t_host_ns
+
     def chunks(self, start: int = 0) -> Iterator[tuple[int, bytes]]:
         """(t_host_ns, data) from chunk index ``start`` on."""
         buffer = self._buffer

@@ -18,6 +18,7 @@ from groundstation.errors import UserError
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import inclination_error_rad, run_on_trial, score
 from groundstation.recording import Recording, open_recording
+from groundstation.session.batch import BatchSession, batch_replay
 from groundstation.session.catalogue import Catalogue, session_catalogue
 from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
@@ -102,7 +103,16 @@ def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
         return data
     if recording.chunk_count == 0:
         raise UserError(f"{path}: the recording holds no data")
-    return from_pipeline(recording, replay(recording, filters, forced, progress))
+    return from_pipeline(recording, computed(recording, filters, forced, progress))
+
+
+def computed(recording: Recording, filters=None, forced=None, progress=None) -> Pipeline | BatchSession:
+    """A recording's session computed whole: the project's frames on the batch path (the same tables as
+    a replay, tests/session/test_batch.py); an autopilot's MAVLink through the incremental pipeline
+    (its front-end turns messages into stage calls one by one; it has no batch form)."""
+    if recording.metadata.get("protocol", "gs") == "gs":
+        return batch_replay(recording, filters, forced, progress)
+    return replay(recording, filters, forced, progress)
 
 
 def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
@@ -140,7 +150,7 @@ def from_trial(trial: Trial, filters, settings_used, metadata: dict) -> SessionD
     )
 
 
-def from_pipeline(recording: Recording, pipeline: Pipeline) -> SessionData:
+def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> SessionData:
     if not len(pipeline.imu) and len(pipeline.onboard):
         return onboard_only(recording, pipeline)
     whole = product(pipeline)

@@ -13,10 +13,11 @@ from collections import deque
 import numpy as np
 
 from firmware_protocol import DecoderStats
+from firmware_protocol.batch import CHUNK_COUNTERS
 from groundstation.session.table import Table
 
 PER_SECOND_COLUMNS = ("t_s", "frames", "bytes", "crc_errors", "frames_lost", "bytes_skipped")
-_COUNTERS = ("frames", "bytes_in", "crc_errors", "frames_lost", "bytes_skipped")
+_COUNTERS = CHUNK_COUNTERS  # the decoder's counters read per second (the batch decode reports them per chunk)
 LATENCY_WINDOW = 1000  # samples (10 s at 100 Hz): short enough that clock drift stays under 1 ms
 
 

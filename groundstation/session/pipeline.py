@@ -46,6 +46,7 @@ _Q_SCALE = SPEC.frame("ATTITUDE").fields[1].scale
 _LAMBDA_SCALE = SPEC.frame("ATTITUDE").fields[5].scale
 _MAG = SPEC.frame("MAG_RAW")
 _MAG_SCALES = tuple(f.scale for f in _MAG.fields[1:4])  # mag_x, mag_y, mag_z: counts -> µT
+TEMPERATURE_SCALE = SPEC.frame("IMU_RAW").fields[-1].scale  # counts -> °C
 
 
 @dataclasses.dataclass(frozen=True)
@@ -61,6 +62,64 @@ class SensorConfig:
 def folded(matrix, scales) -> list[tuple[float, float, float]]:
     """A mounting matrix with each sensor axis's scale folded in: sensor counts -> body units in one product."""
     return [tuple(float(x) * s for x, s in zip(row, scales)) for row in matrix]
+
+
+def conversions(sensor: SensorConfig) -> tuple[list, list, list]:
+    """The folded matrices (accelerometer -> g, gyro -> rad/s, magnetometer -> µT, body axes) of a sensor
+    configuration; ValueError for a mounting index outside 0-23 or a rate that is not positive."""
+    m = mounting.matrix(sensor.mounting)  # raises ValueError for an index outside 0-23
+    if sensor.rate_hz <= 0:
+        raise ValueError(f"output rate {sensor.rate_hz} Hz")
+    return (folded(m, (1.0 / ACCEL_LSB_PER_G[sensor.accel_fs_g],) * 3),
+            folded(m, (math.radians(1.0) / GYRO_LSB_PER_DPS[sensor.gyro_fs_dps],) * 3), folded(m, _MAG_SCALES))
+
+
+def in_body_axes(m, x, y, z) -> tuple:
+    """Sensor counts ``x, y, z`` through a folded matrix: body axes, physical units. Numbers or arrays
+    (the same operations in the same order: the live and the batch path agree bit for bit)."""
+    (m0, m1, m2), (m3, m4, m5), (m6, m7, m8) = m
+    return (m0 * x + m1 * y + m2 * z, m3 * x + m4 * y + m5 * z, m6 * x + m7 * y + m8 * z)
+
+
+def period_s(sensor: SensorConfig) -> float:
+    """``dt`` of a segment's first IMU sample (no previous device time): one output period."""
+    return 1.0 / sensor.rate_hz
+
+
+def sample_dt_s(t_us, last_us):
+    """``dt`` between two IMU samples of one segment from their device times (µs); numbers or arrays."""
+    return (t_us - last_us) * 1e-6
+
+
+def hold_expired(time_s, first_held_s):
+    """IMU samples held for a CONFIG since ``first_held_s`` are converted with the assumed scales now."""
+    return time_s - first_held_s >= HOLD_FOR_CONFIG_US * 1e-6
+
+
+def gap_time_s(event: dict) -> float:
+    """Session time of the gap row a discontinuity puts in every table: between the times on either side."""
+    return 0.5 * (event["session_time_before_s"] + event["session_time_s"])
+
+
+def no_config_message(s: SensorConfig) -> str:
+    return (f"no CONFIG frame: converting with assumed full scales ±{s.accel_fs_g} g, ±{s.gyro_fs_dps} °/s, "
+            f"mounting {s.mounting}")
+
+
+def schema_message(fingerprint: int) -> str:
+    return (f"the firmware was built from another protocol spec (schema fingerprint 0x{fingerprint:08X}); "
+            "its frames may be mis-decoded")
+
+
+def impossible_config_message(values: dict) -> str:
+    return f"CONFIG with impossible values {values}; keeping the previous conversion"
+
+
+def sensor_of(values: dict) -> SensorConfig:
+    """The SensorConfig a CONFIG frame's values say; KeyError or ValueError when they cannot be one."""
+    sensor = SensorConfig(values["accel_fs_g"], values["gyro_fs_dps"], values["rate_hz"], values["mounting"])
+    conversions(sensor)
+    return sensor
 
 
 class Pipeline:
@@ -160,14 +219,13 @@ class Pipeline:
         self.tables["config"].append(self._row(frame))
         self.events.append({"t_host_ns": t_host_ns, "kind": "config", **self.config})
         if self.front.decoder.schema_matches is False:
-            self._warn(t_host_ns, "the firmware was built from another protocol spec (schema fingerprint "
-                       f"0x{frame['schema_fingerprint']:08X}); its frames may be mis-decoded")
+            self._warn(t_host_ns, schema_message(frame["schema_fingerprint"]))
         try:
-            sensor = SensorConfig(frame["accel_fs_g"], frame["gyro_fs_dps"], frame["rate_hz"], frame["mounting"])
-            self._use_sensor(sensor)
+            sensor = sensor_of(self.config)
         except (KeyError, ValueError):
-            self._warn(t_host_ns, f"CONFIG with impossible values {self.config}; keeping the previous conversion")
+            self._warn(t_host_ns, impossible_config_message(self.config))
             return
+        self._use_sensor(sensor)
         self._release_held()
 
     def _ack(self, t_host_ns: int, frame: Frame) -> None:
@@ -176,13 +234,8 @@ class Pipeline:
         self.events.append({"t_host_ns": t_host_ns, "kind": "ack", **frame.values})
 
     def _use_sensor(self, sensor: SensorConfig) -> None:
-        m = mounting.matrix(sensor.mounting)  # raises ValueError for an index outside 0-23
-        if sensor.rate_hz <= 0:
-            raise ValueError(f"output rate {sensor.rate_hz} Hz")
         # Scale and mounting folded into one matrix each: three dot products per vector per sample.
-        self._acc_m = folded(m, (1.0 / ACCEL_LSB_PER_G[sensor.accel_fs_g],) * 3)
-        self._gyr_m = folded(m, (math.radians(1.0) / GYRO_LSB_PER_DPS[sensor.gyro_fs_dps],) * 3)
-        self._mag_m = folded(m, _MAG_SCALES)
+        self._acc_m, self._gyr_m, self._mag_m = conversions(sensor)
         self.sensor = sensor
 
     def _release_held(self) -> None:
@@ -195,27 +248,23 @@ class Pipeline:
             self._imu_sample(t_host_ns, frame, self._time_s, self._device_us)
             return
         self._held.append((t_host_ns, frame, self._time_s, self._device_us))
-        if self._time_s - self._held[0][2] >= HOLD_FOR_CONFIG_US * 1e-6:
-            s = self.assumed_sensor
-            self._warn(t_host_ns, f"no CONFIG frame: converting with assumed full scales ±{s.accel_fs_g} g, "
-                       f"±{s.gyro_fs_dps} °/s, mounting {s.mounting}")
-            self._use_sensor(s)
+        if hold_expired(self._time_s, self._held[0][2]):
+            self._warn(t_host_ns, no_config_message(self.assumed_sensor))
+            self._use_sensor(self.assumed_sensor)
             self._release_held()
 
     def _imu_sample(self, t_host_ns: int, frame: Frame, time_s: float, t_us: int) -> None:
         """One IMU sample at session time ``time_s``, device time ``t_us`` (unwrapped within its segment)."""
         _, _, (_, cx, cy, cz, rx, ry, rz, temperature), _ = frame
-        (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = self._acc_m
-        (g0, g1, g2), (g3, g4, g5), (g6, g7, g8) = self._gyr_m
-        acc = (a0 * cx + a1 * cy + a2 * cz, a3 * cx + a4 * cy + a5 * cz, a6 * cx + a7 * cy + a8 * cz)
-        gyr = (g0 * rx + g1 * ry + g2 * rz, g3 * rx + g4 * ry + g5 * rz, g6 * rx + g7 * ry + g8 * rz)
-        self.imu_stage(t_host_ns, time_s, t_us, acc, gyr, temperature * 0.01, 1.0 / self.sensor.rate_hz)
+        acc = in_body_axes(self._acc_m, cx, cy, cz)
+        gyr = in_body_axes(self._gyr_m, rx, ry, rz)
+        self.imu_stage(t_host_ns, time_s, t_us, acc, gyr, temperature * TEMPERATURE_SCALE, period_s(self.sensor))
 
     def imu_stage(self, t_host_ns: int, time_s: float, t_us: int, acc: tuple, gyr: tuple, temperature_c: float,
                   first_dt_s: float) -> None:
         """One IMU sample in body axes (g, rad/s) through the estimators into ``imu``; ``dt`` from the
         device times, ``first_dt_s`` for the first sample of a segment."""
-        dt_s = first_dt_s if self._last_us is None else (t_us - self._last_us) * 1e-6
+        dt_s = first_dt_s if self._last_us is None else sample_dt_s(t_us, self._last_us)
         self._last_us = t_us
         row = [time_s, t_us, (t_host_ns - self.t0_host_ns) * 1e-9, *acc, *gyr, temperature_c]
         mag, gps = self.aiding.take_for_estimators()
@@ -230,8 +279,7 @@ class Pipeline:
 
     def _magnetometer(self, t_host_ns: int, frame: Frame) -> None:
         _, mx, my, mz = frame[2]
-        (m0, m1, m2), (m3, m4, m5), (m6, m7, m8) = self._mag_m
-        body = (m0 * mx + m1 * my + m2 * mz, m3 * mx + m4 * my + m5 * mz, m6 * mx + m7 * my + m8 * mz)
+        body = in_body_axes(self._mag_m, mx, my, mz)
         sx, sy, sz = _MAG_SCALES
         self.magnetometer_stage(body, (mx * sx, my * sy, mz * sz))
 
@@ -272,7 +320,7 @@ class Pipeline:
         self.bank.restart()
         self.aiding.restart()
         self._last_us = None
-        gap_s = 0.5 * (event["session_time_before_s"] + event["session_time_s"])
+        gap_s = gap_time_s(event)
         for table in self.tables.values():
             if len(table):
                 table.append((gap_s,) + (math.nan,) * (len(table.columns) - 1))

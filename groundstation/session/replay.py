@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 
 from groundstation.errors import UserError
@@ -31,8 +32,18 @@ def check_forced(filters, forced) -> None:
                         f"add {' and '.join(idle)} with --filters")
 
 
-def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
-    """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``."""
+@dataclasses.dataclass(frozen=True)
+class RecordedSetup:
+    """How a recorded session was set up: its protocol, estimators and settings, plus ``forced``."""
+
+    filters: tuple[str, ...]
+    settings: dict[str, dict[str, float]]
+    forced: dict | None
+    protocol: str
+    warnings: list[dict]  # events to start the session's events with
+
+
+def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedSetup:
     if filters is None:
         filters = recording.metadata.get("filters", DEFAULT_FILTERS)
     check_forced(filters, forced)
@@ -40,11 +51,19 @@ def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
     if protocol not in PROTOCOLS:
         raise UserError(f"{recording.path}: recorded from a {protocol!r} link, which this version cannot decode "
                         f"(it knows {', '.join(PROTOCOLS)})")
-    pipeline = Pipeline(filters, recorded_settings(recording), forced, protocol=protocol)
+    warnings = []
     outdated = outdated_settings(recording)
     if outdated:
-        pipeline.events.append({"t_host_ns": 0, "kind": "warning", "message": "recorded settings this version's "
-                                f"estimators no longer have, left out (their defaults apply): {', '.join(outdated)}"})
+        warnings.append({"t_host_ns": 0, "kind": "warning", "message": "recorded settings this version's "
+                         f"estimators no longer have, left out (their defaults apply): {', '.join(outdated)}"})
+    return RecordedSetup(tuple(filters), recorded_settings(recording), forced, protocol, warnings)
+
+
+def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
+    """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``."""
+    setup = recorded_setup(recording, filters, forced)
+    pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol)
+    pipeline.events += setup.warnings
     return pipeline
 
 
@@ -66,6 +85,10 @@ class SettingsSchedule:
             ((t, i, e) for i, (t, e) in enumerate(recording.events) if e.get("kind") == "settings"), key=lambda x: x[:2]
         )
         self._next = 0
+
+    def changes(self) -> list[tuple[float, dict]]:
+        """Every recorded change as (t_host_ns, event), in the order they apply."""
+        return [(t, e) for t, _, e in self._events]
 
     def apply_before(self, pipeline: Pipeline, t_host_ns: float) -> None:
         """Apply every change recorded before a chunk that arrived at ``t_host_ns``."""

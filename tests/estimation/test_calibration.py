@@ -1,7 +1,12 @@
 """Gyro bias from rest, rest detection and stored accelerometer calibration on synthetic data."""
 
+import math
+import random
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from groundstation.estimation.calibration import AccelCalibration, RestBiasCalibrator, detect_rest, gyro_bias_rad_s
 
@@ -71,3 +76,30 @@ def test_rest_bias_calibrator_restarts_on_motion_and_on_command():
     assert cal.step([np.nan, 0.0, 0.0], acc[0], 0.01) is None and cal.step(gyr[0], [0.0, 0.0, -1.5], 0.01) is None
     with pytest.raises(ValueError):
         RestBiasCalibrator(duration_s=0.0)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(st.lists(st.tuples(st.integers(1, 150), st.sampled_from(["still", "moving", "tilted", "nan", "bad_dt", "drifting"])),
+                min_size=1, max_size=12), st.integers(0, 2**32))
+def test_measure_is_step_sample_for_sample(stretches, seed):
+    """The batch path's calibrator: where it measures and the bias, bit for bit as step, over stretches
+    at rest, moving, tilted (the accelerometer off 1 g), with NaN, with bad dt, and slowly drifting."""
+    rng = random.Random(seed)  # the samples' noise: drawn here, not by hypothesis (too many draws)
+    gyr, acc, dt = [], [], []
+    bias = [rng.uniform(-0.3, 0.3) for _ in range(3)]
+    for length, kind in stretches:
+        for k in range(length):
+            noise = 0.03 if kind == "moving" else 0.004
+            drift = 0.0001 * k if kind == "drifting" else 0.0
+            gyr.append([b + drift + rng.gauss(0.0, noise) for b in bias])
+            acc.append([rng.gauss(0.0, 0.01), rng.gauss(0.0, 0.01), -1.0 + (0.2 if kind == "tilted" else rng.gauss(0.0, 0.01))])
+            dt.append(-0.01 if kind == "bad_dt" and k % 7 == 0 else 0.01)
+            if kind == "nan" and k % 5 == 0:
+                gyr[-1][rng.randrange(3)] = math.nan
+    gyr, acc, dt = np.array(gyr), np.array(acc), np.array(dt)
+    one = RestBiasCalibrator(duration_s=0.5)
+    expected = next((i for i, (g, a, d) in enumerate(zip(gyr.tolist(), acc.tolist(), dt.tolist())) if one.step(g, a, d)), None)
+    batch = RestBiasCalibrator(duration_s=0.5)
+    assert batch.measure(gyr, acc, dt) == expected
+    assert batch.bias_rad_s == one.bias_rad_s
+

@@ -21,7 +21,7 @@ def test_each_reading_lands_once_on_the_next_imu_row_of_the_csv(sim_session, tmp
         readings_inside &= np.isfinite(table[column])  # e.g. no heading before the first attitude
         assert filled.sum() == readings_inside.sum() > 0, csv_column
         assert readings_inside.sum() >= 0.98 * len(rows), csv_column  # 1% frame loss on this link
-        assert np.allclose(csv[csv_column][filled], table[column][readings_inside], rtol=1e-9), csv_column  # CSV_FLOAT_FORMAT keeps 10 significant digits
+        assert np.allclose(csv[csv_column][filled], table[column][readings_inside], rtol=1e-9), csv_column
         # The row is the first IMU sample at or after the reading: the row before it is earlier.
         row_times = csv["time_s"].to_numpy()
         at = np.flatnonzero(filled)

@@ -6,6 +6,8 @@ The streams are built from what really happened (host time of each frame, the de
 
 import math
 
+import numpy as np
+
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -110,3 +112,24 @@ def test_a_frame_stamped_a_little_before_the_last_gets_the_last_time():
     assert clock.place(10_000_000, 5_010_000) == 0.01
     assert clock.place(10_000_000, 4_900_000) == 0.01 and clock.device_us == 4_900_000 and clock.event is None
     assert clock.place(20_000_000, 5_020_000) == 0.02
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.integers(0, WRAP - 1), histories, st.randoms(use_true_random=False), st.floats(-200.0, 200.0))
+def test_place_many_is_place_frame_by_frame(t0_us, history, rng, drift_ppm):
+    """The batch path's columns: the same times, device times and events bit for bit, with late,
+    bunched and early frames, a drifting device clock (the lead rises frame after frame), sensors
+    reporting a little late, outages, jumps and restarts."""
+    frames, _ = stream(t0_us, history)
+    hosts, stamps, arrived = [], [], 0.0
+    for t_send_s, t32 in frames:
+        arrived = max(arrived, t_send_s * (1 + drift_ppm * 1e-6) + rng.choice([0.0, rng.uniform(0.0, 0.2)]))
+        hosts.append(round(arrived * 1e9))
+        stamps.append(t32 if rng.random() > 0.05 else (t32 - rng.randrange(400_000)) & 0xFFFFFFFF)  # a late sensor
+    one, expected, expected_device, expected_events = SessionClock(), [], [], []
+    for i, (t_host_ns, t32) in enumerate(zip(hosts, stamps)):
+        expected.append(one.place(t_host_ns, t32))
+        expected_device.append(one.device_us)
+        expected_events += [(i, one.event)] if one.event else []
+    times, device, events = SessionClock().place_many(np.array(hosts, dtype=np.int64), np.array(stamps, dtype=np.int64))
+    assert times.tolist() == expected and device.tolist() == expected_device and events == expected_events

@@ -31,3 +31,4 @@ def test_the_turn_on_bias_is_measured_at_rest_recorded_and_removed():
     qw, qz = imu["hf_qw"][after], imu["hf_qz"][after]
     yaw_deg = np.degrees(2 * np.arctan2(qz, qw))
     assert np.ptp(yaw_deg) < 1.0
+

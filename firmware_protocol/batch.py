@@ -1,0 +1,410 @@
+"""Columnar decode of a whole recorded byte stream: numpy arrays per frame type, no Frame objects.
+
+``decode_chunks(chunks)`` gives exactly what ``StreamDecoder`` gives when fed the same ``(t_host_ns,
+bytes)`` chunks one by one (the same frames in the same order, device times, the chunk each frame
+comes out with, counters, pending tail), as columns; and the counters as they stood after every
+chunk (what the link's per-second figures read). The incremental decoder waits for a whole frame
+before it decides on it, so framing does not depend on the chunking, and the decode is done in two
+passes over the whole buffer:
+
+1. Framing, as array operations. Every sync byte is a candidate; its length byte is checked against
+   its type and the CRC of every plausible one is computed at once (a table CRC-16/CCITT-FALSE over
+   the candidates as columns: one numpy pass per two frame bytes, not per frame). The scan accepts a
+   CRC-valid candidate that starts at or after the end of the frame accepted before it, and examines,
+   then skips, every other sync byte outside accepted frames; CRC-valid candidates overlap only
+   around damage (a frame that passes the CRC inside another), and only those are resolved in Python.
+   Where the scan stood after each chunk follows from the bytes each examined candidate needs.
+2. Sequence and time. Duplicates (same seq and values as the frame before) and unknown types are
+   dropped; then every frame that the incremental decoder's fast path takes (a timestamped frame
+   with the next seq, soon after a timestamped one) is placed by a cumulative sum, and every other
+   frame by the incremental decoder's own slow path (``StreamDecoder._place`` and ``_untimed`` on a
+   decoder holding the state): the first frame, frames without timestamp, gaps, long or backward
+   steps, held frames and restarts. One set of rules, no copy of them here.
+
+Payloads are unpacked by viewing the frames' bytes as a numpy structured dtype built from the spec
+(``payload_dtype``), so raw values are the wire values, bit for bit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from firmware_protocol.codec import CRC_BYTES, HEADER_BYTES, SYNC
+from firmware_protocol.decoder import DecoderStats, StreamDecoder
+from firmware_protocol.spec import C_TYPES, SPEC, FrameType, Spec
+
+_OVERHEAD = HEADER_BYTES + CRC_BYTES
+_CONFIG = SPEC.frame("CONFIG")
+# DecoderStats as they stood after each chunk: what link.LinkStats reads per second.
+CHUNK_COUNTERS = ("frames", "bytes_in", "crc_errors", "frames_lost", "bytes_skipped")
+
+
+def payload_dtype(frame_type: FrameType) -> np.dtype:
+    """The packed little-endian numpy dtype of a frame type's payload, field for field from the spec."""
+    return np.dtype([(f.name, "<" + C_TYPES[f.c_type][0]) for f in frame_type.fields])
+
+
+def _crc_tables() -> tuple[np.ndarray, np.ndarray]:
+    """CRC-16/CCITT-FALSE (poly 0x1021, no reflection) from a zero register of each byte value, and
+    of each 16-bit word (high byte first). A 16-bit register is shifted out entirely by 16 bits of
+    input, so a register ``c`` followed by a word ``w`` becomes ``T16[c ^ w]``: two bytes per step."""
+    table = np.arange(256, dtype=np.uint32) << 8
+    for _ in range(8):
+        table = np.where(table & 0x8000, (table << 1) ^ 0x1021, table << 1) & 0xFFFF
+    words = np.arange(65536, dtype=np.uint32)
+    first = table[words >> 8]
+    return table.astype(np.uint16), (((first << 8) & 0xFFFF) ^ table[(first >> 8) ^ (words & 0xFF)]).astype(np.uint16)
+
+
+_CRC8, _CRC16 = _crc_tables()
+
+
+@dataclass
+class FrameColumns:
+    """The frames of one type, in the order the incremental decoder returns them."""
+
+    type: FrameType
+    order: np.ndarray  # int64: position of each frame among all frames returned (every type)
+    seq: np.ndarray  # uint8
+    raw: np.ndarray  # structured array, payload_dtype(type): wire values as sent
+    device_time_us: np.ndarray | None  # int64, unwrapped as StreamDecoder does; None for types without t_us
+    chunk: np.ndarray  # int64: index of the chunk with which StreamDecoder returns the frame
+    t_host_ns: np.ndarray  # int64: that chunk's arrival time
+
+    def __len__(self) -> int:
+        return len(self.seq)
+
+    def scaled(self, field: str) -> np.ndarray:
+        """One field's physical values (raw * scale, in the spec's unit) as float64, as Frame.scaled."""
+        (spec_field,) = (f for f in self.type.fields if f.name == field)
+        return self.raw[field].astype(np.float64) * spec_field.scale
+
+
+@dataclass
+class BatchDecode:
+    frames: dict[str, FrameColumns]  # by frame type name; every type of the spec, possibly empty
+    stats: DecoderStats
+    remote_fingerprint: int | None  # as StreamDecoder.remote_fingerprint after the last chunk
+    rate_hz: int  # as StreamDecoder.rate_hz
+    pending_bytes: int  # the incomplete tail the incremental decoder would still be waiting on
+    chunk_t_host_ns: np.ndarray  # (chunks,) arrival times
+    chunk_counters: dict[str, np.ndarray]  # CHUNK_COUNTERS -> (chunks,): each counter after each chunk
+
+    @property
+    def count(self) -> int:
+        return self.stats.frames
+
+    def schema_matches(self) -> bool | None:
+        return None if self.remote_fingerprint is None else self.remote_fingerprint == SPEC.fingerprint
+
+
+def decode_chunks(chunks: Iterable[tuple[int, bytes]], spec: Spec = SPEC,
+                  progress: Callable[[int, int], None] | None = None) -> BatchDecode:
+    """``decode_batch`` of ``(t_host_ns, data)`` chunks as a recording holds them."""
+    times, parts = [], []
+    for t_host_ns, data in chunks:
+        times.append(t_host_ns)
+        parts.append(data)
+    ends = np.cumsum([len(p) for p in parts], dtype=np.int64)
+    return decode_batch(b"".join(parts), ends, np.array(times, dtype=np.int64), spec, progress)
+
+
+def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec = SPEC,
+                 progress: Callable[[int, int], None] | None = None) -> BatchDecode:
+    """Decode ``data``, the concatenation of chunks ending at byte offsets ``chunk_ends`` (cumulative,
+    exclusive) that arrived at ``chunk_t_host_ns``. Without chunks: one chunk arriving at 0.
+    ``progress(done, total)`` is told the frames placed so far."""
+    buf = np.frombuffer(data, dtype=np.uint8)
+    n = len(buf)
+    if chunk_ends is None:
+        chunk_ends, chunk_t_host_ns = np.array([n], dtype=np.int64), np.zeros(1, dtype=np.int64)
+    chunk_ends = np.asarray(chunk_ends, dtype=np.int64)
+    chunk_t_host_ns = np.asarray(chunk_t_host_ns, dtype=np.int64)
+    tables = _Tables(spec)
+    scan = _scan(buf, chunk_ends, tables, spec)
+    starts = scan.starts
+    type_ids = buf[starts + 2].astype(np.intp)
+    seqs = buf[starts + 3]
+    duplicate = _duplicates(data, starts, scan.ends, type_ids, seqs, tables)
+    known = tables.known[type_ids]
+    keep = ~duplicate & known
+    kept = _Kept(buf, starts[keep], type_ids[keep], seqs[keep], tables)
+    chunk_of = np.searchsorted(scan.stops, kept.starts, side="right")  # the chunk whose feed reaches the frame
+    placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, spec, progress)
+
+    stats = placed.decoder.stats
+    stats.bytes_in = n
+    stats.frame_bytes = int((scan.ends - starts).sum())
+    stats.bytes_skipped = int(scan.stops[-1]) - stats.frame_bytes if len(scan.stops) else 0
+    stats.bad_lengths, stats.crc_errors = int(scan.bad_at.size), int(scan.crc_at.size)
+    stats.duplicates = int(duplicate.sum())
+    stats.unknown_types = int((~duplicate & ~known).sum())
+    stats.frames = len(placed.index)
+    stats.frames_lost = int(placed.lost.sum())
+
+    # Counters after each chunk: what lies before the scan's stop then.
+    stops = scan.stops
+    emitted_at = kept.starts[placed.emitter]  # a held frame comes out with the frame that confirms it
+    frame_ends = np.cumsum(scan.ends - starts)
+    accepted_before = np.searchsorted(starts, stops)
+    counters = {
+        "frames": np.searchsorted(np.sort(emitted_at), stops),
+        "bytes_in": chunk_ends.copy(),
+        "crc_errors": np.searchsorted(scan.crc_at, stops),
+        "frames_lost": np.concatenate(([0], np.cumsum(placed.lost)))[np.searchsorted(kept.starts, stops)],
+        "bytes_skipped": stops - np.concatenate(([0], frame_ends))[accepted_before],
+    }
+
+    order_of = placed.index  # kept index of each frame returned, in return order
+    frames = {}
+    for frame_type in spec.frames:
+        (order,) = np.nonzero(kept.type_ids[order_of] == frame_type.id)
+        which = order_of[order]
+        dtype = payload_dtype(frame_type)
+        if len(which):  # a frame's payload lies within the buffer, so its window exists
+            rows = np.lib.stride_tricks.sliding_window_view(buf, frame_type.payload_size)[kept.starts[which] + HEADER_BYTES]
+            raw = np.ascontiguousarray(rows).view(dtype).reshape(len(which))
+        else:
+            raw = np.zeros(0, dtype)
+        chunk = chunk_of[placed.emitter[order]]
+        device = placed.t64[order] if frame_type.has_timestamp else None
+        frames[frame_type.name] = FrameColumns(frame_type, order, kept.seqs[which], raw, device, chunk, chunk_t_host_ns[chunk])
+    decoder = placed.decoder
+    return BatchDecode(frames, stats, decoder.remote_fingerprint, decoder.rate_hz, n - int(stops[-1]) if len(stops) else 0,
+                       chunk_t_host_ns, counters)
+
+
+class _Tables:
+    """Per type id (0..255) lookups from the spec."""
+
+    def __init__(self, spec: Spec):
+        by_id = {t.id: t for t in spec.frames}
+        types = [by_id.get(i) for i in range(256)]
+        self.types = types
+        self.size = np.array([t.payload_size if t else -1 for t in types], dtype=np.int16)  # -1: unknown id
+        self.known = self.size >= 0
+        self.timestamped = np.array([bool(t and t.has_timestamp) for t in types])
+        self.unpackers = [t.struct.unpack_from if t else None for t in types]
+
+
+@dataclass
+class _Scan:
+    starts: np.ndarray  # accepted frames (CRC-valid, where the scan accepts them), sorted
+    ends: np.ndarray
+    stops: np.ndarray  # (chunks,) where the scan stood after each chunk: every byte before it is decided
+    crc_at: np.ndarray  # sorted positions of candidates examined and failed (CRC)
+    bad_at: np.ndarray  # ... with an impossible length
+
+
+def _scan(buf: np.ndarray, chunk_ends: np.ndarray, tables: _Tables, spec: Spec) -> _Scan:
+    n = len(buf)
+    syncs = np.flatnonzero(buf == SYNC)
+    header = syncs + HEADER_BYTES <= n
+    lengths = np.zeros(len(syncs), dtype=np.int64)
+    sizes = np.full(len(syncs), -1, dtype=np.int64)
+    lengths[header] = buf[syncs[header] + 1]
+    sizes[header] = tables.size[buf[syncs[header] + 2]]
+    plausible = header & ((lengths == sizes) | ((sizes < 0) & (lengths <= spec.max_payload_bytes)))
+    ends = syncs + _OVERHEAD + lengths
+    complete = plausible & (ends <= n)
+    valid = np.zeros(len(syncs), dtype=bool)
+    for length in np.flatnonzero(np.bincount(lengths[complete])):
+        (which,) = np.nonzero(complete & (lengths == length))
+        valid[which] = _crc_is_zero(buf, syncs[which] + 1, int(length) + _OVERHEAD - 1)
+    s, e = syncs[valid], ends[valid]
+    accepted = _greedy(s, e)
+    s, e = s[accepted], e[accepted]
+    # Sync bytes inside accepted frames are never examined. Each examined one, and each accepted frame,
+    # needs bytes up to ``need`` before the scan can pass it: the scan stops after a chunk at the first
+    # one needing more than has arrived (the chunk ends at or after the buffer's end: incomplete).
+    examined = ~_inside(syncs, s, e)
+    points = np.concatenate((syncs[examined], s))
+    need = np.concatenate((np.where(plausible, ends, syncs + HEADER_BYTES)[examined], e))
+    ordering = np.argsort(points, kind="stable")
+    points, need = points[ordering], need[ordering]
+    reach = np.maximum.accumulate(need) if len(need) else need
+    first_waiting = np.searchsorted(reach, chunk_ends, side="right")
+    stops = chunk_ends.copy()
+    waits = first_waiting < len(points)
+    stops[waits] = np.minimum(points[first_waiting[waits]], chunk_ends[waits])
+    final = int(stops[-1]) if len(stops) else n
+    keep = s < final
+    examined_decided = examined & (syncs < final)
+    crc_at = syncs[examined_decided & complete & ~valid]
+    bad_at = syncs[examined_decided & header & ~plausible]
+    return _Scan(s[keep], e[keep], stops.astype(np.int64), crc_at, bad_at)
+
+
+def _crc_is_zero(buf: np.ndarray, body_starts: np.ndarray, body_bytes: int) -> np.ndarray:
+    """CRC over ``body_bytes`` from each start (CRC included) is zero: the frame is intact."""
+    rows = np.lib.stride_tricks.sliding_window_view(buf, body_bytes)[body_starts]
+    crc = np.full(len(body_starts), 0xFFFF, dtype=np.uint16)
+    if body_bytes % 2:  # an odd byte first, then whole words
+        crc = (crc << 8) ^ _CRC8[(crc >> 8) ^ rows[:, 0]]
+        rows = rows[:, 1:]
+    # One contiguous row of big-endian words per word position.
+    words = np.ascontiguousarray(np.ascontiguousarray(rows).view(">u2").astype(np.uint16).T)
+    for word in words:
+        crc = _CRC16[crc ^ word]
+    return crc == 0
+
+
+def _greedy(s: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """Which CRC-valid candidates (sorted starts ``s``, ends ``e``) are accepted: each one that starts
+    at or after the end of the last accepted one, where the incremental scan resumes.
+
+    A candidate starting at or after every earlier end is accepted whatever came before; only the
+    others (a CRC-valid candidate inside another frame: damage) need the sequential rule.
+    """
+    accepted = np.ones(len(s), dtype=bool)
+    if len(s) < 2:
+        return accepted
+    reach = np.maximum.accumulate(e)
+    fresh = np.concatenate(([True], s[1:] >= reach[:-1]))
+    last_fresh = np.maximum.accumulate(np.where(fresh, np.arange(len(s)), 0))
+    last_overlapping_accepted = -1
+    for i in np.flatnonzero(~fresh).tolist():
+        last = max(int(last_fresh[i]), last_overlapping_accepted)
+        if s[i] >= e[last]:
+            last_overlapping_accepted = i
+        else:
+            accepted[i] = False
+    return accepted
+
+
+def _inside(positions: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """Whether each position lies within one of the sorted, disjoint [start, end) intervals."""
+    if not len(starts):
+        return np.zeros(len(positions), dtype=bool)
+    i = np.searchsorted(starts, positions, side="right") - 1
+    return (i >= 0) & (positions < ends[np.maximum(i, 0)])
+
+
+def _duplicates(data: bytes, starts, ends, type_ids, seqs, tables: _Tables) -> np.ndarray:
+    """StreamDecoder's rule: same seq and equal unpacked values as the last known-type non-duplicate frame."""
+    duplicate = np.zeros(len(starts), dtype=bool)
+    if len(starts) < 2:
+        return duplicate
+    known = tables.known[type_ids]
+    # The rule compares with the last frame of a known type that was not a duplicate.
+    index = np.flatnonzero(known)
+    ks = seqs[index]
+    for j in (np.flatnonzero(ks[1:] == ks[:-1]) + 1).tolist():
+        i, previous = int(index[j]), j - 1
+        while duplicate[index[previous]]:
+            previous -= 1
+        p = int(index[previous])
+        if tables.unpackers[type_ids[i]](data, int(starts[i]) + HEADER_BYTES) == tables.unpackers[type_ids[p]](
+                data, int(starts[p]) + HEADER_BYTES):
+            duplicate[i] = True
+    return duplicate
+
+
+class _Kept:
+    """The frames that reach the sequence rules (known types, no duplicates), in stream order."""
+
+    def __init__(self, buf: np.ndarray, starts, type_ids, seqs, tables: _Tables):
+        self.starts, self.type_ids, self.seqs = starts, type_ids, seqs
+        self.timestamped = tables.timestamped[type_ids]
+        # TIMESTAMP_FIELD is the first field: a little-endian uint32 at the payload's start.
+        at = starts + HEADER_BYTES
+        t32 = np.zeros(len(starts), dtype=np.int64)
+        if len(starts):
+            t32 = np.lib.stride_tricks.sliding_window_view(buf, 4)[np.minimum(at, len(buf) - 4)].copy().view("<u4")
+            t32 = t32.reshape(-1).astype(np.int64)
+        self.t32 = np.where(self.timestamped, t32, 0)
+        self.tables = tables
+
+    def __len__(self) -> int:
+        return len(self.starts)
+
+
+@dataclass
+class _Placed:
+    index: np.ndarray  # kept index of each frame returned, in return order
+    t64: np.ndarray  # its device time (0 for frames without timestamp)
+    emitter: np.ndarray  # kept index of the frame whose processing returned it (a held frame: the confirming one)
+    lost: np.ndarray  # (kept,) frames counted lost while processing each kept frame
+    decoder: StreamDecoder  # holding the state and the slow path's counters
+
+
+def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tables, spec: Spec, progress) -> _Placed:
+    """StreamDecoder's sequence and time rules over the kept frames: fast runs as arrays, the rest
+    through the decoder's own slow path."""
+    n = len(kept)
+    decoder = StreamDecoder(spec)
+    ts, seqs, t32 = kept.timestamped, kept.seqs.astype(np.int64), kept.t32
+    # Frame j continues a fast run after frame j-1 if both are timestamped, seq follows and the step is short.
+    consecutive = np.zeros(n, dtype=bool)
+    step = np.zeros(n, dtype=np.int64)
+    if n > 1:
+        consecutive[1:] = ts[1:] & ts[:-1] & (seqs[1:] == (seqs[:-1] + 1) & 0xFF)
+        step[1:] = (t32[1:] - t32[:-1]) & 0xFFFFFFFF
+    breaks_for: dict[int, np.ndarray] = {}
+    index = np.empty(n, dtype=np.int64)
+    t64 = np.zeros(n, dtype=np.int64)
+    emitter = np.empty(n, dtype=np.int64)
+    lost = np.zeros(n, dtype=np.int64)
+    returned = 0
+    lost_total = 0
+    held_at = -1  # kept index of the held frame
+    types, unpackers = tables.types, tables.unpackers
+    i = 0
+    next_progress = 0
+    while i < n:
+        if progress is not None and i >= next_progress:
+            progress(i, n)
+            next_progress = i + 200_000
+        type_id = int(kept.type_ids[i])
+        seq = int(seqs[i])
+        raw = unpackers[type_id](data, int(kept.starts[i]) + HEADER_BYTES)
+        t_host_ns = int(chunk_t_host_ns[chunk_of[i]])
+        advances = returned + lost_total
+        if not ts[i]:
+            k = decoder._untimed(type_id, seq, raw, advances)
+            index[returned], emitter[returned] = i, i
+            returned += 1
+        else:
+            out: list = []
+            held_before = decoder._held
+            k = decoder._place(out, types[type_id], seq, raw, int(t32[i]), t_host_ns, advances)
+            if len(out) == 2:
+                index[returned], t64[returned], emitter[returned] = held_at, out[0][3], i
+                returned += 1
+            if out:
+                index[returned], t64[returned], emitter[returned] = i, out[-1][3], i
+                returned += 1
+            if decoder._held is not None and decoder._held is not held_before:
+                held_at = i
+        lost[i] = k
+        lost_total += k
+        i += 1
+        # The fast run that follows: frames the incremental decoder's fast path takes.
+        fast_us = decoder._fast_us
+        if not fast_us or i >= n:
+            continue
+        breaks = breaks_for.get(fast_us)
+        if breaks is None:
+            breaks = breaks_for[fast_us] = np.flatnonzero(~consecutive | (step >= fast_us))
+        b = np.searchsorted(breaks, i)
+        end = int(breaks[b]) if b < len(breaks) else n
+        if end == i or seqs[i] != decoder._ref_next:
+            continue
+        steps = step[i:end]
+        run = decoder._ref_t64 + np.cumsum(steps)
+        count = end - i
+        index[returned : returned + count] = np.arange(i, end)
+        emitter[returned : returned + count] = index[returned : returned + count]
+        t64[returned : returned + count] = run
+        returned += count
+        moved = np.flatnonzero(steps)
+        if len(moved):  # the reference moved in the chunk of the last frame that moved it
+            decoder._ref_host_ns = int(chunk_t_host_ns[chunk_of[i + int(moved[-1])]])
+        decoder._ref_next, decoder._ref_t32, decoder._ref_t64 = (int(seqs[end - 1]) + 1) & 0xFF, int(t32[end - 1]), int(run[-1])
+        i = end
+    if progress is not None:
+        progress(n, n)
+    return _Placed(index[:returned], t64[:returned], emitter[:returned], lost, decoder)
