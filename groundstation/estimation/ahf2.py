@@ -131,6 +131,7 @@ class Ahf2(Estimator):
         self._bias = (0.0, 0.0, 0.0)
         self._q_g = self._q_c = (1.0, 0.0, 0.0, 0.0)
         self._acc_lp = None
+        self._start = (0.0, 0.0, 0.0, 0.0)  # elapsed time and ∫a_I dt while the low-pass starts
         self._rate_lp = 0.0
         self._tau = self.settings.tau_acc_s
         self._e_a = 0.0
@@ -143,7 +144,7 @@ class Ahf2(Estimator):
     def _set_attitude(self, q):
         self._q = self._q_g = q
         self._q_c = (1.0, 0.0, 0.0, 0.0)
-        self._acc_lp = None  # re-started from the next accelerometer sample
+        self._start = (0.0, 0.0, 0.0, 0.0)  # the low-pass starts again from the next accelerometer sample
 
     def _diagnostics(self, status):
         return Ahf2Diagnostics(status, self._lam, self._e_a, self._rest, self._tau, *self._bias)
@@ -170,9 +171,15 @@ class Ahf2(Estimator):
         if acc_ok:
             # 2. low-pass in I
             ix, iy, iz = _rotate(q_g, ax, ay, az)
-            if self._acc_lp is None or s.tau_acc_s <= 0.0:
+            if s.tau_acc_s <= 0.0:
                 vx, vy, vz = 0.0, 0.0, 0.0
                 lx, ly, lz = ix, iy, iz
+            elif self._start is not None:  # the first τ seconds: the mean so far (VQF's start)
+                t, sx, sy, sz = self._start
+                t, sx, sy, sz = t + dt_s, sx + ix * dt_s, sy + iy * dt_s, sz + iz * dt_s
+                vx, vy, vz = 0.0, 0.0, 0.0
+                lx, ly, lz = sx / t, sy / t, sz / t
+                self._start = None if t >= self._tau else (t, sx, sy, sz)
             else:
                 (vx, vy, vz), (lx, ly, lz) = self._acc_lp
                 h = dt_s / self._tau
@@ -229,6 +236,7 @@ class Ahf2(Estimator):
         self._rest_t = self._rest_t + dt_s if still else 0.0
         self._rest = 1.0 if self._rest_t >= s.rest_min_s else 0.0
         if self._rest:
-            kb = dt_s / (s.tau_bias_rest_s + dt_s)
+            # the mean since rest began for the first τ_bias_rest, then a first-order low-pass
+            kb = dt_s / (min(self._rest_t - s.rest_min_s, s.tau_bias_rest_s) + dt_s)
             bx, by, bz = self._bias
             self._bias = (bx + kb * (mx - bx), by + kb * (my - by), bz + kb * (mz - bz))
