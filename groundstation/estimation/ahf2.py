@@ -174,6 +174,7 @@ class Ahf2(Estimator):
         self._rate_lp += (rate - self._rate_lp) * dt_s / (s.tau_rate_s + dt_s)
         self._tau = s.tau_acc_s / (1.0 + self._rate_lp / s.rate_ref_rad_s)
         q_c = self._q_c
+        turn = None  # the correction turn of step 4 (NED), when there is one
         if s.rest_bias:
             self._detect_rest(gx, gy, gz, ax, ay, az, acc_ok, dt_s)
         if acc_ok:
@@ -214,17 +215,17 @@ class Ahf2(Estimator):
                 ux, uy = -ey / horiz, ex / horiz  # a_E × (0, 0, -1), normalised
                 sh = math.sin(0.5 * delta)
                 q_c = self._q_c = quaternion_product((math.cos(0.5 * delta), ux * sh, uy * sh, 0.0), q_c)
-                # 7. bias in motion: the correction rate in body axes drives the integral
-                if s.motion_bias_ki > 0.0 and not self._rest:
-                    q = quaternion_product(q_c, q_g)
-                    cx, cy, cz = _rotate((q[0], -q[1], -q[2], -q[3]), ux * delta, uy * delta, 0.0)
-                    ki, m = s.motion_bias_ki, s.bias_max_rad_s
-                    bx = min(max(bx - ki * cx, -m), m)
-                    by = min(max(by - ki * cy, -m), m)
-                    bz = min(max(bz - ki * cz, -m), m)
-                    self._bias = (bx, by, bz)
-        self._q = quaternion_product(q_c, q_g)
-        return self._q, _new_tuple(Ahf2Diagnostics, (status, self._lam, self._e_a, self._rest, self._tau, *self._bias))
+                turn = (ux * delta, uy * delta)
+        q = self._q = quaternion_product(q_c, q_g)
+        if turn is not None and s.motion_bias_ki > 0.0 and not self._rest:
+            # 7. bias in motion: the correction turn in body axes drives the integral
+            cx, cy, cz = _rotate((q[0], -q[1], -q[2], -q[3]), turn[0], turn[1], 0.0)
+            ki, m = s.motion_bias_ki, s.bias_max_rad_s
+            bx = min(max(bx - ki * cx, -m), m)
+            by = min(max(by - ki * cy, -m), m)
+            bz = min(max(bz - ki * cz, -m), m)
+            self._bias = (bx, by, bz)
+        return q, _new_tuple(Ahf2Diagnostics, (status, self._lam, self._e_a, self._rest, self._tau, *self._bias))
 
     def _detect_rest(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
         """Steps 5 and 6 (module docstring)."""
