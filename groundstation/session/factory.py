@@ -21,9 +21,9 @@ from groundstation.sources import ReplaySource, SourceError, open_source
 # a check box, not a restart: the IMU filters (HF, ECF), those with the magnetometer (HF+mag, ECF+mag,
 # MCF; a few µs per sample each) and the GPS-aided unscented filters (UKF, SSSRUKF; a few hundred µs
 # per sample each, in the reader thread). Hidden curves cost the UI nothing per frame.
-# The first is the one shown: VQF, the best on the BROAD dev set (bench/bench_estimators.out.md); the
-# paper's AHF and AHF2 follow, one "show" click away.
-LIVE_FILTERS = ("vqf", "ahf", "ahf2", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
+# The first is the one shown: AHF2, the best on the BROAD dev set (bench/bench_estimators.out.md); VQF
+# and the paper's AHF follow, one "show" click away.
+LIVE_FILTERS = ("ahf2", "vqf", "ahf", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
 DEMO_SPEC = "sim:"
 
 

@@ -15,6 +15,7 @@ from pathlib import Path
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.errors import UserError
+from groundstation.estimation import ESTIMATORS
 from groundstation.recording import default_recordings_dir
 from groundstation.session.factory import DEMO_SPEC, LIVE_FILTERS, open_session
 from groundstation.session.live import LiveSession
@@ -26,7 +27,7 @@ from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
 from groundstation.ui.event_console import EventConsole
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
-from groundstation.ui.live_view import LiveView
+from groundstation.ui.live_view import LABELS, LiveView
 from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
@@ -36,8 +37,9 @@ REDRAW_HZ = 30
 # several times the horizon's), figures and labels at 5 Hz (each repaint costs CPU under software
 # rendering; people read numbers no faster).
 HORIZON_EVERY, BODY_EVERY, FIGURES_EVERY = 2, 6, 6
-# comparison estimators start switched off
-DEFAULT_HIDDEN = frozenset({"AHF2", "HF", "ECF", "CF1", "KF", "EKF", "HF+mag", "ECF+mag", "MCF", "UKF", "SSSRUKF"})
+# The comparison estimators start switched off: shown are the best (the first of LIVE_FILTERS), the
+# paper's AHF and the aircraft's own estimate.
+DEFAULT_HIDDEN = frozenset(LABELS[name] for name in ESTIMATORS if name not in (LIVE_FILTERS[0], "ahf"))
 STEP_S = 5.0  # ← and → in a replay
 PAN_FRACTION = 0.1  # of the window, ← and → live
 RECENT_RECORDINGS = 8  # listed in File > Recent recordings

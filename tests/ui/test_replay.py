@@ -119,14 +119,14 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     window.live_view.window_box.setCurrentText("whole session")
 
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(8.0))
-    qtbot.waitUntil(lambda: points(pitch_curve(window, "vqf")) > 3, timeout=5000)  # playing
+    qtbot.waitUntil(lambda: points(pitch_curve(window, LIVE_FILTERS[0])) > 3, timeout=5000)  # playing
     bar.play_button.click()
     assert session.source.paused
     middle = float(data.time_s[len(data) // 2])
     window.seek(middle)
-    check_plotted_up_to(window, qtbot, data, "vqf", middle)
+    check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], middle)
     window.seek(middle / 3)  # back
-    check_plotted_up_to(window, qtbot, data, "vqf", middle / 3)
+    check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], middle / 3)
     last = np.flatnonzero(data.time_s <= middle / 3)[-1]  # the horizon shows the newest estimate shown
     newest = f"{pitch_deg(data.estimates['vqf'][last:last + 1])[0]:+7.1f}°"
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=3000)
@@ -239,11 +239,11 @@ def test_a_dataset_csv_plays_as_a_recording_does(window, qtbot, tmp_path):
     csv = tmp_path / "f.truth.csv.gz"  # the truth and sensor values in the dataset CSV layout
     open_file(window, qtbot, csv)
     data = window.session.data
-    assert window.banner.isHidden() and window.session.pipeline.filters[0] == "vqf" and data.true_q is not None
+    assert window.banner.isHidden() and window.session.pipeline.filters[0] == LIVE_FILTERS[0] and data.true_q is not None
     window.live_view.window_box.setCurrentText("whole session")
     window.replay_bar.play_button.click()
     window.seek(6.0)
-    check_plotted_up_to(window, qtbot, data, "vqf", 6.0)
+    check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], 6.0)
     assert window.link_panel.headline.text().startswith("NO LINK")
 
 
