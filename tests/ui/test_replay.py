@@ -128,7 +128,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     window.seek(middle / 3)  # back
     check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], middle / 3)
     last = np.flatnonzero(data.time_s <= middle / 3)[-1]  # the horizon shows the newest estimate shown
-    newest = f"{pitch_deg(data.estimates['vqf'][last:last + 1])[0]:+7.1f}°"
+    newest = f"{pitch_deg(data.estimates[LIVE_FILTERS[0]][last:last + 1])[0]:+7.1f}°"
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=3000)
     assert len(loads) == 1  # seeking computed nothing
 
