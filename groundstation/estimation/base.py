@@ -152,7 +152,8 @@ class Estimator:
         n2 = ax * ax + ay * ay + az * az
         # NaN fails every comparison, so this one test rejects NaN, Inf and free fall.
         acc_ok = self._acc_min2 <= n2 < math.inf
-        if acc_ok and self._acc_gated and dt_s > 0.0:
+        # Only a finite positive dt weighs the deviation: inf would make it inf/inf = NaN for good.
+        if acc_ok and self._acc_gated and 0.0 < dt_s < math.inf:
             dev = self._acc_dev
             dev += (abs(n2**0.5 - 1.0) - dev) * dt_s / (self._acc_window_s + dt_s)
             self._acc_dev = dev
