@@ -60,7 +60,7 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import GYRO_OVERRANGE, NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard
+from groundstation.estimation.base import GYRO_OVERRANGE, NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, record, sample
 from groundstation.estimation.tilt import earth_field_reference, unit_field
 
 
@@ -172,6 +172,13 @@ def _field_gradient(q1, q2, q3, q4, s1, s2, s3, s4, mx, my, mz):
     return s1, s2, s3, s4
 
 
+@njit(cache=True)
+def ahf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):
+        status_out[k] = ahf_kernel(state, p, *sample(gyr, acc, dt, mag, k))
+        record(state, k, q_out, diag_out)
+
+
 class Ahf(CompiledEstimator):
     """Adaptive hybrid filter (eq. 6-20). ``dtype=np.float32`` runs it in single precision."""
 
@@ -179,6 +186,7 @@ class Ahf(CompiledEstimator):
     Settings = AhfSettings
     Diagnostics = AhfDiagnostics
     kernel = staticmethod(ahf_kernel)
+    run_kernel = staticmethod(ahf_run)
     adaptive = True
 
     def __init__(self, settings=None, dtype=None):

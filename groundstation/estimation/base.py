@@ -45,8 +45,8 @@ Status flags are bits of ``diag.status`` (plain ints, cheap per sample).
 Compiled estimators (``CompiledEstimator``: ahf, hf, ecf, cf1, kf, ekf, hfm, ecfm): each one's per-sample
 arithmetic is written once, as a ``kernel(state, params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz) ->
 status`` on scalars and two small float arrays, that starts with this module's ``guard``. numba compiles
-it; ``step`` calls it once per sample, ``run`` passes it to one compiled loop (``run_kernel``) shared by
-all, so the two agree sample for sample by construction (2-6 µs a step, millions of samples a second
+it; ``step`` calls it once per sample, ``run`` calls it in a compiled loop (the estimator's
+``run_kernel``), so the two agree sample for sample by construction (2-6 µs a step, millions of samples a second
 in ``run``; bench/bench_kernels.out.md). ``state`` holds q, the waiting flag, the gate's deviation, the
 diagnostics after ``status`` in their order, then the estimator's own state; ``params`` the guard's
 settings, then the estimator's (``STATE_*``, ``P_*`` below). The helpers a kernel calls are
@@ -288,7 +288,7 @@ P_OWN = 5  # the estimator's own parameters
 
 _F8, _VECTOR, _ROWS = types.float64, types.float64[::1], types.float64[:, ::1]
 KERNEL_SIGNATURE = types.int64(_VECTOR, _VECTOR, *[_F8] * 10)  # state, params, gyr, acc, dt_s, mag
-_RUN_SIGNATURE = types.void(types.FunctionType(KERNEL_SIGNATURE), _VECTOR, _VECTOR, _ROWS, _ROWS, _VECTOR, _ROWS, _ROWS, types.int64[::1], _ROWS)
+RUN_SIGNATURE = types.void(_VECTOR, _VECTOR, _ROWS, _ROWS, _VECTOR, _ROWS, _ROWS, types.int64[::1], _ROWS)  # (state, params, gyr, acc, dt, mag, outputs)
 
 
 @register_jitable
@@ -319,28 +319,32 @@ def guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     return status, acc_ok
 
 
-@njit(cache=True)
-def run_kernel(kernel, state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
-    """``kernel`` over arrays in one compiled loop; row k of the outputs is what ``step`` returns for
-    sample k. ``mag`` (N, 3) or (0, 3) for none."""
-    fields = diag_out.shape[1]
-    has_mag = mag.shape[0] > 0
-    mx = my = mz = math.nan
-    for k in range(dt.shape[0]):
-        if has_mag:
-            mx, my, mz = mag[k, 0], mag[k, 1], mag[k, 2]
-        status_out[k] = kernel(state, p, gyr[k, 0], gyr[k, 1], gyr[k, 2], acc[k, 0], acc[k, 1], acc[k, 2], dt[k], mx, my, mz)
-        for i in range(4):
-            q_out[k, i] = state[i]
-        for i in range(fields):
-            diag_out[k, i] = state[STATE_DIAG + i]
+@register_jitable
+def sample(gyr, acc, dt, mag, k):
+    """Row k of ``run``'s arrays as a kernel's inputs after (state, params); ``mag`` (0, 3) for none."""
+    if mag.shape[0] == 0:
+        return gyr[k, 0], gyr[k, 1], gyr[k, 2], acc[k, 0], acc[k, 1], acc[k, 2], dt[k], math.nan, math.nan, math.nan
+    return gyr[k, 0], gyr[k, 1], gyr[k, 2], acc[k, 0], acc[k, 1], acc[k, 2], dt[k], mag[k, 0], mag[k, 1], mag[k, 2]
+
+
+@register_jitable
+def record(state, k, q_out, diag_out):
+    """Row k of ``run``'s outputs (after status) from the state: what ``step`` returns."""
+    for i in range(4):
+        q_out[k, i] = state[i]
+    for i in range(diag_out.shape[1]):
+        diag_out[k, i] = state[STATE_DIAG + i]
+
+
+_READY = set()  # the dispatchers compiled for their one signature
 
 
 def _compiled(dispatcher, signature):
     """The dispatcher compiled (or loaded from numba's cache) for exactly this signature, on first use."""
-    if not dispatcher.signatures:
+    if dispatcher not in _READY:
         dispatcher.compile(signature)
         dispatcher.disable_compile()  # other argument types are converted to these, never compiled anew
+        _READY.add(dispatcher)
     return dispatcher
 
 
@@ -352,7 +356,10 @@ class CompiledEstimator(Estimator):
     """An estimator whose per-sample arithmetic is a compiled ``kernel`` (module docstring).
 
     Subclasses set ``kernel`` (``staticmethod`` of an ``@njit(cache=True)`` function with
-    ``KERNEL_SIGNATURE``) and ``uses_magnetometer``, and implement ``_parameters()`` (their own
+    ``KERNEL_SIGNATURE``), ``run_kernel`` (likewise, ``RUN_SIGNATURE``: the loop ``for k: status[k] =
+    kernel(state, params, *sample(...k)); record(...k)``, written out in each kernel's module because a
+    kernel passed as an argument cannot be cached, and a kernel passed from Python costs ~0.5 ms a
+    call to convert) and ``uses_magnetometer``, and implement ``_parameters()`` (their own
     parameters, after the guard's) and ``_initial_state()`` (their diagnostics after status, then their
     own state, as after ``reset()``). ``dtype`` None runs the compiled kernel on float64; a numpy type
     runs the same source interpreted on numbers of that type (ahf's float32 firmware model): ``step``
@@ -360,6 +367,7 @@ class CompiledEstimator(Estimator):
     """
 
     kernel: ClassVar
+    run_kernel: ClassVar
     uses_magnetometer: ClassVar[bool] = False
 
     def __init__(self, settings=None, dtype=None):
@@ -414,11 +422,12 @@ class CompiledEstimator(Estimator):
             _rows(gps, n, 4, "gps")  # checked like every estimator's; these do not use it
         q, status, table = np.empty((n, 4)), np.empty(n, dtype=np.int64), np.empty((n, self._diag_end - STATE_DIAG))
         if self._cast is None:
-            run_kernel_ = _compiled(run_kernel, _RUN_SIGNATURE)
-        else:
-            run_kernel_ = run_kernel.py_func
+            _compiled(type(self).run_kernel, RUN_SIGNATURE)(self._state, self._params, gyr, acc, dt, mags, q, status, table)
+        else:  # the same loop, interpreted (run_kernel.py_func would call the compiled kernel)
             gyr, acc, dt, mags = (a.astype(self._dtype) for a in (gyr, acc, dt, mags))
-        run_kernel_(self._kernel, self._state, self._params, gyr, acc, dt, mags, q, status, table)
+            for k in range(n):
+                status[k] = self._kernel(self._state, self._params, *sample(gyr, acc, dt, mags, k))
+                record(self._state, k, q, table)
         return q, {"status": status} | {name: table[:, i] for i, name in enumerate(self.Diagnostics._fields[1:])}
 
 

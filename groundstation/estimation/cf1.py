@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 from numba import njit
 
-from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
 from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 
@@ -70,11 +70,19 @@ def cf1_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     return status
 
 
+@njit(cache=True)
+def cf1_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):
+        status_out[k] = cf1_kernel(state, p, *sample(gyr, acc, dt, mag, k))
+        record(state, k, q_out, diag_out)
+
+
 class Cf1(CompiledEstimator):
     name = "cf1"
     Settings = Cf1Settings
     Diagnostics = Cf1Diagnostics
     kernel = staticmethod(cf1_kernel)
+    run_kernel = staticmethod(cf1_run)
 
     def _parameters(self):
         return [self.settings.time_constant_s, self.settings.innovation_max_rad]

@@ -31,7 +31,7 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate
+from groundstation.estimation.base import NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
 from groundstation.estimation.tilt import earth_field_reference, unit_field
 
 
@@ -108,12 +108,20 @@ def _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz):
     return ex + my * wz - mz * wy, ey + mz * wx - mx * wz, ez + mx * wy - my * wx
 
 
+@njit(cache=True)
+def ecf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):
+        status_out[k] = ecf_kernel(state, p, *sample(gyr, acc, dt, mag, k))
+        record(state, k, q_out, diag_out)
+
+
 class Ecf(CompiledEstimator):
     name = "ecf"
     estimates_gyro_bias = True
     Settings = EcfSettings
     Diagnostics = EcfDiagnostics
     kernel = staticmethod(ecf_kernel)
+    run_kernel = staticmethod(ecf_run)
 
     def _parameters(self):
         s = self.settings

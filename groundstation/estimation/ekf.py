@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
 
 _P0 = 0.01  # initial variance of each quaternion component (std 0.1 ≈ 11°): the gravity init is rough
 
@@ -140,11 +140,19 @@ def ekf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     return status
 
 
+@njit(cache=True)
+def ekf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):
+        status_out[k] = ekf_kernel(state, p, *sample(gyr, acc, dt, mag, k))
+        record(state, k, q_out, diag_out)
+
+
 class Ekf(CompiledEstimator):
     name = "ekf"
     Settings = EkfSettings
     Diagnostics = EkfDiagnostics
     kernel = staticmethod(ekf_kernel)
+    run_kernel = staticmethod(ekf_run)
 
     def _parameters(self):
         s = self.settings

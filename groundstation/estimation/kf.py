@@ -25,7 +25,7 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
 from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 _DEG2 = (math.pi / 180.0) ** 2
@@ -94,12 +94,20 @@ def kf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     return status
 
 
+@njit(cache=True)
+def kf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):
+        status_out[k] = kf_kernel(state, p, *sample(gyr, acc, dt, mag, k))
+        record(state, k, q_out, diag_out)
+
+
 class Kf(CompiledEstimator):
     name = "kf"
     estimates_gyro_bias = True
     Settings = KfSettings
     Diagnostics = KfDiagnostics
     kernel = staticmethod(kf_kernel)
+    run_kernel = staticmethod(kf_run)
 
     def _parameters(self):
         s = self.settings
