@@ -174,9 +174,8 @@ def _field_gradient(q1, q2, q3, q4, s1, s2, s3, s4, mx, my, mz):
 
 @njit(cache=True)
 def ahf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
-    for k in range(dt.shape[0]):
-        status_out[k] = ahf_kernel(state, p, *sample(gyr, acc, dt, mag, k))
-        record(state, k, q_out, diag_out)
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, ahf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 
 
 class Ahf(CompiledEstimator):

@@ -328,8 +328,9 @@ def sample(gyr, acc, dt, mag, k):
 
 
 @register_jitable
-def record(state, k, q_out, diag_out):
-    """Row k of ``run``'s outputs (after status) from the state: what ``step`` returns."""
+def record(state, k, status, status_out, q_out, diag_out):
+    """Row k of ``run``'s outputs from the kernel's status and state: what ``step`` returns."""
+    status_out[k] = status
     for i in range(4):
         q_out[k, i] = state[i]
     for i in range(diag_out.shape[1]):
@@ -356,8 +357,8 @@ class CompiledEstimator(Estimator):
     """An estimator whose per-sample arithmetic is a compiled ``kernel`` (module docstring).
 
     Subclasses set ``kernel`` (``staticmethod`` of an ``@njit(cache=True)`` function with
-    ``KERNEL_SIGNATURE``), ``run_kernel`` (likewise, ``RUN_SIGNATURE``: the loop ``for k: status[k] =
-    kernel(state, params, *sample(...k)); record(...k)``, written out in each kernel's module because a
+    ``KERNEL_SIGNATURE``), ``run_kernel`` (likewise, ``RUN_SIGNATURE``: the loop ``for k: record(...,
+    kernel(state, params, *sample(..., k)), ...)``, written out in each kernel's module because a
     kernel passed as an argument cannot be cached, and a kernel passed from Python costs ~0.5 ms a
     call to convert) and ``uses_magnetometer``, and implement ``_parameters()`` (their own
     parameters, after the guard's) and ``_initial_state()`` (their diagnostics after status, then their
@@ -426,8 +427,7 @@ class CompiledEstimator(Estimator):
         else:  # the same loop, interpreted (run_kernel.py_func would call the compiled kernel)
             gyr, acc, dt, mags = (a.astype(self._dtype) for a in (gyr, acc, dt, mags))
             for k in range(n):
-                status[k] = self._kernel(self._state, self._params, *sample(gyr, acc, dt, mags, k))
-                record(self._state, k, q, table)
+                record(self._state, k, self._kernel(self._state, self._params, *sample(gyr, acc, dt, mags, k)), status, q, table)
         return q, {"status": status} | {name: table[:, i] for i, name in enumerate(self.Diagnostics._fields[1:])}
 
 

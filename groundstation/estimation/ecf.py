@@ -110,9 +110,8 @@ def _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz):
 
 @njit(cache=True)
 def ecf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
-    for k in range(dt.shape[0]):
-        status_out[k] = ecf_kernel(state, p, *sample(gyr, acc, dt, mag, k))
-        record(state, k, q_out, diag_out)
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, ecf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 
 
 class Ecf(CompiledEstimator):

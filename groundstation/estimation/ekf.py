@@ -142,9 +142,8 @@ def ekf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
 
 @njit(cache=True)
 def ekf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
-    for k in range(dt.shape[0]):
-        status_out[k] = ekf_kernel(state, p, *sample(gyr, acc, dt, mag, k))
-        record(state, k, q_out, diag_out)
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, ekf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 
 
 class Ekf(CompiledEstimator):
