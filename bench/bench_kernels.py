@@ -1,6 +1,6 @@
 """The compiled estimator kernels (estimation/base.py) against the code before them, vqf and imufusion.
 
-    python bench/bench_kernels.py [--rounds R] [--samples N] [--no-broad]
+    PYTHONPATH=. python bench/bench_kernels.py [--rounds R] [--calls N] [--samples N] [--no-broad]
 
 All in one run, on the same flight-like samples (100 Hz):
 
