@@ -389,6 +389,8 @@ class CompiledEstimator(Estimator):
         s = self.settings
         guards = [self._acc_min2, s.acc_deviation_max_g, s.acc_window_s, s.max_gap_s, float(self.uses_magnetometer)]
         self._params = np.array(guards + self._parameters(), dtype=self._dtype)
+        if self._cast is not None:  # interpreted: a list of numpy scalars reads 3x faster than an array
+            self._params = list(self._params)
         q = (1.0, 0.0, 0.0, 0.0) if q0 is None else quaternion.normalise(q0).tolist()
         self._state = np.array([*q, float(q0 is None), 0.0, *self._initial_state()], dtype=self._dtype)
 
