@@ -60,10 +60,10 @@ and the interpreted path, and it installs from wheels (Windows, Linux, macOS) wi
 user's machine, where Cython or a C extension would need one or a wheel per platform built by us.
 Its cost is compiling: ``cache=True`` writes the machine code beside the sources (``__pycache__``) on
 the first use on a machine, and each kernel is compiled lazily, when its estimator is first created, so
-a command that uses none pays nothing (figures in bench/bench_kernels.out.md). numba's cache is checked
-against each kernel's own file only: after editing a helper in another file (this module's ``guard``,
-``tilt``), delete the ``__pycache__/*.nbi`` files (tests/estimation/test_kernels.py fails on a stale
-cache, comparing the compiled kernels with their interpreted source).
+a command that uses none pays nothing (figures in bench/bench_kernels.out.md). numba checks a cached
+function against its own file only, so ``drop_stale_cache`` drops a kernel's cache when this module,
+``tilt`` or ``compass`` (compiled into every kernel) is newer (tests/estimation/test_kernels.py also
+compares the compiled kernels with their interpreted source).
 """
 
 from __future__ import annotations
@@ -71,6 +71,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from itertools import chain
+from pathlib import Path
 from typing import ClassVar, NamedTuple
 
 import numpy as np
@@ -78,6 +79,7 @@ from numba import njit, types
 from numba.extending import register_jitable
 
 from groundstation import quaternion
+from groundstation.estimation import compass, tilt
 from groundstation.estimation.compass import level_heading_rad
 from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 from groundstation.readings import optional_rows
@@ -338,11 +340,26 @@ def record(state, k, status, status_out, q_out, diag_out):
 
 
 _READY = set()  # the dispatchers compiled for their one signature
+# Sources every kernel and run loop compiles in besides its own file (guard, sample, record; tilt; compass)
+_SHARED_SOURCES = (Path(__file__), Path(tilt.__file__), Path(compass.__file__))
+
+
+def drop_stale_cache(dispatcher, shared_sources=_SHARED_SOURCES) -> None:
+    """numba checks a cached function against its own file only: its index (``<module>.<name>-<line>.*.nbi``)
+    is deleted when older than a shared source, so numba compiles an edit there instead of loading the
+    function compiled before it (a missing index is just compiled anew)."""
+    newest = max(path.stat().st_mtime for path in shared_sources)
+    function = dispatcher.py_func
+    pattern = f"{Path(function.__code__.co_filename).stem}.{function.__qualname__}-*.nbi"
+    for index in Path(dispatcher.stats.cache_path).glob(pattern):
+        if index.stat().st_mtime < newest:
+            index.unlink(missing_ok=True)
 
 
 def _compiled(dispatcher, signature):
     """The dispatcher compiled (or loaded from numba's cache) for exactly this signature, on first use."""
     if dispatcher not in _READY:
+        drop_stale_cache(dispatcher)
         dispatcher.compile(signature)
         dispatcher.disable_compile()  # other argument types are converted to these, never compiled anew
         _READY.add(dispatcher)

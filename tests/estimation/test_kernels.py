@@ -1,7 +1,12 @@
 """The compiled estimators (base.CompiledEstimator): run equals step sample for sample, and both equal the
-same kernel source run interpreted, on inputs with every kind of bad sample the guard handles."""
+same kernel source run interpreted, on inputs with every kind of bad sample the guard handles; numba's
+cache follows edits of the sources shared by every kernel."""
 
+import importlib
 import math
+import os
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -10,7 +15,7 @@ from hypothesis import strategies as st
 
 from estimation_samples import flight_like_samples
 from groundstation.estimation import ESTIMATORS, create
-from groundstation.estimation.base import CompiledEstimator
+from groundstation.estimation.base import CompiledEstimator, drop_stale_cache
 
 COMPILED = [name for name, cls in ESTIMATORS.items() if issubclass(cls, CompiledEstimator)]
 MAGNETIC = {"hfm", "ecfm"}
@@ -75,7 +80,7 @@ GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
 @pytest.mark.parametrize("name", COMPILED)
 def test_run_equals_step_and_the_interpreted_source(name, seed, events, waiting, gate, start):
     """Compiled run = compiled step = the kernel's Python source interpreted (dtype=np.float64), bit for
-    bit; a stale numba cache (a helper in another file edited, base.py's module docstring) fails here."""
+    bit (the compiled code is what the source says, a stale cache included)."""
     gyr, acc, dt, mag = samples(300, seed, events, waiting)
     cls = ESTIMATORS[name]
     batch, stepper, interpreted = (cls(create(name, gate).settings, dtype=t) for t in (None, None, np.float64))
@@ -128,3 +133,22 @@ def test_step_takes_ints_and_float32_and_returns_floats(name):
     assert q == q_ref and diag == diag_ref
     q, diag = a.step(np.float32([0.1, 0.2, 0.3]), np.float32([0.0, 0.1, -1.0]), np.float32(0.01))
     assert all(type(v) is float for v in q) and type(diag.status) is int
+
+
+def test_a_cache_older_than_a_shared_source_is_dropped_and_a_newer_one_kept(tmp_path, monkeypatch):
+    """numba checks a cache against the function's own file only; drop_stale_cache covers the shared
+    sources compiled into every kernel (base.py, tilt.py, compass.py): here a one-line kernel of its own."""
+    (tmp_path / "tiny_kernel.py").write_text("from numba import njit\n\n\n@njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    kernel = importlib.import_module("tiny_kernel").twice
+    assert kernel(1.5) == 3.0  # compiled, cache written
+    indexes = lambda: list(Path(kernel.stats.cache_path).glob("tiny_kernel.twice-*.nbi"))  # noqa: E731
+    shared = tmp_path / "shared.py"
+    shared.write_text("")
+    [index] = indexes()
+    os.utime(shared, (time.time() - 100, time.time() - 100))
+    drop_stale_cache(kernel, (shared,))
+    assert indexes() == [index]  # the cache is newer than the shared source: kept
+    os.utime(shared, (time.time() + 100, time.time() + 100))
+    drop_stale_cache(kernel, (shared,))
+    assert indexes() == []  # the shared source was edited after: numba compiles anew
