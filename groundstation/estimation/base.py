@@ -413,15 +413,15 @@ class CompiledEstimator(Estimator):
 
     @property
     def _q(self):
-        return tuple(self._outputs()[:4])
+        return tuple(self._values()[:4])
 
     @property
     def _acc_dev(self):
         return self._state[STATE_ACC_DEV]
 
-    def _outputs(self):
+    def _values(self):
         # tolist(): Python floats for step's output; the interpreted model keeps its numpy type
-        return self._state[: self._diag_end].tolist() if self._cast is None else list(self._state[: self._diag_end])
+        return self._state.tolist() if self._cast is None else list(self._state)
 
     def step(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
         gx, gy, gz = gyr_rad_s
@@ -431,8 +431,8 @@ class CompiledEstimator(Estimator):
             c = self._cast
             gx, gy, gz, ax, ay, az, dt_s = c(gx), c(gy), c(gz), c(ax), c(ay), c(az), c(dt_s)
         status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
-        values = self._outputs()
-        return tuple(values[:4]), _new_tuple(self.Diagnostics, (status, *values[STATE_DIAG:]))
+        v = self._values()
+        return (v[0], v[1], v[2], v[3]), _new_tuple(self.Diagnostics, (status, *v[STATE_DIAG : self._diag_end]))
 
     def run(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
         gyr, acc, dt = batch_inputs(gyr_rad_s, acc_g, dt_s)
