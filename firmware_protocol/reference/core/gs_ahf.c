@@ -1,5 +1,5 @@
-/* See gs_ahf.h. Each line mirrors groundstation/estimation/ahf.py (Ahf._update) and
- * groundstation/estimation/base.py (Estimator.step); keep them in step. */
+/* See gs_ahf.h. Each line mirrors groundstation/estimation/ahf.py (ahf_kernel) and
+ * groundstation/estimation/base.py (screen, guard); keep them in step. */
 #include "gs_ahf.h"
 
 #include <math.h>
