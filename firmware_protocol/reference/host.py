@@ -116,7 +116,7 @@ def ahf_settings(settings) -> ctypes.Array:
 
 class Ahf32:
     """The core's onboard AHF (gs_ahf.c) alone: ``step`` returns (status, q (4), lambda, e_a, err) as floats;
-    ``acc_dev_g`` is then the low-passed accelerometer deviation from 1 g (base.py's ``_acc_dev``)."""
+    ``acc_dev_g`` is then the low-passed accelerometer deviation from 1 g (base.py's ``STATE_ACC_DEV``, ``Ahf._acc_dev``)."""
 
     def __init__(self, settings, q0=None, defines: tuple[str, ...] = ()):
         self._lib = lib = library(defines)

@@ -35,16 +35,16 @@ range, the accelerometer is the more accurate, so λ takes a large value"): with
 ``gyro_overrange_rad_s`` set (e.g. 0.95 × the configured full scale), any axis at or above it forces
 λ = λ_max for that sample. Off by default (``inf``) so that the default filter is eq. 20 exactly.
 
-float32 (the simulated firmware): the per-sample core uses arithmetic operators only (``** -0.5``, no
-``math`` calls), so it computes in whatever type its numbers have. ``Ahf(settings, dtype=np.float32)``
-casts the settings, the state and every input to ``numpy.float32``; NumPy 2's promotion rules (NEP 50)
-keep float32 ⊕ Python-float literals in float32, so the whole update runs in single precision, as on
-the STM32. ``step`` then returns float32 numbers; ``run`` returns them widened to float64 (exactly).
-Each float32 step agrees with a float64 step from the same state to float32 precision, but whole runs
-drift apart: eq. 18 normalises the gradient, so when the error is near zero its direction is set by
-rounding and still gets a full λ Δt step. To reproduce the onboard float32 estimate bit for bit, run
-the host copy with ``dtype=np.float32`` too. The default (``dtype=None``) is plain Python floats, the
-fast path::
+float32 (the simulated firmware): the kernel uses arithmetic operators only (``** -0.5``, no ``math``
+calls), so interpreted it computes in whatever type its numbers have. ``Ahf(settings, dtype=np.float32)``
+runs it interpreted (base.py, compiled estimators) with the settings, the state and every input as
+``numpy.float32``; NumPy 2's promotion rules (NEP 50) keep float32 ⊕ Python-float literals in float32,
+so the whole update runs in single precision, as on the STM32. ``step`` then returns float32 numbers;
+``run`` returns them widened to float64 (exactly). Each float32 step agrees with a float64 step from the
+same state to float32 precision, but whole runs drift apart: eq. 18 normalises the gradient, so when the
+error is near zero its direction is set by rounding and still gets a full λ Δt step. To reproduce the
+onboard float32 estimate bit for bit, run the host copy with ``dtype=np.float32`` too. The default
+(``dtype=None``) is the compiled kernel on float64::
 
     onboard = Ahf(AhfSettings(), dtype=np.float32)
     onboard.reset()
@@ -57,9 +57,11 @@ import dataclasses
 import math
 from typing import NamedTuple
 
-import numpy as np
+from numba import njit
+from numba.extending import register_jitable
 
-from groundstation.estimation.base import GYRO_OVERRANGE, CommonSettings, Estimator
+from groundstation.estimation.base import GYRO_OVERRANGE, NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, record, sample
+from groundstation.estimation.tilt import earth_field_reference, unit_field
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,103 +87,123 @@ class AhfDiagnostics(NamedTuple):
     gravity_error: float  # |ex| + |ey| + |ez| of e = ĝ × â on this sample (eq. 20), ≈ sin of the angle
 
 
-_new_tuple = tuple.__new__
+# Parameters after the guard's (base.P_OWN): adaptive (1: AHF, 0: HF), λ_max (HF: β), λ_min, lowpass,
+# (1 - lowpass) error_gain, gyro_overrange_rad_s. State after q and the guard's: the diagnostics.
+_ADAPTIVE, _LAM_MAX, _LAM_MIN, _LOWPASS, _GAIN, _OVERRANGE = range(P_OWN, P_OWN + 6)
+_LAM, _E_A, _ERR = STATE_DIAG, STATE_DIAG + 1, STATE_DIAG + 2
 
 
-class Ahf(Estimator):
+@njit(cache=True)
+def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
+    """One sample of AHF, HF (λ fixed) or HFM (HF with the magnetometer): base.py's compiled kernels."""
+    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    if status & NO_UPDATE:
+        return status
+    q1, q2, q3, q4 = state[0], state[1], state[2], state[3]
+    # (eq. 6) q̇_ω = ½ q ⊗ [0, ω]
+    d1 = 0.5 * (-q2 * gx - q3 * gy - q4 * gz)
+    d2 = 0.5 * (q1 * gx + q3 * gz - q4 * gy)
+    d3 = 0.5 * (q1 * gy - q2 * gz + q4 * gx)
+    d4 = 0.5 * (q1 * gz + q2 * gy - q3 * gx)
+    if acc_ok:
+        # â: measured down direction, -acc normalised (see the module docstring on frames)
+        r = -((ax * ax + ay * ay + az * az) ** -0.5)
+        ax, ay, az = ax * r, ay * r, az * r
+        # (eq. 8) ĝ: estimated down direction in the body frame
+        vx = 2.0 * (q2 * q4 - q1 * q3)
+        vy = 2.0 * (q1 * q2 + q3 * q4)
+        vz = q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4
+        # (eq. 9) f = ĝ - â
+        fx, fy, fz = vx - ax, vy - ay, vz - az
+        # (eq. 10, 12) ∇f = Jᵀ f
+        s1 = -2.0 * q3 * fx + 2.0 * q2 * fy
+        s2 = 2.0 * q4 * fx + 2.0 * q1 * fy - 4.0 * q2 * fz
+        s3 = -2.0 * q1 * fx + 2.0 * q4 * fy - 4.0 * q3 * fz
+        s4 = 2.0 * q2 * fx + 2.0 * q3 * fy
+        if p[P_MAGNETOMETER] != 0.0:  # hfm: Madgwick's magnetometer term (marg.py)
+            s1, s2, s3, s4 = _field_gradient(q1, q2, q3, q4, s1, s2, s3, s4, mx, my, mz)
+        # Tangent projection ∇f ← ∇f - (q·∇f) q (module docstring: mounting independence)
+        s = q1 * s1 + q2 * s2 + q3 * s3 + q4 * s4
+        s1, s2, s3, s4 = s1 - s * q1, s2 - s * q2, s3 - s * q3, s4 - s * q4
+        # (eq. 20) e = ĝ ⊗ â, vector part ĝ × â
+        err = abs(vy * az - vz * ay) + abs(vz * ax - vx * az) + abs(vx * ay - vy * ax)
+        lam = p[_LAM_MAX]
+        if p[_ADAPTIVE] != 0.0:
+            e_a = p[_LOWPASS] * state[_E_A] + p[_GAIN] * err  # (eq. 20) low-pass
+            state[_E_A] = e_a
+            lam = lam - e_a
+            if lam < p[_LAM_MIN]:
+                lam = p[_LAM_MIN]
+            elif lam > p[_LAM_MAX]:  # only for a negative e_a, i.e. a negative error_gain
+                lam = p[_LAM_MAX]
+            overrange = p[_OVERRANGE]  # inf: off (no finite rate reaches it)
+            if abs(gx) >= overrange or abs(gy) >= overrange or abs(gz) >= overrange:
+                lam = p[_LAM_MAX]  # gyro over-range rule (module docstring)
+                status |= GYRO_OVERRANGE
+        state[_LAM], state[_ERR] = lam, err
+        n2 = s1 * s1 + s2 * s2 + s3 * s3 + s4 * s4
+        if n2 > 0.0:  # ∇f = 0 when the estimate already matches: nothing to correct
+            k = lam * n2**-0.5
+            # (eq. 18) q̇ = q̇_ω - λ ∇f/‖∇f‖
+            d1, d2, d3, d4 = d1 - k * s1, d2 - k * s2, d3 - k * s3, d4 - k * s4
+    # (eq. 19) q(k) = q(k-1) + q̇ Δt, normalised
+    q1, q2, q3, q4 = q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s
+    r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
+    state[0], state[1], state[2], state[3] = q1 * r, q2 * r, q3 * r, q4 * r
+    return status
+
+
+@register_jitable
+def _field_gradient(q1, q2, q3, q4, s1, s2, s3, s4, mx, my, mz):
+    """∇f with Madgwick's magnetometer rows added (marg.py); unchanged without a usable reading."""
+    usable, mx, my, mz = unit_field(mx, my, mz)
+    if not usable:
+        return s1, s2, s3, s4
+    bx, bz = earth_field_reference(q1, q2, q3, q4, mx, my, mz)
+    # (Madgwick eq. 31) f_b = Rᵀ(q) b - m̂
+    f4 = 2.0 * bx * (0.5 - q3 * q3 - q4 * q4) + 2.0 * bz * (q2 * q4 - q1 * q3) - mx
+    f5 = 2.0 * bx * (q2 * q3 - q1 * q4) + 2.0 * bz * (q1 * q2 + q3 * q4) - my
+    f6 = 2.0 * bx * (q1 * q3 + q2 * q4) + 2.0 * bz * (0.5 - q2 * q2 - q3 * q3) - mz
+    # (Madgwick eq. 32, 34) ∇f += J_bᵀ f_b
+    s1 += -2.0 * bz * q3 * f4 + (-2.0 * bx * q4 + 2.0 * bz * q2) * f5 + 2.0 * bx * q3 * f6
+    s2 += 2.0 * bz * q4 * f4 + (2.0 * bx * q3 + 2.0 * bz * q1) * f5 + (2.0 * bx * q4 - 4.0 * bz * q2) * f6
+    s3 += (-4.0 * bx * q3 - 2.0 * bz * q1) * f4 + (2.0 * bx * q2 + 2.0 * bz * q4) * f5 + (2.0 * bx * q1 - 4.0 * bz * q3) * f6
+    s4 += (-4.0 * bx * q4 + 2.0 * bz * q2) * f4 + (-2.0 * bx * q1 + 2.0 * bz * q3) * f5 + 2.0 * bx * q2 * f6
+    return s1, s2, s3, s4
+
+
+@njit(cache=True)
+def ahf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, ahf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
+
+
+class Ahf(CompiledEstimator):
     """Adaptive hybrid filter (eq. 6-20). ``dtype=np.float32`` runs it in single precision."""
 
     name = "ahf"
     Settings = AhfSettings
     Diagnostics = AhfDiagnostics
+    kernel = staticmethod(ahf_kernel)
+    run_kernel = staticmethod(ahf_run)
     adaptive = True
-    marg = False  # True in marg.Hfm: adds the magnetometer's gradient
 
     def __init__(self, settings=None, dtype=None):
-        self._cast = None if dtype is None else np.dtype(dtype).type  # read by Estimator.step
         s = self.Settings() if settings is None else settings
-        c = self._num
-        if self.adaptive:
-            if not 0.0 <= s.lambda_min <= s.lambda_max:
-                raise ValueError("need 0 <= lambda_min <= lambda_max")
-            self._lam_max, self._lam_min = c(s.lambda_max), c(s.lambda_min)
-            self._lp, self._gain = c(s.lowpass), c((1.0 - s.lowpass) * s.error_gain)
-            self._overrange = c(s.gyro_overrange_rad_s)
-            self._overrange_on = s.gyro_overrange_rad_s != math.inf
-        else:
-            if s.beta < 0.0:
-                raise ValueError("beta must be >= 0")
-            self._lam_max = c(s.beta)
-        super().__init__(s)
+        if self.adaptive and not 0.0 <= s.lambda_min <= s.lambda_max:
+            raise ValueError("need 0 <= lambda_min <= lambda_max")
+        if not self.adaptive and s.beta < 0.0:
+            raise ValueError("beta must be >= 0")
+        super().__init__(s, dtype)
 
-    def _num(self, x):
-        return x if self._cast is None else self._cast(x)
+    def _parameters(self):
+        s = self.settings
+        if not self.adaptive:
+            return [0.0, s.beta, 0.0, 0.0, 0.0, math.inf]
+        return [1.0, s.lambda_max, s.lambda_min, s.lowpass, (1.0 - s.lowpass) * s.error_gain, s.gyro_overrange_rad_s]
 
-    def _reset_state(self):
-        self._e_a = self._num(0.0)
-        self._lam = self._lam_max
-        self._err = self._num(0.0)
-
-    def _set_attitude(self, q):
-        self._q = tuple(self._num(v) for v in q)
-
-    def _diagnostics(self, status):
-        return AhfDiagnostics(status, self._lam, self._e_a, self._err)
-
-    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
-        q1, q2, q3, q4 = self._q
-        # (eq. 6) q̇_ω = ½ q ⊗ [0, ω]
-        d1 = 0.5 * (-q2 * gx - q3 * gy - q4 * gz)
-        d2 = 0.5 * (q1 * gx + q3 * gz - q4 * gy)
-        d3 = 0.5 * (q1 * gy - q2 * gz + q4 * gx)
-        d4 = 0.5 * (q1 * gz + q2 * gy - q3 * gx)
-        if acc_ok:
-            # â: measured down direction, -acc normalised (see the module docstring on frames)
-            r = -((ax * ax + ay * ay + az * az) ** -0.5)
-            ax, ay, az = ax * r, ay * r, az * r
-            # (eq. 8) ĝ: estimated down direction in the body frame
-            vx = 2.0 * (q2 * q4 - q1 * q3)
-            vy = 2.0 * (q1 * q2 + q3 * q4)
-            vz = q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4
-            # (eq. 9) f = ĝ - â
-            fx, fy, fz = vx - ax, vy - ay, vz - az
-            # (eq. 10, 12) ∇f = Jᵀ f
-            s1 = -2.0 * q3 * fx + 2.0 * q2 * fy
-            s2 = 2.0 * q4 * fx + 2.0 * q1 * fy - 4.0 * q2 * fz
-            s3 = -2.0 * q1 * fx + 2.0 * q4 * fy - 4.0 * q3 * fz
-            s4 = 2.0 * q2 * fx + 2.0 * q3 * fy
-            if self.marg and self._mag is not None:  # hfm: Madgwick's magnetometer term (marg.py)
-                s1, s2, s3, s4 = self._mag_gradient(q1, q2, q3, q4, s1, s2, s3, s4)
-            # Tangent projection ∇f ← ∇f - (q·∇f) q (module docstring: mounting independence)
-            p = q1 * s1 + q2 * s2 + q3 * s3 + q4 * s4
-            s1, s2, s3, s4 = s1 - p * q1, s2 - p * q2, s3 - p * q3, s4 - p * q4
-            # (eq. 20) e = ĝ ⊗ â, vector part ĝ × â
-            err = abs(vy * az - vz * ay) + abs(vz * ax - vx * az) + abs(vx * ay - vy * ax)
-            lam = self._lam_max
-            if self.adaptive:
-                e_a = self._lp * self._e_a + self._gain * err  # (eq. 20) low-pass
-                self._e_a = e_a
-                lam = lam - e_a
-                if lam < self._lam_min:
-                    lam = self._lam_min
-                elif lam > self._lam_max:  # only for a negative e_a, i.e. a negative error_gain
-                    lam = self._lam_max
-                if self._overrange_on and (abs(gx) >= self._overrange or abs(gy) >= self._overrange or abs(gz) >= self._overrange):
-                    lam = self._lam_max  # gyro over-range rule (module docstring)
-                    status |= GYRO_OVERRANGE
-            self._lam, self._err = lam, err
-            n2 = s1 * s1 + s2 * s2 + s3 * s3 + s4 * s4
-            if n2 > 0.0:  # ∇f = 0 when the estimate already matches: nothing to correct
-                k = lam * n2**-0.5
-                # (eq. 18) q̇ = q̇_ω - λ ∇f/‖∇f‖
-                d1, d2, d3, d4 = d1 - k * s1, d2 - k * s2, d3 - k * s3, d4 - k * s4
-        # (eq. 19) q(k) = q(k-1) + q̇ Δt, normalised
-        q1, q2, q3, q4 = q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s
-        r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
-        q = (q1 * r, q2 * r, q3 * r, q4 * r)
-        self._q = q
-        # tuple.__new__ skips NamedTuple's Python-level __new__: 0.2 µs of a 2 µs step.
-        return q, _new_tuple(AhfDiagnostics, (status, self._lam, self._e_a, self._err))
+    def _initial_state(self):
+        return [self._parameters()[1], 0.0, 0.0]  # λ = λ_max, e_a, gravity_error
 
 
 class Hf(Ahf):

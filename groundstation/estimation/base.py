@@ -41,6 +41,29 @@ Robust stepping (every estimator, decided here once):
   also raise λ then; see its ``gyro_overrange_rad_s``).
 
 Status flags are bits of ``diag.status`` (plain ints, cheap per sample).
+
+Compiled estimators (``CompiledEstimator``: ahf, hf, ecf, cf1, kf, ekf, hfm, ecfm): each one's per-sample
+arithmetic is written once, as a ``kernel(state, params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz) ->
+status`` on scalars and two small float arrays, that starts with this module's ``guard``. numba compiles
+it; ``step`` calls it once per sample, ``run`` calls it in a compiled loop (the estimator's
+``run_kernel``), so the two agree sample for sample by construction (2-6 µs a step, millions of samples a second
+in ``run``; bench/bench_kernels.out.md). ``state`` holds q, the waiting flag, the gate's deviation, the
+diagnostics after ``status`` in their order, then the estimator's own state; ``params`` the guard's
+settings, then the estimator's (``STATE_*``, ``P_*`` below). The helpers a kernel calls are
+``register_jitable``: compiled inside a kernel, plain Python when called from Python, so the same source
+also runs interpreted on numpy.float32 numbers (``dtype=np.float32``: ahf's onboard firmware model, bit
+for bit with the C core) or float64 (tests compare it with the compiled code).
+
+Why numba: the filters are scalar recurrences (each sample needs the previous state), which numpy
+cannot vectorise; numba compiles this Python source nearly unchanged, so one source serves the compiled
+and the interpreted path, and it installs from wheels (Windows, Linux, macOS) with no compiler on the
+user's machine, where Cython or a C extension would need one or a wheel per platform built by us.
+Its cost is compiling: ``cache=True`` writes the machine code beside the sources (``__pycache__``) on
+the first use on a machine, and each kernel is compiled lazily, when its estimator is first created, so
+a command that uses none pays nothing (figures in bench/bench_kernels.out.md). numba checks a cached
+function against its own file only, so ``drop_stale_cache`` drops a kernel's cache when this module,
+``tilt`` or ``compass`` (compiled into every kernel) is newer (tests/estimation/test_kernels.py also
+compares the compiled kernels with their interpreted source).
 """
 
 from __future__ import annotations
@@ -48,12 +71,17 @@ from __future__ import annotations
 import dataclasses
 import math
 from itertools import chain
+from pathlib import Path
 from typing import ClassVar, NamedTuple
 
 import numpy as np
+from numba import njit, types
+from numba.extending import register_jitable
 
 from groundstation import quaternion
-from groundstation.estimation.tilt import acc_pitch_roll
+from groundstation.estimation import compass, tilt
+from groundstation.estimation.compass import level_heading_rad
+from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 from groundstation.readings import optional_rows
 
 # diag.status bits
@@ -63,7 +91,7 @@ HELD = 4  # bad gyro or dt: previous estimate returned unchanged
 ACC_SKIPPED = 8  # accelerometer unusable: gyro-only on this sample
 REINITIALISED = 16  # gap longer than max_gap_s: pitch/roll re-set from the accelerometer
 GYRO_OVERRANGE = 32  # ahf only: gyro at or above gyro_overrange_rad_s, λ forced to λ_max
-
+NO_UPDATE = WAITING | HELD | REINITIALISED  # the guard has said all there is to say about the sample
 
 
 class GpsFix(NamedTuple):
@@ -97,6 +125,55 @@ class CommonSettings:
     max_gap_s: float = 1.0  # longer dt: re-initialise from the accelerometer instead of integrating
 
 
+@register_jitable
+def screen(gx, gy, gz, ax, ay, az, dt_s, waiting, acc_dev, acc_min2, acc_dev_max, acc_window_s, max_gap_s):
+    """The input guard of the module docstring: ``(status, acc_ok, acc_dev)``, acc_dev the new low-passed
+    deviation. The caller sets the attitude from gravity on ``INITIALISED``, then on ``REINITIALISED``
+    (yaw kept), and updates the filter unless ``status & NO_UPDATE``."""
+    n2 = ax * ax + ay * ay + az * az
+    # NaN fails every comparison, so this one test rejects NaN, Inf and free fall.
+    acc_ok = acc_min2 <= n2 and n2 < math.inf
+    # Only a finite positive dt weighs the deviation: inf would make it inf/inf = NaN for good.
+    if acc_ok and acc_dev_max < math.inf and 0.0 < dt_s and dt_s < math.inf:
+        acc_dev += (abs(n2**0.5 - 1.0) - acc_dev) * dt_s / (acc_window_s + dt_s)
+        acc_ok = acc_dev <= acc_dev_max
+    status = 0
+    if waiting:
+        if not acc_ok:
+            return WAITING, acc_ok, acc_dev
+        status = INITIALISED
+    total = gx + gy + gz + dt_s
+    if not dt_s > 0.0 or total - total != 0.0:  # dt <= 0, or a NaN/Inf anywhere in gyro or dt
+        return status | HELD, acc_ok, acc_dev
+    if dt_s > max_gap_s:  # re-initialise from gravity; without it there is nothing to go on: held
+        return status | (REINITIALISED if acc_ok else HELD), acc_ok, acc_dev
+    if not acc_ok:
+        status |= ACC_SKIPPED
+    return status, acc_ok, acc_dev
+
+
+@register_jitable
+def gravity_attitude(ax, ay, az, yaw_rad):
+    """Quaternion (tuple) with the given yaw whose pitch and roll put gravity where the accelerometer says."""
+    pitch, roll = acc_pitch_roll(ax, ay, az)
+    return quaternion_of(yaw_rad, pitch, roll)
+
+
+@register_jitable
+def integrate_rate(q, wx, wy, wz, dt_s):
+    """``q + ½ q ⊗ [0, ω] dt``, normalised: one Euler step of the attitude kinematics (seed 000 eq. 6, 19)."""
+    q1, q2, q3, q4 = q
+    h = 0.5 * dt_s
+    q1, q2, q3, q4 = (
+        q1 - h * (q2 * wx + q3 * wy + q4 * wz),
+        q2 + h * (q1 * wx + q3 * wz - q4 * wy),
+        q3 + h * (q1 * wy - q2 * wz + q4 * wx),
+        q4 + h * (q1 * wz + q2 * wy - q3 * wx),
+    )
+    r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
+    return (q1 * r, q2 * r, q3 * r, q4 * r)
+
+
 class Estimator:
     """Base class; subclasses set ``name``, ``Settings``, ``Diagnostics`` and implement the hooks.
 
@@ -109,7 +186,6 @@ class Estimator:
     # True when the filter estimates its own gyro bias; the session applies a bias measured at rest
     # (calibration.RestBiasCalibrator) only to the others
     estimates_gyro_bias: ClassVar[bool] = False
-    _cast = None  # a numpy scalar type to run in (ahf/hf: dtype=np.float32); None = Python floats
     Settings: ClassVar[type]
     Diagnostics: ClassVar[type[NamedTuple]]
 
@@ -146,35 +222,16 @@ class Estimator:
         self._gps = gps
         gx, gy, gz = gyr_rad_s
         ax, ay, az = acc_g
-        if self._cast is not None:
-            c = self._cast
-            gx, gy, gz, ax, ay, az, dt_s = c(gx), c(gy), c(gz), c(ax), c(ay), c(az), c(dt_s)
-        n2 = ax * ax + ay * ay + az * az
-        # NaN fails every comparison, so this one test rejects NaN, Inf and free fall.
-        acc_ok = self._acc_min2 <= n2 < math.inf
-        if acc_ok and self._acc_gated and dt_s > 0.0:
-            dev = self._acc_dev
-            dev += (abs(n2**0.5 - 1.0) - dev) * dt_s / (self._acc_window_s + dt_s)
-            self._acc_dev = dev
-            acc_ok = dev <= self._acc_dev_max
-        status = 0
-        if self._waiting:
-            if not acc_ok:
-                return self._q, self._diagnostics(WAITING)
-            self._set_attitude(self._attitude_from_acc(ax, ay, az, 0.0))
+        status, acc_ok, self._acc_dev = screen(
+            gx, gy, gz, ax, ay, az, dt_s, self._waiting, self._acc_dev, self._acc_min2, self._acc_dev_max, self._acc_window_s, self._max_gap_s
+        )
+        if status & INITIALISED:
             self._waiting = False
-            status = INITIALISED
-        total = gx + gy + gz + dt_s
-        if not dt_s > 0.0 or total - total != 0.0:  # dt <= 0, or a NaN/Inf anywhere in gyro or dt
-            return self._q, self._diagnostics(status | HELD)
-        if dt_s > self._max_gap_s:
-            if not acc_ok:
-                return self._q, self._diagnostics(status | HELD)
-            yaw = float(quaternion.to_euler_zyx(np.array(self._q, dtype=float))[0])
-            self._set_attitude(self._attitude_from_acc(ax, ay, az, yaw))
-            return self._q, self._diagnostics(status | REINITIALISED)
-        if not acc_ok:
-            status |= ACC_SKIPPED
+            self._set_attitude(self._attitude_from_acc(ax, ay, az, 0.0))
+        if status & REINITIALISED:
+            self._set_attitude(self._attitude_from_acc(ax, ay, az, euler_of(self._q)[0]))
+        if status & NO_UPDATE:
+            return self._q, self._diagnostics(status)
         return self._update(gx, gy, gz, ax, ay, az, acc_ok, dt_s, status)
 
     def run(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
@@ -185,11 +242,7 @@ class Estimator:
         ``(q, diag)``: q an (N, 4) float64 array, diag a dict of (N,) arrays, one per diagnostics field;
         row k is exactly what ``step`` returns for sample k.
         """
-        gyr = np.asarray(gyr_rad_s, dtype=float).reshape(-1, 3)
-        acc = np.asarray(acc_g, dtype=float).reshape(-1, 3)
-        dt = np.broadcast_to(np.asarray(dt_s, dtype=float), (len(gyr),))
-        if len(acc) != len(gyr):
-            raise ValueError(f"gyr_rad_s has {len(gyr)} rows but acc_g has {len(acc)}")
+        gyr, acc, dt = batch_inputs(gyr_rad_s, acc_g, dt_s)
         mags = optional_rows(mag, len(gyr), 3, "mag")
         fixes = [None if r is None else GpsFix(*r) for r in optional_rows(gps, len(gyr), 4, "gps")]
         step = self.step
@@ -213,19 +266,193 @@ class Estimator:
     @staticmethod
     def _attitude_from_acc(ax, ay, az, yaw_rad):
         """Quaternion with the given yaw whose pitch and roll put gravity where the accelerometer says."""
-        pitch, roll = acc_pitch_roll(float(ax), float(ay), float(az))
-        return tuple(quaternion.from_euler_zyx(yaw_rad, pitch, roll).tolist())
+        return gravity_attitude(float(ax), float(ay), float(az), float(yaw_rad))
 
 
-def integrate_rate(q, wx, wy, wz, dt_s):
-    """``q + ½ q ⊗ [0, ω] dt``, normalised: one Euler step of the attitude kinematics (seed 000 eq. 6, 19)."""
-    q1, q2, q3, q4 = q
-    h = 0.5 * dt_s
-    q1, q2, q3, q4 = (
-        q1 - h * (q2 * wx + q3 * wy + q4 * wz),
-        q2 + h * (q1 * wx + q3 * wz - q4 * wy),
-        q3 + h * (q1 * wy - q2 * wz + q4 * wx),
-        q4 + h * (q1 * wz + q2 * wy - q3 * wx),
+def batch_inputs(gyr_rad_s, acc_g, dt_s):
+    """``run``'s arrays as contiguous float64: gyr and acc (N, 3), dt (N,); ValueError on unequal lengths.
+    Writable too (a copy of a read-only array): the compiled loop's signature is for writable arrays."""
+    gyr = _rows(gyr_rad_s, None, 3, "gyr_rad_s")
+    acc = _rows(acc_g, len(gyr), 3, "acc_g")
+    return gyr, acc, np.require(np.broadcast_to(np.asarray(dt_s, dtype=float), (len(gyr),)), requirements="CW")
+
+
+# -- compiled estimators (module docstring) ---------------------------------------------------
+
+# Slots of a compiled estimator's state array
+STATE_WAITING = 4  # state[0:4] is q (w, x, y, z); this slot 1 while waiting for gravity, else 0
+STATE_ACC_DEV = 5  # the low-passed |‖acc‖ - 1| (g)
+STATE_DIAG = 6  # the diagnostics after status, in their order; then the estimator's own state
+# Slots of its parameter array
+P_ACC_MIN2, P_ACC_DEV_MAX, P_ACC_WINDOW_S, P_MAX_GAP_S = 0, 1, 2, 3
+P_MAGNETOMETER = 4  # 1: the estimator uses the magnetometer (marg.py): yaw from the compass on (re-)initialising
+P_OWN = 5  # the estimator's own parameters
+
+_F8, _VECTOR, _ROWS = types.float64, types.float64[::1], types.float64[:, ::1]
+KERNEL_SIGNATURE = types.int64(_VECTOR, _VECTOR, *[_F8] * 10)  # state, params, gyr, acc, dt_s, mag
+RUN_SIGNATURE = types.void(_VECTOR, _VECTOR, _ROWS, _ROWS, _VECTOR, _ROWS, _ROWS, types.int64[::1], _ROWS)  # (state, params, gyr, acc, dt, mag, outputs)
+
+
+@register_jitable
+def _set_gravity_attitude(state, p, ax, ay, az, yaw_rad, mx, my, mz):
+    """state[0:4] from gravity with this yaw, or the compass's (``P_MAGNETOMETER``, a usable reading).
+    In double, whatever the state's type (the C core's set_from_gravity)."""
+    ax, ay, az = float(ax), float(ay), float(az)
+    n2 = mx * mx + my * my + mz * mz
+    if p[P_MAGNETOMETER] != 0.0 and 0.0 < n2 and n2 < math.inf:
+        pitch, roll = acc_pitch_roll(ax, ay, az)
+        yaw_rad = wrap_pi(level_heading_rad(pitch, roll, mx, my, mz))
+    state[0], state[1], state[2], state[3] = gravity_attitude(ax, ay, az, yaw_rad)
+
+
+@register_jitable
+def guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
+    """``screen`` on a compiled estimator's state, the attitude set as it says: ``(status, acc_ok)``."""
+    status, acc_ok, acc_dev = screen(
+        gx, gy, gz, ax, ay, az, dt_s, state[STATE_WAITING] != 0.0, state[STATE_ACC_DEV], p[P_ACC_MIN2], p[P_ACC_DEV_MAX], p[P_ACC_WINDOW_S], p[P_MAX_GAP_S]
     )
-    r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
-    return (q1 * r, q2 * r, q3 * r, q4 * r)
+    state[STATE_ACC_DEV] = acc_dev
+    if status & INITIALISED:
+        state[STATE_WAITING] = 0.0
+        _set_gravity_attitude(state, p, ax, ay, az, 0.0, mx, my, mz)
+    if status & REINITIALISED:
+        yaw = euler_of((float(state[0]), float(state[1]), float(state[2]), float(state[3])))[0]
+        _set_gravity_attitude(state, p, ax, ay, az, yaw, mx, my, mz)
+    return status, acc_ok
+
+
+@register_jitable
+def sample(gyr, acc, dt, mag, k):
+    """Row k of ``run``'s arrays as a kernel's inputs after (state, params); ``mag`` (0, 3) for none."""
+    if mag.shape[0] == 0:
+        return gyr[k, 0], gyr[k, 1], gyr[k, 2], acc[k, 0], acc[k, 1], acc[k, 2], dt[k], math.nan, math.nan, math.nan
+    return gyr[k, 0], gyr[k, 1], gyr[k, 2], acc[k, 0], acc[k, 1], acc[k, 2], dt[k], mag[k, 0], mag[k, 1], mag[k, 2]
+
+
+@register_jitable
+def record(state, k, status, status_out, q_out, diag_out):
+    """Row k of ``run``'s outputs from the kernel's status and state: what ``step`` returns."""
+    status_out[k] = status
+    for i in range(4):
+        q_out[k, i] = state[i]
+    for i in range(diag_out.shape[1]):
+        diag_out[k, i] = state[STATE_DIAG + i]
+
+
+_READY = set()  # the dispatchers compiled for their one signature
+# Sources every kernel and run loop compiles in besides its own file (guard, sample, record; tilt; compass)
+_SHARED_SOURCES = (Path(__file__), Path(tilt.__file__), Path(compass.__file__))
+
+
+def drop_stale_cache(dispatcher, shared_sources=_SHARED_SOURCES) -> None:
+    """numba checks a cached function against its own file only: its index (``<module>.<name>-<line>.*.nbi``)
+    is deleted when older than a shared source, so numba compiles an edit there instead of loading the
+    function compiled before it (a missing index is just compiled anew)."""
+    newest = max(path.stat().st_mtime for path in shared_sources)
+    function = dispatcher.py_func
+    pattern = f"{Path(function.__code__.co_filename).stem}.{function.__qualname__}-*.nbi"
+    for index in Path(dispatcher.stats.cache_path).glob(pattern):
+        if index.stat().st_mtime < newest:
+            index.unlink(missing_ok=True)
+
+
+def _compiled(dispatcher, signature):
+    """The dispatcher compiled (or loaded from numba's cache) for exactly this signature, on first use."""
+    if dispatcher not in _READY:
+        drop_stale_cache(dispatcher)
+        dispatcher.compile(signature)
+        dispatcher.disable_compile()  # other argument types are converted to these, never compiled anew
+        _READY.add(dispatcher)
+    return dispatcher
+
+
+_new_tuple = tuple.__new__
+_NO_FIELD = (math.nan, math.nan, math.nan)
+
+
+class CompiledEstimator(Estimator):
+    """An estimator whose per-sample arithmetic is a compiled ``kernel`` (module docstring).
+
+    Subclasses set ``kernel`` (``staticmethod`` of an ``@njit(cache=True)`` function with
+    ``KERNEL_SIGNATURE``), ``run_kernel`` (likewise, ``RUN_SIGNATURE``: the loop ``for k: record(...,
+    kernel(state, params, *sample(..., k)), ...)``, written out in each kernel's module because a
+    kernel passed as an argument cannot be cached, and a kernel passed from Python costs ~0.5 ms a
+    call to convert) and ``uses_magnetometer``, and implement ``_parameters()`` (their own
+    parameters, after the guard's) and ``_initial_state()`` (their diagnostics after status, then their
+    own state, as after ``reset()``). ``dtype`` None runs the compiled kernel on float64; a numpy type
+    runs the same source interpreted on numbers of that type (ahf's float32 firmware model): ``step``
+    then returns numbers of that type, ``run`` widens them to float64 (exactly).
+    """
+
+    kernel: ClassVar
+    run_kernel: ClassVar
+    uses_magnetometer: ClassVar[bool] = False
+
+    def __init__(self, settings=None, dtype=None):
+        self._dtype = np.dtype(np.float64 if dtype is None else dtype)
+        self._cast = None if dtype is None else self._dtype.type
+        kernel = type(self).kernel
+        self._kernel = _compiled(kernel, KERNEL_SIGNATURE) if dtype is None else kernel.py_func
+        self._diag_end = STATE_DIAG + len(self.Diagnostics._fields) - 1
+        super().__init__(settings)
+
+    def _parameters(self) -> list[float]:
+        raise NotImplementedError
+
+    def _initial_state(self) -> list[float]:
+        raise NotImplementedError
+
+    def reset(self, q0=None) -> None:
+        s = self.settings
+        guards = [self._acc_min2, s.acc_deviation_max_g, s.acc_window_s, s.max_gap_s, float(self.uses_magnetometer)]
+        self._params = np.array(guards + self._parameters(), dtype=self._dtype)
+        if self._cast is not None:  # interpreted: a list of numpy scalars reads 3x faster than an array
+            self._params = list(self._params)
+        q = (1.0, 0.0, 0.0, 0.0) if q0 is None else quaternion.normalise(q0).tolist()
+        self._state = np.array([*q, float(q0 is None), 0.0, *self._initial_state()], dtype=self._dtype)
+
+    @property
+    def _q(self):
+        return tuple(self._values()[:4])
+
+    @property
+    def _acc_dev(self):
+        return self._state[STATE_ACC_DEV]
+
+    def _values(self):
+        # tolist(): Python floats for step's output; the interpreted model keeps its numpy type
+        return self._state.tolist() if self._cast is None else list(self._state)
+
+    def step(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
+        gx, gy, gz = gyr_rad_s
+        ax, ay, az = acc_g
+        mx, my, mz = _NO_FIELD if mag is None else mag
+        if self._cast is not None:
+            c = self._cast
+            gx, gy, gz, ax, ay, az, dt_s = c(gx), c(gy), c(gz), c(ax), c(ay), c(az), c(dt_s)
+        status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+        v = self._values()
+        return (v[0], v[1], v[2], v[3]), _new_tuple(self.Diagnostics, (status, *v[STATE_DIAG : self._diag_end]))
+
+    def run(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
+        gyr, acc, dt = batch_inputs(gyr_rad_s, acc_g, dt_s)
+        n = len(dt)
+        mags = np.empty((0, 3)) if mag is None else _rows(mag, n, 3, "mag")
+        if gps is not None:
+            _rows(gps, n, 4, "gps")  # checked like every estimator's; these do not use it
+        q, status, table = np.empty((n, 4)), np.empty(n, dtype=np.int64), np.empty((n, self._diag_end - STATE_DIAG))
+        if self._cast is None:
+            _compiled(type(self).run_kernel, RUN_SIGNATURE)(self._state, self._params, gyr, acc, dt, mags, q, status, table)
+        else:  # the same loop, interpreted (run_kernel.py_func would call the compiled kernel)
+            gyr, acc, dt, mags = (a.astype(self._dtype) for a in (gyr, acc, dt, mags))
+            for k in range(n):
+                record(self._state, k, self._kernel(self._state, self._params, *sample(gyr, acc, dt, mags, k)), status, q, table)
+        return q, {"status": status} | {name: table[:, i] for i, name in enumerate(self.Diagnostics._fields[1:])}
+
+
+def _rows(values, n: int | None, width: int, name: str) -> np.ndarray:
+    """(n, width) contiguous writable float64; any n when None."""
+    rows = np.require(np.asarray(values, dtype=float).reshape(-1, width), requirements="CW")
+    if n is not None and len(rows) != n:
+        raise ValueError(f"{name} has {len(rows)} rows of {width}, expected {n}")
+    return rows

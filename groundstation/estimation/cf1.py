@@ -22,7 +22,9 @@ import dataclasses
 import math
 from typing import NamedTuple
 
-from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
+from numba import njit
+
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
 from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 
@@ -41,33 +43,48 @@ class Cf1Diagnostics(NamedTuple):
     roll_acc_rad: float
 
 
-class Cf1(Estimator):
+# Parameters after the guard's: τ, innovation_max_rad. State after the guard's: the diagnostics.
+_TAU, _INNOVATION_MAX = P_OWN, P_OWN + 1
+_ALPHA, _PITCH_ACC, _ROLL_ACC = STATE_DIAG, STATE_DIAG + 1, STATE_DIAG + 2
+
+
+@njit(cache=True)
+def cf1_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
+    """One CF1 sample: base.py's compiled kernels."""
+    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    if status & NO_UPDATE:
+        return status
+    # Gyro prediction on the quaternion (no gimbal lock, whatever the mounting), blend on the angles.
+    q = integrate_rate((state[0], state[1], state[2], state[3]), gx, gy, gz, dt_s)
+    if acc_ok:
+        yaw, pitch, roll = euler_of(q)
+        pitch_acc, roll_acc = acc_pitch_roll(ax, ay, az)
+        alpha = p[_TAU] / (p[_TAU] + dt_s)
+        m = p[_INNOVATION_MAX]
+        pitch += (1.0 - alpha) * min(max(wrap_pi(pitch_acc - pitch), -m), m)
+        roll += (1.0 - alpha) * min(max(wrap_pi(roll_acc - roll), -m), m)
+        state[_ALPHA], state[_PITCH_ACC], state[_ROLL_ACC] = alpha, pitch_acc, roll_acc
+        pitch = min(max(pitch, -math.pi / 2), math.pi / 2)
+        q = quaternion_of(yaw, pitch, roll)
+    state[0], state[1], state[2], state[3] = q
+    return status
+
+
+@njit(cache=True)
+def cf1_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, cf1_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
+
+
+class Cf1(CompiledEstimator):
     name = "cf1"
     Settings = Cf1Settings
     Diagnostics = Cf1Diagnostics
+    kernel = staticmethod(cf1_kernel)
+    run_kernel = staticmethod(cf1_run)
 
-    def _reset_state(self):
-        self._diag = (1.0, 0.0, 0.0)
+    def _parameters(self):
+        return [self.settings.time_constant_s, self.settings.innovation_max_rad]
 
-    def _set_attitude(self, q):
-        self._q = q
-
-    def _diagnostics(self, status):
-        return Cf1Diagnostics(status, *self._diag)
-
-    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
-        # Gyro prediction on the quaternion (no gimbal lock, whatever the mounting), blend on the angles.
-        q = integrate_rate(self._q, gx, gy, gz, dt_s)
-        if acc_ok:
-            yaw, pitch, roll = euler_of(q)
-            pitch_acc, roll_acc = acc_pitch_roll(ax, ay, az)
-            tau = self.settings.time_constant_s
-            alpha = tau / (tau + dt_s)
-            m = self.settings.innovation_max_rad
-            pitch += (1.0 - alpha) * min(max(wrap_pi(pitch_acc - pitch), -m), m)
-            roll += (1.0 - alpha) * min(max(wrap_pi(roll_acc - roll), -m), m)
-            self._diag = (alpha, pitch_acc, roll_acc)
-            pitch = min(max(pitch, -math.pi / 2), math.pi / 2)
-            q = quaternion_of(yaw, pitch, roll)
-        self._q = q
-        return self._q, self._diagnostics(status)
+    def _initial_state(self):
+        return [1.0, 0.0, 0.0]  # α, pitch_acc, roll_acc

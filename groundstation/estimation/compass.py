@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba.extending import register_jitable
 
 from groundstation import quaternion
 from groundstation.estimation.tilt import wrap_pi
@@ -46,6 +47,7 @@ def reading_heading_rad(q_body_to_ned, mag_body) -> float:
     return math.remainder(yaw - math.atan2(east, north), 2 * math.pi)
 
 
+@register_jitable  # also compiled: the compiled MARG filters' yaw on initialising (base.py)
 def level_heading_rad(pitch_rad, roll_rad, mx, my, mz):
     """Magnetic heading ψ = atan2(-m_h,y, m_h,x) with ``m_h = Ry(θ) Rx(φ) m_b`` (eq. 14-15); floats or arrays."""
     sp, cp, sr, cr = np.sin(pitch_rad), np.cos(pitch_rad), np.sin(roll_rad), np.cos(roll_rad)

@@ -25,9 +25,14 @@ accelerometer sample moves the estimate no more than a moderate one) were chosen
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import NamedTuple
 
-from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
+from numba import njit
+from numba.extending import register_jitable
+
+from groundstation.estimation.base import NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
+from groundstation.estimation.tilt import earth_field_reference, unit_field
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,44 +56,75 @@ class EcfDiagnostics(NamedTuple):
     gravity_error: float  # ‖e‖ = sine of the angle between measured and estimated gravity
 
 
-class Ecf(Estimator):
+# Parameters after the guard's: kp, ki, bias_max_rad_s, error_max. State after the guard's: the diagnostics.
+_KP, _KI, _BIAS_MAX, _ERROR_MAX = range(P_OWN, P_OWN + 4)
+_BX, _BY, _BZ, _ERR = range(STATE_DIAG, STATE_DIAG + 4)
+
+
+@njit(cache=True)
+def ecf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
+    """One sample of ECF or ECFM (with the magnetometer): base.py's compiled kernels."""
+    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    if status & NO_UPDATE:
+        return status
+    q1, q2, q3, q4 = state[0], state[1], state[2], state[3]
+    bx, by, bz = state[_BX], state[_BY], state[_BZ]
+    if acc_ok:
+        r = -((ax * ax + ay * ay + az * az) ** -0.5)
+        ax, ay, az = ax * r, ay * r, az * r  # â: measured down direction
+        vx = 2.0 * (q2 * q4 - q1 * q3)  # ĝ: estimated down direction (seed 000 eq. 8)
+        vy = 2.0 * (q1 * q2 + q3 * q4)
+        vz = q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4
+        ex, ey, ez = ay * vz - az * vy, az * vx - ax * vz, ax * vy - ay * vx  # e = â × ĝ
+        err = math.sqrt(ex * ex + ey * ey + ez * ez)  # not ** 0.5: compiled, that is sqrt, interpreted libm's pow
+        state[_ERR] = err
+        if err > p[_ERROR_MAX]:
+            c = p[_ERROR_MAX] / err
+            ex, ey, ez = ex * c, ey * c, ez * c
+        if p[P_MAGNETOMETER] != 0.0:  # ecfm: e += m × w (marg.py)
+            ex, ey, ez = _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz)
+        ki, kp, m = p[_KI] * dt_s, p[_KP], p[_BIAS_MAX]
+        bx, by, bz = bx - ki * ex, by - ki * ey, bz - ki * ez  # ḃ = -Ki e
+        bx, by, bz = min(max(bx, -m), m), min(max(by, -m), m), min(max(bz, -m), m)
+        state[_BX], state[_BY], state[_BZ] = bx, by, bz
+        gx, gy, gz = gx + kp * ex, gy + kp * ey, gz + kp * ez
+    # ω' = ω - b + Kp e
+    state[0], state[1], state[2], state[3] = integrate_rate((q1, q2, q3, q4), gx - bx, gy - by, gz - bz, dt_s)
+    return status
+
+
+@register_jitable
+def _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz):
+    """e with Mahony's magnetometer term ``m̂ × w`` added (marg.py); unchanged without a usable reading."""
+    usable, mx, my, mz = unit_field(mx, my, mz)
+    if not usable:
+        return ex, ey, ez
+    bx, bz = earth_field_reference(q1, q2, q3, q4, mx, my, mz)
+    # w = Rᵀ(q) b: the estimated field direction on the body axes
+    wx = bx * (1.0 - 2.0 * (q3 * q3 + q4 * q4)) + bz * 2.0 * (q2 * q4 - q1 * q3)
+    wy = bx * 2.0 * (q2 * q3 - q1 * q4) + bz * 2.0 * (q1 * q2 + q3 * q4)
+    wz = bx * 2.0 * (q2 * q4 + q1 * q3) + bz * (1.0 - 2.0 * (q2 * q2 + q3 * q3))
+    # (Mahony eq. 48a) e += m̂ × w
+    return ex + my * wz - mz * wy, ey + mz * wx - mx * wz, ez + mx * wy - my * wx
+
+
+@njit(cache=True)
+def ecf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, ecf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
+
+
+class Ecf(CompiledEstimator):
     name = "ecf"
     estimates_gyro_bias = True
     Settings = EcfSettings
     Diagnostics = EcfDiagnostics
-    marg = False  # True in marg.Ecfm: adds the magnetometer's error term
+    kernel = staticmethod(ecf_kernel)
+    run_kernel = staticmethod(ecf_run)
 
-    def _reset_state(self):
-        self._bias = (0.0, 0.0, 0.0)
-        self._err = 0.0
+    def _parameters(self):
+        s = self.settings
+        return [s.kp, s.ki, s.bias_max_rad_s, s.error_max]
 
-    def _set_attitude(self, q):
-        self._q = q
-
-    def _diagnostics(self, status):
-        return EcfDiagnostics(status, *self._bias, self._err)
-
-    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
-        q1, q2, q3, q4 = self._q
-        bx, by, bz = self._bias
-        if acc_ok:
-            r = -((ax * ax + ay * ay + az * az) ** -0.5)
-            ax, ay, az = ax * r, ay * r, az * r  # â: measured down direction
-            vx = 2.0 * (q2 * q4 - q1 * q3)  # ĝ: estimated down direction (seed 000 eq. 8)
-            vy = 2.0 * (q1 * q2 + q3 * q4)
-            vz = q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4
-            ex, ey, ez = ay * vz - az * vy, az * vx - ax * vz, ax * vy - ay * vx  # e = â × ĝ
-            err = self._err = (ex * ex + ey * ey + ez * ez) ** 0.5
-            if err > self.settings.error_max:
-                c = self.settings.error_max / err
-                ex, ey, ez = ex * c, ey * c, ez * c
-            if self.marg and self._mag is not None:  # ecfm: e += m × w (marg.py)
-                ex, ey, ez = self._mag_error(q1, q2, q3, q4, ex, ey, ez)
-            ki, kp = self.settings.ki * dt_s, self.settings.kp
-            m = self.settings.bias_max_rad_s
-            bx, by, bz = bx - ki * ex, by - ki * ey, bz - ki * ez  # ḃ = -Ki e
-            bx, by, bz = min(max(bx, -m), m), min(max(by, -m), m), min(max(bz, -m), m)
-            self._bias = (bx, by, bz)
-            gx, gy, gz = gx + kp * ex, gy + kp * ey, gz + kp * ez
-        self._q = integrate_rate(self._q, gx - bx, gy - by, gz - bz, dt_s)  # ω' = ω - b + Kp e
-        return self._q, self._diagnostics(status)
+    def _initial_state(self):
+        return [0.0, 0.0, 0.0, 0.0]  # bias, gravity_error

@@ -22,8 +22,10 @@ import dataclasses
 import math
 from typing import NamedTuple
 
-from groundstation import quaternion
-from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
+from numba import njit
+from numba.extending import register_jitable
+
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
 from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 _DEG2 = (math.pi / 180.0) ** 2
@@ -46,67 +48,69 @@ class KfDiagnostics(NamedTuple):
     roll_std_rad: float
 
 
-class _Axis:
-    """One angle with its rate bias: the two-state filter above."""
-
-    __slots__ = ("angle", "bias", "p00", "p01", "p10", "p11")
-
-    def __init__(self, angle):
-        self.angle, self.bias = angle, 0.0
-        self.p00 = self.p01 = self.p10 = self.p11 = 0.0
-
-    def predict(self, rate, dt, q_angle, q_bias):
-        self.angle += (rate - self.bias) * dt
-        p11 = self.p11
-        self.p00 += dt * (dt * p11 - self.p01 - self.p10 + q_angle)
-        self.p01 -= dt * p11
-        self.p10 -= dt * p11
-        self.p11 += q_bias * dt
-
-    def correct(self, angle_meas, r, bias_max, innovation_max):
-        s = self.p00 + r
-        k0, k1 = self.p00 / s, self.p10 / s
-        y = min(max(wrap_pi(angle_meas - self.angle), -innovation_max), innovation_max)
-        self.angle += k0 * y
-        self.bias = min(max(self.bias + k1 * y, -bias_max), bias_max)
-        p00, p01 = self.p00, self.p01
-        self.p00 -= k0 * p00
-        self.p01 -= k0 * p01
-        self.p10 -= k1 * p00
-        self.p11 -= k1 * p01
+# Parameters after the guard's: the settings in their order. State after the guard's: the diagnostics,
+# then P (p00, p01, p10, p11) of pitch and of roll. The angles are read from q on every sample.
+_Q_ANGLE, _Q_BIAS, _R_ANGLE, _BIAS_MAX, _INNOVATION_MAX = range(P_OWN, P_OWN + 5)
+_BIAS, _STD, _P = STATE_DIAG, STATE_DIAG + 2, STATE_DIAG + 4  # + axis (0 pitch, 1 roll); P: + 4 axis
 
 
-class Kf(Estimator):
+@register_jitable
+def _axis(state, p, axis, angle, angle_acc, acc_ok, dt):
+    """One axis's two-state filter (module docstring): predict, and correct when the accelerometer is
+    usable; returns the new angle, keeps the bias, P and √P00 in ``state``."""
+    k = _P + 4 * axis
+    bias, p00, p01, p10, p11 = state[_BIAS + axis], state[k], state[k + 1], state[k + 2], state[k + 3]
+    angle -= bias * dt  # the rate is in the quaternion already: only the bias is taken off
+    p00 += dt * (dt * p11 - p01 - p10 + p[_Q_ANGLE])
+    p01 -= dt * p11
+    p10 -= dt * p11
+    p11 += p[_Q_BIAS] * dt
+    if acc_ok:
+        s = p00 + p[_R_ANGLE]
+        k0, k1 = p00 / s, p10 / s
+        y = min(max(wrap_pi(angle_acc - angle), -p[_INNOVATION_MAX]), p[_INNOVATION_MAX])
+        angle += k0 * y
+        bias = min(max(bias + k1 * y, -p[_BIAS_MAX]), p[_BIAS_MAX])
+        p00, p01, p10, p11 = p00 - k0 * p00, p01 - k0 * p01, p10 - k1 * p00, p11 - k1 * p01
+    state[_BIAS + axis], state[k], state[k + 1], state[k + 2], state[k + 3] = bias, p00, p01, p10, p11
+    state[_STD + axis] = math.sqrt(max(p00, 0.0))
+    return angle
+
+
+@njit(cache=True)
+def kf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
+    """One KF sample: base.py's compiled kernels."""
+    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    if status & NO_UPDATE:
+        return status
+    # The gyro's angle change comes from the quaternion (no gimbal lock, whatever the mounting);
+    # each axis then subtracts its own bias estimate.
+    yaw, pitch, roll = euler_of(integrate_rate((state[0], state[1], state[2], state[3]), gx, gy, gz, dt_s))
+    pitch_acc, roll_acc = acc_pitch_roll(ax, ay, az) if acc_ok else (0.0, 0.0)
+    pitch = _axis(state, p, 0, pitch, pitch_acc, acc_ok, dt_s)
+    roll = _axis(state, p, 1, roll, roll_acc, acc_ok, dt_s)
+    pitch = min(max(pitch, -math.pi / 2), math.pi / 2)
+    state[0], state[1], state[2], state[3] = quaternion_of(yaw, pitch, wrap_pi(roll))
+    return status
+
+
+@njit(cache=True)
+def kf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, kf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
+
+
+class Kf(CompiledEstimator):
     name = "kf"
     estimates_gyro_bias = True
     Settings = KfSettings
     Diagnostics = KfDiagnostics
+    kernel = staticmethod(kf_kernel)
+    run_kernel = staticmethod(kf_run)
 
-    def _reset_state(self):
-        self._yaw, self._pitch, self._roll = 0.0, _Axis(0.0), _Axis(0.0)
+    def _parameters(self):
+        s = self.settings
+        return [s.q_angle_rad2_s, s.q_bias_rad2_s3, s.r_angle_rad2, s.bias_max_rad_s, s.innovation_max_rad]
 
-    def _set_attitude(self, q):
-        # Keep the bias estimates across a re-initialisation; only the angles come from gravity.
-        self._yaw, self._pitch.angle, self._roll.angle = quaternion.to_euler_zyx(q).tolist()
-        self._q = q
-
-    def _diagnostics(self, status):
-        p, r = self._pitch, self._roll
-        return KfDiagnostics(status, p.bias, r.bias, max(p.p00, 0.0) ** 0.5, max(r.p00, 0.0) ** 0.5)
-
-    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
-        s, pitch, roll = self.settings, self._pitch, self._roll
-        # The gyro's angle change comes from the quaternion (no gimbal lock, whatever the mounting);
-        # each axis then subtracts its own bias estimate in predict.
-        q = integrate_rate(self._q, gx, gy, gz, dt_s)
-        self._yaw, pitch.angle, roll.angle = euler_of(q)
-        pitch.predict(0.0, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
-        roll.predict(0.0, dt_s, s.q_angle_rad2_s, s.q_bias_rad2_s3)
-        if acc_ok:
-            pitch_acc, roll_acc = acc_pitch_roll(ax, ay, az)
-            pitch.correct(pitch_acc, s.r_angle_rad2, s.bias_max_rad_s, s.innovation_max_rad)
-            roll.correct(roll_acc, s.r_angle_rad2, s.bias_max_rad_s, s.innovation_max_rad)
-        pitch.angle = min(max(pitch.angle, -math.pi / 2), math.pi / 2)
-        roll.angle = wrap_pi(roll.angle)
-        self._q = quaternion_of(self._yaw, pitch.angle, roll.angle)
-        return self._q, self._diagnostics(status)
+    def _initial_state(self):
+        return [0.0] * 12  # biases, stds, P of both axes: like the original, confident in the initialisation

@@ -1,17 +1,22 @@
-"""Scalar helpers for the per-sample filters: Euler angles (cf1, kf), initialisation from gravity, products.
+"""Scalar helpers for the per-sample filters: Euler angles (cf1, kf), initialisation from gravity, products,
+the magnetometer's earth reference (hfm, ecfm).
 
-Body axes FRD, earth NED, ZYX Euler angles (docs/conventions.md). Per-sample code, so plain ``math``.
+Body axes FRD, earth NED, ZYX Euler angles (docs/conventions.md). Per-sample code, so plain ``math``;
+``register_jitable``: compiled inside the compiled estimators' kernels (base.py), plain Python elsewhere.
 """
 
 from __future__ import annotations
 
 import math
 
+from numba.extending import register_jitable
+
 # cos θ floor in the Euler kinematics: at ±90° pitch yaw and roll rates are undefined (gimbal lock);
 # the floor keeps them finite (the per-angle filters are not meant for vertical flight).
 _COS_PITCH_MIN = 1e-6
 
 
+@register_jitable
 def acc_pitch_roll(ax, ay, az):
     """Pitch θ and roll φ (rad) from the specific force in body axes, any unit.
 
@@ -30,11 +35,13 @@ def euler_rates(roll_rad, pitch_rad, gx, gy, gz):
     return turn / cos_pitch, gy * c - gz * s, gx + turn * math.sin(pitch_rad) / cos_pitch
 
 
+@register_jitable
 def wrap_pi(angle_rad):
     """Angle wrapped into [-π, π)."""
     return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
+@register_jitable
 def euler_of(q):
     """ZYX (yaw, pitch, roll) in rad of a unit quaternion tuple: ``quaternion.to_euler_zyx`` for one
     sample on plain floats (numpy's per-call cost is most of a per-sample filter's time)."""
@@ -47,6 +54,7 @@ def euler_of(q):
     )
 
 
+@register_jitable
 def quaternion_of(yaw_rad, pitch_rad, roll_rad):
     """``qz(ψ) ⊗ qy(θ) ⊗ qx(φ)`` as a tuple: ``quaternion.from_euler_zyx`` for one sample on plain floats."""
     cy, sy = math.cos(0.5 * yaw_rad), math.sin(0.5 * yaw_rad)
@@ -65,3 +73,24 @@ def quaternion_product(p, q):
         pw * qy - px * qz + py * qw + pz * qx,
         pw * qz + px * qy - py * qx + pz * qw,
     )
+
+
+@register_jitable
+def unit_field(mx, my, mz):
+    """``(usable, m̂)``: the magnetometer reading normalised; not usable (and m̂ zero) when it is missing
+    (NaN), infinite or zero."""
+    n2 = mx * mx + my * my + mz * mz
+    if not (0.0 < n2 and n2 < math.inf):  # NaN fails, Inf and 0 excluded
+        return False, 0.0, 0.0, 0.0
+    r = n2**-0.5
+    return True, mx * r, my * r, mz * r
+
+
+@register_jitable
+def earth_field_reference(q1, q2, q3, q4, mx, my, mz):
+    """``b = (bx, 0, bz)``: the measured field m̂ turned into NED by q, its horizontal part onto north
+    (Madgwick eq. 45-46): ``h = R(q) m̂``, ``bx = ‖(h_n, h_e)‖``, ``bz = h_d`` (marg.py)."""
+    hx = (1.0 - 2.0 * (q3 * q3 + q4 * q4)) * mx + 2.0 * (q2 * q3 - q1 * q4) * my + 2.0 * (q2 * q4 + q1 * q3) * mz
+    hy = 2.0 * (q2 * q3 + q1 * q4) * mx + (1.0 - 2.0 * (q2 * q2 + q4 * q4)) * my + 2.0 * (q3 * q4 - q1 * q2) * mz
+    hz = 2.0 * (q2 * q4 - q1 * q3) * mx + 2.0 * (q3 * q4 + q1 * q2) * my + (1.0 - 2.0 * (q2 * q2 + q3 * q3)) * mz
+    return math.sqrt(hx * hx + hy * hy), hz

@@ -174,3 +174,16 @@ def test_settings_are_frozen_and_overrides_are_checked():
     for bad in ["hf.beta", "beta=1", "hf.beta=abc", ".beta=1"]:
         with pytest.raises(ValueError):
             parse_overrides([bad])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_an_infinite_period_leaves_the_deviation_gate_working(name):
+    """dt_s = inf is held like NaN; with the low-passed deviation gate on it used to make the deviation
+    inf/inf = NaN, and NaN <= limit skipped the accelerometer on every later sample until a reset."""
+    est = create(name, {"acc_deviation_max_g": 0.3})
+    level = static_acc(0.0, 0.0)
+    est.step([0.0, 0.0, 0.0], level, 0.01)
+    _, diag = est.step([0.0, 0.0, 0.0], level, math.inf)
+    assert diag.status & base.HELD
+    statuses = [est.step([0.0, 0.0, 0.0], level, 0.01)[1].status for _ in range(50)]
+    assert not any(s & base.ACC_SKIPPED for s in statuses)

@@ -174,8 +174,7 @@ def test_float32_core_stays_float32_and_each_step_matches_float64(cls):
     worst = 0.0
     for g, a, d in zip(gyr.tolist(), acc.tolist(), dt.tolist()):
         double = cls()
-        double.reset(np.array(single._q, dtype=float))
-        double._e_a = float(single._e_a)
+        double._state[:] = single._state  # the same state (q, e_a, ...), widened exactly
         q32, diag32 = single.step(g, a, d)
         q64, _ = double.step(g, a, d)
         worst = max(worst, float(np.abs(np.array(q32, dtype=float) - q64).max()))

@@ -48,7 +48,7 @@ GATE_ON = {"acc_deviation_max_g": 0.1, "acc_window_s": 0.5}
 
 @pytest.mark.parametrize("gate", [GATE_OFF, GATE_ON], ids=["gate-off", "gate-on"])
 def test_the_guards_agree_bit_for_bit(c_core, gate):
-    """Waiting for gravity, NaN and Inf, dt <= 0, a gap (re-initialised, yaw kept), free fall, a shock,
+    """Waiting for gravity, NaN and Inf, dt <= 0 and dt = inf, a gap (re-initialised, yaw kept), free fall, a shock,
     over-range, and 2 s of shaking, with the low-passed deviation gate off and on."""
     run = simulate("fast", 20.0, seed=2, accel_fs_g=8, gyro_fs_dps=250)
     gyr, acc, dt = run.gyr_rad_s.tolist(), run.acc_g.tolist(), [run.dt_s] * len(run)
@@ -56,6 +56,7 @@ def test_the_guards_agree_bit_for_bit(c_core, gate):
     gyr[100][1] = math.nan
     acc[200] = [math.inf, 0.0, -1.0]
     dt[300], dt[301] = 0.0, -0.01
+    dt[350] = math.inf  # held like NaN; it made the gate's low-passed deviation NaN for good (inf / inf)
     dt[400] = 1.5  # a gap: pitch and roll from gravity, yaw kept
     acc[500] = [0.0, 0.01, -0.05]  # free fall
     acc[600] = [0.0, 2.0, -3.5]  # a shock: 4 g, one sample

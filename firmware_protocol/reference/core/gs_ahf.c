@@ -1,5 +1,5 @@
-/* See gs_ahf.h. Each line mirrors groundstation/estimation/ahf.py (Ahf._update) and
- * groundstation/estimation/base.py (Estimator.step); keep them in step. */
+/* See gs_ahf.h. Each line mirrors groundstation/estimation/ahf.py (ahf_kernel) and
+ * groundstation/estimation/base.py (screen, guard); keep them in step. */
 #include "gs_ahf.h"
 
 #include <math.h>
@@ -90,7 +90,8 @@ unsigned gs_ahf_step(gs_ahf *f, const float gyr_rad_s[3], const float acc_g[3], 
     float n2 = ax * ax + ay * ay + az * az;
     /* NaN fails every comparison, so this one test rejects NaN, Inf and free fall. */
     int acc_ok = f->acc_min2 <= n2 && n2 < INFINITY;
-    if (acc_ok && f->acc_gated && dt_s > 0.0f) {
+    /* Only a finite positive dt weighs the deviation: inf would make it inf/inf = NaN for good. */
+    if (acc_ok && f->acc_gated && dt_s > 0.0f && dt_s < INFINITY) {
         /* Sustained shaking or acceleration: the deviation from 1 g, low-passed over acc_window_s */
         float dev = f->acc_dev;
         dev = dev + (fabsf(root(n2) - 1.0f) - dev) * dt_s / (f->acc_window_s + dt_s);

@@ -1,0 +1,154 @@
+"""The compiled estimators (base.CompiledEstimator): run equals step sample for sample, and both equal the
+same kernel source run interpreted, on inputs with every kind of bad sample the guard handles; numba's
+cache follows edits of the sources shared by every kernel."""
+
+import importlib
+import math
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from estimation_samples import flight_like_samples
+from groundstation.estimation import ESTIMATORS, create
+from groundstation.estimation.base import CompiledEstimator, drop_stale_cache
+
+COMPILED = [name for name, cls in ESTIMATORS.items() if issubclass(cls, CompiledEstimator)]
+MAGNETIC = {"hfm", "ecfm"}
+
+# Bad samples: (gyro, acc, dt) replacements, None = keep the flight-like value
+EVENTS = {
+    "gyro nan": ([math.nan, 0.0, 0.0], None, None),
+    "gyro inf": ([0.0, -math.inf, 0.0], None, None),
+    "gyro over range": ([40.0, -40.0, 40.0], None, None),
+    "acc nan": (None, [0.0, math.nan, -1.0], None),
+    "acc inf": (None, [math.inf, 0.0, -1.0], None),
+    "free fall": (None, [0.0, 0.01, -0.05], None),
+    "shock": (None, [3.0, -6.0, 9.0], None),
+    "dt zero": (None, None, 0.0),
+    "dt negative": (None, None, -0.01),
+    "dt nan": (None, None, math.nan),
+    "dt inf": (None, None, math.inf),
+    "gap": (None, None, 2.5),
+}
+
+
+def samples(n, seed, events, waiting):
+    """Flight-like samples with the events at their indices, the first ``waiting`` without gravity, and a
+    magnetometer reading on every third sample (NaN rows between, and one zero reading)."""
+    gyr, acc, dt = flight_like_samples(n, seed)
+    acc[:waiting] = 0.0
+    for k, kind in events:
+        g, a, d = EVENTS[kind]
+        if g is not None:
+            gyr[k % n] = g
+        if a is not None:
+            acc[k % n] = a
+        if d is not None:
+            dt[k % n] = d
+    mag = np.full((n, 3), np.nan)
+    mag[::3] = np.random.default_rng(seed).normal(0.0, 30.0, (len(mag[::3]), 3)) + [20.0, 0.0, 40.0]
+    mag[n // 2] = 0.0
+    return gyr, acc, dt, mag
+
+
+def stepped(est, gyr, acc, dt, mag):
+    rows = [est.step(g, a, d, None if math.isnan(m[0]) else m) for g, a, d, m in zip(gyr.tolist(), acc.tolist(), dt.tolist(), mag.tolist())]
+    return np.array([q for q, _ in rows]), np.array([d for _, d in rows])
+
+
+def assert_same(q, diag, q_ref, table_ref, fields):
+    np.testing.assert_array_equal(q, q_ref)
+    np.testing.assert_array_equal(np.column_stack([diag[f] for f in fields]), table_ref)
+
+
+GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    events=st.lists(st.tuples(st.integers(0, 10_000), st.sampled_from(sorted(EVENTS))), max_size=30),
+    waiting=st.integers(0, 5),
+    gate=st.sampled_from(GATES),
+    start=st.sampled_from([None, (0.9, 0.1, -0.3, 0.2)]),
+)
+@pytest.mark.parametrize("name", COMPILED)
+def test_run_equals_step_and_the_interpreted_source(name, seed, events, waiting, gate, start):
+    """Compiled run = compiled step = the kernel's Python source interpreted (dtype=np.float64), bit for
+    bit (the compiled code is what the source says, a stale cache included)."""
+    gyr, acc, dt, mag = samples(300, seed, events, waiting)
+    cls = ESTIMATORS[name]
+    batch, stepper, interpreted = (cls(create(name, gate).settings, dtype=t) for t in (None, None, np.float64))
+    for est in (batch, stepper, interpreted):
+        est.reset(start)
+    q, diag = batch.run(gyr, acc, dt, mag=mag)
+    q_step, table_step = stepped(stepper, gyr, acc, dt, mag)
+    fields = cls.Diagnostics._fields
+    assert_same(q, diag, q_step, table_step, fields)
+    q_py, diag_py = interpreted.run(gyr, acc, dt, mag=mag)
+    assert_same(q_py, diag_py, q_step, table_step, fields)
+    assert np.all(np.isfinite(q)) and np.allclose(np.linalg.norm(q, axis=1), 1.0)
+    assert all(np.all(np.isfinite(diag[f])) for f in fields)
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_run_continues_from_the_current_state(name):
+    gyr, acc, dt, mag = samples(600, 3, [(100, "gap"), (200, "acc nan")], 2)
+    whole, parts = create(name), create(name)
+    q, diag = whole.run(gyr, acc, dt, mag=mag)
+    q1, d1 = parts.run(gyr[:250], acc[:250], dt[:250], mag=mag[:250])
+    parts.step(gyr[250], acc[250], dt[250])  # sample 250 has no reading (mag on every third sample)
+    q2, d2 = parts.run(gyr[251:], acc[251:], dt[251:], mag=mag[251:])
+    np.testing.assert_array_equal(q[:250], q1)
+    np.testing.assert_array_equal(q[251:], q2)
+    np.testing.assert_array_equal(diag["status"][251:], d2["status"])
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_run_accepts_read_only_and_strided_arrays_and_checks_lengths(name):
+    gyr, acc, dt, mag = samples(200, 4, [], 0)
+    data = np.hstack([gyr, acc])
+    data.flags.writeable = False
+    q, _ = create(name).run(data[:, :3], data[:, 3:], 0.01, mag=mag)
+    q_ref, _ = create(name).run(gyr.copy(), acc.copy(), np.full(200, 0.01), mag=mag)
+    np.testing.assert_array_equal(q, q_ref)
+    with pytest.raises(ValueError, match="acc_g"):
+        create(name).run(gyr, acc[:-1], dt)
+    with pytest.raises(ValueError, match="mag"):
+        create(name).run(gyr, acc, dt, mag=mag[:-1])
+    with pytest.raises(ValueError, match="gps"):
+        create(name).run(gyr, acc, dt, gps=np.zeros((3, 4)))
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_step_takes_ints_and_float32_and_returns_floats(name):
+    a, b = create(name), create(name)
+    q, diag = a.step((0, 0, 1), (0, 0, -1), 0.01)
+    q_ref, diag_ref = b.step((0.0, 0.0, 1.0), (0.0, 0.0, -1.0), 0.01)
+    assert q == q_ref and diag == diag_ref
+    q, diag = a.step(np.float32([0.1, 0.2, 0.3]), np.float32([0.0, 0.1, -1.0]), np.float32(0.01))
+    assert all(type(v) is float for v in q) and type(diag.status) is int
+
+
+def test_a_cache_older_than_a_shared_source_is_dropped_and_a_newer_one_kept(tmp_path, monkeypatch):
+    """numba checks a cache against the function's own file only; drop_stale_cache covers the shared
+    sources compiled into every kernel (base.py, tilt.py, compass.py): here a one-line kernel of its own."""
+    (tmp_path / "tiny_kernel.py").write_text("from numba import njit\n\n\n@njit(cache=True)\ndef twice(x):\n    return 2.0 * x\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    kernel = importlib.import_module("tiny_kernel").twice
+    assert kernel(1.5) == 3.0  # compiled, cache written
+    indexes = lambda: list(Path(kernel.stats.cache_path).glob("tiny_kernel.twice-*.nbi"))  # noqa: E731
+    shared = tmp_path / "shared.py"
+    shared.write_text("")
+    [index] = indexes()
+    os.utime(shared, (time.time() - 100, time.time() - 100))
+    drop_stale_cache(kernel, (shared,))
+    assert indexes() == [index]  # the cache is newer than the shared source: kept
+    os.utime(shared, (time.time() + 100, time.time() + 100))
+    drop_stale_cache(kernel, (shared,))
+    assert indexes() == []  # the shared source was edited after: numba compiles anew
