@@ -30,12 +30,14 @@ def run(port: str | None, baud: int | None, recording: str | None) -> int:
     app.setOrganizationName(ORGANIZATION)
     app.setApplicationName(APPLICATION)
     pg.setConfigOptions(antialias=False)  # antialiased lines cost several times more per frame
+    splash = prepare_estimators(app)
     window = MainWindow(QtCore.QSettings())
     # Ctrl-C or a kill closes the window as its close button does: the session stops, the recording
     # is closed and the settings saved. (Python runs the handler at the redraw timer's next tick.)
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: window.close())
     window.show()
+    splash.finish(window)
     if recording:
         window.open_recording(recording)
     elif port:
@@ -43,3 +45,24 @@ def run(port: str | None, baud: int | None, recording: str | None) -> int:
     else:
         window.start_demo("no port given: streaming from the simulated bridge")
     return app.exec()
+
+
+def prepare_estimators(app):
+    """The live session's estimators made once before the window opens, under a splash screen that
+    says so. The first start on a machine compiles their numba kernels (some seconds; later starts load
+    them from numba's cache in well under one), which would otherwise freeze the window without a word."""
+    from PySide6 import QtCore, QtGui, QtWidgets
+
+    from groundstation.estimation import create
+    from groundstation.session.factory import LIVE_FILTERS
+
+    blank = QtGui.QPixmap(560, 90)
+    blank.fill(QtGui.QColor("#263238"))
+    splash = QtWidgets.QSplashScreen(blank)
+    splash.show()
+    for name in LIVE_FILTERS:
+        splash.showMessage(f"groundstation: preparing the {name} estimator…\n(compiled on the first start on this "
+                           "machine, then loaded from a cache)", QtCore.Qt.AlignCenter, QtGui.QColor("white"))
+        app.processEvents()
+        create(name)
+    return splash
