@@ -105,7 +105,8 @@ def tour() -> None:
     shoot(window, "replay.png")
 
     stop = threading.Event()
-    window.connect_serial(bridge_on_a_pty(stop), 115200)
+    window.bar.port_box.setEditText(bridge_on_a_pty(stop))  # typed into the Source box
+    window.connect_serial(window.bar.source)
     wait(6)
     stop.set()
     wait(3)
