@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import math
 import sys
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
 import numpy as np
 
@@ -20,7 +18,8 @@ from groundstation.estimation import create
 from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
-BROAD = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets" / "broad"
+from broad import per_trial
+
 VARIANTS = {
     "ahf2 (defaults)": ("ahf2", {}),
     "λ fixed at λ_max (no adaptive step)": ("ahf2", {"adaptive": False}),
@@ -53,12 +52,9 @@ def trial_rows(path):
 
 
 def main() -> int:
-    paths = sorted(BROAD.glob("*.csv*"))
-    if not paths:
-        print(f"no BROAD trials at {BROAD}")
+    rows = per_trial(trial_rows)
+    if rows is None:
         return 1
-    with ProcessPoolExecutor(max_workers=2) as pool:
-        rows = dict(pool.map(trial_rows, paths))
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}\n")
     print("| variant | " + " | ".join(rows) + " | **mean** |")
     print("|---|" + "---:|" * (len(rows) + 1))

@@ -22,8 +22,6 @@ import argparse
 import statistics
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
 import imufusion
 import numpy as np
@@ -36,7 +34,8 @@ from groundstation.estimation.base import Estimator
 from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
-BROAD = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets" / "broad"
+from broad import per_trial
+
 ROUNDS, CALLS = 7, 20_000
 
 
@@ -163,12 +162,9 @@ def broad_trial(path):
 
 
 def bench_broad():
-    paths = sorted(BROAD.glob("*.csv*"))
-    if not paths:
-        print(f"\n(no BROAD trials at {BROAD}; skipped)")
+    rows = per_trial(broad_trial)
+    if rows is None:
         return
-    with ProcessPoolExecutor(max_workers=2) as pool:
-        rows = dict(pool.map(broad_trial, paths))
     print("\n## BROAD inclination RMSE (deg), moving samples, every estimator at its defaults\n")
     print("| trial | " + " | ".join(COLUMNS) + " |")
     print("|---|" + "---:|" * len(COLUMNS))

@@ -11,8 +11,6 @@ them ``q_true ⊗ q_M``. A mounting-independent filter has a spread at rounding 
 from __future__ import annotations
 
 import sys
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -23,7 +21,8 @@ from groundstation.estimation import create
 from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
-BROAD = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets" / "broad"
+from broad import per_trial
+
 NAMES = ["ahf", "ahf2", "hf", "ecf", "cf1", "kf", "ekf", "vqf"]
 SEGMENT_S = 30.0
 ROTATIONS = Rotation.random(10, random_state=13)
@@ -50,12 +49,9 @@ def trial_rows(path):
 
 
 def main() -> int:
-    paths = sorted(BROAD.glob("*.csv*"))
-    if not paths:
-        print(f"no BROAD trials at {BROAD}")
+    rows = per_trial(trial_rows)
+    if rows is None:
         return 1
-    with ProcessPoolExecutor(max_workers=2) as pool:
-        rows = dict(pool.map(trial_rows, paths))
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}; first {SEGMENT_S:.0f} s of each trial\n")
     print("RMSE as recorded / spread (max - min) over 10 random rotations, deg\n")
     print("| trial | " + " | ".join(NAMES) + " |")
