@@ -23,12 +23,14 @@ from groundstation.errors import UserError
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
 from groundstation.session.catalogue import Catalogue, message_table, session_catalogue
-from groundstation.session.data import SessionData
 from groundstation.session.pipeline import DEFAULT_FILTERS
+from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns
 
 MAX_GAP_S = 1.0
 READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
 PROGRESS_STEPS = 1000
+READINGS = ("mag", "baro", "gps")  # the log's slower sensors: each a table of its own
+AUTOPILOT_PROTOCOL = "mavlink"  # what the window treats a flight log's aircraft as speaking: no commands of ours
 FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
 
 
@@ -42,11 +44,11 @@ def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
 
 def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionData:
     """``share(fraction)``: told after each estimator's run, from ``READ_SHARE`` to 1."""
-    metadata = describe(log)
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
-        return SessionData(metadata=metadata, time_s=(t_us - t_us[0]) / 1e6, estimates={}, diagnostics={}, sensors={},
-                           onboard=log.onboard.stack(Q_COLUMNS), true_q=interpolated(t_us, log.truth), true_frame="NED")  # fmt: skip
+        tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0])}
+        return build_product(describe(log), log_catalogue(log, {}), tables, (), protocol=AUTOPILOT_PROTOCOL,
+                             true_q=interpolated(t_us, log.truth), true_frame="NED")
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
     mag = on_rows(t_us, log.mag, MAG_COLUMNS)
@@ -62,43 +64,47 @@ def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionDat
                 share(READ_SHARE + (1.0 - READ_SHARE) * i / len(names))
     except ValueError as error:
         raise UserError(str(error)) from None
-    sensors = {name: log.imu.columns[name] for name in IMU_COLUMNS if name.startswith("acc")}
-    sensors.update({f"gyr_{a}_dps": np.degrees(gyr[:, i]) for i, a in enumerate("xyz")})
-    sensors.update({name: mag[:, i] for i, name in enumerate(MAG_COLUMNS)} if log.mag is not None else {})
-    for prefix, stream in (("baro", log.baro), ("gps", log.gps)):
-        if stream is not None:
-            values = on_rows(t_us, stream, list(stream.columns))
-            sensors.update({f"{prefix}_{name}": values[:, i] for i, name in enumerate(stream.columns)})
     settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
-    diagnostics = {name: d for name, (_, d) in runs.items()}
-    tables, catalogue = catalogued(log, {name: q for name, (q, _) in runs.items()}, diagnostics)
-    return SessionData(
-        metadata=metadata, time_s=(t_us - t_us[0]) / 1e6,
-        estimates={name: q for name, (q, _) in runs.items()}, diagnostics=diagnostics,
-        sensors=sensors, onboard=interpolated(t_us, log.onboard), true_q=interpolated(t_us, log.truth), true_frame="NED",
-        settings_at_start=settings, settings_at_end=settings, tables=tables, catalogue=catalogue,
-    )  # fmt: skip
-
-
-def catalogued(log: FlightLog, estimates: dict, diagnostics: dict) -> tuple[dict, Catalogue]:
-    """The session's ``imu`` table (samples and estimates) and one table per other logged message type
-    (a tlog's VFR_HUD, SYS_STATUS, ...: "plot any channel"), with their catalogue; columns named
-    ``<field>_<unit>`` from pymavlink's units, on session time."""
-    t_us = log.imu.time_us
-    imu_info = session_catalogue({name: tuple(d) for name, d in diagnostics.items()})["imu"]
     imu = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
-    for name, q in estimates.items():
-        imu.update({f"{name}_q{c}": q[:, i] for i, c in enumerate("wxyz")})
-        imu.update({f"{name}_{d}": values for d, values in diagnostics[name].items()})
-    nan = np.full(len(t_us), np.nan)
-    tables = {"imu": {c: imu.get(c, nan) for c in imu_info.column_names}}
-    infos = {"imu": imu_info}
+    for name, (q, diagnostics) in runs.items():
+        imu.update(estimate_columns(name, q, diagnostics))
+    tables = {"imu": imu, **reading_tables(log, t_us[0])}
+    if log.onboard is not None:
+        tables[ONBOARD] = onboard_columns(t_us, t_us[0], interpolated(t_us, log.onboard))
+    catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()})
+    return build_product(describe(log), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
+                         true_q=interpolated(t_us, log.truth), true_frame="NED",
+                         settings_at_start=settings, settings_at_end=settings)
+
+
+def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np.ndarray]:
+    """The ``onboard`` table of rows at ``t_us`` (λ and flags: a log has none)."""
+    return {"time_s": (t_us - t0_us) / 1e6, "device_time_us": t_us.astype(float),
+            **{c: q[:, i] for i, c in enumerate(Q_COLUMNS)}}
+
+
+def reading_tables(log: FlightLog, t0_us: int) -> dict[str, dict[str, np.ndarray]]:
+    """The slower sensors and every other logged message type (a tlog's VFR_HUD, SYS_STATUS, ...: "plot
+    any channel"), each a table on its own rows in session time."""
+    streams = {**{name: getattr(log, name) for name in READINGS}, **log.tables}
+    return {info.name: {"time_s": (streams[key].time_us - t0_us) / 1e6, **dict(zip(info.column_names[1:], streams[key].columns.values()))}
+            for key, info in _stream_infos(log).items()}
+
+
+def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]]) -> Catalogue:
+    """The log's tables: ``imu`` with the estimators' columns, ``onboard``, the slower sensors and one per
+    other message type, columns named ``<field>_<unit>`` from the log's units."""
+    tables = session_catalogue(diagnostics)
+    return Catalogue({"imu": tables["imu"], ONBOARD: tables[ONBOARD], **{i.name: i for i in _stream_infos(log).values()}})
+
+
+def _stream_infos(log: FlightLog) -> dict:
+    """What each stream besides the IMU and the attitude is described as, by its key in the log."""
+    infos = {name: message_table(name, f"{name} ({getattr(log, name).source})", list(getattr(log, name).columns), {})
+             for name in READINGS if getattr(log, name) is not None}
     for name, stream in log.tables.items():
-        info = message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {}))
-        infos[info.name] = info
-        columns = zip(info.column_names[1:], stream.columns.values())
-        tables[info.name] = {"time_s": (stream.time_us - t_us[0]) / 1e6, **dict(columns)}
-    return tables, Catalogue(infos)
+        infos[name] = message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {}))
+    return infos
 
 
 def describe(log: FlightLog) -> dict:

@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundstation.autopilot.agreement import agreement
+    from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.commands.progress import ProgressBar
     from groundstation.session.data import load_session
 
@@ -42,10 +42,10 @@ def run(args: argparse.Namespace) -> int:
         data = load_session(args.file, names, overrides, bar)
     finally:
         bar.done()
-    if data.true_q is None and data.onboard is not None:
-        if not data.estimates:
+    if data.true_q is None and data.has_onboard():
+        if not data.estimated:
             raise UserError(f"{args.file}: no IMU samples, so no host estimator ran; only the onboard estimate is there")
-        return print_agreement(agreement(data.estimates, data.onboard), data.metadata.get("imu_warning"), args.json)
+        return print_agreement(onboard_agreement(data), data.metadata.get("imu_warning"), args.json)
     results = data.evaluate()
     if args.json:
         print(json.dumps(results, indent=2))

@@ -36,7 +36,7 @@ def summary_line(session: LiveSession) -> str:
     attitude = ""
     if p.filters:  # a log with the aircraft's estimate only has none of its own
         name = p.filters[0]
-        _, pitch, roll = np.degrees(quaternion.to_euler_zyx(np.array([row[f"{name}_q{c}"] for c in "wxyz"])))
+        _, pitch, roll = quaternion.euler_deg(np.array([row[f"{name}_q{c}"] for c in "wxyz"]))
         attitude = f"  {name} pitch {pitch:+6.1f}° roll {roll:+6.1f}°"
     if stats is None:
         return f"t {row['time_s']:8.2f} s{attitude}"

@@ -27,8 +27,6 @@ from groundstation.session.data import DATASET_SUFFIXES, LinkSummary, SessionDat
 from groundstation.session.link import LATENCY_WINDOW, PER_SECOND_COLUMNS, clock_figures
 from groundstation.sources.replay import check_speed
 
-ONBOARD_COLUMNS = ("time_s", "qw", "qx", "qy", "qz", "lambda")  # what the window plots of the aircraft's estimate
-SENSOR_COLUMNS = tuple(f"{s}_{a}_{u}" for s, u in (("acc", "g"), ("gyr", "rad_s")) for a in "xyz")
 TOTALS = ("frames", "crc_errors", "frames_lost", "bytes_skipped")  # the decoder's counters a replay shows
 PLAY_INTERVAL_S = 0.02  # how often a session started on its own (the CLI's) moves its clock
 
@@ -154,22 +152,13 @@ class Revealed:
     ``decoder`` are None for a file with no link in it (a flight log, a dataset)."""
 
     def __init__(self, data: SessionData):
-        self.filters = tuple(data.estimates)
-        self.catalogue = data.catalogue if data.catalogue is not None else Catalogue({})  # no table of its own
+        self.filters = data.filters
+        self.catalogue = data.catalogue
         self.config = data.config
         self.t0_host_ns = None  # every event carries its session time
-        # What the link spoke: a recording says; a flight log is an autopilot's
-        self.protocol = data.metadata.get("protocol", "mavlink" if "autopilot" in data.metadata else "gs")
+        self.protocol = data.protocol
         self._settings = data.settings_at_end
-        tables = {name: RevealedTable(columns) for name, columns in data.tables.items()}
-        nan = np.full(len(data.time_s), np.nan)
-        if "imu" not in tables:  # the aircraft's estimate only: its rows give the plots their time
-            tables["imu"] = RevealedTable({"time_s": data.time_s, **dict.fromkeys(SENSOR_COLUMNS, nan)})
-        if "onboard" not in tables:  # a flight log's or a dataset's: on the IMU rows
-            q = data.onboard if data.onboard is not None else np.full((len(data.time_s), 4), np.nan)
-            tables["onboard"] = RevealedTable({"time_s": data.time_s, **{f"q{c}": q[:, i] for i, c in enumerate("wxyz")},
-                                               "lambda": nan})
-        self.tables = tables
+        self.tables = tables = {name: RevealedTable(columns) for name, columns in data.tables.items()}
         self.imu, self.onboard = tables["imu"], tables["onboard"]
         self.link = RevealedLink(data.link, self.imu, [self.imu, self.onboard]) if data.link is not None else None
         self.decoder = SimpleNamespace(stats=self.link.stats) if self.link is not None else None

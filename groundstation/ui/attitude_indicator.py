@@ -105,7 +105,7 @@ class AttitudePanel(QtWidgets.QGroupBox):
         if not len(last):
             return
         q = last[0][[table.columns.index(f"{prefix}{c}") for c in "wxyz"]]
-        self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
+        self.show_attitude(*quaternion.euler_deg(q))
         if body:
             self.body_view.set_attitude(q)
 

@@ -121,7 +121,7 @@ def test_replay_command_reads_flight_logs(name):
     done = gs("replay", path, "--speed", "64")
     assert done.returncode == 0, done.stderr
     last = done.stdout.splitlines()[-1]
-    assert last == (f"{len(data)} IMU samples" if data.estimates else f"{len(data)} onboard attitude samples, no IMU")
+    assert last == (f"{len(data)} IMU samples" if data.sample_table == "imu" else f"{len(data)} onboard attitude samples, no IMU")
 
 
 def test_a_flight_logs_progress_moves_through_its_estimators():

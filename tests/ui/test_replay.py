@@ -61,7 +61,7 @@ def check_plotted_up_to(window, qtbot, data, name: str, t_s: float) -> None:
     curve = pitch_curve(window, name)
     qtbot.waitUntil(lambda: points(curve) == rows.sum(), timeout=3000)
     np.testing.assert_array_equal(curve.xData, data.time_s[rows])
-    expected = pitch_deg(data.estimates[name][rows] if name != "onboard" else data.onboard[rows])
+    expected = pitch_deg(data.quaternion(name)[rows])
     np.testing.assert_allclose(curve.yData, expected, atol=1e-4)  # the plot keeps float32
 
 
@@ -128,7 +128,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     window.seek(middle / 3)  # back
     check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], middle / 3)
     last = np.flatnonzero(data.time_s <= middle / 3)[-1]  # the horizon shows the newest estimate shown
-    newest = f"{pitch_deg(data.estimates[LIVE_FILTERS[0]][last:last + 1])[0]:+7.1f}°"
+    newest = f"{pitch_deg(data.quaternion(LIVE_FILTERS[0])[last:last + 1])[0]:+7.1f}°"
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=3000)
     assert len(loads) == 1  # seeking computed nothing
 
@@ -140,7 +140,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     window.live_view.set_visible("CF1", True)
     check_plotted_up_to(window, qtbot, session.data, "cf1", middle / 3)
     alone = load_session(path, ("cf1",))  # the same estimator computed by itself
-    np.testing.assert_array_equal(session.data.estimates["cf1"], alone.estimates["cf1"])
+    np.testing.assert_array_equal(session.data.quaternion("cf1"), alone.quaternion("cf1"))
 
 
 def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
