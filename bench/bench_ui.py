@@ -38,12 +38,13 @@ import numpy as np  # noqa: E402
 from PySide6 import QtCore, QtTest, QtWidgets  # noqa: E402
 
 from groundstation.recording import open_recording  # noqa: E402
-from groundstation.session.pipeline import Pipeline  # noqa: E402
+from groundstation.session.view import Pipeline  # noqa: E402
 from groundstation.session.table import Table  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
 from groundstation.session.factory import LIVE_FILTERS, replay_session  # noqa: E402
 from groundstation.sources import ReplaySource  # noqa: E402
 from groundstation.ui.live_view import attitude_plots  # noqa: E402
+from groundstation.session.factory import Sessions
 from groundstation.ui.main_window import MainWindow  # noqa: E402
 from groundstation.ui.plots import StackedPlots  # noqa: E402
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities  # noqa: E402
@@ -157,7 +158,7 @@ def ui_thread_cpu_s() -> float:
 def live_run(start, seconds: float) -> tuple[float, float, float, list[float]]:
     with tempfile.TemporaryDirectory() as folder:
         settings = QtCore.QSettings(str(Path(folder) / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-        window = MainWindow(settings, recordings_dir=Path(folder))
+        window = MainWindow(settings, Sessions(), recordings_dir=Path(folder))
         window.resize(1280, 800)
         window.show()
         start(window)
@@ -225,7 +226,7 @@ def memory_child(kind: str, path: str) -> None:
     window = None
     if kind == "window":
         settings = QtCore.QSettings(str(Path(path).with_suffix(".ini")), QtCore.QSettings.Format.IniFormat)
-        window = MainWindow(settings)
+        window = MainWindow(settings, Sessions())
         window.resize(1280, 800)
         window.show()
         window.live_view.window_box.setCurrentText("whole session")
@@ -240,7 +241,7 @@ def memory_child(kind: str, path: str) -> None:
         wait(0.5)
     wait(0.5)
     print(json.dumps({
-        "growth_mb": rss_mb() - before, "tables_mb": table_mb(session.pipeline), "samples": len(session.pipeline.imu),
+        "growth_mb": rss_mb() - before, "tables_mb": table_mb(session.view), "samples": len(session.view.imu),
         "seconds": time.monotonic() - t0,
         "buffers_mb": sum(s.nbytes() for s in window.live_view.series.values()) / 1e6 if window else 0.0,
     }))

@@ -15,7 +15,7 @@ import numpy as np
 
 from groundstation import quaternion
 from groundstation.errors import UserError
-from groundstation.session.data import SessionData
+from groundstation.session.product import SessionData
 
 
 def check_row_options(t_from: float | None, t_to: float | None, rate_hz: float | None) -> None:

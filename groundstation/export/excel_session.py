@@ -14,7 +14,7 @@ from openpyxl.styles import Font
 from groundstation import mounting
 from groundstation.errors import UserError
 from groundstation.export.excel_columns import DATE_TIME, start_time
-from groundstation.session.data import SessionData
+from groundstation.session.product import SessionData
 
 WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70, "E": 24}
 LINK_COUNTS = (

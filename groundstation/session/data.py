@@ -1,5 +1,6 @@
-"""A whole session as columns, whatever it came from: a recording of the link, an imported dataset
-CSV (a recording holding sample columns), or a dataset CSV read directly.
+"""Opening a file whole: a recording of the link, an imported dataset CSV (a recording holding sample
+columns), a dataset CSV read directly, or a flight log, each computed into a ``SessionData``
+(``session.product``) by the maker that fits it; ``Loading`` does it in a worker thread.
 
 Exports and evaluation read ``SessionData``; they never know the source.
 """
@@ -7,6 +8,7 @@ Exports and evaluation read ``SessionData``; they never know the source.
 from __future__ import annotations
 
 import dataclasses
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +17,7 @@ from groundstation import mounting, quaternion
 from groundstation.autopilot import LOG_SUFFIXES
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, read_csv, trial_from_columns
 from groundstation.errors import UserError
-from groundstation.estimation import create
+from groundstation.estimation import GPS_AIDED, create
 from groundstation.estimation.evaluation import run_on_trial
 from groundstation.recording import Recording, open_recording
 from groundstation.session.batch import BatchSession, batch_replay
@@ -126,3 +128,59 @@ def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], devic
     data.true_frame = "ENU"
     if "moving" in samples:
         data.moving = aligned(device_us, truth_us, samples["moving"][:, None])[:, 0] == 1.0
+
+
+def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:
+    """The estimators a file opens with: a recording's own (None); for files that record none (flight
+    logs, dataset CSVs) the app's set without the GPS-aided filters, which without GPS are slow tilt
+    filters (as ``evaluate`` leaves them out): one check box adds them."""
+    name = Path(path).name.lower()
+    if name.endswith(LOG_SUFFIXES) or name.endswith(DATASET_SUFFIXES):
+        return tuple(n for n in app_filters if n not in GPS_AIDED)
+    return None
+
+
+class Loading:
+    """``load_session(path, filters, forced)`` in a worker thread. The window polls ``fraction`` and
+    ``done``; then ``data`` is the computed session, or ``error`` says, for the user, why there is none.
+    ``cancel`` stops it at its next progress report (its result is dropped in any case)."""
+
+    def __init__(self, path, filters=None, forced=None):
+        self.path = Path(path)
+        self.setup = (filters, forced)
+        self.fraction = 0.0
+        self.done = False
+        self.data: SessionData | None = None
+        self.error: str | None = None
+        self._cancel = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="groundstation-load", daemon=True)
+        self._thread.start()
+
+    def _progress(self, done: int, total: int) -> None:
+        if self._cancel.is_set():
+            raise _Cancelled
+        self.fraction = done / total if total else 0.0
+
+    def _run(self) -> None:
+        try:
+            self.data = load_session(self.path, *self.setup, progress=self._progress)
+            self.fraction = 1.0
+        except _Cancelled:
+            self.error = "cancelled"
+        except UserError as error:
+            self.error = str(error)
+        except OSError as error:
+            self.error = f"{self.path}: cannot be read ({error.strerror or error})"
+        except Exception as error:  # noqa: BLE001 — a reader's bug must reach the window as a message, not a traceback
+            self.error = f"{self.path}: cannot be opened ({type(error).__name__}: {error})"
+        self.done = True
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    def wait(self, timeout_s: float | None = None) -> None:
+        self._thread.join(timeout_s)
+
+
+class _Cancelled(Exception):
+    """Raised from the progress callback to stop a load nobody waits for any more."""

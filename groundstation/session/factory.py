@@ -12,18 +12,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from groundstation.session.data import Loading, estimators_for, load_session
+from groundstation.session.estimators import LIVE_FILTERS
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
 from groundstation.sources import ReplaySource, SourceError, open_source
 
-# The comparison estimators run on every live session (and so on its recording's replays), so showing one is a legend click or
-# a check box, not a restart: the IMU filters (HF, ECF), those with the magnetometer (HF+mag, ECF+mag,
-# MCF; a few µs per sample each) and the GPS-aided unscented filters (UKF, SSSRUKF; a few hundred µs
-# per sample each, in the reader thread). Hidden curves cost the UI nothing per frame.
-# The first is the one shown: AHF2, the best on the BROAD dev set (bench/bench_estimators.out.md); VQF
-# and the paper's AHF follow, one "show" click away.
-LIVE_FILTERS = ("ahf2", "vqf", "ahf", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
 DEMO_SPEC = "sim:"
 
 
@@ -49,3 +44,17 @@ def replay_session(source: ReplaySource) -> LiveSession:
     """A recording through the live path with its recorded estimators and settings (every one of
     ``LIVE_FILTERS`` for the app's recordings), as the live session computed it."""
     return LiveSession(source, pipeline_for(source.recording), record=False)
+
+
+class Sessions:
+    """How the window opens sessions, handed to it (``ui.main_window.MainWindow``) so that the window
+    imports no maker of sessions: a source live (``open``), a file computed whole in a worker
+    (``load``, then ``reveal.RevealSession``), the estimators a file opens with, and the loader an
+    export runs."""
+
+    demo_spec = DEMO_SPEC
+    live_filters = LIVE_FILTERS
+    open = staticmethod(open_session)
+    load = Loading
+    estimators_for = staticmethod(estimators_for)
+    load_session = staticmethod(load_session)

@@ -32,11 +32,10 @@ import math
 from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
-from groundstation.autopilot.streams import AUTOPILOTS, StreamRequester, slow_imu_note
+from groundstation.autopilot.streams import AUTOPILOTS, REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.session.catalogue import Catalogue, message_table
 from groundstation.session.table import Table
 
-REQUESTED_RATE_HZ = 50.0
 SLOW_WARNING_S = 5.0  # the requester's retry interval: one retry's chance before the warning
 KEPT_TABLES = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the project's tables a MAVLink session fills
 _NAN = math.nan

@@ -9,13 +9,13 @@ from groundstation import quaternion
 def test_plotted_pitch_is_the_pipelines_ahf_pitch(window, qtbot):
     window.start_demo()
     session = window.session
-    qtbot.waitUntil(lambda: len(session.pipeline.imu) > 150 and window.live_view.frames_drawn > 10, timeout=8000)
+    qtbot.waitUntil(lambda: len(session.view.imu) > 150 and window.live_view.frames_drawn > 10, timeout=8000)
     ahf = next(c for s, c in window.live_view.attitude.curves if s.quantity == "ahf_pitch_deg")
     onboard = next(c for s, c in window.live_view.attitude.curves if s.quantity == "onboard_pitch_deg")
     t, pitch = ahf.xData[-1], ahf.yData[-1]
-    imu = session.pipeline.imu.array()
-    row = imu[np.flatnonzero(imu[:, session.pipeline.imu.columns.index("time_s")] == t)[0]]
-    q = [row[session.pipeline.imu.columns.index(f"ahf_q{c}")] for c in "wxyz"]
+    imu = session.view.imu.array()
+    row = imu[np.flatnonzero(imu[:, session.view.imu.columns.index("time_s")] == t)[0]]
+    q = [row[session.view.imu.columns.index(f"ahf_q{c}")] for c in "wxyz"]
     assert pitch == np.float32(np.degrees(quaternion.to_euler_zyx(np.array(q))[1]))
     assert f"AHF {pitch:+.2f}" in window.live_view.attitude.read_at(t)  # the crosshair's readout
     assert len(window.live_view.attitude.drawn(onboard)[0]) > 100  # the aircraft's own estimate is drawn too

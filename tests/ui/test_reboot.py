@@ -24,7 +24,7 @@ def drawn_segments(curve):
 def test_a_device_reboot_breaks_every_curve_and_the_link_panel_shows_no_restart_figures(window, qtbot):
     window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     session = window.session
-    events = session.pipeline.events
+    events = session.view.events
     qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=10000)
     reset = next(e for e in events if e["kind"] == "device_reset")
     before_s, after_s = reset["session_time_before_s"], reset["session_time_s"]

@@ -70,7 +70,7 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     assert len(loads) == 1 and window.banner.isHidden()
     session, bar = window.session, window.replay_bar
     data = load_session(recording)  # the export's and evaluate's session, computed apart
-    assert session.pipeline.filters == tuple(data.estimates) == ("ahf",)
+    assert session.view.filters == tuple(data.estimates) == ("ahf",)
     window.live_view.window_box.setCurrentText("whole session")
     qtbot.waitUntil(lambda: session.source.position_s > 0.5, timeout=5000)
 
@@ -79,9 +79,9 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     paused_at = session.source.position_s
     qtbot.wait(200)
     assert session.source.position_s == paused_at
-    shown = len(session.pipeline.imu)
+    shown = len(session.view.imu)
     bar.step_button.click()  # one more sample
-    assert len(session.pipeline.imu) == shown + 1 and session.source.position_s == data.time_s[shown]
+    assert len(session.view.imu) == shown + 1 and session.source.position_s == data.time_s[shown]
 
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(4.0))
     assert session.source.speed == 4.0
@@ -91,15 +91,15 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     check_plotted_up_to(window, qtbot, data, "ahf", 7.5)
     assert window.session is session and window.loading is None and len(loads) == 1
     assert session.source.paused and session.source.speed == 4.0  # kept across the seeks
-    shown = session.pipeline.imu.to_dict()
+    shown = session.view.imu.to_dict()
     for column, values in data.tables["imu"].items():  # every column, bit for bit, up to the clock
         np.testing.assert_array_equal(shown[column], values[data.time_s <= 7.5], err_msg=column)
     times = [e.get("session_time_s", e["t_s"]) for e in data.events]
-    assert [e["session_time_s"] for e in session.pipeline.events] == sorted(t for t in times if t <= 7.5)
+    assert [e["session_time_s"] for e in session.view.events] == sorted(t for t in times if t <= 7.5)
 
     bar.play_button.click()
     qtbot.waitUntil(lambda: session.source.position_s > 8.5, timeout=3000)  # 4x from 7.5 s
-    assert session.pipeline.link.stats.frames > 0 and window.link_panel.values["frames/s"].text() not in ("—", "")
+    assert session.view.counters()["frames"] > 0 and window.link_panel.values["frames/s"].text() not in ("—", "")
 
 
 @pytest.mark.parametrize("name", LOGS)
@@ -111,7 +111,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     assert window.banner.isHidden() and not window.loading_row.isVisible()
     session, bar = window.session, window.replay_bar
     filters = tuple(n for n in LIVE_FILTERS if n not in ("ukf", "sssrukf"))
-    assert loads == [(filters, None)] and session.pipeline.filters == filters
+    assert loads == [(filters, None)] and session.view.filters == filters
     data = session.data
     assert len(data) > 100 and data.link is None
     assert not window.uplink_panel.isEnabled() and not window.estimator_panel.send_button.isEnabled()  # no uplink
@@ -133,7 +133,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     assert len(loads) == 1  # seeking computed nothing
 
     window.estimator_panel.shown["cf1"].setChecked(True)  # a what-if: one more estimator
-    qtbot.waitUntil(lambda: window.loading is None and "cf1" in window.session.pipeline.filters, timeout=60000)
+    qtbot.waitUntil(lambda: window.loading is None and "cf1" in window.session.view.filters, timeout=60000)
     assert loads[-1][0] == (*filters, "cf1")
     session = window.session
     assert session.source.position_s == middle / 3 and session.source.paused  # the position kept
@@ -147,8 +147,8 @@ def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
     path = flightlog("arduplane_omnibusf4_ground_pilot_0004.bin")
     open_file(window, qtbot, path)
     session = window.session
-    assert session.pipeline.filters == () and session.data.onboard is not None
-    assert any("IMU" in e["message"] for e in session.pipeline.events if e["kind"] == "warning")  # said, at 0 s
+    assert session.view.filters == () and session.data.onboard is not None
+    assert any("IMU" in e["message"] for e in session.view.events if e["kind"] == "warning")  # said, at 0 s
     window.live_view.window_box.setCurrentText("whole session")
     window.replay_bar.play_button.click()
     window.seek(30.0)
@@ -209,7 +209,7 @@ def test_the_export_dialog_writes_the_estimators_a_flight_log_is_shown_with(wind
     qtbot.waitUntil(lambda: dialog.job.done, timeout=60000)
     assert dialog.job.error is None, dialog.job.error
     header = out.read_text().splitlines()[0].split(",")
-    for name in window.session.pipeline.filters:  # the window's estimators, not the CLI's default
+    for name in window.session.view.filters:  # the window's estimators, not the CLI's default
         assert f"{name}_pitch_deg" in header, name
 
 
@@ -239,7 +239,7 @@ def test_a_dataset_csv_plays_as_a_recording_does(window, qtbot, tmp_path):
     csv = tmp_path / "f.truth.csv.gz"  # the truth and sensor values in the dataset CSV layout
     open_file(window, qtbot, csv)
     data = window.session.data
-    assert window.banner.isHidden() and window.session.pipeline.filters[0] == LIVE_FILTERS[0] and data.true_q is not None
+    assert window.banner.isHidden() and window.session.view.filters[0] == LIVE_FILTERS[0] and data.true_q is not None
     window.live_view.window_box.setCurrentText("whole session")
     window.replay_bar.play_button.click()
     window.seek(6.0)
