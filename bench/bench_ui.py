@@ -38,7 +38,7 @@ import numpy as np  # noqa: E402
 from PySide6 import QtCore, QtTest, QtWidgets  # noqa: E402
 
 from groundstation.recording import open_recording  # noqa: E402
-from groundstation.session.view import Pipeline  # noqa: E402
+from groundstation.session.pipeline import Pipeline  # noqa: E402
 from groundstation.session.table import Table  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
 from groundstation.session.factory import LIVE_FILTERS, replay_session  # noqa: E402

@@ -29,7 +29,14 @@ from groundstation.session.product import ONBOARD, SessionData, build_product, e
 MAX_GAP_S = 1.0
 READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
 PROGRESS_STEPS = 1000
-READINGS = ("mag", "baro", "gps")  # the log's slower sensors: each a table of its own
+# The log's slower sensors in the tables a live session fills with the same readings (the spec's
+# MAG_RAW, BARO and GPS tables: one description, live and logged; a log has no compass heading column):
+# stream -> (table, {column: (the stream's column, factor)}).
+READINGS = {
+    "mag": ("mag_raw", {c: (c, 1.0) for c in MAG_COLUMNS}),
+    "baro": ("baro", {"pressure_Pa": ("pressure_hpa", 100.0), "temperature_degC": ("temperature_c", 1.0)}),
+    "gps": ("gps", {c: (c, 1.0) for c in GPS_COLUMNS}),
+}
 AUTOPILOT_PROTOCOL = "mavlink"  # what the window treats a flight log's aircraft as speaking: no commands of ours
 FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
 
@@ -86,25 +93,30 @@ def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np
 def reading_tables(log: FlightLog, t0_us: int) -> dict[str, dict[str, np.ndarray]]:
     """The slower sensors and every other logged message type (a tlog's VFR_HUD, SYS_STATUS, ...: "plot
     any channel"), each a table on its own rows in session time."""
-    streams = {**{name: getattr(log, name) for name in READINGS}, **log.tables}
-    return {info.name: {"time_s": (streams[key].time_us - t0_us) / 1e6, **dict(zip(info.column_names[1:], streams[key].columns.values()))}
-            for key, info in _stream_infos(log).items()}
+    out = {}
+    for key, (name, columns) in READINGS.items():
+        stream: Series | None = getattr(log, key)
+        if stream is not None:
+            out[name] = {"time_s": (stream.time_us - t0_us) / 1e6,
+                         **{c: stream.columns[source] * factor for c, (source, factor) in columns.items()}}
+    for info, stream in _message_tables(log):
+        out[info.name] = {"time_s": (stream.time_us - t0_us) / 1e6, **dict(zip(info.column_names[1:], stream.columns.values()))}
+    return out
 
 
 def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]]) -> Catalogue:
-    """The log's tables: ``imu`` with the estimators' columns, ``onboard``, the slower sensors and one per
-    other message type, columns named ``<field>_<unit>`` from the log's units."""
+    """The log's tables: ``imu`` with the estimators' columns, ``onboard`` and the slower sensors as the
+    live session describes them; one per other message type, columns named ``<field>_<unit>`` from the
+    log's units."""
     tables = session_catalogue(diagnostics)
-    return Catalogue({"imu": tables["imu"], ONBOARD: tables[ONBOARD], **{i.name: i for i in _stream_infos(log).values()}})
+    readings = [name for key, (name, _) in READINGS.items() if getattr(log, key) is not None]
+    return Catalogue({name: tables[name] for name in ("imu", ONBOARD, *readings)} | {i.name: i for i, _ in _message_tables(log)})
 
 
-def _stream_infos(log: FlightLog) -> dict:
-    """What each stream besides the IMU and the attitude is described as, by its key in the log."""
-    infos = {name: message_table(name, f"{name} ({getattr(log, name).source})", list(getattr(log, name).columns), {})
-             for name in READINGS if getattr(log, name) is not None}
-    for name, stream in log.tables.items():
-        infos[name] = message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {}))
-    return infos
+def _message_tables(log: FlightLog) -> list[tuple]:
+    """(``TableInfo``, ``Series``) of every other message type the log holds."""
+    return [(message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {})), stream)
+            for name, stream in log.tables.items()]
 
 
 def describe(log: FlightLog) -> dict:

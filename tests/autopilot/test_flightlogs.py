@@ -55,7 +55,7 @@ def test_px4_modern_log_attitude_starts_late():
     assert not have[: int(3.0 * 200)].any()  # README: vehicle_attitude only for the last 5.6 s
     assert have.sum() / 200 == pytest.approx(5.55, abs=0.1)
     assert onboard_agreement(data)["hf"]["rows"] == have.sum()
-    assert {"mag_x_uT", "baro_pressure_hpa", "gps_lat_deg"} <= export_columns(data).keys()
+    assert {"mag_x_uT", "baro_pressure_Pa", "gps_lat_deg"} <= export_columns(data).keys()
 
 
 def test_px4_sitl_truth_scores_the_onboard_and_host_estimates():

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from groundstation import quaternion
-from groundstation.session import reveal
+from groundstation.session import data as opening
 from groundstation.session.data import load_session
 from groundstation.session.factory import LIVE_FILTERS
 
@@ -39,7 +39,7 @@ def loads(monkeypatch):
         calls.append(args[1:3])
         return load_session(*args, **kwargs)
 
-    monkeypatch.setattr(reveal, "load_session", counted)
+    monkeypatch.setattr(opening, "load_session", counted)
     return calls
 
 
@@ -70,7 +70,7 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     assert len(loads) == 1 and window.banner.isHidden()
     session, bar = window.session, window.replay_bar
     data = load_session(recording)  # the export's and evaluate's session, computed apart
-    assert session.view.filters == tuple(data.estimates) == ("ahf",)
+    assert session.view.filters == data.filters == ("ahf",)
     window.live_view.window_box.setCurrentText("whole session")
     qtbot.waitUntil(lambda: session.source.position_s > 0.5, timeout=5000)
 
@@ -147,7 +147,7 @@ def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
     path = flightlog("arduplane_omnibusf4_ground_pilot_0004.bin")
     open_file(window, qtbot, path)
     session = window.session
-    assert session.view.filters == () and session.data.onboard is not None
+    assert session.view.filters == () and session.data.has_onboard()
     assert any("IMU" in e["message"] for e in session.view.events if e["kind"] == "warning")  # said, at 0 s
     window.live_view.window_box.setCurrentText("whole session")
     window.replay_bar.play_button.click()
