@@ -44,16 +44,6 @@ def test_both_images_build_fit_the_blue_pill_and_route_their_interrupts(tmp_path
     assert (tmp_path / "flight.bin").stat().st_size == sizes["flight"].flash_bytes
 
 
-def model_rows(settings, gyr, acc, dt) -> list[tuple[int, ...]]:
-    """The ground station's float32 model of the onboard AHF (estimation/ahf.py, dtype=np.float32), as ``cross.row``s."""
-    model = Ahf(settings, dtype=np.float32)
-    rows = []
-    for g, a, d in zip(gyr, acc, dt):
-        q, diag = model.step(g, a, d)
-        rows.append(cross.row(diag.status, *q, diag.lam, diag.e_a, diag.gravity_error, model._acc_dev))
-    return rows
-
-
 def flight_case() -> tuple:
     """(settings, gyr, acc, dt): 60 s of the simulated flight, the paper's settings."""
     run = simulate("flight", 60.0, seed=5, accel_fs_g=4, gyro_fs_dps=500)
@@ -68,7 +58,7 @@ def test_on_a_cortex_m3_with_newlib_the_core_computes_the_ground_stations_float3
     every guard with the deviation gate (its square root) on."""
     settings, gyr, acc, dt = case()
     board = cross.run_ahf(cross.build_ahf_program(settings, gyr, acc, dt, tmp_path))
-    expected = model_rows(settings, gyr, acc, dt)
+    expected = cross.model_rows(Ahf(settings, dtype=np.float32), gyr, acc, dt)
     assert len(board) == len(expected) == len(dt)
     mismatched = [k for k, (b, e) in enumerate(zip(board, expected)) if b != e]
     assert not mismatched, f"{len(mismatched)} of {len(dt)} rows differ, first at sample {mismatched[0]}: board {board[mismatched[0]]} != model {expected[mismatched[0]]}"
