@@ -36,14 +36,14 @@ range, the accelerometer is the more accurate, so λ takes a large value"): with
 λ = λ_max for that sample. Off by default (``inf``) so that the default filter is eq. 20 exactly.
 
 float32 (the simulated firmware): the kernel uses arithmetic operators and ``np.sqrt`` only (no ``math``
-calls, which return Python floats), so interpreted it computes in whatever type its numbers have. Every
-operation is one IEEE 754 rounds correctly (+, −, ×, ÷, square root): x^-0.5 is ``1.0 / np.sqrt(x)``,
-not ``x ** -0.5``, which NumPy computes with the C library's ``powf``, rounded differently by every C
-library (newlib's, the board's, differs from glibc's in 9 % of inputs). So the C core (gs_ahf.c), built
-for the STM32 with newlib or for the host, computes the same bits (docs/firmware.md). ``Ahf(settings,
-dtype=np.float32)`` runs it interpreted (base.py, compiled estimators) with the settings, the state and every input as
-``numpy.float32``; NumPy 2's promotion rules (NEP 50) keep float32 ⊕ Python-float literals in float32,
-so the whole update runs in single precision, as on the STM32. ``step`` then returns float32 numbers;
+calls, which return Python floats), so interpreted it computes in whatever type its numbers have, and
+only operations IEEE 754 rounds correctly (+, −, ×, ÷, square root): x^-0.5 is ``1.0 / np.sqrt(x)``, not
+``x ** -0.5``, which NumPy computes with the C library's ``powf``, rounded differently by each C library
+(newlib's, the board's, differs from glibc's in 9 % of inputs). So the C core (gs_ahf.c), built for the
+STM32 with newlib or for the host, computes the same bits (docs/firmware.md). ``Ahf(settings,
+dtype=np.float32)`` runs it interpreted (base.py, compiled estimators) with the settings, the state and
+every input as ``numpy.float32``; NumPy 2's promotion rules (NEP 50) keep float32 ⊕ Python-float literals
+in float32, so the whole update runs in single precision, as on the STM32. ``step`` then returns float32 numbers;
 ``run`` returns them widened to float64 (exactly). Each float32 step agrees with a float64 step from the
 same state to float32 precision, but whole runs drift apart: eq. 18 normalises the gradient, so when the
 error is near zero its direction is set by rounding and still gets a full λ Δt step. To reproduce the
