@@ -14,7 +14,8 @@ from groundstation.sim.offline import simulate
 from tests.firmware.test_fw_ahf import GATE_ON, guard_case
 
 pytestmark = pytest.mark.skipif(cross.toolchain() is None, reason="arm-none-eabi-gcc not installed (Debian: gcc-arm-none-eabi, "
-                                                                  "libnewlib-arm-none-eabi): the STM32 images are not built")
+                                                                  "libnewlib-arm-none-eabi): the STM32 images are not built and the "
+                                                                  "core's AHF is not checked on a Cortex-M3")
 needs_qemu = pytest.mark.skipif(cross.emulator() is None, reason="qemu-system-arm not installed (Debian: qemu-system-arm): the core's AHF "
                                                                  "is not checked bit for bit on an emulated Cortex-M3")
 

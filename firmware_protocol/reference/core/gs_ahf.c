@@ -5,10 +5,10 @@
 #include <math.h>
 #include <stddef.h>
 
-/* x^-0.5 and x^0.5 in float from the operations IEEE 754 rounds correctly (division and sqrtf), as the
- * ground station's float32 model writes them (1.0 / np.sqrt(x), np.sqrt(x)): every C library and FPU, the
- * board's newlib and soft float among them, computes them alike, so the board, the host build and the
- * model agree bit for bit. Not powf: C libraries round it differently (newlib's differs from glibc's in
+/* x^-0.5 (the normalisations of seed 000 eq. 9, 18 and 19) and x^0.5 (the gate) in float from the
+ * operations IEEE 754 rounds correctly (division and sqrtf), as the ground station's float32 model writes
+ * them (1.0 / np.sqrt(x), np.sqrt(x)): every C library and FPU, the board's newlib and soft float among
+ * them, computes them alike, so the board, the host build and the model agree bit for bit. Not powf: C libraries round it differently (newlib's differs from glibc's in
  * 9 % of inputs), and the filter turns one ulp into degrees (docs/firmware.md). */
 static float rsqrt(float x) { return 1.0f / sqrtf(x); }
 static float root(float x) { return sqrtf(x); }
