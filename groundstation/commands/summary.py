@@ -53,8 +53,10 @@ def totals_line(session: Session) -> str:
         if p.link is None:  # a flight log or a dataset: no link was decoded
             return f"{len(p.imu)} IMU samples" if p.filters else f"{len(p.onboard)} onboard attitude samples, no IMU"
         c = p.counters()
-        return (f"{len(p.imu)} IMU samples, {c['frames']} frames, {c['frames_lost']} lost, "
+        line = (f"{len(p.imu)} IMU samples, {c['frames']} frames, {c['frames_lost']} lost, "
                 f"{c['crc_errors']} CRC errors, {c['bytes_skipped']} bytes skipped")
+    ignored = getattr(session.source, "ignored", None)  # a UDP source locked to its sender
+    return f"{line}; {ignored}" if ignored and ignored.datagrams else line
 
 
 def follow(session: Session, stream=sys.stdout, interval_s: float = 0.25, until=None) -> None:
