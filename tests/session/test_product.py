@@ -107,3 +107,17 @@ def test_a_live_session_and_a_file_give_the_window_the_same_view(tmp_path):
             assert set(session.view.counters()) >= {"frames", "frames_lost", "crc_errors", "bytes_skipped"}
         assert not live.seekable and live.seek(1.0) is False
     assert played.seekable and played.file() == (path, played.source.duration_s)
+
+
+def test_the_window_never_asks_which_kind_of_session_it_holds():
+    """Before: ``isinstance(session, RevealSession)`` 7 times in main_window.py and once in replay_bar.py."""
+    import ast
+
+    asked = []
+    for path in sorted((Path(__file__).resolve().parents[2] / "groundstation" / "ui").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "isinstance" and len(node.args) == 2:
+                kinds = ast.unparse(node.args[1])
+                if "Session" in kinds:
+                    asked.append(f"{path.name}:{node.lineno} {kinds}")
+    assert asked == []
