@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from estimation_samples import flight_like_samples
@@ -69,7 +69,13 @@ def assert_same(q, diag, q_ref, table_ref, fields):
 GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=15)
+# Failures found: hfm's compiled kernel and its interpreted source set the initial yaw from the compass with
+# np.arctan2, which numba compiles to libm's atan2 but NumPy runs through its own SIMD code (AVX-512 here),
+# 1 ulp apart on ~7 % of inputs; the normalised gradient step (ahf.py eq. 18) then turns that ulp into a
+# full β·dt step in another direction (1.2e-3 in q on the first sample).
+@example(seed=1, events=[], waiting=0, gate={}, start=None)
+@example(seed=35, events=[], waiting=0, gate=GATES[1], start=None)
 @given(
     seed=st.integers(0, 2**31),
     events=st.lists(st.tuples(st.integers(0, 10_000), st.sampled_from(sorted(EVENTS))), max_size=30),
