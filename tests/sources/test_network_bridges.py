@@ -101,7 +101,7 @@ def test_udp_source_locks_to_its_bridge_and_a_spoofer_neither_rescales_nor_recei
             seq = session.send_command("request_config")
             wait_for(lambda: acked(session, seq))
             bridge.close()
-            time.sleep(0.3)
+            wait_for(lambda: session.pipeline.decoder.stats.bytes_in >= len(bridge.sent), what="the last datagrams in flight")
         with session.lock:
             acc = np.column_stack([session.pipeline.imu.column(f"acc_{c}_g") for c in "xyz"])[-100:]
         assert abs(np.median(np.linalg.norm(acc, axis=1)) - 1.0) < 0.25  # a hover near 1 g; the forged scale gives 4 g
