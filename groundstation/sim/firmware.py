@@ -186,7 +186,7 @@ class Firmware:
         self._clock_epoch = 0
         self._mishaps = sorted((self._sample_at(t_s), what) for t_s, what in
                                ((settings.reboot_after_s, self._reboot), (settings.clock_jump_after_s, self._jump_clock)) if t_s > 0)
-        self._last_t_dev_us: int | None = None
+        self._last_t_us: int | None = None  # the board's timestamp of its last sample
         self._queued: list[tuple[str, dict]] = []  # frames to send before the next sample
         self.stored_gyro_offset_dps: np.ndarray | None = None  # the last calibration, in flash: survives resets
         self._boot()
@@ -245,7 +245,7 @@ class Firmware:
     def _reboot(self) -> None:
         self._epoch_us = round(self._k * self._period_s * 1e6)
         self._clock_epoch += 1
-        self._seq, self._queued, self._last_t_dev_us = 0, [], None
+        self._seq, self._queued, self._last_t_us = 0, [], None
         self.mode = MODES[self.settings.mode]
         self.ahf_settings = self._boot_ahf_settings
         self.onboard, self._onboard_q = Ahf(self.ahf_settings, dtype=np.float32), None
@@ -383,15 +383,19 @@ class Firmware:
         gyr_body = (units.gyro_counts_to_rad_s(raw.gyr_counts, s.gyro_fs_dps) @ self._body_from_sensor.T).tolist()
         acc_body = (units.accel_counts_to_g(raw.acc_counts, s.accel_fs_g) @ self._body_from_sensor.T).tolist()
         # The filter starts with the stream: its first dt is the nominal period, as a host assumes.
-        prev = self._last_t_dev_us if self._last_t_dev_us is not None else int(t_dev_us[0]) - round(self._period_s * 1e6)
-        dt_s = (np.diff(t_dev_us, prepend=prev) * 1e-6).tolist()
-        self._last_t_dev_us = int(t_dev_us[-1])
+        # dt from the board's own 32-bit timestamps as a signed difference, as the C core: a clock jump
+        # is a jump of dt too.
+        t_us_all = (t_dev_us - self._epoch_us) & 0xFFFFFFFF
+        prev = self._last_t_us if self._last_t_us is not None else int(t_us_all[0]) - round(self._period_s * 1e6)
+        dt_us = (np.diff(t_us_all, prepend=prev) + (1 << 31)) % (1 << 32) - (1 << 31)
+        dt_s = (dt_us * 1e-6).tolist()
+        self._last_t_us = int(t_us_all[-1])
         # The die temperature as the firmware reports it: TEMP_OUT counts, then counts/340 + 36.53.
         temp_c = units.temperature_counts_to_c(units.temperature_c_to_counts(raw.temperature_c))
         extras = self._extra_readings(truth)
         per_status = s.rate_hz
         acc_counts, gyr_counts = raw.acc_counts.tolist(), raw.gyr_counts.tolist()
-        t_true_list, t_us_list = t_true.tolist(), ((t_dev_us - self._epoch_us) & 0xFFFFFFFF).tolist()
+        t_true_list, t_us_list = t_true.tolist(), t_us_all.tolist()
         for i in range(n):
             t, t_us = t_true_list[i], t_us_list[i]
             for name, values in self._queued:
