@@ -13,6 +13,10 @@ import math
 from groundstation.estimation import create
 from groundstation.estimation.calibration import RestBiasCalibrator
 
+# Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
+# reset in flight (tests/session/test_reboot_in_flight.py); the app warns for as long.
+RECONVERGE_S = 5.0
+
 
 class EstimatorBank:
     """``filters``: estimator names (``ahf`` first by convention; the first one drives the compass
