@@ -221,7 +221,7 @@ typedef struct {
     uint16_t rate_hz; /* Hz: output rate of IMU_RAW / ATTITUDE */
     uint8_t mode; /* enum: what is sent */
     uint8_t mounting; /* index: sensor mounting, one of the 24 axis-aligned rotations (docs/conventions.md) */
-    uint8_t gyro_calibration; /* enum: none: no calibration, the gyro's turn-on bias; boot: measured at this boot, the craft still; stored: the craft moved during the boot calibration, so the last calibration (kept in flash) is used; command: measured on calibrate_gyro */
+    uint8_t gyro_calibration; /* enum: none: no calibration, the gyro's turn-on bias; boot: measured at this boot, the craft still; stored: the craft moved during the boot calibration, so the last calibration (kept over resets) is used; command: measured on calibrate_gyro */
 } gs_config_t;
 
 /* Packs m into out (room for GS_MAX_FRAME_BYTES); returns the frame's length. */

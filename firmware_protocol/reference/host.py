@@ -140,7 +140,7 @@ class FlightCore:
 
     def __init__(self, *, rate_hz: int, accel_fs_g: int, gyro_fs_dps: int, mounting: int, mode: int,
                  boot_calibration_s: float, fw_version: tuple[int, int, int], ahf, stored_gyro_offset_dps=None):
-        """``stored_gyro_offset_dps``: the calibration the board's flash holds (deg/s, sensor axes), or None."""
+        """``stored_gyro_offset_dps``: the calibration the board kept over a reset (deg/s, sensor axes), or None."""
         self._lib = lib = library()
         self._state = ctypes.create_string_buffer(lib.gs_host_sizeof_flight())
         config = (ctypes.c_uint * 8)(rate_hz, accel_fs_g, gyro_fs_dps, mounting, mode, *fw_version)

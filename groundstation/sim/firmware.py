@@ -10,8 +10,8 @@ rest) and writes the result into the chip's offset registers, as flight firmware
 stored accelerometer offsets too (``accel_calibrated``: the bench calibration the paper did before
 its tests, equal to the part's turn-on zero-g bias). The average is used only if the craft was still
 over the window (``still``: as ArduPilot's ``AP_InertialSensor::_init_gyro`` skips an average taken
-while the accelerometer changed); otherwise the board writes its last calibration, which it keeps in
-flash across resets, or none if it never had one. ``CONFIG.gyro_calibration`` says which. Then it
+while the accelerometer changed); otherwise the board writes its last calibration, which it keeps
+over resets (the STM32 port: in its backup registers), or none if it never had one. ``CONFIG.gyro_calibration`` says which. Then it
 sends ``CONFIG`` and starts streaming:
 
 - each sample: ``IMU_RAW`` (mode raw or both), ``ATTITUDE`` from the onboard AHF (estimated or both);
@@ -201,7 +201,7 @@ class Firmware:
                                ((settings.reboot_after_s, self._reboot), (settings.clock_jump_after_s, self._jump_clock)) if t_s > 0)
         self._last_t_us: int | None = None  # the board's timestamp of its last sample
         self._queued: list[tuple[str, dict]] = []  # frames to send before the next sample
-        self.stored_gyro_offset_dps: np.ndarray | None = None  # the last calibration, in flash: survives resets
+        self.stored_gyro_offset_dps: np.ndarray | None = None  # the last calibration: survives resets
         self._boot()
 
     # -- time --------------------------------------------------------------------------------

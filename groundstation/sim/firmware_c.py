@@ -30,7 +30,7 @@ class CFirmware(Firmware):
         self._core = self._power_up()
 
     def _power_up(self) -> host.FlightCore:
-        """The core as the board starts it: fresh, with the calibration its flash holds."""
+        """The core as the board starts it: fresh, with the calibration it kept over the reset."""
         s = self.settings
         self.onboard = None  # the estimate is the core's
         return host.FlightCore(
@@ -69,6 +69,6 @@ class CFirmware(Firmware):
                 out.append(SentFrame(t, frame, t_us if frame[2] in _TIMESTAMPED else None))
                 self._seq = (frame[3] + 1) & 0xFF
             offset_dps = core.take_gyro_offset()
-            if offset_dps is not None:  # written to the chip, and kept in flash for the next boot
+            if offset_dps is not None:  # written to the chip, and kept for the next boot (over a reset)
                 self.imu.gyro_offset_dps = self.imu.gyro_offset_dps + offset_dps
                 self.stored_gyro_offset_dps = self.imu.gyro_offset_dps.copy()

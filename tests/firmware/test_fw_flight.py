@@ -116,7 +116,7 @@ CALIBRATION = ENUM["gyro_calibration"]
     (Scenario("fast", 14.0, seed=6, firmware=FirmwareSettings(mode="estimated", accel_fs_g=16, gyro_fs_dps=250, mounting=17, rate_hz=200)),
      "boot", None),
     (Scenario("flight", 14.0, seed=7, firmware=FirmwareSettings(boot_calibration_s=0.0, accel_calibrated=False)), "none", None),
-    # issue 21: reset in flight, so moving at boot: the calibration kept in flash (the last commanded one)
+    # issue 21: reset in flight, so moving at boot: the calibration kept over the reset (the last commanded one)
     (Scenario("flight", 14.0, seed=7, firmware=FirmwareSettings(reboot_after_s=11.0)), "boot", "stored"),
     # reset at rest: measured again; then the clock jumps
     (Scenario("static", 14.0, seed=9, firmware=FirmwareSettings(reboot_after_s=11.0, clock_jump_after_s=13.0)), "boot", "boot"),

@@ -64,7 +64,7 @@ def test_the_truth_is_attached_across_the_reset(recordings):
     after = data.time_s > resets[0]["session_time_s"] + BACK_ON_TRUTH_S
     onboard_error_deg = np.degrees(inclination_error_rad(data.onboard, data.true_q, data.true_frame))
     assert np.nanmax(onboard_error_deg[after]) < 20.0
-    # and the board said how it calibrated: at rest at power-up, from flash after the reset in flight
+    # and the board said how it calibrated: at rest at power-up, the stored one after the reset in flight
     assert [e["gyro_calibration"] for e in data.events if e["kind"] == "config"] == [GYRO_CALIBRATION["boot"], GYRO_CALIBRATION["stored"]]
 
 

@@ -7,7 +7,7 @@
  *
  * - boot: the first boot_calibration_s of samples average the gyro; if the craft was still over them
  *   (GS_FLIGHT_STILL_*) the port writes the average into the chip's offset registers
- *   (gs_flight_take_gyro_offset), else the last calibration it keeps in flash (gs_flight_restore_gyro_offset),
+ *   (gs_flight_take_gyro_offset), else the last calibration the port keeps over resets (gs_flight_restore_gyro_offset),
  *   if any; CONFIG.gyro_calibration says which, and CONFIG goes out;
  * - each sample: the onboard AHF (gs_ahf.h) steps; IMU_RAW (mode raw or both) and ATTITUDE (estimated
  *   or both); STATUS every rate_hz samples, counted from power-up;
@@ -81,7 +81,7 @@ typedef struct {
     double calibration_sum_dps[3];
     int64_t calibration_counts[4][3]; /* sums of gyro counts, their squares, accel counts, their squares */
     int have_stored_offset;
-    double stored_offset_dps[3];  /* the last calibration, from flash (gs_flight_restore_gyro_offset) */
+    double stored_offset_dps[3];  /* the last calibration, kept over resets (gs_flight_restore_gyro_offset) */
     uint8_t gyro_calibration; /* GS_GYRO_CALIBRATION_*: where the offsets in use came from (CONFIG) */
     int offset_ready;
     double offset_dps[3];     /* to add to the chip's gyro offset, deg/s (gs_flight_take_gyro_offset) */
@@ -105,10 +105,10 @@ void gs_flight_uplink(gs_flight *f, const uint8_t *frame, size_t len);
 
 /* 1 when a gyro calibration has finished since the last call: offset_dps (deg/s, sensor axes) is to
  * be subtracted from what the chip reports (added to its offset registers) before the next sample.
- * What the registers then hold (they start at 0 at power-up) is the calibration to keep in flash. */
+ * What the registers then hold (they start at 0 at power-up) is the calibration to keep over resets. */
 int gs_flight_take_gyro_offset(gs_flight *f, double offset_dps[3]);
 
-/* At power-up, before the first sample: the calibration kept in flash (deg/s, sensor axes), written
+/* At power-up, before the first sample: the calibration kept over resets (deg/s, sensor axes), written
  * to the registers if the craft moves during the boot calibration. */
 void gs_flight_restore_gyro_offset(gs_flight *f, const double offset_dps[3]);
 
