@@ -2,7 +2,8 @@
 
 For the field (a laptop by the runway, no window) and for tests. Runs until ``--duration`` or Ctrl-C
 (SIGINT/SIGTERM), then closes the recording cleanly and says where it is. Exit status 0 when stopped
-that way, 1 when the source failed for good (the recording keeps what came before), 2 for bad input.
+that way, 1 when the source failed for good or decoding stopped on an error (the recording keeps what
+came before; the reason is printed), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -62,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
     size = session.recording_path.stat().st_size if session.recording_path.exists() else 0
     print(f"recording closed: {session.recording_path} ({size / 1e6:.2f} MB)")
     if session.error:
-        print(f"groundstation record: the source stopped: {session.error}", file=sys.stderr)
+        print(f"groundstation record: the session stopped: {session.error}", file=sys.stderr)
         return 1
     return 0
 

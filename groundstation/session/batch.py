@@ -42,7 +42,7 @@ from groundstation.session.estimators import EstimatorBank
 from groundstation.session.link import LinkStats
 from groundstation.session.pipeline import (
     _LAMBDA_SCALE, _MAG_SCALES, _Q_SCALE, TEMPERATURE_SCALE, SensorConfig, conversions, gap_time_s, hold_expired,
-    impossible_config_message, in_body_axes, no_config_message, period_s, sample_dt_s, schema_message, sensor_of,
+    impossible_config_message, in_body_axes, no_config_message, period_s, sample_dt_s, schema_message, sensor_of, unexpected_frame_event,
 )
 from groundstation.session.replay import RecordedSetup, SettingsSchedule, apply_event, recorded_setup
 from groundstation.session.table import Table
@@ -66,6 +66,7 @@ class BatchSession:
         self.config: dict | None = None
         self.sensor: SensorConfig | None = None
         self.events: list[dict] = []
+        self.unexpected_frames: dict[str, int] = {}
         self.t0_host_ns: int | None = None
         self.decoder: BatchDecode | None = None  # ``decoder.stats``: the link's counters
         self._keyed_events: list[tuple[float, dict]] = [(-math.inf, e) for e in setup.warnings]
@@ -130,6 +131,7 @@ class _Builder:
         self._settings_keys()
         self._config()
         self._frame_tables()
+        self._unexpected()
         self._imu()
         self._gaps()
         self._link()
@@ -244,6 +246,15 @@ class _Builder:
             self.add("onboard", self.key(board.order), np.column_stack([
                 self.time_s[board.order], self.device_us[board.order], *q, board.raw["lambda_gain"] * _LAMBDA_SCALE,
                 board.raw["flags"].astype(float)]))
+
+    def _unexpected(self) -> None:
+        """Frames of uplink types (the aircraft never sends one): counted, the first of each type said."""
+        for frame_type in SPEC.frames:
+            columns = self.d.frames[frame_type.name]
+            if frame_type.direction == "down" or not len(columns):
+                continue
+            self.s.unexpected_frames[frame_type.name] = len(columns)
+            self.s.event(4.0 * int(columns.order[0]) + HANDLER, unexpected_frame_event(int(columns.t_host_ns[0]), frame_type.name))
 
     # -- IMU and estimators -----------------------------------------------------------------------
 

@@ -106,6 +106,14 @@ def no_config_message(s: SensorConfig) -> str:
             f"mounting {s.mounting}")
 
 
+def unexpected_frame_event(t_host_ns: int, name: str) -> dict:
+    """The event of the first frame of a type the aircraft never sends (an uplink COMMAND echoed by a
+    loopback or a radio, another sender): such frames are counted and ignored, never a stopped session."""
+    return {"t_host_ns": t_host_ns, "kind": "warning",
+            "message": f"unexpected {name} frame on the downlink (a ground-to-aircraft frame: a loopback or "
+                       "another sender?); it and any more are counted and ignored"}
+
+
 def schema_message(fingerprint: int) -> str:
     return (f"the firmware was built from another protocol spec (schema fingerprint 0x{fingerprint:08X}); "
             "its frames may be mis-decoded")
@@ -150,6 +158,7 @@ class Pipeline:
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
+        self.unexpected_frames: dict[str, int] = {}  # frames of uplink types that came down, by type name
         self.t0_host_ns: int | None = None  # arrival of the first chunk: the origin of host times
         self._held: list[tuple[int, Frame, float, int]] = []  # IMU samples waiting for CONFIG, with their times
         self._last_us: int | None = None
@@ -159,7 +168,7 @@ class Pipeline:
         if protocol == "gs":  # the frame handlers write to the spec's tables, which a MAVLink session lacks
             # Each frame type's value scales (timestamp excluded), looked up once: rows are value x scale.
             self._scales = {t.id: tuple(f.scale for f in t.fields[1 if t.has_timestamp else 0 :]) for t in spec.frames}
-            self._handlers = {t.id: self._frame_handler(t) for t in spec.frames if t.direction == "down"}
+            self._handlers = {t.id: self._frame_handler(t) for t in spec.frames}  # every type the decoder returns
 
     @property
     def estimators(self):
@@ -201,7 +210,10 @@ class Pipeline:
     # -- frames ---------------------------------------------------------------------------------
 
     def _frame_handler(self, frame_type):
-        """The handler of one frame type: a stage for the frames that feed one, else a table row."""
+        """The handler of one frame type: a stage for the frames that feed one, a table row for any other
+        downlink frame, and for an uplink type (the aircraft never sends one) a count."""
+        if frame_type.direction != "down":
+            return self._unexpected
         special = {"IMU_RAW": self._imu, "ATTITUDE": self._attitude, "CONFIG": self._config, "ACK": self._ack,
                    "MAG_RAW": self._magnetometer, "BARO": self._barometer, "GPS": self._gps}.get(frame_type.name)
         if special is not None:
@@ -227,6 +239,13 @@ class Pipeline:
             return
         self._use_sensor(sensor)
         self._release_held()
+
+    def _unexpected(self, t_host_ns: int, frame: Frame) -> None:
+        name = frame[0].name
+        seen = self.unexpected_frames.get(name, 0)
+        self.unexpected_frames[name] = seen + 1
+        if not seen:
+            self.events.append(unexpected_frame_event(t_host_ns, name))
 
     def _ack(self, t_host_ns: int, frame: Frame) -> None:
         """The aircraft's answer to a COMMAND (``LiveSession.send_command``)."""
