@@ -63,12 +63,10 @@ Q_SCALES = scales(_ATTITUDE, *Q_FIELDS)  # Q2.14 -> 1
 (LAMBDA_SCALE,) = scales(_ATTITUDE, "lambda_gain")
 MAG_SCALES = scales(_MAG, *MAG_FIELDS)  # counts -> µT
 (TEMPERATURE_SCALE,) = scales(_IMU, "temperature")  # counts -> °C
-_imu_values = values_of(_IMU, *ACC_FIELDS, *GYR_FIELDS, "temperature")
-_attitude_values = values_of(_ATTITUDE, *Q_FIELDS, "lambda_gain", "flags")
-_mag_values = values_of(_MAG, *MAG_FIELDS)
-_BARO = SPEC.frame("BARO")
-_BARO_SCALES = scales(_BARO, "pressure", "temperature")  # -> Pa, °C
-_baro_values = values_of(_BARO, "pressure", "temperature")
+_BARO_SCALES = scales(SPEC.frame("BARO"), "pressure", "temperature")  # -> Pa, °C
+# The fields each stage reads, by frame type, in the order it reads them.
+_STAGE_FIELDS = {"IMU_RAW": (*ACC_FIELDS, *GYR_FIELDS, "temperature"), "ATTITUDE": (*Q_FIELDS, "lambda_gain", "flags"),
+                 "MAG_RAW": MAG_FIELDS, "BARO": ("pressure", "temperature")}
 
 # What happens at one frame, in this order: the recorded settings changes that apply before the chunk
 # the frame came with (``replay.SettingsSchedule``), then the device clock's discontinuity at the frame
@@ -228,6 +226,8 @@ class Pipeline:
             # Each frame type's value scales (timestamp excluded), looked up once: rows are value x scale.
             self._scales = {t.id: tuple(f.scale for f in t.fields[1 if t.has_timestamp else 0 :]) for t in spec.frames}
             self._handlers = {t.id: self._frame_handler(t) for t in spec.frames}  # every type the decoder returns
+            self._imu_values, self._attitude_values, self._mag_values, self._baro_values = (
+                values_of(spec.frame(name), *names) for name, names in _STAGE_FIELDS.items())
 
     @property
     def estimators(self):
@@ -330,7 +330,7 @@ class Pipeline:
 
     def _imu_sample(self, t_host_ns: int, frame: Frame, time_s: float, t_us: int) -> None:
         """One IMU sample at session time ``time_s``, device time ``t_us`` (unwrapped within its segment)."""
-        cx, cy, cz, rx, ry, rz, temperature = _imu_values(frame[2])
+        cx, cy, cz, rx, ry, rz, temperature = self._imu_values(frame[2])
         acc = in_body_axes(self._acc_m, cx, cy, cz)
         gyr = in_body_axes(self._gyr_m, rx, ry, rz)
         self.imu_stage(t_host_ns, time_s, t_us, acc, gyr, temperature * TEMPERATURE_SCALE, period_s(self.sensor))
@@ -353,7 +353,7 @@ class Pipeline:
         self.link.on_sample(t_host_ns, t_us)
 
     def _magnetometer(self, t_host_ns: int, frame: Frame) -> None:
-        mx, my, mz = _mag_values(frame[2])
+        mx, my, mz = self._mag_values(frame[2])
         body = in_body_axes(self._mag_m, mx, my, mz)
         sx, sy, sz = MAG_SCALES
         self.magnetometer_stage(body, (mx * sx, my * sy, mz * sz))
@@ -365,7 +365,7 @@ class Pipeline:
         self.tables["mag_raw"].append((self._time_s, *shown_ut, heading))
 
     def _barometer(self, t_host_ns: int, frame: Frame) -> None:
-        pressure, temperature = _baro_values(frame[2])
+        pressure, temperature = self._baro_values(frame[2])
         self.barometer_stage(pressure * _BARO_SCALES[0], temperature * _BARO_SCALES[1])
 
     def barometer_stage(self, pressure_pa: float, temperature_c: float) -> None:
@@ -381,7 +381,7 @@ class Pipeline:
         self.aiding.gps(values)
 
     def _attitude(self, t_host_ns: int, frame: Frame) -> None:
-        qw, qx, qy, qz, lam, flags = _attitude_values(frame[2])
+        qw, qx, qy, qz, lam, flags = self._attitude_values(frame[2])
         sw, sx, sy, sz = Q_SCALES
         self.onboard_stage((qw * sw, qx * sx, qy * sy, qz * sz), lam * LAMBDA_SCALE, flags)
 
