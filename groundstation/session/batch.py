@@ -2,23 +2,25 @@
 
 ``batch_replay(recording)`` gives the same tables, events, link figures, config and settings as
 ``replay(recording)`` (the incremental ``Pipeline`` fed chunk by chunk; tests/session/test_batch.py
-proves it), an order of magnitude faster: the byte stream is decoded into numpy columns per frame
-type (``firmware_protocol.batch``), units and mounting are array operations, and every estimator
-runs its batch ``run`` over the samples of each stretch between device restarts and settings changes.
-Live data keeps the incremental path; a recording opened whole (``load_session``: export, evaluate,
-the app) takes this one.
+proves it), several times faster (bench/bench_batch.out.md): the byte stream is decoded into numpy
+columns per frame type (``firmware_protocol.batch``), units and mounting are array operations, and
+every estimator runs its batch ``run`` over the samples of each stretch between device restarts and
+settings changes. Live data keeps the incremental path; a recording opened whole (``load_session``:
+export, evaluate, the app) takes this one.
 
-The pipeline's rules are not restated: its per-frame functions (``conversions``, ``in_body_axes``,
-``sample_dt_s``, ``hold_expired``, ``gap_time_s`` ...) are called on arrays, and what is inherently
-sequential and cheap runs the pipeline's own code over a column (``SessionClock`` over the frame
-times, the rest-bias calibrator until it has measured, the compass heading per magnetometer frame).
+The pipeline's rules are not restated here. Its per-frame functions (``conversions``,
+``in_body_axes``, ``sample_dt_s``, ``gap_row`` ...) are called on arrays, with the same operations in
+the same order; what is sequential runs the pipeline's own code over the columns: ``SessionClock``
+over the frame times, ``ConfigWait`` over the samples before the first CONFIG, the rest-bias
+calibrator until it has measured, and the aiding stage (``Aiding``: readings handed to the samples,
+compass heading, position) over the readings, samples and restarts merged in the pipeline's order
+(``_Readings``). Scalar and vector maths never meet: NumPy's SIMD ``exp``/``log``/``pow`` may differ
+from libm's in the last bit, so the same rule runs the same code on both paths.
 
 Order. Everything the pipeline does happens at a frame (its position among the frames the decoder
-returns) and, at one frame, in this order: recorded settings changes that apply before the chunk the
-frame came with, then the clock's discontinuity (its event, the estimators' restart, the gap rows),
-then the frame's handler. Each row and event gets that place as its key (``4 * frame + stage``),
-so held IMU samples (waiting for a CONFIG) take the key of the frame that releases them. Readings
-of the aiding sensors go to the first IMU sample processed after them, in the same device segment.
+returns), in the pipeline's order at one frame (``pipeline.stage_key``: recorded settings changes,
+then the clock's discontinuity, then the frame's handler). Each row and event gets that place as its
+key, so held IMU samples (waiting for a CONFIG) take the key of the frame that releases them.
 """
 
 from __future__ import annotations

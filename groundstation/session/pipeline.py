@@ -6,15 +6,22 @@ tests, so one recording always gives the same numbers. Device timestamps drive `
 jumps, the event is recorded, the estimators start over, and every table gets a gap row (NaN in all
 columns but ``time_s``).
 
-The pipeline is a dispatcher from frame type to a handler. Every downlink frame of the spec lands
-in a table (``catalogue``): most in a table of their own, in physical units; ``IMU_RAW`` through the
-IMU stage (units, mounting, estimators) into ``imu``; ``ATTITUDE`` into ``onboard``; magnetometer,
-barometer and GPS readings also go to the aiding stage (``aiding.py``) for the estimators and the
-position. ``CONFIG`` and ``ACK`` are events as well.
+The pipeline is a dispatcher from frame type to a handler, one for every frame type of the spec.
+Every downlink frame lands in a table (``catalogue``): most in a table of their own, in physical
+units; ``IMU_RAW`` through the IMU stage (units, mounting, estimators) into ``imu``; ``ATTITUDE``
+into ``onboard``; magnetometer, barometer and GPS readings also go to the aiding stage
+(``aiding.py``) for the estimators and the position. ``CONFIG`` and ``ACK`` are events as well. An
+uplink frame (a COMMAND echoed by a loopback, another sender) is counted in ``unexpected_frames``
+and said once per type; no frame stops a session. Frames are read by field name.
 
-Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames are held (up to
-``HOLD_FOR_CONFIG_US`` of device time); after that the assumed ``SensorConfig`` is used and a
-warning event is recorded. A later ``CONFIG`` takes effect from its position in the stream.
+Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames wait
+(``ConfigWait``, up to ``HOLD_FOR_CONFIG_US`` of session time); after that the assumed
+``SensorConfig`` is used and a warning event is recorded. A later ``CONFIG`` takes effect from its
+position in the stream.
+
+The rules here are the session's only copy: the batch path (``batch.py``) calls the same functions
+(``conversions``, ``in_body_axes``, ``sample_dt_s``, ``ConfigWait``, ``gap_row``, the aiding stage's
+``Aiding``) on its columns and orders what it computed by ``stage_key``.
 
 Two protocol front-ends turn bytes into the stages' input: the project's own frames (``GsFrontEnd``,
 the dispatcher above) and an autopilot's MAVLink (``session/mavlink_front.py``: records already in
@@ -191,7 +198,8 @@ class Pipeline:
     """Feed ``(t_host_ns, bytes)`` chunks; read ``tables`` (``imu``, ``onboard`` and one per frame, as
     ``catalogue`` describes them), ``events``, ``link``, ``config``.
 
-    ``filters`` names the host estimators (``ahf`` first by convention); ``settings`` maps a name to
+    ``filters`` names the host estimators (the first drives the compass heading and the position:
+    ``EstimatorBank.first_q``); ``settings`` maps a name to
     setting overrides (the recorded settings); ``forced`` to overrides that win over everything,
     including settings changed later in the session (the what-if ``--set`` of replay and export).
     """
