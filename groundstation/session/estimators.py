@@ -19,8 +19,8 @@ RECONVERGE_S = 5.0
 
 
 class EstimatorBank:
-    """``filters``: estimator names (``ahf`` first by convention; the first one drives the compass
-    heading and the position); ``settings``/``forced``: name -> {setting: value}."""
+    """``filters``: estimator names (the first one drives the compass heading and the position);
+    ``settings``/``forced``: name -> {setting: value}."""
 
     def __init__(self, filters, settings=None, forced=None):
         self.filters = tuple(dict.fromkeys(filters))
