@@ -103,6 +103,7 @@ class Ahf2Settings(CommonSettings):
     tau_bias_rest_s: float = 2.0
     motion_bias_ki: float = 0.03  # 1/s; 0 = no bias estimation in motion
     bias_max_rad_s: float = 0.035  # |b_i| bound (2 °/s)
+    lp_map: bool = False
 
 
 class Ahf2Diagnostics(NamedTuple):
@@ -123,6 +124,16 @@ def _rotate(q, x, y, z):
     return x + w * tx + b * tz - c * ty, y + w * ty + c * tx - a * tz, z + w * tz + a * ty - b * tx
 
 
+def _matrix(q):
+    """R(q), row-major."""
+    w, x, y, z = q
+    return (
+        1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y),
+        2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x),
+        2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y),
+    )
+
+
 class Ahf2(Estimator):
     name = "ahf2"
     estimates_gyro_bias = True
@@ -139,7 +150,7 @@ class Ahf2(Estimator):
         self._bias = (0.0, 0.0, 0.0)
         self._q_g = self._q_c = (1.0, 0.0, 0.0, 0.0)
         self._acc_lp = None
-        self._start = (0.0, 0.0, 0.0, 0.0)  # elapsed time and ∫a_I dt while the low-pass starts
+        self._start = (0.0, [0.0] * 12)  # elapsed time and ∫x dt while the low-pass starts
         self._rate_lp = 0.0
         self._tau = self.settings.tau_acc_s
         self._e_a = 0.0
@@ -152,7 +163,7 @@ class Ahf2(Estimator):
     def _set_attitude(self, q):
         self._q = self._q_g = q
         self._q_c = (1.0, 0.0, 0.0, 0.0)
-        self._start = (0.0, 0.0, 0.0, 0.0)  # the low-pass starts again from the next accelerometer sample
+        self._start = (0.0, [0.0] * 12)  # the low-pass starts again from the next accelerometer sample
 
     def _diagnostics(self, status):
         return Ahf2Diagnostics(status, self._lam, self._e_a, self._rest, self._tau, *self._bias)
@@ -178,25 +189,27 @@ class Ahf2(Estimator):
         if s.rest_bias:
             self._detect_rest(gx, gy, gz, ax, ay, az, acc_ok, dt_s)
         if acc_ok:
-            # 2. low-pass in I
+            # 2. low-pass in I: the specific force, and the rotation into I that step 7 maps with
             ix, iy, iz = _rotate(q_g, ax, ay, az)
+            x = (ix, iy, iz, *_matrix(q_g))
             if s.tau_acc_s <= 0.0:
-                vx, vy, vz = 0.0, 0.0, 0.0
-                lx, ly, lz = ix, iy, iz
+                lp = x
             elif self._start is not None:  # the first τ seconds: the mean so far (VQF's start)
-                t, sx, sy, sz = self._start
-                t, sx, sy, sz = t + dt_s, sx + ix * dt_s, sy + iy * dt_s, sz + iz * dt_s
-                vx, vy, vz = 0.0, 0.0, 0.0
-                lx, ly, lz = sx / t, sy / t, sz / t
-                self._start = None if t >= self._tau else (t, sx, sy, sz)
+                t, sums = self._start
+                t = t + dt_s
+                sums = [si + xi * dt_s for si, xi in zip(sums, x)]
+                lp = [si / t for si in sums]
+                self._acc_lp = ([0.0] * len(x), lp)
+                self._start = None if t >= self._tau else (t, sums)
             else:
-                (vx, vy, vz), (lx, ly, lz) = self._acc_lp
+                v, lp = self._acc_lp
                 h = dt_s / self._tau
                 k = 2.0 * h / self._tau  # ω_n² Δt
                 den = 1.0 + 2.0 * h + 2.0 * h * h  # 1 + 2ζω_n Δt + ω_n² Δt²
-                vx, vy, vz = (vx + k * (ix - lx)) / den, (vy + k * (iy - ly)) / den, (vz + k * (iz - lz)) / den
-                lx, ly, lz = lx + vx * dt_s, ly + vy * dt_s, lz + vz * dt_s
-            self._acc_lp = ((vx, vy, vz), (lx, ly, lz))
+                v = [(vi + k * (xi - li)) / den for vi, xi, li in zip(v, x, lp)]
+                lp = [li + vi * dt_s for li, vi in zip(lp, v)]
+                self._acc_lp = (v, lp)
+            lx, ly, lz = lp[0], lp[1], lp[2]
             # 3. disagreement of this sample: angle of a_E(now) to the vertical, ‖ĝ × â‖ = its sine
             ex, ey, ez = _rotate(q_c, ix, iy, iz)
             lam = s.lambda_max
@@ -219,7 +232,14 @@ class Ahf2(Estimator):
         q = self._q = quaternion_product(q_c, q_g)
         if turn is not None and s.motion_bias_ki > 0.0 and not self._rest:
             # 7. bias in motion: the correction turn in body axes drives the integral
-            cx, cy, cz = _rotate((q[0], -q[1], -q[2], -q[3]), turn[0], turn[1], 0.0)
+            if s.lp_map:
+                vx, vy, vz = _rotate((q_c[0], -q_c[1], -q_c[2], -q_c[3]), turn[0], turn[1], 0.0)
+                m = lp[3:]
+                cx = m[0] * vx + m[3] * vy + m[6] * vz
+                cy = m[1] * vx + m[4] * vy + m[7] * vz
+                cz = m[2] * vx + m[5] * vy + m[8] * vz
+            else:
+                cx, cy, cz = _rotate((q[0], -q[1], -q[2], -q[3]), turn[0], turn[1], 0.0)
             ki, m = s.motion_bias_ki, s.bias_max_rad_s
             bx = min(max(bx - ki * cx, -m), m)
             by = min(max(by - ki * cy, -m), m)
