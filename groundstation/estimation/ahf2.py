@@ -40,8 +40,16 @@ the rest detector's low-passes. Output ``q = q_c ⊗ q_g``. Per sample, Δt the 
    yaw's too), t_rest the time since rest was detected: the mean over the rest so far, then a
    first-order low-pass (VQF's Kalman filter does the same, gain high while its variance is).
 7. Gyro bias in motion (Mahony's integral, on the correction):  the correction turn ``δ u`` (NED) in
-   body axes, ``r = R(q)ᵀ δ u / Δt``; ``b ← b - k_i r Δt``; then ``|b_i| ≤ bias_max``. Only the axes
-   perpendicular to gravity are observable; the clamp stops any wind-up.
+   body axes, ``r = L̄ᵀ δ u / Δt``; ``b ← b - k_i r Δt``; then ``|b_i| ≤ bias_max``. ``L̄ = R(q_c) R̄_g``,
+   ``R̄_g`` the rotation matrix of ``q_g`` through the same low-pass as the accelerometer (2): the
+   correction answers the low-passed specific force, in which a bias error ``b̃`` shows as ``R̄_g b̃``,
+   so ``L̄`` is the map from the bias to the correction and the loop's gain ``L̄ᵀ L̄`` is positive
+   semi-definite (VQF maps its motion bias update with the low-passed rotation likewise). The present
+   rotation ``R(q)`` in its place gives ``R(q)ᵀ L̄``, which in sustained fast rotation (the rotation
+   turning by a large angle within τ) is not: over 10 minutes of aggressive flight without rest the
+   integral wound up to its 2 °/s clamp against a true 1 °/s (``aggressive`` profile,
+   tests/estimation/test_ahf2.py). Only the axes perpendicular to gravity are observable; while the
+   body turns fast ``R̄_g`` shrinks (it averages rotations), and with it the gain.
 
 What differs from the paper and why. Each part's measured effect is the BROAD dev-set mean inclination
 RMSE (10 trials, one setting for all) with that part changed, against 0.615° for AHF2 as it is
@@ -103,7 +111,6 @@ class Ahf2Settings(CommonSettings):
     tau_bias_rest_s: float = 2.0
     motion_bias_ki: float = 0.03  # 1/s; 0 = no bias estimation in motion
     bias_max_rad_s: float = 0.035  # |b_i| bound (2 °/s)
-    lp_map: bool = False
 
 
 class Ahf2Diagnostics(NamedTuple):
@@ -232,14 +239,12 @@ class Ahf2(Estimator):
         q = self._q = quaternion_product(q_c, q_g)
         if turn is not None and s.motion_bias_ki > 0.0 and not self._rest:
             # 7. bias in motion: the correction turn in body axes drives the integral
-            if s.lp_map:
-                vx, vy, vz = _rotate((q_c[0], -q_c[1], -q_c[2], -q_c[3]), turn[0], turn[1], 0.0)
-                m = lp[3:]
-                cx = m[0] * vx + m[3] * vy + m[6] * vz
-                cy = m[1] * vx + m[4] * vy + m[7] * vz
-                cz = m[2] * vx + m[5] * vy + m[8] * vz
-            else:
-                cx, cy, cz = _rotate((q[0], -q[1], -q[2], -q[3]), turn[0], turn[1], 0.0)
+            # (body axes through the low-passed rotation: cᵢ = Σⱼ L̄ⱼᵢ vⱼ, v the turn in I)
+            vx, vy, vz = _rotate((q_c[0], -q_c[1], -q_c[2], -q_c[3]), turn[0], turn[1], 0.0)
+            m = lp[3:]
+            cx = m[0] * vx + m[3] * vy + m[6] * vz
+            cy = m[1] * vx + m[4] * vy + m[7] * vz
+            cz = m[2] * vx + m[5] * vy + m[8] * vz
             ki, m = s.motion_bias_ki, s.bias_max_rad_s
             bx = min(max(bx - ki * cx, -m), m)
             by = min(max(by - ki * cy, -m), m)

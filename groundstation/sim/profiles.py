@@ -19,7 +19,9 @@ firmware calibrates its gyro there, as a real board does at power-up. Profiles a
 duration; evaluation is vectorised over a block of times, so hours of flight cost seconds.
 
 Profiles (``PROFILES``): ``static`` (at rest), ``hover`` (small attitude wander, motor vibration),
-``flight`` (pitch/roll manoeuvres up to ±30°, yaw turns, climbs), ``slide`` (horizontal translation
+``flight`` (pitch/roll manoeuvres up to ±30°, yaw turns, climbs), ``aggressive`` (10 min of
+continuous manoeuvring without rest: roll and pitch swinging up to about ±50°, turns at up to 300 °/s,
+accelerations up to about 8 m/s²), ``slide`` (horizontal translation
 at zero attitude, accelerations up to ±3 m/s², the paper's sliding test), ``fast`` (flips at
 550-900 °/s, beyond a ±500 °/s gyro range), ``car`` (driving at up to
 15 m/s with speed changes and turns, yaw along the velocity: seed 001's test) and ``turntable`` (seed
@@ -230,8 +232,8 @@ def _flight(rng, duration_s):
 
 def _aggressive(rng, duration_s):
     """Aggressive flight without a moment's rest: roll and pitch always swinging (three sines each,
-    up to about ±60°), yaw turning (90-360° in 2-5 s, then the next after at most 0.5 s), the
-    position always swinging (accelerations up to about 5 m/s² horizontally, 2 m/s² vertically)."""
+    up to about ±50°), yaw turning (90-360° in 2-5 s, then the next after at most 0.5 s), the
+    position always swinging (accelerations up to about 8 m/s²)."""
     deg = math.radians
 
     def turn(rng, value):
