@@ -88,7 +88,7 @@ import math
 from typing import NamedTuple
 
 from groundstation.estimation.base import CommonSettings, Estimator
-from groundstation.estimation.tilt import quaternion_product
+from groundstation.estimation.tilt import quaternion_product, wrap_pi
 
 _new_tuple = tuple.__new__
 
@@ -109,8 +109,9 @@ class Ahf2Settings(CommonSettings):
     rest_acc_g: float = 0.05
     rest_min_s: float = 1.5
     tau_bias_rest_s: float = 2.0
-    motion_bias_ki: float = 0.03  # 1/s; 0 = no bias estimation in motion
+    motion_bias_ki: float = 0.1  # 1/s; 0 = no bias estimation in motion
     bias_max_rad_s: float = 0.035  # |b_i| bound (2 °/s)
+    tau_mag_s: float = 9.0  # ahf2m: heading follows the magnetometer with this time constant (VQF's)
 
 
 class Ahf2Diagnostics(NamedTuple):
@@ -129,6 +130,11 @@ def _rotate(q, x, y, z):
     w, a, b, c = q
     tx, ty, tz = 2.0 * (b * z - c * y), 2.0 * (c * x - a * z), 2.0 * (a * y - b * x)
     return x + w * tx + b * tz - c * ty, y + w * ty + c * tx - a * tz, z + w * tz + a * ty - b * tx
+
+
+def _yaw_turn(psi_rad):
+    """q_z(ψ): a turn by ψ about the NED vertical."""
+    return (math.cos(0.5 * psi_rad), 0.0, 0.0, math.sin(0.5 * psi_rad))
 
 
 def _matrix(q):
@@ -166,9 +172,12 @@ class Ahf2(Estimator):
         self._rest_acc = None
         self._rest_t = 0.0
         self._rest = 0.0
+        self._heading_offset = 0.0  # ψ_m (step 8), rad
+        self._heading_known = False
 
     def _set_attitude(self, q):
-        self._q = self._q_g = q
+        self._q = q
+        self._q_g = quaternion_product(_yaw_turn(-self._heading_offset), q)  # q = q_z(ψ_m) ⊗ q_c ⊗ q_g
         self._q_c = (1.0, 0.0, 0.0, 0.0)
         self._start = (0.0, [0.0] * 12)  # the low-pass starts again from the next accelerometer sample
 
@@ -236,7 +245,10 @@ class Ahf2(Estimator):
                 sh = math.sin(0.5 * delta)
                 q_c = self._q_c = quaternion_product((math.cos(0.5 * delta), ux * sh, uy * sh, 0.0), q_c)
                 turn = (ux * delta, uy * delta)
-        q = self._q = quaternion_product(q_c, q_g)
+        q = quaternion_product(q_c, q_g)
+        if self.uses_magnetometer:
+            q = quaternion_product(_yaw_turn(self._follow_magnetometer(q, dt_s)), q)
+        self._q = q
         if turn is not None and s.motion_bias_ki > 0.0 and not self._rest:
             # 7. bias in motion: the correction turn in body axes drives the integral
             # (body axes through the low-passed rotation: cᵢ = Σⱼ L̄ⱼᵢ vⱼ, v the turn in I)
@@ -251,6 +263,20 @@ class Ahf2(Estimator):
             bz = min(max(bz - ki * cz, -m), m)
             self._bias = (bx, by, bz)
         return q, _new_tuple(Ahf2Diagnostics, (status, self._lam, self._e_a, self._rest, self._tau, *self._bias))
+
+    def _follow_magnetometer(self, q6, dt_s):
+        """Step 8: the heading offset ψ_m, moved toward the magnetometer's when this sample has a reading."""
+        mag = self._mag
+        if mag is not None:
+            hx, hy, _ = _rotate(q6, *mag)
+            if hx * hx + hy * hy > 0.0:  # False for NaN too
+                target = -math.atan2(hy, hx)
+                if not self._heading_known:
+                    self._heading_offset, self._heading_known = target, True
+                else:
+                    k = dt_s / (self.settings.tau_mag_s + dt_s)
+                    self._heading_offset += k * wrap_pi(target - self._heading_offset)
+        return self._heading_offset
 
     def _detect_rest(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
         """Steps 5 and 6 (module docstring)."""
@@ -274,3 +300,10 @@ class Ahf2(Estimator):
             kb = dt_s / (min(self._rest_t - s.rest_min_s, s.tau_bias_rest_s) + dt_s)
             bx, by, bz = self._bias
             self._bias = (bx + kb * (mx - bx), by + kb * (my - by), bz + kb * (mz - bz))
+
+
+class Ahf2m(Ahf2):
+    """AHF2 with its heading following the magnetometer (step 8 of the module docstring)."""
+
+    name = "ahf2m"
+    uses_magnetometer = True

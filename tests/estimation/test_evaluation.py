@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 from ahrs.filters import Madgwick
 
+from groundstation import quaternion as quat
 from groundstation.datasets import DatasetError, read_csv
-from groundstation.estimation.evaluation import evaluate_trial, inclination_error_rad, sample_periods_s, score
+from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, sample_periods_s, score
+from groundstation.sim.profiles import make_profile
 
 TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
 SLICE = 12_000  # about 42 s at 285.7 Hz: enough to include rest and motion, quick to run
@@ -39,6 +41,42 @@ def test_inclination_error_matches_the_definition():
         "incl_rmse_deg": pytest.approx(np.sqrt(25 / 3)),
         "incl_max_deg": pytest.approx(4.0),
     }
+
+
+def test_heading_error_removes_one_constant_offset_and_ignores_inclination():
+    """Estimates built from the simulator's truth with a known heading error ψ(t) = offset + e(t) about
+    the vertical, on top of a known tilt error: the score is e's RMS (e has zero mean over whole periods),
+    whatever the offset and the tilt, in either truth frame; the inclination error is the tilt's."""
+    t = np.arange(0.0, 60.0, 0.01)
+    truth_ned = make_profile("flight", 60.0, seed=2).truth(t).q_body_to_ned
+    wobble_rad = np.radians(2.0) * np.sin(2 * np.pi * t / 10.0)  # six whole periods: zero mean
+    tilt = quat.from_rotation_vector(np.column_stack([np.full_like(t, np.radians(3.0)), np.zeros_like(t), np.zeros_like(t)]))
+    half_turn = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])  # NED <-> ENU
+    for offset_deg in (0.0, 37.0, -170.0):
+        psi = np.radians(offset_deg) + wobble_rad
+        yaw_error = np.column_stack([np.cos(psi / 2), np.zeros_like(t), np.zeros_like(t), np.sin(psi / 2)])
+        est = quat.multiply(quat.multiply(yaw_error, tilt), truth_ned)  # error turns in the earth frame
+        for q_true, frame in ((truth_ned, "NED"), (quat.multiply(half_turn, truth_ned), "ENU")):
+            error = heading_error_rad(est, q_true, frame)
+            assert np.abs(error - wobble_rad).max() < 1e-9
+            assert score(error, prefix="heading")["heading_rmse_deg"] == pytest.approx(2.0 / np.sqrt(2.0), rel=1e-6)
+            assert np.degrees(inclination_error_rad(est, q_true, frame)) == pytest.approx(np.full_like(t, 3.0))
+    # a missing truth sample is NaN and does not move the offset
+    q_true = truth_ned.copy()
+    q_true[:100] = np.nan
+    error = heading_error_rad(quat.multiply(yaw_error, truth_ned), q_true, "NED")
+    assert np.isnan(error[:100]).all() and np.abs(error[100:] - (wobble_rad[100:] - np.mean(wobble_rad[100:]))).max() < 1e-3
+
+
+def test_the_magnetometer_reaches_the_estimators_that_use_it(trial_slice):
+    """On a trial with a magnetometer, hfm is not hf (before: it was, bit for bit, as the magnetometer
+    never reached it), and heading is scored for the estimators that use it, VQF with its magnetometer
+    among them, and only for those."""
+    figures = evaluate_trial(read_csv(trial_slice), ["hf", "hfm", "vqf", "ahf2m", "mcf"])
+    assert figures["hfm"]["incl_rmse_deg"] != figures["hf"]["incl_rmse_deg"]
+    assert "heading_rmse_deg" not in figures["hf"]
+    for name in ("hfm", "vqf", "ahf2m", "mcf"):
+        assert 0.0 < figures[name]["heading_rmse_deg"] < 5.0, (name, figures[name])
 
 
 def test_hf_on_broad_equals_ahrs_madgwick(trial_slice):
