@@ -18,7 +18,11 @@ the heading of the others is the gyro's and drifts by design.
 
 from __future__ import annotations
 
+import dataclasses
+from fractions import Fraction
+
 import numpy as np
+from scipy.signal import resample_poly
 
 from groundstation import quaternion
 from groundstation.estimation import ESTIMATORS, create
@@ -85,6 +89,36 @@ def sample_periods_s(time_s) -> np.ndarray:
     gaps = np.diff(time_s)
     first = np.median(gaps) if len(gaps) else 0.0
     return np.concatenate([[first], gaps])
+
+
+def resampled(trial, rate_hz: float):
+    """The trial at ``rate_hz`` (a board's rate): the sensors through scipy's polyphase resampler (its
+    anti-aliasing low-pass, as a board's sensor filter), the truth interpolated between its two nearest
+    samples (normalised linear, NaN if either is NaN), ``moving`` from the nearest sample. The rate ratio
+    must be a ratio of small integers (BROAD's 2000/7 Hz to 100 Hz: 7/20)."""
+    period_s = float(np.median(np.diff(trial.time_s)))
+    ratio = Fraction(rate_hz * period_s).limit_denominator(100)
+    if abs(ratio - rate_hz * period_s) > 1e-3 * rate_hz * period_s:
+        raise ValueError(f"{rate_hz:g} Hz is not a small rational multiple of the trial's {1.0 / period_s:g} Hz")
+    up, down = ratio.numerator, ratio.denominator
+
+    def sensor(values):
+        return None if values is None else resample_poly(values, up, down, axis=0)
+
+    gyr = sensor(trial.gyr_rad_s)
+    position = np.arange(len(gyr)) * down / up  # in input samples
+    true_q = None
+    if trial.true_q is not None:
+        i0 = np.minimum(position.astype(int), len(trial.time_s) - 2)
+        a = (position - i0)[:, None]
+        q0, q1 = trial.true_q[i0], trial.true_q[i0 + 1]
+        q1 = q1 * np.where(np.sum(q0 * q1, axis=1, keepdims=True) < 0.0, -1.0, 1.0)  # the same hemisphere
+        true_q = quaternion.normalise((1.0 - a) * q0 + a * q1)
+    nearest = np.minimum(np.rint(position).astype(int), len(trial.time_s) - 1)
+    return dataclasses.replace(
+        trial, time_s=trial.time_s[0] + position * period_s, gyr_rad_s=gyr, acc_m_s2=sensor(trial.acc_m_s2),
+        mag_uT=sensor(trial.mag_uT), true_q=true_q, moving=None if trial.moving is None else trial.moving[nearest],
+    )
 
 
 def run_on_trial(trial, names, overrides=None) -> dict[str, tuple[np.ndarray, dict[str, np.ndarray]]]:

@@ -11,7 +11,8 @@ from ahrs.filters import Madgwick
 
 from groundstation import quaternion as quat
 from groundstation.datasets import DatasetError, read_csv
-from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, sample_periods_s, score
+from groundstation.datasets import Trial
+from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score
 from groundstation.sim.profiles import make_profile
 
 TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
@@ -66,6 +67,26 @@ def test_heading_error_removes_one_constant_offset_and_ignores_inclination():
     q_true[:100] = np.nan
     error = heading_error_rad(quat.multiply(yaw_error, truth_ned), q_true, "NED")
     assert np.isnan(error[:100]).all() and np.abs(error[100:] - (wobble_rad[100:] - np.mean(wobble_rad[100:]))).max() < 1e-3
+
+
+def test_resampled_to_the_boards_rate_keeps_slow_signals_and_the_truth():
+    """BROAD's 2000/7 Hz to 100 Hz: a 1 Hz sine keeps its amplitude (the resampler's low-pass cuts
+    near 50 Hz), and the truth, a steady turn about z at 100 °/s, lands on its value at the new times."""
+    t = np.arange(4000) * 0.0035
+    rate = np.radians(100.0)
+    sine = np.sin(2 * np.pi * t)[:, None] * np.ones(3)
+    true_q = np.column_stack([np.cos(rate * t / 2), 0 * t, 0 * t, np.sin(rate * t / 2)])
+    true_q[1000] = np.nan  # a lost truth sample stays lost
+    trial = Trial(time_s=t, gyr_rad_s=sine, acc_m_s2=sine, mag_uT=None, true_q=true_q, moving=t > 5.0)
+    r = resampled(trial, 100.0)
+    assert len(r) == 1400 and np.allclose(np.diff(r.time_s), 0.01)
+    middle = (r.time_s > 1.0) & (r.time_s < 13.0)  # away from the resampler's edges
+    assert np.abs(r.gyr_rad_s[middle] - np.sin(2 * np.pi * r.time_s[middle])[:, None]).max() < 2e-3
+    expected = np.column_stack([np.cos(rate * r.time_s / 2), 0 * r.time_s, 0 * r.time_s, np.sin(rate * r.time_s / 2)])
+    known = np.isfinite(r.true_q).all(axis=1)
+    assert (~known).sum() == 1 and np.degrees(quat.angle_between(r.true_q[known], expected[known])).max() < 1e-4
+    far = np.abs(r.time_s - 5.0) > 0.0035  # within one input period of the switch, either is right
+    assert np.array_equal(r.moving[far], r.time_s[far] > 5.0) and r.mag_uT is None
 
 
 def test_the_magnetometer_reaches_the_estimators_that_use_it(trial_slice):
@@ -128,12 +149,13 @@ def run_cli(*args):
 
 
 def test_evaluate_command_json(trial_slice):
-    result = run_cli(str(trial_slice), "--filters", "hf,ecf", "--set", "hf.beta=0.033", "--json")
+    result = run_cli(str(trial_slice), "--filters", "hf,ecf,hfm", "--set", "hf.beta=0.033", "--json")
     assert result.returncode == 0, result.stderr
     figures = json.loads(result.stdout)
-    assert list(figures) == ["hf", "ecf"]
-    expected = evaluate_trial(read_csv(trial_slice), ["hf"], {"hf": {"beta": 0.033}})["hf"]
-    assert figures["hf"] == pytest.approx(expected)
+    assert list(figures) == ["hf", "ecf", "hfm"]
+    expected = evaluate_trial(read_csv(trial_slice), ["hf", "hfm"], {"hf": {"beta": 0.033}})
+    assert figures["hf"] == pytest.approx(expected["hf"])
+    assert figures["hfm"] == pytest.approx(expected["hfm"]) and "heading_rmse_deg" in figures["hfm"]  # the CLI scores heading too
 
 
 @pytest.mark.parametrize(
