@@ -318,4 +318,7 @@ class Ahf2m(Ahf2):
     """AHF2 with its heading following the magnetometer (step 8 of the module docstring)."""
 
     name = "ahf2m"
+    label = "AHF2+mag"
+    colour = "purple"
+    live = False  # evaluate and replays; live sessions have hfm, ecfm, mcf and vqf for the heading
     uses_magnetometer = True
