@@ -115,8 +115,8 @@ STATUS_NAMES = {
 }
 
 # The interval rule (module docstring): a step integrates at most STEP_RATIO_MAX running intervals; the
-# running interval follows each (limited) dt with this weight. Both powers of two: exact in float32 too.
-STEP_RATIO_MAX = 2.0
+# running interval follows each (limited) dt with this weight.
+STEP_RATIO_MAX = 1.5
 INTERVAL_WEIGHT = 0.25
 
 
