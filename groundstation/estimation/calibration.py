@@ -65,89 +65,77 @@ class RestBiasCalibrator:
     ``detect_rest`` + ``gyro_bias_rad_s``)::
 
         cal = RestBiasCalibrator()
-        bias = cal.step(gyr_rad_s, acc_g, dt_s)   # None until measured, then the bias (3 floats, rad/s)
+        bias = cal.step(gyr_rad_s, acc_g, dt_s, armed=False)   # None until measured, then (3 floats, rad/s)
 
-    Still: every gyro axis within ``gyro_dev_max_rad_s`` of the running mean (the mean itself is the
-    bias, up to ±20 °/s on an uncalibrated MPU-6050, so magnitude says nothing) and the accelerometer
-    within ``acc_dev_max_g`` of 1 g on every sample. After ``duration_s`` of still samples the mean is the
-    bias and stays fixed; any motion first restarts the count. ``restart()`` measures again (the user's
-    command, once the craft is put down).
+    Still means, over a window of ``duration_s`` of consecutive samples: every gyro axis's standard
+    deviation below ``gyro_std_max_rad_s`` and every accelerometer axis's below ``acc_std_max_g`` (noise
+    only: no motion, no vibration), the mean accelerometer norm within ``acc_dev_max_g`` of 1 g, and the
+    mean rate within ``bias_max_rad_s`` (the gyro the host gets was calibrated at boot, by the board or
+    the autopilot, so a larger steady rate is a turn: a loiter has a steady rate with no variance at
+    all). Then the window's mean rate is the bias and stays fixed; a window that is not still starts a
+    new one. Refused, the window restarted: below ``min_rate_hz`` (a window of 2 s at 4 Hz is 8 samples,
+    too few to tell a turn from the noise), a non-finite sample, and while a MAVLink vehicle is
+    ``armed`` (it may be flying however still it looks). A steady turn slower than ``bias_max_rad_s``
+    cannot be told from a bias by these sensors. ``restart()`` measures again (the user's command, once
+    the craft is put down).
     """
 
-    def __init__(self, duration_s: float = 2.0, gyro_dev_max_rad_s: float = 0.02, acc_dev_max_g: float = 0.05):
-        if not duration_s > 0 or not gyro_dev_max_rad_s > 0 or not acc_dev_max_g > 0:
-            raise ValueError("duration_s, gyro_dev_max_rad_s and acc_dev_max_g must be positive")
+    def __init__(self, duration_s: float = 2.0, gyro_std_max_rad_s: float = math.radians(0.5), acc_std_max_g: float = 0.01,
+                 acc_dev_max_g: float = 0.05, bias_max_rad_s: float = math.radians(3.0), min_rate_hz: float = 20.0):
+        if not all(v > 0 for v in (duration_s, gyro_std_max_rad_s, acc_std_max_g, acc_dev_max_g, bias_max_rad_s, min_rate_hz)):
+            raise ValueError("duration_s, the deviation and bias bounds and min_rate_hz must be positive")
         self.duration_s = duration_s
-        self.gyro_dev_max_rad_s = gyro_dev_max_rad_s
+        self.gyro_std_max_rad_s = gyro_std_max_rad_s
+        self.acc_std_max_g = acc_std_max_g
         self.acc_dev_max_g = acc_dev_max_g
+        self.bias_max_rad_s = bias_max_rad_s
+        self.max_dt_s = 1.0 / min_rate_hz
         self.restart()
 
     def restart(self) -> None:
         self.bias_rad_s: tuple[float, float, float] | None = None
-        self._sum = [0.0, 0.0, 0.0]
+        self._new_window()
+
+    def _new_window(self) -> None:
+        self._sums = [0.0] * 12  # gyro x y z, acc x y z, then their squares
         self._n = 0
         self._still_s = 0.0
 
-    def measure(self, gyr_rad_s: np.ndarray, acc_g: np.ndarray, dt_s: np.ndarray) -> int | None:
-        """``step`` over (N, 3), (N, 3), (N,) float64 arrays from a fresh start, stopping where the bias is
-        measured: returns that sample's index (``bias_rad_s`` is then set, bit for bit as ``step`` sets
-        it), or None. The sums are running sums (``np.cumsum`` adds in order, as ``step`` does) from the
-        last restart of the count; where a sample restarts it, the next one starts over.
-        """
+    def measure(self, gyr_rad_s, acc_g, dt_s, armed=None) -> int | None:
+        """``step`` over (N, 3), (N, 3), (N,) arrays (and an optional (N,) ``armed``) from a fresh start,
+        stopping where the bias is measured: returns that sample's index (``bias_rad_s`` set), or None."""
         if self._n or self.bias_rad_s is not None:
             raise ValueError("measure() starts from a fresh calibrator")
-        n = len(dt_s)
-        ax, ay, az = acc_g[:, 0], acc_g[:, 1], acc_g[:, 2]
-        with np.errstate(invalid="ignore", over="ignore"):
-            norm = np.sqrt(ax * ax + ay * ay + az * az)  # correctly rounded, as math.sqrt in step
-            acc_still = (np.abs(norm - 1.0) <= self.acc_dev_max_g) & (dt_s > 0)
-        candidates = np.flatnonzero(acc_still)
-        start, window = 0, 64
-        while True:
-            i = np.searchsorted(candidates, start)
-            if i == len(candidates):
-                return None
-            start = int(candidates[i])
-            end = min(n, start + window)
-            block = acc_still[start:end]
-            end = start + (int(np.argmin(block)) if not block.all() else len(block))  # the acc-still run
-            sums = np.cumsum(gyr_rad_s[start:end], axis=0)
-            counts = np.arange(1, end - start)[:, None]
-            with np.errstate(invalid="ignore"):
-                deviation = np.abs(gyr_rad_s[start + 1 : end] - sums[:-1] / counts)
-                still = np.concatenate(([True], (deviation <= self.gyro_dev_max_rad_s).all(axis=1)))
-            stop = int(np.argmin(still)) if not still.all() else end - start  # the first sample that moved
-            still_s = np.cumsum(dt_s[start : start + stop])
-            done = np.flatnonzero(still_s >= self.duration_s)
-            if len(done):
-                k = int(done[0])
-                self._n, self._still_s = k + 1, float(still_s[k])
-                self._sum = sums[k].tolist()
-                self.bias_rad_s = tuple((sums[k] / (k + 1)).tolist())
-                return start + k
-            if stop == end - start and end < n and acc_still[end - 1] and end - start == window:
-                window *= 2  # still going at the window's end: look further at once
-                continue
-            start, window = start + stop + (stop < end - start), 64
+        flags = [False] * len(dt_s) if armed is None else np.asarray(armed, dtype=bool).tolist()
+        for k, (g, a, d, on) in enumerate(zip(np.asarray(gyr_rad_s).tolist(), np.asarray(acc_g).tolist(), np.asarray(dt_s).tolist(), flags)):
+            if self.step(g, a, d, on) is not None:
+                return k
+        return None
 
-    def step(self, gyr_rad_s, acc_g, dt_s):
+    def step(self, gyr_rad_s, acc_g, dt_s, armed: bool = False):
         if self.bias_rad_s is not None:
             return self.bias_rad_s
-        gx, gy, gz = gyr_rad_s
-        ax, ay, az = acc_g
-        n2 = ax * ax + ay * ay + az * az
-        # NaN fails every comparison: a bad sample is not still.
-        still = abs(math.sqrt(n2) - 1.0) <= self.acc_dev_max_g and dt_s > 0
-        if still and self._n:
-            m = self.gyro_dev_max_rad_s
-            sx, sy, sz = (s / self._n for s in self._sum)
-            still = abs(gx - sx) <= m and abs(gy - sy) <= m and abs(gz - sz) <= m
-        if not still:
-            self._sum, self._n, self._still_s = [0.0, 0.0, 0.0], 0, 0.0
+        values = (*gyr_rad_s, *acc_g)
+        # NaN fails every comparison: a bad sample or interval refuses like a slow rate or an armed vehicle.
+        if armed or not (0.0 < dt_s <= self.max_dt_s) or not all(abs(v) < math.inf for v in values):
+            self._new_window()
             return None
-        self._sum = [self._sum[0] + gx, self._sum[1] + gy, self._sum[2] + gz]
+        sums = self._sums
+        for i, v in enumerate(values):
+            sums[i] += v
+            sums[i + 6] += v * v
         self._n += 1
         self._still_s += dt_s
         if self._still_s >= self.duration_s:
-            self.bias_rad_s = tuple(s / self._n for s in self._sum)
+            n = self._n
+            mean = [v / n for v in sums[:6]]
+            var = [max(0.0, sums[i + 6] / n - mean[i] * mean[i]) for i in range(6)]
+            gyro_still = all(v <= self.gyro_std_max_rad_s**2 for v in var[:3])
+            acc_still = all(v <= self.acc_std_max_g**2 for v in var[3:])
+            level = abs(math.sqrt(mean[3] ** 2 + mean[4] ** 2 + mean[5] ** 2) - 1.0) <= self.acc_dev_max_g
+            slow = math.sqrt(mean[0] ** 2 + mean[1] ** 2 + mean[2] ** 2) <= self.bias_max_rad_s
+            if gyro_still and acc_still and level and slow:
+                self.bias_rad_s = (mean[0], mean[1], mean[2])
+            else:
+                self._new_window()
         return self.bias_rad_s
