@@ -14,6 +14,8 @@ import math
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from groundstation.readings import optional_rows
+
 
 def detect_rest(gyr_rad_s, acc_g, window: int = 50, gyro_max_rad_s: float = 0.03, acc_std_max_g: float = 0.01):
     """Boolean mask (N,): True where the sample lies in a window of ``window`` samples that is still.
@@ -65,30 +67,34 @@ class RestBiasCalibrator:
     ``detect_rest`` + ``gyro_bias_rad_s``)::
 
         cal = RestBiasCalibrator()
-        bias = cal.step(gyr_rad_s, acc_g, dt_s, armed=False)   # None until measured, then (3 floats, rad/s)
+        bias = cal.step(gyr_rad_s, acc_g, dt_s, armed, mag_ut, gps)   # None until measured, then 3 floats, rad/s
 
     Still means, over a window of ``duration_s`` of consecutive samples: every gyro axis's standard
     deviation below ``gyro_std_max_rad_s`` and every accelerometer axis's below ``acc_std_max_g`` (noise
-    only: no motion, no vibration), the mean accelerometer norm within ``acc_dev_max_g`` of 1 g, and the
-    mean rate within ``bias_max_rad_s`` (the gyro the host gets was calibrated at boot, by the board or
-    the autopilot, so a larger steady rate is a turn: a loiter has a steady rate with no variance at
-    all). Then the window's mean rate is the bias and stays fixed; a window that is not still starts a
-    new one. Refused, the window restarted: below ``min_rate_hz`` (a window of 2 s at 4 Hz is 8 samples,
-    too few to tell a turn from the noise), a non-finite sample, and while a MAVLink vehicle is
-    ``armed`` (it may be flying however still it looks). A steady turn slower than ``bias_max_rad_s``
-    cannot be told from a bias by these sensors. ``restart()`` measures again (the user's command, once
-    the craft is put down).
+    only: no motion, no vibration), the mean accelerometer norm within ``acc_dev_max_g`` of 1 g, every
+    magnetometer axis's standard deviation below ``mag_std_max_ut`` (readings that arrived, if any) and
+    every GPS fix's speed below ``gps_speed_max_m_s``. Then the window's mean rate is the bias and stays
+    fixed; a window that is not still starts a new one. The gyro's magnitude says nothing (a board that
+    skipped its boot calibration streams a bias up to ±20 °/s), so a steady turn, whose rate has no
+    variance and whose specific force stays near 1 g at a small bank, is told from a bias by the
+    magnetometer turning with it or by the GPS speed; with neither, a steady turn at a small bank cannot
+    be told from a bias by these sensors. Refused, the window restarted: below ``min_rate_hz`` (a window of
+    2 s at 4 Hz is 8 samples, too few to tell a turn from the noise), a non-finite sample, and while a
+    MAVLink vehicle is ``armed`` (it may be flying however still it looks). ``restart()`` measures again
+    (the user's command, once the craft is put down).
     """
 
     def __init__(self, duration_s: float = 2.0, gyro_std_max_rad_s: float = math.radians(0.5), acc_std_max_g: float = 0.01,
-                 acc_dev_max_g: float = 0.05, bias_max_rad_s: float = math.radians(3.0), min_rate_hz: float = 20.0):
-        if not all(v > 0 for v in (duration_s, gyro_std_max_rad_s, acc_std_max_g, acc_dev_max_g, bias_max_rad_s, min_rate_hz)):
-            raise ValueError("duration_s, the deviation and bias bounds and min_rate_hz must be positive")
+                 acc_dev_max_g: float = 0.05, mag_std_max_ut: float = 1.5, gps_speed_max_m_s: float = 1.0, min_rate_hz: float = 20.0):
+        bounds = (duration_s, gyro_std_max_rad_s, acc_std_max_g, acc_dev_max_g, mag_std_max_ut, gps_speed_max_m_s, min_rate_hz)
+        if not all(v > 0 for v in bounds):
+            raise ValueError("duration_s, the deviation, field and speed bounds and min_rate_hz must be positive")
         self.duration_s = duration_s
         self.gyro_std_max_rad_s = gyro_std_max_rad_s
         self.acc_std_max_g = acc_std_max_g
         self.acc_dev_max_g = acc_dev_max_g
-        self.bias_max_rad_s = bias_max_rad_s
+        self.mag_std_max_ut = mag_std_max_ut
+        self.gps_speed_max_m_s = gps_speed_max_m_s
         self.max_dt_s = 1.0 / min_rate_hz
         self.restart()
 
@@ -97,45 +103,68 @@ class RestBiasCalibrator:
         self._new_window()
 
     def _new_window(self) -> None:
-        self._sums = [0.0] * 12  # gyro x y z, acc x y z, then their squares
-        self._n = 0
+        self._imu = _Moments(6)  # gyro x y z, acc x y z
+        self._mag = _Moments(3)
         self._still_s = 0.0
 
-    def measure(self, gyr_rad_s, acc_g, dt_s, armed=None) -> int | None:
-        """``step`` over (N, 3), (N, 3), (N,) arrays (and an optional (N,) ``armed``) from a fresh start,
-        stopping where the bias is measured: returns that sample's index (``bias_rad_s`` set), or None."""
-        if self._n or self.bias_rad_s is not None:
+    def measure(self, gyr_rad_s, acc_g, dt_s, armed=None, mag_ut=None, gps=None) -> int | None:
+        """``step`` over (N, 3), (N, 3), (N,) arrays, with the optional (N,) ``armed`` and the (N, 3) ``mag_ut``
+        and (N, 4) ``gps`` of ``Estimator.run`` (NaN rows: none), from a fresh start, stopping where the
+        bias is measured: returns that sample's index (``bias_rad_s`` set), or None."""
+        if self._imu.n or self.bias_rad_s is not None:
             raise ValueError("measure() starts from a fresh calibrator")
-        flags = [False] * len(dt_s) if armed is None else np.asarray(armed, dtype=bool).tolist()
-        for k, (g, a, d, on) in enumerate(zip(np.asarray(gyr_rad_s).tolist(), np.asarray(acc_g).tolist(), np.asarray(dt_s).tolist(), flags)):
-            if self.step(g, a, d, on) is not None:
+        n = len(dt_s)
+        flags = [False] * n if armed is None else np.asarray(armed, dtype=bool).tolist()
+        mags = optional_rows(mag_ut, n, 3, "mag_ut")
+        fixes = optional_rows(gps, n, 4, "gps")
+        rows = zip(np.asarray(gyr_rad_s).tolist(), np.asarray(acc_g).tolist(), np.asarray(dt_s).tolist(), flags, mags, fixes)
+        for k, (g, a, d, on, m, f) in enumerate(rows):
+            if self.step(g, a, d, on, m, f) is not None:
                 return k
         return None
 
-    def step(self, gyr_rad_s, acc_g, dt_s, armed: bool = False):
+    def step(self, gyr_rad_s, acc_g, dt_s, armed: bool = False, mag_ut=None, gps=None):
+        """One sample; ``mag_ut`` the magnetometer reading (µT) and ``gps`` the fix ((vel_n, vel_e, vel_d m/s,
+        ...)) that arrived since the previous sample, None when none did."""
         if self.bias_rad_s is not None:
             return self.bias_rad_s
         values = (*gyr_rad_s, *acc_g)
         # NaN fails every comparison: a bad sample or interval refuses like a slow rate or an armed vehicle.
-        if armed or not (0.0 < dt_s <= self.max_dt_s) or not all(abs(v) < math.inf for v in values):
+        moving = gps is not None and not math.hypot(gps[0], gps[1], gps[2]) <= self.gps_speed_max_m_s
+        if armed or moving or not (0.0 < dt_s <= self.max_dt_s) or not all(abs(v) < math.inf for v in values):
             self._new_window()
             return None
-        sums = self._sums
-        for i, v in enumerate(values):
-            sums[i] += v
-            sums[i + 6] += v * v
-        self._n += 1
+        self._imu.add(values)
+        if mag_ut is not None and all(abs(v) < math.inf for v in mag_ut):
+            self._mag.add(mag_ut)
         self._still_s += dt_s
         if self._still_s >= self.duration_s:
-            n = self._n
-            mean = [v / n for v in sums[:6]]
-            var = [max(0.0, sums[i + 6] / n - mean[i] * mean[i]) for i in range(6)]
-            gyro_still = all(v <= self.gyro_std_max_rad_s**2 for v in var[:3])
-            acc_still = all(v <= self.acc_std_max_g**2 for v in var[3:])
-            level = abs(math.sqrt(mean[3] ** 2 + mean[4] ** 2 + mean[5] ** 2) - 1.0) <= self.acc_dev_max_g
-            slow = math.sqrt(mean[0] ** 2 + mean[1] ** 2 + mean[2] ** 2) <= self.bias_max_rad_s
-            if gyro_still and acc_still and level and slow:
+            mean, var = self._imu.mean_var()
+            still = all(v <= self.gyro_std_max_rad_s**2 for v in var[:3]) and all(v <= self.acc_std_max_g**2 for v in var[3:])
+            still = still and abs(math.hypot(*mean[3:]) - 1.0) <= self.acc_dev_max_g
+            if self._mag.n >= 2:
+                still = still and all(v <= self.mag_std_max_ut**2 for v in self._mag.mean_var()[1])
+            if still:
                 self.bias_rad_s = (mean[0], mean[1], mean[2])
             else:
                 self._new_window()
         return self.bias_rad_s
+
+
+class _Moments:
+    """Running sums of values and their squares: means and (population) variances per channel."""
+
+    def __init__(self, width: int):
+        self.n = 0
+        self._sums = [0.0] * width
+        self._squares = [0.0] * width
+
+    def add(self, values) -> None:
+        self.n += 1
+        for i, v in enumerate(values):
+            self._sums[i] += v
+            self._squares[i] += v * v
+
+    def mean_var(self):
+        mean = [s / self.n for s in self._sums]
+        return mean, [max(0.0, q / self.n - m * m) for q, m in zip(self._squares, mean)]

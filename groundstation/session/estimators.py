@@ -39,7 +39,7 @@ class EstimatorBank:
         Once the craft has been still long enough to measure the gyro bias (``RestBiasCalibrator``), the
         estimators that do not estimate their own get the gyro with that bias removed.
         """
-        bias = self.gyro_calibration.step(gyr, acc, dt_s, self.armed)
+        bias = self.gyro_calibration.step(gyr, acc, dt_s, self.armed, mag, gps)
         unbiased = gyr if bias is None else (gyr[0] - bias[0], gyr[1] - bias[1], gyr[2] - bias[2])
         row: list[float] = []
         for name, estimator in self.estimators.items():
