@@ -34,8 +34,9 @@ Robust stepping (every estimator, decided here once):
     yaw kept (``REINITIALISED``); if the accelerometer is unusable too, the estimate is held.
   - Otherwise one step integrates at most ``STEP_RATIO_MAX`` (1.5) running intervals: a longer ``dt_s``
     (a radio dropout, a logger stall) is integrated as that (``LIMITED``). The running interval is the
-    first integrated ``dt_s``, then a low-pass (weight ``INTERVAL_WEIGHT``) of the integrated ones, so it
-    follows a stream that changes its rate (4 Hz, then 50 Hz) within a few samples.
+    first integrated ``dt_s``, then a low-pass (weight ``INTERVAL_WEIGHT``) of the integrated ones: it
+    follows a rate that rises (4 Hz, then 50 Hz) within a few samples, and one that falls by 1/8 a sample
+    (from 50 Hz to 4 Hz in about 20 samples, which meanwhile integrate less than their whole interval).
 
   Why a limit and not one step over the whole interval: the corrections are Euler steps whose size grows
   with Δt — seed 000 eq. 19, ``q(k) = q(k-1) + q̇ Δt`` with eq. 18's normalised gradient, turns the
