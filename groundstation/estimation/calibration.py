@@ -14,8 +14,6 @@ import math
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from groundstation.readings import optional_rows
-
 
 def detect_rest(gyr_rad_s, acc_g, window: int = 50, gyro_max_rad_s: float = 0.03, acc_std_max_g: float = 0.01):
     """Boolean mask (N,): True where the sample lies in a window of ``window`` samples that is still.
@@ -108,19 +106,51 @@ class RestBiasCalibrator:
         self._still_s = 0.0
 
     def measure(self, gyr_rad_s, acc_g, dt_s, armed=None, mag_ut=None, gps=None) -> int | None:
-        """``step`` over (N, 3), (N, 3), (N,) arrays, with the optional (N,) ``armed`` and the (N, 3) ``mag_ut``
-        and (N, 4) ``gps`` of ``Estimator.run`` (NaN rows: none), from a fresh start, stopping where the
-        bias is measured: returns that sample's index (``bias_rad_s`` set), or None."""
+        """``step`` over (N, 3), (N, 3), (N,) float64 arrays, with the optional (N,) ``armed`` and the (N, 3)
+        ``mag_ut`` and (N, 4) ``gps`` of ``Estimator.run`` (NaN rows: none), from a fresh start, stopping
+        where the bias is measured: returns that sample's index (``bias_rad_s`` set, bit for bit as ``step``
+        sets it), or None. Window by window: the sums are running sums (``np.cumsum`` adds in order, as
+        ``step`` does) from the window's first sample."""
         if self._imu.n or self.bias_rad_s is not None:
             raise ValueError("measure() starts from a fresh calibrator")
-        n = len(dt_s)
-        flags = [False] * n if armed is None else np.asarray(armed, dtype=bool).tolist()
-        mags = optional_rows(mag_ut, n, 3, "mag_ut")
-        fixes = optional_rows(gps, n, 4, "gps")
-        rows = zip(np.asarray(gyr_rad_s).tolist(), np.asarray(acc_g).tolist(), np.asarray(dt_s).tolist(), flags, mags, fixes)
-        for k, (g, a, d, on, m, f) in enumerate(rows):
-            if self.step(g, a, d, on, m, f) is not None:
-                return k
+        imu = np.column_stack([gyr_rad_s, acc_g]).astype(float)
+        dt = np.asarray(dt_s, dtype=float)
+        n = len(dt)
+        with np.errstate(invalid="ignore"):
+            refused = ~(np.isfinite(imu).all(axis=1) & (dt > 0.0) & (dt <= self.max_dt_s))
+        if armed is not None:
+            refused |= np.asarray(armed, dtype=bool)
+        if gps is not None:
+            fixes = np.asarray(gps, dtype=float).reshape(-1, 4)
+            for k in np.flatnonzero(~np.isnan(fixes).all(axis=1)).tolist():
+                refused[k] |= not math.hypot(*fixes[k, :3].tolist()) <= self.gps_speed_max_m_s
+        mags = None if mag_ut is None else np.asarray(mag_ut, dtype=float).reshape(-1, 3)
+        refusals = np.flatnonzero(refused)
+        start, span = 0, 256
+        while start < n:
+            if refused[start]:
+                start += 1
+                continue
+            j = np.searchsorted(refusals, start)
+            stop = int(refusals[j]) if j < len(refusals) else n  # the window cannot reach past a refusal
+            still_s = np.cumsum(dt[start : min(stop, start + span)])
+            done = np.flatnonzero(still_s >= self.duration_s)
+            if not len(done):
+                if start + span < stop:
+                    span *= 2  # the window is longer than the samples looked at: look further
+                else:
+                    start = stop
+                continue
+            end = start + int(done[0]) + 1
+            self._imu = _Moments.of(imu[start:end])
+            if mags is not None:
+                block = mags[start:end]
+                self._mag = _Moments.of(block[np.isfinite(block).all(axis=1)])
+            self._still_s = float(still_s[done[0]])
+            if self._judge():
+                return end - 1
+            start = end
+        self._new_window()
         return None
 
     def step(self, gyr_rad_s, acc_g, dt_s, armed: bool = False, mag_ut=None, gps=None):
@@ -139,16 +169,21 @@ class RestBiasCalibrator:
             self._mag.add(mag_ut)
         self._still_s += dt_s
         if self._still_s >= self.duration_s:
-            mean, var = self._imu.mean_var()
-            still = all(v <= self.gyro_std_max_rad_s**2 for v in var[:3]) and all(v <= self.acc_std_max_g**2 for v in var[3:])
-            still = still and abs(math.hypot(*mean[3:]) - 1.0) <= self.acc_dev_max_g
-            if self._mag.n >= 2:
-                still = still and all(v <= self.mag_std_max_ut**2 for v in self._mag.mean_var()[1])
-            if still:
-                self.bias_rad_s = (mean[0], mean[1], mean[2])
-            else:
-                self._new_window()
+            self._judge()
         return self.bias_rad_s
+
+    def _judge(self) -> bool:
+        """At the end of a window: the bias if it was still (True), else a new window."""
+        mean, var = self._imu.mean_var()
+        still = all(v <= self.gyro_std_max_rad_s**2 for v in var[:3]) and all(v <= self.acc_std_max_g**2 for v in var[3:])
+        still = still and abs(math.hypot(*mean[3:]) - 1.0) <= self.acc_dev_max_g
+        if self._mag.n >= 2:
+            still = still and all(v <= self.mag_std_max_ut**2 for v in self._mag.mean_var()[1])
+        if still:
+            self.bias_rad_s = (mean[0], mean[1], mean[2])
+        else:
+            self._new_window()
+        return still
 
 
 class _Moments:
@@ -164,6 +199,16 @@ class _Moments:
         for i, v in enumerate(values):
             self._sums[i] += v
             self._squares[i] += v * v
+
+    @classmethod
+    def of(cls, rows: np.ndarray) -> "_Moments":
+        """The moments of (n, width) rows, summed in order as ``add`` sums them."""
+        moments = cls(rows.shape[1])
+        moments.n = len(rows)
+        if len(rows):
+            moments._sums = np.cumsum(rows, axis=0)[-1].tolist()
+            moments._squares = np.cumsum(rows * rows, axis=0)[-1].tolist()
+        return moments
 
     def mean_var(self):
         mean = [s / self.n for s in self._sums]
