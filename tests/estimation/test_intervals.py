@@ -75,3 +75,17 @@ def test_one_odd_interval_on_still_data_moves_no_estimate_more_than_a_degree(sti
         assert bool(status & LIMITED) == (interval_s > STEP_RATIO_MAX * still.dt_s)
     moved = tilt_error_deg(q[AFTER], still.truth.q_body_to_ned[AFTER]).max() - reference_error_deg(name, still)
     assert moved <= TOLERANCE_DEG, f"{name}: an interval of {interval_s} s moved the tilt error by {moved:.2f}°"
+
+
+@pytest.mark.parametrize("name", sorted(ESTIMATORS))
+def test_the_running_interval_follows_a_stream_that_changes_its_rate(name):
+    """4 Hz then 50 Hz (a MAVLink stream after its requests): nothing limited; 50 Hz then 4 Hz: the first
+    slow samples are limited while the running interval grows by 1/8 a sample, then integrated whole."""
+    n = 40
+    gyr, acc = np.zeros((2 * n, 3)), np.tile([0.0, 0.0, -1.0], (2 * n, 1))
+    rising = np.concatenate([np.full(n, 0.25), np.full(n, 0.02)])
+    _, diag = create(name).run(gyr, acc, rising)
+    assert not np.any(diag["status"] & LIMITED)
+    _, diag = create(name).run(gyr, acc, rising[::-1].copy())
+    limited = np.flatnonzero(diag["status"] & LIMITED)
+    assert limited.tolist() == list(range(n, n + len(limited))) and 15 <= len(limited) <= 25
