@@ -22,7 +22,7 @@ from groundstation.session.batch import BatchSession, batch_replay
 from groundstation.session.catalogue import Catalogue, session_catalogue
 from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
-from groundstation.session.replay import check_forced, recorded_settings, replay
+from groundstation.session.replay import check_forced, recorded_filters, recorded_settings, replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 DATASET_SUFFIXES = (".csv", ".csv.gz", ".gz")
@@ -93,7 +93,7 @@ def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
     recording = open_recording(path)
     if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
-        filters = filters or recording.metadata.get("filters", DEFAULT_FILTERS)
+        filters = filters or recorded_filters(recording)[0]
         check_forced(filters, forced)
         settings = {**recorded_settings(recording)}
         for name, values in (forced or {}).items():

@@ -82,7 +82,7 @@ def test_rest_bias_calibrator_restarts_on_motion_and_on_command():
 KINDS = ["still", "moving", "tilted", "nan", "bad_dt", "drifting", "slow", "armed", "field_turning", "gps_moving"]
 
 
-@settings(max_examples=60, deadline=None, derandomize=True)
+@settings(max_examples=60, derandomize=True)
 @given(st.lists(st.tuples(st.integers(1, 150), st.sampled_from(KINDS)), min_size=1, max_size=12), st.integers(0, 2**32))
 def test_measure_is_step_sample_for_sample(stretches, seed):
     """The batch path's calibrator: where it measures and the bias, bit for bit as step, over stretches
