@@ -329,7 +329,7 @@ class _Builder:
         s, bank = self.s, self.s.bank
         n = len(keys)
         calibrator = bank.gyro_calibration
-        measured_at = calibrator.measure(gyr, acc, dt)
+        measured_at = calibrator.measure(gyr, acc, dt, None, mag, gps)
         unbiased = gyr
         if measured_at is not None:
             bias = calibrator.bias_rad_s
