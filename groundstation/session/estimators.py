@@ -13,10 +13,14 @@ import math
 from groundstation.estimation import create
 from groundstation.estimation.calibration import RestBiasCalibrator
 
+# Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
+# reset in flight (tests/session/test_reboot_in_flight.py); the app warns for as long.
+RECONVERGE_S = 5.0
+
 
 class EstimatorBank:
-    """``filters``: estimator names (``ahf`` first by convention; the first one drives the compass
-    heading and the position); ``settings``/``forced``: name -> {setting: value}."""
+    """``filters``: estimator names (the first one drives the compass heading and the position);
+    ``settings``/``forced``: name -> {setting: value}."""
 
     def __init__(self, filters, settings=None, forced=None):
         self.filters = tuple(dict.fromkeys(filters))
@@ -26,6 +30,7 @@ class EstimatorBank:
         self.last_q: dict[str, tuple | None] = {name: None for name in self.filters}
         self.at_start = self.settings()
         self.gyro_calibration = RestBiasCalibrator()  # restart() measures again (the user's command)
+        self.armed = False  # a MAVLink vehicle's HEARTBEAT says armed: no bias is measured meanwhile
         self._bias_noted: tuple | None = None
 
     def diagnostics(self) -> dict[str, tuple[str, ...]]:
@@ -38,7 +43,7 @@ class EstimatorBank:
         Once the craft has been still long enough to measure the gyro bias (``RestBiasCalibrator``), the
         estimators that do not estimate their own get the gyro with that bias removed.
         """
-        bias = self.gyro_calibration.step(gyr, acc, dt_s)
+        bias = self.gyro_calibration.step(gyr, acc, dt_s, self.armed, mag, gps)
         unbiased = gyr if bias is None else (gyr[0] - bias[0], gyr[1] - bias[1], gyr[2] - bias[2])
         row: list[float] = []
         for name, estimator in self.estimators.items():
@@ -61,10 +66,17 @@ class EstimatorBank:
         return self.last_q[self.filters[0]] if self.filters else None
 
     def restart(self) -> None:
-        """Forget every attitude (a device reset: the next sample starts each estimator afresh)."""
+        """After a device reset or clock jump: every estimator starts over from its last attitude.
+
+        The board's reset restarts its gyro calibration, not the craft: what each estimator learnt of
+        the sensors (its gyro bias above all: the board may now subtract another offset) is forgotten,
+        so a new bias is learnt from zero, but the attitude is kept. Started from gravity instead, in
+        flight the tilt would come from an accelerating accelerometer and the heading from nothing
+        (0, or the compass only for a filter whose first sample has a reading): a magnetometer filter
+        took minutes to turn 100 degrees back (tests/session/test_reboot_in_flight.py).
+        """
         for name, estimator in self.estimators.items():
-            estimator.reset()
-            self.last_q[name] = None
+            estimator.reset(q0=self.last_q[name])
 
     def change(self, name: str, overrides: dict[str, float]) -> None:
         """New settings for one estimator from now on, keeping its attitude; ValueError before any change."""
