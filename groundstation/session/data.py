@@ -93,7 +93,8 @@ def from_trial(trial: Trial, filters, settings_used, metadata: dict) -> SessionD
         imu.update(estimate_columns(name, q, diagnostics))
     settings = {name: dataclasses.asdict(create(name, (settings_used or {}).get(name, {})).settings) for name in runs}
     return build_product(metadata, catalogue, {"imu": imu}, runs, true_q=trial.true_q, true_frame="ENU",
-                         moving=trial.moving, settings_at_start=settings, settings_at_end=settings)
+                         moving=trial.moving, magnetometer=trial.mag_uT is not None, settings_at_start=settings,
+                         settings_at_end=settings)
 
 
 def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> SessionData:
@@ -105,6 +106,7 @@ def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> Se
         link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
         events=[{**event, "t_s": (event["t_host_ns"] - t0_ns) / 1e9} for event in pipeline.events],
         settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=list(recording.damage),
+        magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
     )
     if "true_qw" in recording.samples:
         device_us = data.tables[data.sample_table]["device_time_us"]

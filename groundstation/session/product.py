@@ -19,7 +19,7 @@ import dataclasses
 import numpy as np
 
 from groundstation.errors import UserError
-from groundstation.estimation.evaluation import inclination_error_rad, score
+from groundstation.estimation.evaluation import scores, uses_magnetometer
 from groundstation.session.catalogue import Catalogue
 
 ONBOARD = "onboard"  # the aircraft's own estimate: a table, and an attitude scored beside the host estimators
@@ -40,6 +40,7 @@ class SessionData:
     catalogue: Catalogue
     filters: tuple[str, ...]  # the host estimators: their columns are in ``imu``
     protocol: str | None = None  # what the link spoke; None: no link (a dataset)
+    magnetometer: bool = False  # the estimators had magnetometer readings (so heading is scored)
     link: LinkSummary | None = None  # None: not decoded from a link (a dataset, a flight log)
     config: dict | None = None  # the aircraft's last CONFIG frame
     events: list[dict] = dataclasses.field(default_factory=list)  # each with ``t_s``: seconds from the first byte
@@ -89,12 +90,14 @@ class SessionData:
         return out
 
     def evaluate(self) -> dict[str, dict[str, float]]:
-        """Inclination RMSE / max of every estimate against the truth (BROAD's metric)."""
+        """Inclination RMSE / max of every estimate against the truth (BROAD's metric), and heading RMSE /
+        max of those that use the magnetometer when the session has one (``evaluation``)."""
         if self.true_q is None:
             raise UserError("this session has no truth to evaluate against (true_qw ... true_qz)")
         mask = self.moving if self.moving is not None else np.ones(len(self), dtype=bool)
         try:
-            return {n: score(inclination_error_rad(q, self.true_q, self.true_frame), mask) for n, q in self.attitudes().items()}
+            return {n: scores(q, self.true_q, mask, self.true_frame, self.magnetometer and uses_magnetometer(n))
+                    for n, q in self.attitudes().items()}
         except ValueError as error:
             raise UserError(str(error)) from None
 
