@@ -182,6 +182,8 @@ class Ahf(CompiledEstimator):
     """Adaptive hybrid filter (eq. 6-20). ``dtype=np.float32`` runs it in single precision."""
 
     name = "ahf"
+    label = "AHF"
+    colour = "indigo"
     Settings = AhfSettings
     Diagnostics = AhfDiagnostics
     kernel = staticmethod(ahf_kernel)
@@ -210,5 +212,7 @@ class Hf(Ahf):
     """Hybrid filter with λ fixed at ``beta`` (eq. 6-19): Madgwick's IMU filter. β = 0 is gyro-only."""
 
     name = "hf"
+    label = "HF"
+    colour = "green"
     Settings = HfSettings
     adaptive = False

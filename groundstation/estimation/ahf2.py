@@ -125,6 +125,8 @@ def _rotate(q, x, y, z):
 
 class Ahf2(Estimator):
     name = "ahf2"
+    label = "AHF2"
+    colour = "black"
     estimates_gyro_bias = True
     Settings = Ahf2Settings
     Diagnostics = Ahf2Diagnostics

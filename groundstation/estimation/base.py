@@ -175,7 +175,8 @@ def integrate_rate(q, wx, wy, wz, dt_s):
 
 
 class Estimator:
-    """Base class; subclasses set ``name``, ``Settings``, ``Diagnostics`` and implement the hooks.
+    """Base class; subclasses set ``name``, ``label``, ``colour``, ``Settings``, ``Diagnostics`` (and ``needs``
+    when they use aiding) and implement the hooks.
 
     Hooks: ``_reset_state()``, ``_set_attitude(q)`` (q a unit quaternion tuple), ``_update(gx, gy, gz,
     ax, ay, az, acc_ok, dt_s, status) -> (q, diag)``, ``_diagnostics(status) -> diag`` (for held
@@ -183,6 +184,11 @@ class Estimator:
     """
 
     name: ClassVar[str]
+    # How the estimator describes itself to the app, evaluate and exports (``ESTIMATORS`` lists the classes):
+    label: ClassVar[str]  # what the legend, the panel and the charts call it
+    colour: ClassVar[str]  # a colour's name in the app's palette (``ui.plots.PALETTE``): Qt stays out of here
+    needs: ClassVar[frozenset[str]] = frozenset()  # aiding it is no more than a tilt filter without: "mag", "gps"
+    live: ClassVar[bool] = True  # run on every live session (so showing it is a click, not a restart)
     # True when the filter estimates its own gyro bias; the session applies a bias measured at rest
     # (calibration.RestBiasCalibrator) only to the others
     estimates_gyro_bias: ClassVar[bool] = False

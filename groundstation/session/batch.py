@@ -57,7 +57,7 @@ class BatchSession:
     """What ``data.from_pipeline`` reads from a replayed ``Pipeline``, computed on the batch path."""
 
     def __init__(self, setup: RecordedSetup):
-        self.bank = EstimatorBank(setup.filters, setup.settings, setup.forced)
+        self.bank = EstimatorBank(setup.filters, setup.settings, setup.forced, setup.aiding)
         self.filters = self.bank.filters
         self.catalogue = session_catalogue(self.bank.diagnostics(), SPEC)
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
@@ -355,7 +355,7 @@ class _Builder:
 
     def _estimate(self, keys, gyr, acc, dt, mag, gps, t_host):
         """Every estimator over the samples, in stretches between restarts and settings changes; the
-        rest-bias calibrator first. Returns the first estimator's quaternions and the table columns."""
+        rest-bias calibrator first. Returns the aiding estimator's quaternions and the table columns."""
         s, bank = self.s, self.s.bank
         n = len(keys)
         calibrator = bank.gyro_calibration
@@ -390,7 +390,7 @@ class _Builder:
         for name in bank.filters:
             qs, diags = outputs[name]
             q = np.concatenate(qs) if qs else np.zeros((0, 4))
-            if name == bank.filters[0]:
+            if name == bank.aiding:
                 first_q = q
             columns += list(q.T)
             for field in bank.diagnostics()[name]:
@@ -400,7 +400,7 @@ class _Builder:
     # -- aiding -----------------------------------------------------------------------------------
 
     def _position(self, keys, segment, acc, dt, first_q, time_s) -> None:
-        """Seed 004's position from the first barometer or GPS reading on, on the first estimator's attitude."""
+        """Seed 004's position from the first barometer or GPS reading on, on the aiding estimator's attitude."""
         if not self.s.filters:
             return
         baro = self.d.frames["BARO"]
@@ -432,7 +432,7 @@ class _Builder:
         self.add("position", keys, np.column_stack([time_s, np.concatenate(out)]))
 
     def _magnetometer(self, keys, segment, first_q) -> None:
-        """The magnetometer table, with the compass heading from the first estimator's latest attitude
+        """The magnetometer table, with the compass heading from the aiding estimator's latest attitude
         in the same device segment (NaN before it has one)."""
         columns = self.d.frames["MAG_RAW"]
         if not len(columns):

@@ -10,16 +10,17 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from groundstation.estimation import create
+from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.calibration import RestBiasCalibrator
 
 
 class EstimatorBank:
-    """``filters``: estimator names (``ahf`` first by convention; the first one drives the compass
-    heading and the position); ``settings``/``forced``: name -> {setting: value}."""
+    """``filters``: estimator names; ``aiding``: the one whose attitude the compass heading and the
+    position use (``estimation.aiding_estimator``); ``settings``/``forced``: name -> {setting: value}."""
 
-    def __init__(self, filters, settings=None, forced=None):
+    def __init__(self, filters, settings=None, forced=None, aiding=None):
         self.filters = tuple(dict.fromkeys(filters))
+        self.aiding = aiding_estimator(self.filters, aiding)
         self._settings = {name: dict((settings or {}).get(name, {})) for name in self.filters}
         self._forced = {name: dict((forced or {}).get(name, {})) for name in self.filters}
         self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
@@ -56,9 +57,9 @@ class EstimatorBank:
         self._bias_noted = bias
         return bias
 
-    def first_q(self):
-        """The newest attitude of the first estimator (the compass and the position use it), or None."""
-        return self.last_q[self.filters[0]] if self.filters else None
+    def aiding_q(self):
+        """The newest attitude of the aiding estimator (the compass and the position use it), or None."""
+        return self.last_q[self.aiding] if self.aiding else None
 
     def restart(self) -> None:
         """Forget every attitude (a device reset: the next sample starts each estimator afresh)."""

@@ -14,9 +14,8 @@ import dataclasses
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.estimation import ESTIMATORS
+from groundstation.estimation import ESTIMATORS, label
 from groundstation.session.live import LiveSession
-from groundstation.ui.live_view import LABELS
 
 # estimator -> (setting, label, unit); units as in the settings dataclasses.
 TUNABLE = {
@@ -49,10 +48,10 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self._shown_row = QtWidgets.QGridLayout()
         self._layout.addRow("show", self._shown_row)
         for name, settings in TUNABLE.items():
-            for setting, label, unit in settings:
+            for setting, text, unit in settings:
                 box = QtWidgets.QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, singleStep=0.01, suffix=f" {unit}")
                 self.boxes[name, setting] = box
-                self._layout.addRow(f"{LABELS[name]} {label}", box)
+                self._layout.addRow(f"{label(name)} {text}", box)
         apply_button = QtWidgets.QPushButton("Apply")
         apply_button.clicked.connect(self.apply)
         defaults_button = QtWidgets.QPushButton("Defaults")
@@ -82,8 +81,8 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         filters = session.pipeline.filters
         offered = [*filters[1:], *(n for n in ESTIMATORS if n not in filters)] if self.replay else filters[1:]
         for index, name in enumerate(offered):
-            box = QtWidgets.QCheckBox(LABELS.get(name, name))
-            box.setChecked(LABELS.get(name, name) in visible_labels and name in filters)
+            box = QtWidgets.QCheckBox(label(name))
+            box.setChecked(label(name) in visible_labels and name in filters)
             box.toggled.connect(lambda on, name=name: self._shown_changed(name, on))
             self.shown[name] = box
             self._shown_row.addWidget(box, *divmod(index, SHOWN_COLUMNS))
@@ -103,7 +102,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         return self.session is not None and self.session.source.is_replay
 
     def _shown_changed(self, name: str, on: bool) -> None:
-        self.visibilityChanged.emit(LABELS.get(name, name), on)
+        self.visibilityChanged.emit(label(name), on)
         filters = self.session.pipeline.filters
         if on and name not in filters:  # only a replay offers it: compute it again with this estimator too
             self.replayAsked.emit((*filters, name), self._forced())
@@ -116,7 +115,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         """Follow the legend, where curves can be switched too."""
         for name, box in self.shown.items():
             box.blockSignals(True)  # reflecting the legend, not a new request
-            box.setChecked(LABELS.get(name, name) in visible_labels)
+            box.setChecked(label(name) in visible_labels)
             box.blockSignals(False)
 
     def values(self, name: str) -> dict[str, float]:
@@ -142,9 +141,9 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             try:
                 self.session.change_settings(name, overrides)
             except ValueError as error:
-                self.message.setText(f"{LABELS[name]}: {error}")
+                self.message.setText(f"{label(name)}: {error}")
                 return
-            changed.append(f"{LABELS[name]} " + ", ".join(f"{k} = {v:g}" for k, v in overrides.items()))
+            changed.append(f"{label(name)} " + ", ".join(f"{k} = {v:g}" for k, v in overrides.items()))
         self.message.setText(("applied: " + "; ".join(changed)) if changed else "nothing changed")
 
     def restore_defaults(self) -> None:

@@ -71,9 +71,9 @@ def test_a_registered_estimator_and_file_format_reach_the_app_the_cli_and_an_exp
     box = window.estimator_panel.shown["twin"]
     assert box.text() == "Twin"
     box.setChecked(True)
-    twin = [c for s, c in window.live_view.attitude.curves if s.label == "Twin"]
-    assert len(twin) == 1 and twin[0].opts["pen"].color().name() == "#cc6677"  # Tol's muted rose
-    qtbot.waitUntil(lambda: twin[0].xData is not None and len(twin[0].xData) > 10, timeout=10000)
+    twin = [c for s, c in window.live_view.attitude.curves if s.label == "Twin"]  # pitch and roll
+    assert len(twin) == 2 and {c.opts["pen"].color().name() for c in twin} == {"#cc6677"}  # Tol's muted rose
+    qtbot.waitUntil(lambda: all(c.xData is not None and len(c.xData) > 10 for c in twin), timeout=10000)
 
     # evaluate: the new estimator is among the default ones, and scores as HF (the same arithmetic).
     assert main(["evaluate", str(npz_trial), "--json"]) == 0
