@@ -184,6 +184,7 @@ class Ahf(CompiledEstimator):
     name = "ahf"
     label = "AHF"
     colour = "indigo"
+    tunable = (("lambda_min", "λ min", "rad/s"), ("lambda_max", "λ max", "rad/s"))
     Settings = AhfSettings
     Diagnostics = AhfDiagnostics
     kernel = staticmethod(ahf_kernel)
@@ -214,5 +215,6 @@ class Hf(Ahf):
     name = "hf"
     label = "HF"
     colour = "green"
+    tunable = (("beta", "β", "rad/s"),)
     Settings = HfSettings
     adaptive = False

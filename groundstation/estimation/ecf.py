@@ -118,6 +118,7 @@ class Ecf(CompiledEstimator):
     name = "ecf"
     label = "ECF"
     colour = "teal"
+    tunable = (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²"))
     estimates_gyro_bias = True
     Settings = EcfSettings
     Diagnostics = EcfDiagnostics

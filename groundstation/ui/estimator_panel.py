@@ -1,5 +1,6 @@
-"""The estimator panel: show or hide the comparison estimators, tune AHF's λ bounds, HF's and
-HF+mag's β and ECF's and ECF+mag's Kp/Ki live, back to the defaults, or send AHF's λ bounds to the aircraft.
+"""The estimator panel: show or hide the comparison estimators, tune the settings the estimators offer
+(``Estimator.tunable``: AHF's λ bounds, HF's and HF+mag's β, ECF's and ECF+mag's Kp/Ki) live, back to
+the defaults, or send AHF's λ bounds to the aircraft.
 
 Live, a change goes through ``LiveSession.change_settings``: it applies from the next sample, keeps
 the attitude, and is written to the recording, so a replay changes it at the same point. In a replay
@@ -17,14 +18,6 @@ from PySide6 import QtCore, QtWidgets
 from groundstation.estimation import ESTIMATORS, label
 from groundstation.session.live import LiveSession
 
-# estimator -> (setting, label, unit); units as in the settings dataclasses.
-TUNABLE = {
-    "ahf": (("lambda_min", "λ min", "rad/s"), ("lambda_max", "λ max", "rad/s")),
-    "hf": (("beta", "β", "rad/s"),),
-    "ecf": (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²")),
-    "hfm": (("beta", "β", "rad/s"),),
-    "ecfm": (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²")),
-}
 SHOWN_COLUMNS = 4  # "show" check boxes per row
 
 
@@ -47,7 +40,9 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self._layout = QtWidgets.QFormLayout(self)
         self._shown_row = QtWidgets.QGridLayout()
         self._layout.addRow("show", self._shown_row)
-        for name, settings in TUNABLE.items():
+        # estimator -> (setting, symbol, unit), as the estimators offer them (``Estimator.tunable``)
+        self.tunable = {name: cls.tunable for name, cls in ESTIMATORS.items() if cls.tunable}
+        for name, settings in self.tunable.items():
             for setting, text, unit in settings:
                 box = QtWidgets.QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, singleStep=0.01, suffix=f" {unit}")
                 self.boxes[name, setting] = box
@@ -87,7 +82,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             self.shown[name] = box
             self._shown_row.addWidget(box, *divmod(index, SHOWN_COLUMNS))
         settings = session.pipeline.settings()
-        for name, fields in TUNABLE.items():
+        for name, fields in self.tunable.items():
             for setting, _, unit in fields:
                 box = self.boxes[name, setting]
                 box.setEnabled(name in settings)
@@ -109,7 +104,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
 
     def _forced(self) -> dict[str, dict[str, float]]:
         """The fields of every estimator the session runs: the settings a recomputed replay is to use."""
-        return {name: self.values(name) for name in TUNABLE if name in self.session.pipeline.filters}
+        return {name: self.values(name) for name in self.tunable if name in self.session.pipeline.filters}
 
     def sync_shown(self, visible_labels: set[str]) -> None:
         """Follow the legend, where curves can be switched too."""
@@ -119,7 +114,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             box.blockSignals(False)
 
     def values(self, name: str) -> dict[str, float]:
-        return {setting: self.boxes[name, setting].value() for setting, _, _ in TUNABLE[name]}
+        return {setting: self.boxes[name, setting].value() for setting, _, _ in self.tunable[name]}
 
     def apply(self) -> None:
         """Change every estimator whose fields differ from the settings in effect (a replay: compute it again)."""
@@ -132,7 +127,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
                 self.message.setText("nothing changed")
             return
         changed = []
-        for name in TUNABLE:
+        for name in self.tunable:
             if name not in current:
                 continue
             overrides = {k: v for k, v in self.values(name).items() if v != current[name][k]}

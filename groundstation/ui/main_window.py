@@ -24,7 +24,7 @@ from groundstation.session.reveal import Loading, RevealSession, estimators_for
 from groundstation.sources import whole_file
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
-from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
+from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.event_console import EventConsole
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
@@ -340,7 +340,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if not session.source.is_replay:  # a replay's settings are the recording's, not the user's
             tuned = session.pipeline.settings()
             self.settings.setValue("estimator_settings", json.dumps(
-                {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in TUNABLE.items() if name in tuned}))
+                {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in self.estimator_panel.tunable.items()
+                 if name in tuned}))
 
     def show_error(self, message: str | None) -> None:
         self.banner.setText(message or "")
