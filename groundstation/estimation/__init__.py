@@ -6,6 +6,10 @@ explicit complementary filter, ``cf1`` first-order complementary filter, ``kf`` 
 ``ekf`` quaternion extended Kalman filter, ``ukf`` and ``sssrukf`` the GPS-aided unscented filters of seed 001
 (standard, and square-root with spherical simplex sigma points); with the magnetometer ``hfm`` (Madgwick MARG) and
 ``ecfm`` (Mahony ECF with the field error term), see ``marg``; ``mcf`` seed 003's multi-sensor complementary filter; ``vqf`` Laidig & Seel's VQF (the ``vqf`` package). ``create("hf", {"beta": 0.033})`` builds one with overrides.
+
+``ESTIMATORS`` is the registry the app, the commands, the exports and the tests take their lists from;
+``runnable`` picks those whose needs a session meets, ``aiding_estimator`` the one the compass heading
+and the position use.
 """
 
 from __future__ import annotations
