@@ -7,6 +7,7 @@ caller gives (a temporary one), never into the source tree.
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 import shutil
 import subprocess
@@ -14,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from firmware_protocol.reference.host import CORE_DIR
+from firmware_protocol.reference import host
 
 REFERENCE_DIR = Path(__file__).parent
 STM32_DIR = REFERENCE_DIR / "stm32"
@@ -66,21 +67,25 @@ def build_images(build_dir: Path) -> dict[str, ImageSize]:
     return sizes
 
 
-def _input_header(gyr_rad_s, acc_g, dt_s) -> str:
+def _input_header(settings, gyr_rad_s, acc_g, dt_s) -> str:
+    """ahf_input.h: the settings (an ``AhfSettings``; its fields are the C struct's) and the samples as float bits."""
+    values = {field.name: getattr(settings, field.name) for field in dataclasses.fields(settings)}
+    literals = ", ".join(f".{name} = {'HUGE_VAL' if value == math.inf else float(value).hex()}" for name, value in values.items())
     rows = np.column_stack([np.asarray(gyr_rad_s), np.asarray(acc_g), np.asarray(dt_s)]).astype(np.float32).view(np.uint32)
-    lines = [f"#define GS_INPUT_SAMPLES {len(rows)}u", "static const uint32_t gs_input[GS_INPUT_SAMPLES][7] = {"]
+    lines = ["static const gs_ahf_settings gs_settings = {" + literals + "};",
+             f"#define GS_INPUT_SAMPLES {len(rows)}u", "static const uint32_t gs_input[GS_INPUT_SAMPLES][7] = {"]
     lines += ["    {" + ", ".join(f"0x{v:08x}u" for v in row) + "}," for row in rows.tolist()]
     return "\n".join([*lines, "};", ""])
 
 
-def build_ahf_program(gyr_rad_s, acc_g, dt_s, build_dir: Path, defines: tuple[str, ...] = ()) -> Path:
-    """The QEMU program (qemu/ahf_qemu.c + core/gs_ahf.c, -Os as the board's) with these samples compiled in."""
+def build_ahf_program(settings, gyr_rad_s, acc_g, dt_s, build_dir: Path) -> Path:
+    """The QEMU program (qemu/ahf_qemu.c + core/gs_ahf.c, -Os as the board's) with these settings and samples
+    compiled in."""
     build_dir.mkdir(parents=True, exist_ok=True)
-    (build_dir / "ahf_input.h").write_text(_input_header(gyr_rad_s, acc_g, dt_s))
-    elf = build_dir / f"ahf{''.join('-' + name for name in defines)}.elf"
-    options = [f"-D{name}" for name in defines]
-    _run(["arm-none-eabi-gcc", *CROSS_CFLAGS, "-Os", *options, "-I", str(build_dir), "-I", str(CORE_DIR),
-          str(QEMU_DIR / "ahf_qemu.c"), str(CORE_DIR / "gs_ahf.c"), "-o", str(elf), f"-T{QEMU_DIR / 'lm3s6965.ld'}", *CROSS_LDFLAGS])
+    (build_dir / "ahf_input.h").write_text(_input_header(settings, gyr_rad_s, acc_g, dt_s))
+    elf = build_dir / "ahf.elf"
+    _run(["arm-none-eabi-gcc", *CROSS_CFLAGS, "-Os", "-I", str(build_dir), "-I", str(host.CORE_DIR),
+          str(QEMU_DIR / "ahf_qemu.c"), str(host.CORE_DIR / "gs_ahf.c"), "-o", str(elf), f"-T{QEMU_DIR / 'lm3s6965.ld'}", *CROSS_LDFLAGS])
     return elf
 
 
@@ -91,23 +96,59 @@ def _qemu(elf: Path, *extra: str, timeout_s: float = 300.0) -> str:
     return _run(command, timeout=timeout_s, stdin=subprocess.DEVNULL).stderr
 
 
-_OUTPUT_LINE = re.compile(r"[0-9a-f]{8}( [0-9a-f]{8}){5}")
+_OUTPUT_LINE = re.compile(r"[0-9a-f]{8}( [0-9a-f]{8}){8}")
+
+
+def row(status: int, *outputs) -> tuple[int, ...]:
+    """One sample as ``run_ahf`` gives it, from the outputs as floats: the status, then the float32 bits of
+    q_w, q_x, q_y, q_z, lambda, e_a, err and acc_dev (ahf_qemu.c's line)."""
+    return (int(status), *np.array(outputs, dtype=np.float32).view(np.uint32).tolist())
+
+
+def model_rows(model, gyr_rad_s, acc_g, dt_s) -> list[tuple[int, ...]]:
+    """The ``row``s of the ground station's float32 model (``Ahf(settings, dtype=np.float32)``, fresh) on these samples."""
+    rows = []
+    for g, a, d in zip(gyr_rad_s, acc_g, dt_s):
+        q, diag = model.step(g, a, d)
+        rows.append(row(diag.status, *q, diag.lam, diag.e_a, diag.gravity_error, model._acc_dev))
+    return rows
+
+
+def host_rows(settings, gyr_rad_s, acc_g, dt_s) -> list[tuple[int, ...]]:
+    """The ``row``s of the core's AHF built for this machine (``host.Ahf32``) on these samples."""
+    core = host.Ahf32(settings)
+    rows = []
+    for g, a, d in zip(gyr_rad_s, acc_g, dt_s):
+        status, q, lam, e_a, err = core.step(g, a, d)
+        rows.append(row(status, *q, lam, e_a, err, core.acc_dev_g))
+    return rows
 
 
 def run_ahf(elf: Path) -> list[tuple[int, ...]]:
-    """Per sample: (status, bits of q_w, q_x, q_y, q_z, bits of lambda) as the emulated Cortex-M3 computed them."""
+    """Per sample, the ``row`` the emulated Cortex-M3 computed."""
     return [tuple(int(v, 16) for v in line.split()) for line in _qemu(elf).splitlines() if _OUTPUT_LINE.fullmatch(line)]
 
 
-def count_step_instructions(elf: Path, trace: Path) -> list[int]:
-    """Instructions executed per AHF step (between the two mark() calls around it, the call included),
-    from a QEMU trace of every instruction (-singlestep -d exec,nochain)."""
+def trace_steps(elf: Path, trace: Path) -> list[list[int]]:
+    """Per AHF step, the addresses of the instructions executed (between the two mark() calls around it, the
+    call included), from a QEMU trace of every instruction (-singlestep -d exec,nochain); ``trace`` is
+    written, read and deleted."""
     mark = next(int(line.split()[0], 16) for line in _run(["arm-none-eabi-nm", str(elf)]).stdout.splitlines()
                 if line.split()[-1] == "mark")
     _qemu(elf, "-singlestep", "-d", "exec,nochain", "-D", str(trace))
-    marks = []
+    steps, current = [], None
     with open(trace) as log:
-        for i, line in enumerate(log):
-            if "[" in line and int(line.split("[", 1)[1].split("/", 2)[1], 16) == mark:
-                marks.append(i)
-    return [marks[2 * j + 1] - marks[2 * j] - 1 for j in range(len(marks) // 2)]
+        for line in log:
+            if "[" not in line:
+                continue
+            pc = int(line.split("[", 1)[1].split("/", 2)[1], 16)
+            if pc == mark:
+                if current is None:
+                    current = []
+                else:
+                    steps.append(current)
+                    current = None
+            elif current is not None:
+                current.append(pc)
+    trace.unlink()
+    return steps

@@ -46,14 +46,12 @@ def compile_command(cc: str, output: Path, extra: tuple[str, ...] = ()) -> list[
     return [cc, *CFLAGS, *extra, *includes, *map(str, SOURCES), "-o", str(output), "-lm"]
 
 
-def build_library(directory: Path | None = None, defines: tuple[str, ...] = ()) -> Path:
-    """The shared library of the core (built if this source version has not been yet); ``defines``
-    are build options (``GS_AHF_PORTABLE_RSQRT``)."""
+def build_library(directory: Path | None = None) -> Path:
+    """The shared library of the core (built if this source version has not been yet)."""
     cc = compiler()
     if cc is None:
         raise CoreUnavailable("no C compiler (cc, gcc or clang) on this machine: the C firmware core cannot be built")
-    options = tuple(f"-D{name}" for name in defines)
-    digest = hashlib.sha256(" ".join([cc, *CFLAGS, *options]).encode())
+    digest = hashlib.sha256(" ".join([cc, *CFLAGS]).encode())
     for path in (*SOURCES, *HEADERS):
         digest.update(path.read_bytes())
     directory = cache_dir() if directory is None else directory
@@ -64,19 +62,20 @@ def build_library(directory: Path | None = None, defines: tuple[str, ...] = ()) 
     # Built beside its final name and renamed: parallel builds never load half a file.
     with tempfile.TemporaryDirectory(dir=directory) as work:
         temporary = Path(work) / library.name
-        result = subprocess.run(compile_command(cc, temporary, (*options, "-fPIC", "-shared")), capture_output=True, text=True)
+        result = subprocess.run(compile_command(cc, temporary, ("-fPIC", "-shared")), capture_output=True, text=True)
         if result.returncode != 0:
             raise CoreUnavailable(f"the C firmware core does not compile with {cc}:\n{result.stderr}")
         os.replace(temporary, library)
     return library
 
 
-_LIBRARIES: dict[tuple[str, ...], ctypes.CDLL] = {}
+_LIBRARY: ctypes.CDLL | None = None
 
 
-def library(defines: tuple[str, ...] = ()) -> ctypes.CDLL:
-    if defines not in _LIBRARIES:
-        lib = ctypes.CDLL(str(build_library(defines=defines)))
+def library() -> ctypes.CDLL:
+    global _LIBRARY
+    if _LIBRARY is None:
+        lib = ctypes.CDLL(str(build_library()))
         P, F, D, U, I = ctypes.c_void_p, ctypes.POINTER(ctypes.c_float), ctypes.POINTER(ctypes.c_double), ctypes.c_uint, ctypes.c_int
         B, S = ctypes.c_char_p, ctypes.c_size_t
         signatures = {
@@ -95,8 +94,8 @@ def library(defines: tuple[str, ...] = ()) -> ctypes.CDLL:
         for name, (restype, argtypes) in signatures.items():
             function = getattr(lib, name)
             function.restype, function.argtypes = restype, argtypes
-        _LIBRARIES[defines] = lib
-    return _LIBRARIES[defines]
+        _LIBRARY = lib
+    return _LIBRARY
 
 
 def _doubles(*values: float):
@@ -118,8 +117,8 @@ class Ahf32:
     """The core's onboard AHF (gs_ahf.c) alone: ``step`` returns (status, q (4), lambda, e_a, err) as floats;
     ``acc_dev_g`` is then the low-passed accelerometer deviation from 1 g (base.py's ``STATE_ACC_DEV``, ``Ahf._acc_dev``)."""
 
-    def __init__(self, settings, q0=None, defines: tuple[str, ...] = ()):
-        self._lib = lib = library(defines)
+    def __init__(self, settings, q0=None):
+        self._lib = lib = library()
         self._state = ctypes.create_string_buffer(lib.gs_host_sizeof_ahf())
         if lib.gs_host_ahf_init(self._state, ahf_settings(settings), None if q0 is None else _floats(*q0)) != 0:
             raise ValueError(f"the C AHF rejects the settings {settings}")

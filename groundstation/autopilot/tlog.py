@@ -232,6 +232,10 @@ def recording_to_tlog(recording, out) -> int:
     monotonic time since it opened). Returns the number of packets; UserError if there are none."""
     from datetime import datetime
 
+    if recording.metadata.get("protocol", "gs") != "mavlink":
+        # Bytes of the project's own frames can pass MAVLink's framing by chance: never write them as packets.
+        raise UserError(f"{recording.path} is a recording of this project's own telemetry, not of a MAVLink link: "
+                        "a .tlog holds MAVLink only (export writes CSV or Parquet)")
     if recording.chunk_count == 0:
         raise UserError(f"{recording.path}: the recording holds no link bytes")
     first_ns = int(recording.chunk_t_host_ns[0])

@@ -17,9 +17,7 @@ import tempfile
 
 from groundstation.errors import UserError
 from groundstation.sim.options import add_scenario_arguments, scenario_from_args
-
-# Without --duration the profile is made a day long; after it the craft holds still.
-OPEN_ENDED_PROFILE_S = 86_400.0
+from groundstation.sim.profiles import MAX_DURATION_S  # without --duration: a day; after it the craft holds still
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -41,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundstation.sim.stream import SimStream
 
-    scenario = scenario_from_args(args, args.duration if args.duration is not None else OPEN_ENDED_PROFILE_S)
+    scenario = scenario_from_args(args, args.duration if args.duration is not None else MAX_DURATION_S)
     scenario = dataclasses.replace(scenario, firmware_core=args.firmware)
     mavlink = args.mavlink or args.mavlink1 or args.udp is not None
     if mavlink:
@@ -94,8 +92,8 @@ def run_udp(stream, target: str, duration_s: float | None, stopping: list) -> in
     from groundstation.sim.udp_bridge import UdpBridge
 
     host, _, port = target.rpartition(":")
-    if not host or not port.isdigit():
-        raise UserError(f"--udp expects HOST:PORT, e.g. 127.0.0.1:14550, not {target!r}")
+    if not host or not port.isdigit() or not 0 < int(port) <= 65535:
+        raise UserError(f"--udp expects HOST:PORT with a port from 1 to 65535, e.g. 127.0.0.1:14550, not {target!r}")
     bridge = UdpBridge(stream, (host, int(port)))
     print(f"bridge-sim: '{stream.scenario.profile}' seed {stream.scenario.seed}, MAVLink on {bridge.path}", flush=True)
     try:

@@ -21,9 +21,11 @@ def add_estimator_options(parser: argparse.ArgumentParser, default_filters: str 
 
 def estimator_options(args: argparse.Namespace) -> tuple[list[str] | None, dict[str, dict[str, float]]]:
     """``(filters or None, overrides)``, checked before any long run; UserError says what is wrong."""
-    from groundstation.estimation import create, parse_overrides
+    from groundstation.estimation import ESTIMATORS, create, parse_overrides
 
     names = None if args.filters is None else [n.strip() for n in args.filters.split(",") if n.strip()]
+    if names == []:
+        raise UserError(f"--filters names no estimator: give one or more of {', '.join(ESTIMATORS)}")
     try:
         overrides = parse_overrides(args.overrides)
         for name in set(names or []) | set(overrides):

@@ -52,6 +52,9 @@ def link_bytes(path: Path):
     from groundstation.recording import open_recording
     from groundstation.recording.format import MAGIC
 
+    if not path.is_file():
+        # A device (/dev/zero, a serial port) never ends: capture it to a file first.
+        raise UserError(f"{path} is not a file: --decode reads a saved capture or recording")
     try:
         handle = path.open("rb")
     except OSError as error:

@@ -2,7 +2,8 @@
 
 For the field (a laptop by the runway, no window) and for tests. Runs until ``--duration`` or Ctrl-C
 (SIGINT/SIGTERM), then closes the recording cleanly and says where it is. Exit status 0 when stopped
-that way, 1 when the source failed for good (the recording keeps what came before), 2 for bad input.
+that way, 1 when the source failed for good (the recording keeps what came before) or the recording
+failed (a full disk: how many seconds were not recorded is said), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -58,13 +59,38 @@ def run(args: argparse.Namespace) -> int:
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+    ended_ns = time.monotonic_ns()
     print(totals_line(session))
-    size = session.recording_path.stat().st_size if session.recording_path.exists() else 0
-    print(f"recording closed: {session.recording_path} ({size / 1e6:.2f} MB)")
+    for path in session.recorder.paths:
+        size = path.stat().st_size if path.exists() else 0
+        print(f"recording closed: {path} ({size / 1e6:.2f} MB)")
+    status = 0
+    with session.lock:
+        unrecorded = unrecorded_stretches(session.pipeline.events, ended_ns)
+    if unrecorded:
+        lost_s = sum(seconds for _, seconds in unrecorded)
+        print(f"groundstation record: the recording failed {len(unrecorded)} time(s) ({unrecorded[0][0]}): "
+              f"{lost_s:.1f} s of the session were not recorded", file=sys.stderr)
+        status = 1
     if session.error:
         print(f"groundstation record: the source stopped: {session.error}", file=sys.stderr)
-        return 1
-    return 0
+        status = 1
+    return status
+
+
+def unrecorded_stretches(events: list[dict], ended_ns: int) -> list[tuple[str, float]]:
+    """(why, seconds) for each time the recording failed: until it resumed, or until the session ended."""
+    out = []
+    failed = None
+    for event in events:
+        if event["kind"] == "recording_failed":
+            failed = event
+        elif event["kind"] == "recording_resumed" and failed is not None:
+            out.append((failed["message"], (event["t_host_ns"] - failed["t_host_ns"]) / 1e9))
+            failed = None
+    if failed is not None:
+        out.append((failed["message"], max(0, ended_ns - failed["t_host_ns"]) / 1e9))
+    return out
 
 
 def writable_folder(folder: Path) -> Path:

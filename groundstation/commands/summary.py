@@ -53,8 +53,10 @@ def totals_line(session: LiveSession) -> str:
         if p.decoder is None:  # a flight log or a dataset: no link was decoded
             return f"{len(p.imu)} IMU samples" if p.filters else f"{len(p.onboard)} onboard attitude samples, no IMU"
         stats = p.decoder.stats
-        return (f"{len(p.imu)} IMU samples, {stats.frames} frames, {stats.frames_lost} lost, "
+        line = (f"{len(p.imu)} IMU samples, {stats.frames} frames, {stats.frames_lost} lost, "
                 f"{stats.crc_errors} CRC errors, {stats.bytes_skipped} bytes skipped")
+    ignored = getattr(session.source, "ignored", None)  # a UDP source locked to its sender
+    return f"{line}; {ignored}" if ignored and ignored.datagrams else line
 
 
 def follow(session: LiveSession, stream=sys.stdout, interval_s: float = 0.25, until=None) -> None:

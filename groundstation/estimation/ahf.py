@@ -35,11 +35,15 @@ range, the accelerometer is the more accurate, so λ takes a large value"): with
 ``gyro_overrange_rad_s`` set (e.g. 0.95 × the configured full scale), any axis at or above it forces
 λ = λ_max for that sample. Off by default (``inf``) so that the default filter is eq. 20 exactly.
 
-float32 (the simulated firmware): the kernel uses arithmetic operators only (``** -0.5``, no ``math``
-calls), so interpreted it computes in whatever type its numbers have. ``Ahf(settings, dtype=np.float32)``
-runs it interpreted (base.py, compiled estimators) with the settings, the state and every input as
-``numpy.float32``; NumPy 2's promotion rules (NEP 50) keep float32 ⊕ Python-float literals in float32,
-so the whole update runs in single precision, as on the STM32. ``step`` then returns float32 numbers;
+float32 (the simulated firmware): the kernel uses arithmetic operators and ``np.sqrt`` only (no ``math``
+calls, which return Python floats), so interpreted it computes in whatever type its numbers have, and
+only operations IEEE 754 rounds correctly (+, −, ×, ÷, square root): x^-0.5 is ``1.0 / np.sqrt(x)``, not
+``x ** -0.5``, which NumPy computes with the C library's ``powf``, rounded differently by each C library
+(newlib's, the board's, differs from glibc's in 9 % of inputs). So the C core (gs_ahf.c), built for the
+STM32 with newlib or for the host, computes the same bits (docs/firmware.md). ``Ahf(settings,
+dtype=np.float32)`` runs it interpreted (base.py, compiled estimators) with the settings, the state and
+every input as ``numpy.float32``; NumPy 2's promotion rules (NEP 50) keep float32 ⊕ Python-float literals
+in float32, so the whole update runs in single precision, as on the STM32. ``step`` then returns float32 numbers;
 ``run`` returns them widened to float64 (exactly). Each float32 step agrees with a float64 step from the
 same state to float32 precision, but whole runs drift apart: eq. 18 normalises the gradient, so when the
 error is near zero its direction is set by rounding and still gets a full λ Δt step. To reproduce the
@@ -57,6 +61,7 @@ import dataclasses
 import math
 from typing import NamedTuple
 
+import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
@@ -93,7 +98,9 @@ _ADAPTIVE, _LAM_MAX, _LAM_MIN, _LOWPASS, _GAIN, _OVERRANGE = range(P_OWN, P_OWN 
 _LAM, _E_A, _ERR = STATE_DIAG, STATE_DIAG + 1, STATE_DIAG + 2
 
 
-@njit(cache=True)
+# error_model="numpy": x / 0 is ±inf or NaN, as in C and NumPy, not ZeroDivisionError (a zero accelerometer
+# with acc_min_g = 0 normalises as in the C core and the float32 model)
+@njit(cache=True, error_model="numpy")
 def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     """One sample of AHF, HF (λ fixed) or HFM (HF with the magnetometer): base.py's compiled kernels."""
     status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
@@ -107,7 +114,7 @@ def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     d4 = 0.5 * (q1 * gz + q2 * gy - q3 * gx)
     if acc_ok:
         # â: measured down direction, -acc normalised (see the module docstring on frames)
-        r = -((ax * ax + ay * ay + az * az) ** -0.5)
+        r = -(1.0 / np.sqrt(ax * ax + ay * ay + az * az))
         ax, ay, az = ax * r, ay * r, az * r
         # (eq. 8) ĝ: estimated down direction in the body frame
         vx = 2.0 * (q2 * q4 - q1 * q3)
@@ -143,12 +150,12 @@ def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
         state[_LAM], state[_ERR] = lam, err
         n2 = s1 * s1 + s2 * s2 + s3 * s3 + s4 * s4
         if n2 > 0.0:  # ∇f = 0 when the estimate already matches: nothing to correct
-            k = lam * n2**-0.5
+            k = lam * (1.0 / np.sqrt(n2))
             # (eq. 18) q̇ = q̇_ω - λ ∇f/‖∇f‖
             d1, d2, d3, d4 = d1 - k * s1, d2 - k * s2, d3 - k * s3, d4 - k * s4
     # (eq. 19) q(k) = q(k-1) + q̇ Δt, normalised
     q1, q2, q3, q4 = q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s
-    r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
+    r = 1.0 / np.sqrt(q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4)
     state[0], state[1], state[2], state[3] = q1 * r, q2 * r, q3 * r, q4 * r
     return status
 

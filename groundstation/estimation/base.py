@@ -135,7 +135,8 @@ def screen(gx, gy, gz, ax, ay, az, dt_s, waiting, acc_dev, acc_min2, acc_dev_max
     acc_ok = acc_min2 <= n2 and n2 < math.inf
     # Only a finite positive dt weighs the deviation: inf would make it inf/inf = NaN for good.
     if acc_ok and acc_dev_max < math.inf and 0.0 < dt_s and dt_s < math.inf:
-        acc_dev += (abs(n2**0.5 - 1.0) - acc_dev) * dt_s / (acc_window_s + dt_s)
+        # np.sqrt, not ** 0.5: correctly rounded in every type, as the C core's sqrtf (ahf.py's docstring)
+        acc_dev += (abs(np.sqrt(n2) - 1.0) - acc_dev) * dt_s / (acc_window_s + dt_s)
         acc_ok = acc_dev <= acc_dev_max
     status = 0
     if waiting:

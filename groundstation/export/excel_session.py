@@ -14,6 +14,7 @@ from openpyxl.styles import Font
 from groundstation import mounting
 from groundstation.errors import UserError
 from groundstation.export.excel_columns import DATE_TIME, start_time
+from groundstation.export.excel_stream import text_cell
 from groundstation.session.data import SessionData
 
 WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70, "E": 24}
@@ -155,7 +156,7 @@ def write_session_sheet(workbook, rows: list[list]) -> None:
     for row in rows:
         cells = []
         for value in row:
-            cell = WriteOnlyCell(sheet, value=value)
+            cell = text_cell(sheet, value) if isinstance(value, str) else WriteOnlyCell(sheet, value=value)
             if isinstance(value, Heading):
                 cell.font = bold
             elif isinstance(value, datetime):

@@ -65,8 +65,16 @@ class _ColumnCell(Cell):
         self.style_id = sheet.parent._cell_styles.add(self._style)
 
 
-def header_cell(sheet, text: str) -> Cell:
+def text_cell(sheet, text: str) -> Cell:
+    """A cell that holds ``text`` as text: openpyxl makes any string that starts with "=" a live formula,
+    and a recording's header (its source, notes) is anybody's text (=HYPERLINK(...), =cmd|...)."""
     cell = WriteOnlyCell(sheet, value=text)
+    cell.data_type = "s"
+    return cell
+
+
+def header_cell(sheet, text: str) -> Cell:
+    cell = text_cell(sheet, text)
     cell.font = Font(bold=True)
     cell.alignment = Alignment(horizontal="center")
     return cell

@@ -68,6 +68,13 @@ def cpu_load_pct(mode: int) -> float:
     return 25.0 if mode == MODES["raw"] else 40.0
 
 
+# What a board can be: an STM32's internal RC oscillator is off by up to about 1 % untrimmed (10,000 ppm);
+# 5 % is beyond any clock that still runs a 1 kHz sensor loop. Jitter beyond one sample period at the
+# MPU-6050's 1 kHz would reorder samples.
+MAX_CLOCK_DRIFT_PPM = 50_000.0
+MAX_SAMPLE_JITTER_US = 1_000.0
+
+
 @dataclasses.dataclass(frozen=True)
 class FirmwareSettings:
     rate_hz: int = 100  # output rate of IMU_RAW / ATTITUDE
@@ -98,6 +105,12 @@ class FirmwareSettings:
                 raise ValueError(f"{name} must divide the output rate {self.rate_hz} Hz")
         if not (self.reboot_after_s >= 0.0 and self.clock_jump_after_s >= 0.0 and self.clock_jump_s >= 0.0):
             raise ValueError("reboot and clock-jump times must be >= 0")
+        if not abs(self.clock_drift_ppm) <= MAX_CLOCK_DRIFT_PPM:
+            raise ValueError(f"clock drift must be within ±{MAX_CLOCK_DRIFT_PPM:g} ppm (an uncalibrated RC oscillator), "
+                             f"not {self.clock_drift_ppm!r}")
+        if not 0.0 <= self.sample_jitter_us <= MAX_SAMPLE_JITTER_US:
+            raise ValueError(f"sample jitter must be between 0 and {MAX_SAMPLE_JITTER_US:g} µs (the sample period at 1 kHz), "
+                             f"not {self.sample_jitter_us!r}")
 
 
 @dataclasses.dataclass(frozen=True)

@@ -47,8 +47,8 @@ class LinkSettings:
             if not 0.0 <= getattr(self, name) < 1.0:
                 raise ValueError(f"{name} must be a probability in [0, 1), not {getattr(self, name)!r}")
         for name in ("latency_ms", "jitter_ms", "usb_batch_ms", "dropout_every_s", "dropout_s"):
-            if not getattr(self, name) >= 0.0:
-                raise ValueError(f"{name} must be >= 0, not {getattr(self, name)!r}")
+            if not 0.0 <= getattr(self, name) < math.inf:
+                raise ValueError(f"{name} must be finite and >= 0, not {getattr(self, name)!r}")
         if self.burst_length_frames < 1.0:
             raise ValueError("burst_length_frames must be >= 1")
         if self.dropout_every_s and self.dropout_s >= self.dropout_every_s:

@@ -8,7 +8,7 @@ import dataclasses
 from groundstation.errors import UserError
 from groundstation.sim.firmware import MODES, FirmwareSettings
 from groundstation.sim.link import LinkSettings
-from groundstation.sim.profiles import DEFAULT_DURATION_S, PROFILES
+from groundstation.sim.profiles import DEFAULT_DURATION_S, MAX_DURATION_S, PROFILES
 from groundstation.sim.stream import Scenario
 
 # Rates of the optional sensors (Hz); each must divide the output rate.
@@ -18,7 +18,7 @@ EXTRA_SENSOR_RATES_HZ = {"mag": 50, "baro": 25, "gps": 5}
 def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     durations = ", ".join(f"{name} {seconds:g} s" for name, seconds in DEFAULT_DURATION_S.items())
     parser.add_argument("--scenario", choices=PROFILES, default="flight", help="truth profile (default: flight)")
-    parser.add_argument("--seed", type=int, default=1, help="random seed; equal seeds give identical bytes (default: 1)")
+    parser.add_argument("--seed", type=seed_number, default=1, help="random seed; equal seeds give identical bytes (default: 1)")
     parser.add_argument("--mode", choices=tuple(MODES), default="both", help="what the board sends (default: both)")
     parser.add_argument("--rate", type=int, default=100, metavar="HZ", help="output rate (default: 100)")
     parser.add_argument("--accel-fs", type=int, default=4, metavar="G", help="accelerometer full scale: 2, 4, 8, 16 (default: 4)")
@@ -46,9 +46,20 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
     link.add_argument("--latency-ms", type=float, default=0.0, metavar="MS", help="fixed link delay")
     link.add_argument("--jitter-ms", type=float, default=0.0, metavar="MS", help="mean of an exponential extra delay")
     link.add_argument("--usb-batch-ms", type=float, default=0.0, metavar="MS", help="release bytes on this period (USB-serial latency timer)")
-    link.add_argument("--dropout-every", type=float, default=0.0, metavar="S", help="the port disappears every S seconds")
+    link.add_argument("--dropout-every", type=float, default=None, metavar="S", help="the port disappears every S seconds")
     link.add_argument("--dropout-s", type=float, default=2.0, metavar="S", help="for this long (default: 2)")
     parser.epilog = f"Default durations: {durations}."
+
+
+def seed_number(text: str) -> int:
+    """An argparse type: a seed numpy's generators take (a non-negative integer)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if seed < 0:
+        raise argparse.ArgumentTypeError(f"a seed is a non-negative integer, not {seed}")
+    return seed
 
 
 def scenario_from_args(args: argparse.Namespace, duration_s: float | None) -> Scenario:
@@ -58,8 +69,11 @@ def scenario_from_args(args: argparse.Namespace, duration_s: float | None) -> Sc
         raise UserError(f"unknown sensor(s) {', '.join(sorted(unknown))}; choose from {', '.join(EXTRA_SENSOR_RATES_HZ)}")
     if args.rate <= 0 or args.rate > 1000:
         raise UserError("--rate must be between 1 and 1000 Hz (the MPU-6050 samples at 1 kHz)")
-    if duration_s is not None and not duration_s > 0:
-        raise UserError("--duration must be positive")
+    if duration_s is not None and not 0 < duration_s <= MAX_DURATION_S:
+        # The truth profile is computed ahead for the whole duration: a bound keeps its memory bounded.
+        raise UserError(f"--duration must be positive and at most {MAX_DURATION_S:g} s (a day), not {duration_s:g}")
+    if args.dropout_every is not None and not args.dropout_every > 0:
+        raise UserError("--dropout-every must be positive (leave it out for a port that never drops)")
     rates = {f"{name}_rate_hz": EXTRA_SENSOR_RATES_HZ[name] for name in sensors}
     try:
         firmware = FirmwareSettings(
@@ -70,7 +84,7 @@ def scenario_from_args(args: argparse.Namespace, duration_s: float | None) -> Sc
         link = LinkSettings(
             loss=args.loss, burst_loss=args.burst_loss, burst_length_frames=args.burst_len, ber=args.ber, truncate=args.truncate,
             latency_ms=args.latency_ms, jitter_ms=args.jitter_ms, usb_batch_ms=args.usb_batch_ms,
-            dropout_every_s=args.dropout_every, dropout_s=args.dropout_s,
+            dropout_every_s=args.dropout_every or 0.0, dropout_s=args.dropout_s,
         )
     except ValueError as error:
         raise UserError(str(error)) from None

@@ -47,6 +47,7 @@ _SMOOTHSTEP_PEAK_RATE = 1.875
 
 DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "slide": 120.0, "fast": 120.0, "car": 120.0, "turntable": 765.0}
 PROFILES = tuple(DEFAULT_DURATION_S)
+MAX_DURATION_S = 86_400.0  # a day: profiles are computed ahead, so their length is bounded
 
 
 class Moves:

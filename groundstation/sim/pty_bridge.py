@@ -20,8 +20,21 @@ import tty
 from groundstation.sim.stream import SimStream
 
 
+# Where the slave side of a pseudo-terminal lives (Linux, macOS): a link pointing there is a bridge's own.
+PTY_DIRECTORIES = ("/dev/pts/", "/dev/ttys")
+
+
+def is_a_bridge_link(path: str) -> bool:
+    """Whether ``path`` is a symlink to a pseudo-terminal: the only kind of name the bridge replaces or removes."""
+    return os.path.islink(path) and os.readlink(path).startswith(PTY_DIRECTORIES)
+
+
 class PtyBridge:
     def __init__(self, stream: SimStream, link_path: str | None = None, timing_log=None):
+        for name in (link_path, f"{link_path}.new") if link_path else ():
+            if os.path.lexists(name) and not is_a_bridge_link(name):
+                raise FileExistsError(f"{name} exists and is not a pseudo-terminal link a bridge made: "
+                                      "choose a new name for --link")
         self.stream = stream
         self.link_path = link_path
         self.timing_log = timing_log  # a text file: one line per write, "monotonic_ns t_us t_us ..."
@@ -54,7 +67,7 @@ class PtyBridge:
             os.close(self._master)
             os.close(self._slave)
             self._master = self._slave = None
-            if self.link_path and os.path.lexists(self.link_path):
+            if self.link_path and is_a_bridge_link(self.link_path):
                 os.unlink(self.link_path)
 
     def close(self) -> None:

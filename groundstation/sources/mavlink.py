@@ -3,7 +3,7 @@
 | spec | what |
 |---|---|
 | ``mavlink:/dev/ttyUSB0[?baud=N]``, ``mavlink:COM4`` | a serial port: a SiK telemetry radio (57600, the default here) or a USB autopilot |
-| ``mavlink:udpin:0.0.0.0:14550`` | listen on UDP (SITL, Wi-Fi bridges; port 0: any free one); uplink to the last sender |
+| ``mavlink:udpin:0.0.0.0:14550`` | listen on UDP (SITL, Wi-Fi bridges; port 0: any free one; no host: this machine only); locked to the first sender of a valid packet, uplink to it alone |
 | ``mavlink:udpout:192.168.4.1:14550`` | send to that address first (a GCS heartbeat, so it learns ours) and read its answers |
 | ``mavlink:tcp:127.0.0.1:5760`` | a TCP connection (ArduPilot SITL's first serial port) |
 | ``mavlink:flight.tlog[?speed=X]`` | a ``.tlog`` replayed, packet by packet at its receive times (X: 0.25-64, or max) |
@@ -39,6 +39,7 @@ class MavlinkSource:
         self.is_replay = transport.is_replay
         self.can_reopen = transport.can_reopen
         self.can_send = transport.can_send
+        self.ignored = getattr(transport, "ignored", None)  # a UDP transport's datagrams from other senders
 
     def read(self) -> Chunk | None:
         return self.transport.read()
@@ -53,20 +54,29 @@ class MavlinkSource:
         self.transport.close()
 
 
+def carries_mavlink(data: bytes) -> bool:
+    """Whether a datagram holds a whole MAVLink packet with its checksum intact."""
+    from groundstation.autopilot.decoder import new_parser
+
+    return any(msg.get_type() != "BAD_DATA" for msg in new_parser().parse_buffer(data) or ())
+
+
 def open_spec(spec: Spec) -> MavlinkSource:
     kind, _, address = spec.target.partition(":")
     if kind in ("udpin", "udpout", "tcp"):
         spec.check_options(())
         host, port = Spec(spec.text, "udp", address).host_port()
         if kind == "udpin":
-            return MavlinkSource(UdpSource(host, port), f"MAVLink UDP in {host or '0.0.0.0'}:{port}")
+            transport = UdpSource(host, port, admits=carries_mavlink)
+            return MavlinkSource(transport, f"MAVLink UDP in {transport.address[0]}:{port}")
         if kind == "tcp":
             host = host or "localhost"
             return MavlinkSource(SerialSource(f"socket://{host}:{port}", description=f"MAVLink TCP {host}:{port}"),
                                  f"MAVLink TCP {host}:{port}")  # fmt: skip
         from groundstation.autopilot.streams import gcs_heartbeat
 
-        source = MavlinkSource(UdpSource("", 0, remote=(host, port)), f"MAVLink UDP out {host}:{port}")
+        # Every interface: the vehicle may be on another machine; only its address is trusted (remote).
+        source = MavlinkSource(UdpSource("0.0.0.0", 0, remote=(host, port)), f"MAVLink UDP out {host}:{port}")
         source.write(gcs_heartbeat())  # the vehicle answers whoever spoke to it
         return source
     if spec.target.lower().endswith(".tlog"):

@@ -1,9 +1,15 @@
 """``udp://HOST:PORT``: a UDP bridge (an ESP32 or other Wi-Fi bridge sending the radio's bytes as datagrams).
 
-The ground station *listens* on HOST:PORT (``0.0.0.0`` or an empty host: every interface) and each
-datagram is one chunk, stamped on arrival. Uplink goes back to the address the last datagram came
-from; commands written before any datagram arrived are held (a few) and sent to the first sender,
-unless ``?remote=HOST:PORT`` names where the bridge listens (for bridges that wait to be spoken to).
+The ground station *listens* on HOST:PORT: on this machine only (127.0.0.1) when no host is named, on
+every interface only when asked (``0.0.0.0``), and each datagram is one chunk, stamped on arrival.
+
+Trust comes from configuration, not from arrival: the source locks to one sender, the one
+``?remote=HOST:PORT`` names (for bridges that wait to be spoken to), else the first whose datagram
+carries a valid frame of the link's protocol (its checksum intact, ``admits``); datagrams from every
+other address are dropped and counted (``ignored``), never recorded or decoded. Uplink goes only to
+the locked sender; commands written before it is known are held (a few) and sent to it then. Why the
+first valid frame and not the first CONFIG: a bridge that started before the ground station sent its
+CONFIG already, and asking for it again needs a sender to ask.
 """
 
 from __future__ import annotations
@@ -11,6 +17,8 @@ from __future__ import annotations
 import socket
 import threading
 import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 from groundstation.sources.base import Chunk, SourceError
 from groundstation.sources.spec import Spec
@@ -18,6 +26,32 @@ from groundstation.sources.spec import Spec
 READ_TIMEOUT_S = 0.05
 MAX_DATAGRAM_BYTES = 65535
 HELD_WRITES = 16  # uplink frames kept until the bridge's address is known
+LOCAL_HOST = "127.0.0.1"  # where an address without a host listens
+NAMED_SENDERS = 16  # other senders named in the report; the count goes on past them
+
+
+@dataclass
+class Ignored:
+    """Datagrams from senders other than the locked one: counted, and the first few senders named."""
+
+    datagrams: int = 0
+    senders: list = field(default_factory=list)
+
+    def add(self, sender) -> None:
+        self.datagrams += 1
+        if sender not in self.senders and len(self.senders) < NAMED_SENDERS:
+            self.senders.append(sender)
+
+    def __str__(self) -> str:
+        named = ", ".join(f"{host}:{port}" for host, port, *_ in self.senders)
+        return f"ignored {self.datagrams} datagrams from other senders ({named})"
+
+
+def carries_a_frame(data: bytes) -> bool:
+    """Whether a datagram holds a whole frame of this project's protocol with its checksum intact."""
+    from firmware_protocol import StreamDecoder
+
+    return bool(StreamDecoder().feed(data))
 
 
 class UdpSource:
@@ -25,11 +59,15 @@ class UdpSource:
     can_reopen = True  # rebinding helps after a network interface went down and came back
     can_send = True
 
-    def __init__(self, host: str, port: int, remote: tuple[str, int] | None = None):
+    def __init__(self, host: str, port: int, remote: tuple[str, int] | None = None,
+                 admits: Callable[[bytes], bool] = carries_a_frame):
+        host = host or LOCAL_HOST
         self.address = (host, port)
-        self.description = f"UDP bridge on {host or '0.0.0.0'}:{port}"
+        self.description = f"UDP bridge on {host}:{port}"
+        self._admits = admits
         self._remote = remote and _resolve(*remote, self.description)
         self._peer = self._remote
+        self.ignored = Ignored()
         self._held: list[bytes] = []
         self._lock = threading.Lock()
         self._socket = self._bind()
@@ -63,12 +101,14 @@ class UdpSource:
         t_host_ns = time.monotonic_ns()
         with self._lock:
             first = self._peer is None
-            if self._remote is None:
+            if first and data and self._admits(data):
                 self._peer = sender
-            held, self._held = self._held, []
-        if first:
-            for data_held in held:
-                self._send(data_held)
+            if sender != self._peer:
+                self.ignored.add(sender)
+                return None
+            held, self._held = (self._held, []) if first else ([], self._held)
+        for data_held in held:
+            self._send(data_held)
         return Chunk(t_host_ns, data) if data else None
 
     def write(self, data: bytes) -> None:

@@ -46,10 +46,12 @@ GATE_OFF = {}  # the default: acc_deviation_max_g = inf
 GATE_ON = {"acc_deviation_max_g": 0.1, "acc_window_s": 0.5}
 
 
-@pytest.mark.parametrize("gate", [GATE_OFF, GATE_ON], ids=["gate-off", "gate-on"])
-def test_the_guards_agree_bit_for_bit(c_core, gate):
-    """Waiting for gravity, NaN and Inf, dt <= 0 and dt = inf, a gap (re-initialised, yaw kept), free fall, a shock,
-    over-range, and 2 s of shaking, with the low-passed deviation gate off and on."""
+SHAKING = range(800, 1000)  # 2 s of ±1.2 g along body z at 25 Hz: the norm swings from 0.2 to 2.2 g
+
+
+def guard_case(gate: dict) -> tuple:
+    """(settings, gyr, acc, dt): 20 s of fast flight through waiting for gravity, NaN and Inf, dt <= 0 and
+    dt = inf, a gap (re-initialised, yaw kept), free fall, a shock, over-range and the 2 s of ``SHAKING``."""
     run = simulate("fast", 20.0, seed=2, accel_fs_g=8, gyro_fs_dps=250)
     gyr, acc, dt = run.gyr_rad_s.tolist(), run.acc_g.tolist(), [run.dt_s] * len(run)
     acc[:3] = [[0.0, 0.0, 0.0]] * 3  # no gravity yet: waiting
@@ -60,10 +62,16 @@ def test_the_guards_agree_bit_for_bit(c_core, gate):
     dt[400] = 1.5  # a gap: pitch and roll from gravity, yaw kept
     acc[500] = [0.0, 0.01, -0.05]  # free fall
     acc[600] = [0.0, 2.0, -3.5]  # a shock: 4 g, one sample
-    shaking = range(800, 1000)  # 2 s of ±1.2 g along body z at 25 Hz: the norm swings from 0.2 to 2.2 g
-    for k in shaking:
+    for k in SHAKING:
         acc[k][2] += 1.2 * math.sin(2 * math.pi * 25.0 * k * run.dt_s)
     settings = AhfSettings(gyro_overrange_rad_s=0.95 * math.radians(250), lambda_min=0.1, lowpass=0.8, error_gain=12.0, **gate)
+    return settings, gyr, acc, dt
+
+
+@pytest.mark.parametrize("gate", [GATE_OFF, GATE_ON], ids=["gate-off", "gate-on"])
+def test_the_guards_agree_bit_for_bit(c_core, gate):
+    """Every guard (``guard_case``) with the low-passed deviation gate off and on."""
+    settings, gyr, acc, dt = guard_case(gate)
     outputs = run_both(settings, gyr, acc, dt)
     statuses = {s for s, _ in outputs}
     assert {1, 2, 4, 8, 16, 32} <= {bit for s in statuses for bit in (1, 2, 4, 8, 16, 32) if s & bit}
@@ -72,7 +80,7 @@ def test_the_guards_agree_bit_for_bit(c_core, gate):
     if gate is GATE_OFF:  # only free fall and non-finite readings are skipped, the shock and the shaking are used
         assert not skipped
     else:  # the shaking is rejected, on both halves of its swing, and the accelerometer is used again after it
-        assert len(skipped & set(shaking)) > 150 and not skipped - set(range(800, 1200))
+        assert len(skipped & set(SHAKING)) > 150 and not skipped - set(range(800, 1200))
         assert any(math.hypot(*acc[k]) > 1.0 for k in skipped) and any(math.hypot(*acc[k]) < 1.0 for k in skipped)
         assert 600 in usable and 600 not in skipped  # one 4 g sample moves the low-passed deviation by < 0.1 g
 

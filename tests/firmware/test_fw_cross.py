@@ -1,5 +1,6 @@
 """The board and bridge images for the Cortex-M3 (where arm-none-eabi-gcc is installed), and the core's
-AHF on an emulated Cortex-M3 (where qemu-system-arm is) against the host build."""
+AHF built with newlib on an emulated Cortex-M3 (where qemu-system-arm is) against the ground station's
+float32 model."""
 
 import struct
 import subprocess
@@ -7,13 +8,16 @@ import subprocess
 import numpy as np
 import pytest
 
-from firmware_protocol.reference import cross, host
+from firmware_protocol.reference import cross
 from groundstation.estimation.ahf import Ahf, AhfSettings
 from groundstation.sim.offline import simulate
+from tests.firmware.test_fw_ahf import GATE_ON, guard_case
 
 pytestmark = pytest.mark.skipif(cross.toolchain() is None, reason="arm-none-eabi-gcc not installed (Debian: gcc-arm-none-eabi, "
-                                                                  "libnewlib-arm-none-eabi): the STM32 images are not built")
-needs_qemu = pytest.mark.skipif(cross.emulator() is None, reason="qemu-system-arm not installed: the Cortex-M3 run is not checked")
+                                                                  "libnewlib-arm-none-eabi): the STM32 images are not built and the "
+                                                                  "core's AHF is not checked on a Cortex-M3")
+needs_qemu = pytest.mark.skipif(cross.emulator() is None, reason="qemu-system-arm not installed (Debian: qemu-system-arm): the core's AHF "
+                                                                 "is not checked bit for bit on an emulated Cortex-M3")
 
 
 def vector(elf, index: int) -> int:
@@ -41,38 +45,21 @@ def test_both_images_build_fit_the_blue_pill_and_route_their_interrupts(tmp_path
     assert (tmp_path / "flight.bin").stat().st_size == sizes["flight"].flash_bytes
 
 
-def flight(seconds: float = 60.0):
-    run = simulate("flight", seconds, seed=5, accel_fs_g=4, gyro_fs_dps=500)
-    return run.gyr_rad_s, run.acc_g, np.full(len(run), run.dt_s)
-
-
-def rows(status, q, lam) -> tuple:
-    return (status, *np.array([*q, lam], dtype=np.float32).view(np.uint32).tolist())
+def flight_case() -> tuple:
+    """(settings, gyr, acc, dt): 60 s of the simulated flight, the paper's settings."""
+    run = simulate("flight", 60.0, seed=5, accel_fs_g=4, gyro_fs_dps=500)
+    return AhfSettings(), run.gyr_rad_s.tolist(), run.acc_g.tolist(), [run.dt_s] * len(run)
 
 
 @needs_qemu
-def test_on_a_cortex_m3_the_core_computes_what_the_host_build_computes(c_core, tmp_path):
-    """Soft-float, newlib's double functions and GCC for ARM change nothing when x^-0.5 is the portable
-    expression: 60 s of flight, every output bit equal."""
-    defines = ("GS_AHF_PORTABLE_RSQRT",)
-    gyr, acc, dt = flight()
-    board = cross.run_ahf(cross.build_ahf_program(gyr, acc, dt, tmp_path, defines))
-    ahf = host.Ahf32(AhfSettings(), defines=defines)
-    expected = []
-    for g, a, d in zip(gyr.tolist(), acc.tolist(), dt.tolist()):
-        status, q, lam, _, _ = ahf.step(g, a, d)
-        expected.append(rows(status, q, lam))
-    assert len(board) == len(expected) == 6000
-    assert board == expected
-
-
-@needs_qemu
-@pytest.mark.xfail(strict=True, reason="newlib's powf(x, -0.5) rounds differently from glibc's (NumPy's) in 9 % of inputs, and "
-                                       "the filter amplifies it to degrees: the ground station's float32 model and the core need "
-                                       "one exactly specified x^-0.5 (docs/firmware.md)")
-def test_the_stm32_build_agrees_with_the_ground_stations_float32_model(tmp_path):
-    gyr, acc, dt = flight(10.0)
-    board = cross.run_ahf(cross.build_ahf_program(gyr, acc, dt, tmp_path))
-    model = Ahf(AhfSettings(), dtype=np.float32)
-    expected = [rows(diag.status, q, diag.lam) for q, diag in (model.step(g, a, d) for g, a, d in zip(gyr.tolist(), acc.tolist(), dt.tolist()))]
-    assert board == expected
+@pytest.mark.parametrize("case", [flight_case, lambda: guard_case(GATE_ON)], ids=["flight-60s", "guards-gate-on"])
+def test_on_a_cortex_m3_with_newlib_the_core_computes_the_ground_stations_float32_model_bit_for_bit(case, tmp_path):
+    """Soft float, newlib's sqrtf and double functions and GCC for ARM: every output bit of every sample (status,
+    q, lambda, e_a, err, the gate's deviation) equals the float32 model, over a minute of flight and through
+    every guard with the deviation gate (its square root) on."""
+    settings, gyr, acc, dt = case()
+    board = cross.run_ahf(cross.build_ahf_program(settings, gyr, acc, dt, tmp_path))
+    expected = cross.model_rows(Ahf(settings, dtype=np.float32), gyr, acc, dt)
+    assert len(board) == len(expected) == len(dt)
+    mismatched = [k for k, (b, e) in enumerate(zip(board, expected)) if b != e]
+    assert not mismatched, f"{len(mismatched)} of {len(dt)} rows differ, first at sample {mismatched[0]}: board {board[mismatched[0]]} != model {expected[mismatched[0]]}"

@@ -111,3 +111,17 @@ def test_the_summary_says_when_the_port_is_gone_or_silent(tmp_path):
             assert time.monotonic() < deadline
             time.sleep(0.05)
         assert summary_line(session).startswith("PORT GONE: ")
+
+
+def test_record_on_a_full_disk_exits_non_zero_and_says_how_long_was_not_recorded(tmp_path):
+    from tests.session.full_disk import tiny_tmpfs
+
+    with tiny_tmpfs(tmp_path / "full") as folder:
+        result = gs("record", "--port", "sim:?scenario=hover", "--duration", "5", "--recordings", folder)
+        assert result.returncode == 1, result.stderr
+        assert "Traceback" not in result.stderr
+        said = re.search(r"the recording failed \d+ time\(s\) \((.*)\): ([\d.]+) s of the session were not recorded",
+                         result.stderr)
+        assert said and "No space left on device" in said[1]
+        assert 0.5 < float(said[2]) < 5.0  # the disk held the first seconds only
+        assert open_recording(recording_of(result.stdout)).chunk_count > 0  # what fitted is kept

@@ -63,3 +63,64 @@ def test_tcp_bridge_streams_and_the_session_reconnects_when_the_bridge_drops(tmp
     assert bridge.connections == 2
     assert session.pipeline.decoder.stats.bytes_in == len(bridge.sent)  # nothing lost on either connection
     assert session.pipeline.decoder.stats.crc_errors == 0
+
+
+def test_udp_without_a_host_listens_on_this_machine_only(tmp_path):
+    from groundstation.sources import open_source
+
+    for spec in ("udp://:0", "mavlink:udpin::0"):
+        source = open_source(spec)
+        try:
+            transport = getattr(source, "transport", source)
+            assert transport.local_address[0] == "127.0.0.1", spec
+        finally:
+            source.close()
+
+
+def test_udp_source_locks_to_its_bridge_and_a_spoofer_neither_rescales_nor_receives(tmp_path):
+    """Another process on the machine sends junk first, then a forged CONFIG (16 g instead of 4 g): it is
+    counted and ignored; the data keeps its scale, uplink goes to the bridge only, the recording holds
+    the bridge's bytes alone."""
+    import socket
+
+    import numpy as np
+
+    from firmware_protocol import StreamDecoder
+    from firmware_protocol.codec import encode, make_frame
+
+    session = open_session("udp://127.0.0.1:0", filters=("ahf",), recordings_dir=tmp_path)
+    target = session.source.local_address
+    spoofer = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    spoofer.bind(("127.0.0.1", 0))
+    spoofer.settimeout(0.2)
+    bridge = UdpBridge(target)
+    try:
+        with session:
+            spoofer.sendto(b"\x00 not a frame " * 8, target)  # before the bridge: no valid frame, no lock
+            bridge.start()
+            wait_for(lambda: len(session.pipeline.imu) > 100)
+            real = next(f for f in StreamDecoder().feed(bytes(bridge.sent)) if f.name == "CONFIG")
+            forged = make_frame("CONFIG", real.seq, **{**real.values, "accel_fs_g": 16})
+            for _ in range(5):
+                spoofer.sendto(encode(forged), target)
+            wait_for(lambda: session.source.ignored.datagrams >= 6)
+            rows = len(session.pipeline.imu)
+            wait_for(lambda: len(session.pipeline.imu) > rows + 100)
+            seq = session.send_command("request_config")
+            wait_for(lambda: acked(session, seq))
+            bridge.close()
+            time.sleep(0.3)
+        with session.lock:
+            acc = np.column_stack([session.pipeline.imu.column(f"acc_{c}_g") for c in "xyz"])[-100:]
+        assert abs(np.median(np.linalg.norm(acc, axis=1)) - 1.0) < 0.25  # a hover near 1 g; the forged scale gives 4 g
+        assert session.source.ignored.senders == [spoofer.getsockname()]
+        try:
+            leaked = spoofer.recv(4096)
+        except TimeoutError:
+            leaked = b""
+        assert leaked == b""  # no uplink command reached the spoofer
+        recording = open_recording(session.recording_path)
+        assert b"".join(data for _, data in recording.chunks()) == bytes(bridge.sent)
+    finally:
+        bridge.close()
+        spoofer.close()

@@ -71,7 +71,7 @@ def test_every_registered_scheme_has_an_opener_and_is_listed_in_the_error():
     ("tcp://127.0.0.1:1", "cannot open the TCP bridge 127.0.0.1:1"),  # nothing listens on port 1
     ("tcp://127.0.0.1:9?x=1", "unknown option x"),
     ("sim:?scenario=nope", "invalid choice: 'nope'"),
-    ("sim:?seed=x", "invalid int value: 'x'"),
+    ("sim:?seed=x", "not an integer: 'x'"),
     ("sim:?seed=1&seed=2", "given twice"),
     ("sim:?duration=-5", "must be positive"),
     ("sim:?sensors=radar", "unknown sensor(s) radar"),

@@ -5,19 +5,13 @@
 #include <math.h>
 #include <stddef.h>
 
-/* x^-0.5 and x^0.5 in float. The ground station's float32 model writes them x ** -0.5 and x ** 0.5,
- * which NumPy computes with the C library's powf (not sqrtf: glibc's powf(x, 0.5f) is not always the
- * correctly rounded root), so the core calls powf too: bit for bit with the model on the same C library.
- * C libraries round it differently: newlib's powf (the STM32 build) differs from glibc's in 9 % of
- * inputs, and the filter turns one ulp into degrees (docs/firmware.md). GS_AHF_PORTABLE_RSQRT builds
- * both from sqrt in double instead: IEEE operations every platform computes alike. */
-#ifdef GS_AHF_PORTABLE_RSQRT
-static float rsqrt(float x) { return (float)(1.0 / sqrt((double)x)); }
-static float root(float x) { return (float)sqrt((double)x); }
-#else
-static float rsqrt(float x) { return powf(x, -0.5f); }
-static float root(float x) { return powf(x, 0.5f); }
-#endif
+/* x^-0.5 (the normalisations of seed 000 eq. 9, 18 and 19) and x^0.5 (the gate) in float from the
+ * operations IEEE 754 rounds correctly (division and sqrtf), as the ground station's float32 model writes
+ * them (1.0 / np.sqrt(x), np.sqrt(x)): every C library and FPU, the board's newlib and soft float among
+ * them, computes them alike, so the board, the host build and the model agree bit for bit. Not powf: C libraries round it differently (newlib's differs from glibc's in
+ * 9 % of inputs), and the filter turns one ulp into degrees (docs/firmware.md). */
+static float rsqrt(float x) { return 1.0f / sqrtf(x); }
+static float root(float x) { return sqrtf(x); }
 
 void gs_ahf_default_settings(gs_ahf_settings *s)
 {

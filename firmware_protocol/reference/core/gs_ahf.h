@@ -2,10 +2,14 @@
  *
  * The same constants and order of operations as groundstation/estimation/ahf.py run with
  * dtype=np.float32 (and the input guards of groundstation/estimation/base.py), so the two agree bit
- * for bit: every update is float arithmetic in the order the Python writes it, x^-0.5 and x^0.5 are
- * powf(x, -0.5f) and powf(x, 0.5f) (NumPy's float32 power; see GS_AHF_PORTABLE_RSQRT in gs_ahf.c), and the few steps the Python does in double (initialisation from gravity,
- * re-normalising a given attitude, the settings) are done in double here too. Build without
- * -ffast-math and without FMA contraction (-ffp-contract=off), or the last bits differ.
+ * for bit: every update is float arithmetic in the order the Python writes it, only with the operations
+ * IEEE 754 rounds correctly (+, -, *, /, sqrtf: x^-0.5 is 1.0f / sqrtf(x), as the Python's 1.0 / np.sqrt(x)),
+ * so any C library computes the same bits (newlib on the STM32: tests/firmware/test_fw_cross.py), and the
+ * few steps the Python does in double (initialisation from gravity, re-normalising a given attitude, the
+ * settings) are done in double here too (their atan2, sin and cos, within an ulp in any C library, change
+ * the float they are rounded to only when that lands within an ulp of double of a rounding boundary, about
+ * once in 2^28). Build without -ffast-math and without FMA contraction (-ffp-contract=off), or the last
+ * bits differ.
  *
  * Frames: q = (w, x, y, z) rotates body (forward-right-down) vectors into north-east-down; gyro in
  * rad/s and accelerometer in g on the body axes (docs/conventions.md). */
