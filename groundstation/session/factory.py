@@ -19,10 +19,6 @@ from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
 from groundstation.sources import ReplaySource, SourceError, open_source
 
-# The comparison estimators run on every live session (and so on its recording's replays), so showing one is a legend click or
-# a check box, not a restart: the IMU filters (HF, ECF), those with the magnetometer (HF+mag, ECF+mag,
-# MCF; a few µs per sample each) and the GPS-aided unscented filters (UKF, SSSRUKF; a few hundred µs
-# per sample each, in the reader thread). Hidden curves cost the UI nothing per frame.
 DEMO_SPEC = "sim:"
 
 
@@ -41,7 +37,7 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
             raise SourceError(f"{spec}: a .tlog is a flight log, not a link: open it whole (groundstation app FILE, "
                               "the app's File > Open, or replay, export and evaluate FILE)")
         return replay_session(source)
-    pipeline = Pipeline(filters or live_estimators(), settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
+    pipeline = Pipeline(live_estimators() if filters is None else filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
     return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata={"source_spec": spec})
 
 
