@@ -2,15 +2,16 @@
 
 As PlotJuggler's ``DataLoader::compatibleFileExtensions()``: each format says its suffixes, what it is,
 the first bytes its files start with (when they have any) and the loader that turns a file into the
-session product, ``load(path, filters, forced, progress) -> SessionData`` (a flight log also its reader
-into a ``FlightLog``). The app's Open dialog, the CLI's help and ``session.data.load_session`` (which the
-app, ``export``, ``evaluate`` and ``replay`` open files with) derive from it; so do ``sources`` (which
-files replay as a link) and ``autopilot.flightlog`` (which reader a flight log takes). A new format is its module and one
-``register`` line here (or a call from anywhere, before the file is opened).
+session product, ``load(path, filters, forced, progress) -> SessionData`` (``loaders``, or
+``autopilot.session.load_log`` for flight logs, which also name their reader into a ``FlightLog``).
+The app's Open dialog, the CLI's help and ``session.data.load_session`` (which the app, ``export``,
+``evaluate`` and ``replay`` open files with) derive from it; so do ``sources`` (which files replay as a
+link) and ``autopilot.flightlog`` (which reader a flight log takes). A new format is its loader module
+and one ``register`` line here (or a call from anywhere, before the file is opened).
 
-Loaders are named as ``"module:function"`` and imported on first use: this module imports nothing of
-the session, so the session's modules can look formats up without an import circle. The flight-log
-readers check the first bytes registered here.
+Loaders and readers are named as ``"module:function"`` and imported on first use: this module imports
+nothing of the session or the readers (it sits below them), so they can look formats up without an
+import circle. The flight-log readers check the first bytes registered here.
 """
 
 from __future__ import annotations
@@ -56,9 +57,9 @@ def register(file_format: FileFormat) -> FileFormat:
     return file_format
 
 
-register(FileFormat("recording", (".gsrec",), "recording", "groundstation.formats.recording:load",
+register(FileFormat("recording", (".gsrec",), "recording", "groundstation.loaders.recording:load",
                     magic=RECORDING_MAGIC, replayable=True))
-register(FileFormat("dataset", (".csv", ".csv.gz", ".gz"), "dataset CSV", "groundstation.formats.dataset_csv:load"))
+register(FileFormat("dataset", (".csv", ".csv.gz", ".gz"), "dataset CSV", "groundstation.loaders.dataset_csv:load"))
 register(FileFormat("tlog", (".tlog",), "MAVLink telemetry log", "groundstation.autopilot.session:load_log",
                     read="groundstation.autopilot.tlog:read_tlog"))
 register(FileFormat("dataflash", (".bin",), "ArduPilot DataFlash log", "groundstation.autopilot.session:load_log",
