@@ -59,8 +59,10 @@ def totals_line(session: LiveSession) -> str:
     return f"{line}; {ignored}" if ignored and ignored.datagrams else line
 
 
-def follow(session: LiveSession, stream=sys.stdout, interval_s: float = 0.25, until=None) -> None:
-    """Rewrite the summary line until the session's reader stops (or ``until()`` is true)."""
+def follow(session: LiveSession, stream=None, interval_s: float = 0.25, until=None) -> None:
+    """Rewrite the summary line until the session's reader stops (or ``until()`` is true); on standard
+    output unless ``stream`` says otherwise (looked up at the call: it may have been replaced since import)."""
+    stream = stream or sys.stdout
     tty = stream.isatty()
     last_print = 0.0
     while session.running and not (until and until()):

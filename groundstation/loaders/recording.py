@@ -6,15 +6,14 @@ from __future__ import annotations
 from groundstation.errors import UserError
 from groundstation.recording import open_recording
 from groundstation.session.data import SessionData, computed, from_pipeline, from_trial, trial_from_samples
-from groundstation.session.pipeline import DEFAULT_FILTERS
-from groundstation.session.replay import check_forced, recorded_settings
+from groundstation.session.replay import check_forced, recorded_filters, recorded_settings
 
 
 def load(path, filters=None, forced=None, progress=None) -> SessionData:
     recording = open_recording(path)
     if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
-        filters = filters or recording.metadata.get("filters", DEFAULT_FILTERS)
+        filters = filters or recorded_filters(recording)[0]
         check_forced(filters, forced)
         settings = {**recorded_settings(recording)}
         for name, values in (forced or {}).items():

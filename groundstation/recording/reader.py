@@ -292,7 +292,7 @@ def _assemble(path: Path, version: int, buffer: bytes, walk: _Walk, damage: list
 def _json_object(payload: memoryview, what: str, damage: list[str]) -> dict | None:
     try:
         value = json.loads(bytes(payload))
-    except ValueError:
+    except (ValueError, RecursionError):  # RecursionError: nested deeper than any record we write
         value = None
     if not isinstance(value, dict):
         damage.append(f"{what} is not a JSON object; skipped")

@@ -3,25 +3,62 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 
 from groundstation.errors import UserError
-from groundstation.estimation import setting_names
+from groundstation.estimation import ESTIMATORS, setting_names
 from groundstation.recording import Recording
 from groundstation.session.pipeline import DEFAULT_FILTERS, PROTOCOLS, Pipeline
 
 
+def checked_settings(name: str, raw) -> tuple[dict[str, float], list[str]]:
+    """The settings of estimator ``name`` in a recording's ``raw`` table that this version has, as finite
+    numbers; and ``name.key`` for each left out (another version's setting, or a value that is no number).
+    A recording is anybody's file: what it says is checked by type here, once, for the header and the
+    settings events alike."""
+    if not isinstance(raw, dict):
+        return {}, [f"{name} (not a table of settings)"]
+    known = setting_names(name) if name in ESTIMATORS else frozenset()
+    kept, left_out = {}, []
+    for key, value in raw.items():
+        is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
+        if key in known and is_number and math.isfinite(value):
+            kept[key] = float(value)
+        else:
+            left_out.append(f"{name}.{key}")
+    return kept, left_out
+
+
+def _header_settings(recording: Recording) -> dict:
+    recorded = recording.metadata.get("estimator_settings", {})
+    return recorded if isinstance(recorded, dict) else {"estimator_settings": recorded}
+
+
 def recorded_settings(recording: Recording) -> dict[str, dict[str, float]]:
-    """The estimator settings in the header (``Pipeline.settings_json``), as numbers again; those the
-    estimators of this version no longer have (a recording from an older one) are left out and named
-    by ``outdated_settings``."""
-    recorded = recording.metadata.get("estimator_settings", {})
-    return {name: {k: float(v) for k, v in settings.items() if k in setting_names(name)} for name, settings in recorded.items()}
+    """The estimator settings in the header (``Pipeline.settings_json``), as numbers again; those this
+    version's estimators do not have or cannot read are left out and named by ``left_out_settings``."""
+    return {name: checked_settings(name, settings)[0] for name, settings in _header_settings(recording).items()
+            if name in ESTIMATORS}
 
 
-def outdated_settings(recording: Recording) -> list[str]:
-    recorded = recording.metadata.get("estimator_settings", {})
-    return [f"{name}.{k}" for name, settings in recorded.items() for k in settings if k not in setting_names(name)]
+def left_out_settings(recording: Recording) -> list[str]:
+    """Every recorded setting, in the header or in a settings event, that a replay cannot apply."""
+    out = [item for name, settings in _header_settings(recording).items() for item in checked_settings(str(name), settings)[1]]
+    for _, event in recording.events:
+        if event.get("kind") == "settings":
+            out += checked_settings(str(event.get("name")), event.get("settings"))[1]
+    return list(dict.fromkeys(out))
+
+
+def recorded_filters(recording: Recording) -> tuple[list[str], list[str]]:
+    """The estimators the recorded session ran that this version has; and what the header names that
+    cannot run (another version's estimator, or not a list of names)."""
+    recorded = recording.metadata.get("filters", DEFAULT_FILTERS)
+    if not isinstance(recorded, list):
+        return list(DEFAULT_FILTERS), [f"filters {recorded!r} (not a list of names)"]
+    names = [name for name in recorded if isinstance(name, str) and name in ESTIMATORS]
+    return names, [repr(name) for name in recorded if name not in names]
 
 
 def check_forced(filters, forced) -> None:
@@ -45,18 +82,21 @@ class RecordedSetup:
 
 
 def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedSetup:
+    warnings = []
     if filters is None:
-        filters = recording.metadata.get("filters", DEFAULT_FILTERS)
+        filters, unknown = recorded_filters(recording)
+        if unknown:
+            warnings.append({"t_host_ns": 0, "kind": "warning", "message": "recorded estimators this version does not "
+                             f"have, left out: {', '.join(unknown)}"})
     check_forced(filters, forced)
     protocol = recording.metadata.get("protocol", "gs")  # recordings from before MAVLink: the project's frames
     if protocol not in PROTOCOLS:
         raise UserError(f"{recording.path}: recorded from a {protocol!r} link, which this version cannot decode "
                         f"(it knows {', '.join(PROTOCOLS)})")
-    warnings = []
-    outdated = outdated_settings(recording)
-    if outdated:
+    left_out = left_out_settings(recording)
+    if left_out:
         warnings.append({"t_host_ns": 0, "kind": "warning", "message": "recorded settings this version's "
-                         f"estimators no longer have, left out (their defaults apply): {', '.join(outdated)}"})
+                         f"estimators do not have or cannot read, left out (their defaults apply): {', '.join(left_out)}"})
     aiding = recording.metadata.get("aiding_estimator")
     return RecordedSetup(tuple(filters), aiding if aiding in filters else None, recorded_settings(recording), forced,
                          protocol, warnings)
@@ -84,9 +124,14 @@ class SettingsSchedule:
     """
 
     def __init__(self, recording: Recording):
-        self._events = sorted(
-            ((t, i, e) for i, (t, e) in enumerate(recording.events) if e.get("kind") == "settings"), key=lambda x: x[:2]
-        )
+        changes = []
+        for i, (t, event) in enumerate(recording.events):
+            name = event.get("name")
+            if event.get("kind") == "settings" and isinstance(name, str):
+                kept, _ = checked_settings(name, event.get("settings"))  # what is left out: left_out_settings
+                if kept:
+                    changes.append((t, i, {**event, "settings": kept}))
+        self._events = sorted(changes, key=lambda x: x[:2])
         self._next = 0
 
     def changes(self) -> list[tuple[float, dict]]:

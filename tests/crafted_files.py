@@ -1,0 +1,72 @@
+"""Crafted recordings: valid checksums, hostile content (issue 22, "Crafted and huge files"). Each
+``CRAFTED`` entry writes one file into a folder; tests run every command on each and want a one-line
+message or a clean result, never a traceback. ``python -m tests.crafted_files DIR`` writes them all."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from groundstation.recording import RecordingWriter
+from groundstation.sim.stream import Scenario, SimStream
+
+DEEP = 100_000  # JSON nested this deep: Python's json recursion limit is far below
+
+
+def _link_bytes(writer: RecordingWriter, seconds: float = 2.0) -> None:
+    stream = SimStream(Scenario(profile="hover", duration_s=seconds, seed=3))
+    for chunk in [*stream.advance(stream.end_s), *stream.flush()]:
+        writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)
+
+
+def _recording(folder: Path, name: str, metadata: dict, events=(), samples=None, link=True) -> Path:
+    path = folder / f"{name}.gsrec"
+    with RecordingWriter(path, metadata) as writer:
+        if link:
+            _link_bytes(writer)
+        for t_ns, event in events:
+            writer.write_event(t_ns, event)
+        if samples is not None:
+            writer.write_samples(samples)
+    return path
+
+
+def _deep_json_event(folder: Path, name: str) -> Path:
+    """An event record whose JSON is nested DEEP levels (its checksum valid)."""
+    from groundstation.recording import format as fmt
+
+    path = _recording(folder, name, {"source": "crafted"})
+    payload = ("[" * DEEP + "]" * DEEP).encode()
+    with path.open("ab") as handle:
+        handle.write(fmt.encode_record(fmt.Kind.EVENT, 10**9, payload))
+    return path
+
+
+CRAFTED = {
+    "settings_not_a_dict": lambda d, n: _recording(d, n, {"estimator_settings": [1, 2, 3]}),
+    "settings_values_text": lambda d, n: _recording(d, n, {"estimator_settings": {"hf": {"beta": "fast"}}}),
+    "settings_of_unknown_estimator": lambda d, n: _recording(d, n, {"estimator_settings": {"zz9": {"beta": 1.0}}}),
+    "filters_not_a_list": lambda d, n: _recording(d, n, {"filters": 42}),
+    "filters_unknown_names": lambda d, n: _recording(d, n, {"filters": ["ahf", "no_such_filter"]}),
+    "settings_event_of_a_newer_version": lambda d, n: _recording(
+        d, n, {"filters": ["hf"]}, events=[(10**9, {"kind": "settings", "name": "hf", "settings": {"warp_drive": 2.0}})]),
+    "settings_event_without_settings": lambda d, n: _recording(d, n, {}, events=[(10**9, {"kind": "settings", "name": "hf"})]),
+    "event_not_an_object": lambda d, n: _recording(d, n, {}, events=[(10**9, {"kind": 7})]),
+    "deep_json_event": _deep_json_event,
+    "samples_without_time": lambda d, n: _recording(d, n, {"source": "import"}, link=False,
+                                                    samples={"gyr_x_rad_s": np.zeros(10), "acc_x_m_s2": np.ones(10)}),
+    "samples_zero_rows": lambda d, n: _recording(d, n, {"source": "import"}, link=False,
+                                                 samples={"time_s": np.zeros(0), "gyr_x_rad_s": np.zeros(0)}),
+}
+
+
+def write_all(folder: Path) -> dict[str, Path]:
+    folder.mkdir(parents=True, exist_ok=True)
+    return {name: make(folder, name) for name, make in CRAFTED.items()}
+
+
+if __name__ == "__main__":
+    for name, path in write_all(Path(sys.argv[1])).items():
+        print(name, path)
