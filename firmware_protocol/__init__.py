@@ -9,7 +9,7 @@
 """
 
 from firmware_protocol.codec import Frame, crc16, encode, make_frame, make_scaled_frame
-from firmware_protocol.decoder import DecoderStats, StreamDecoder
+from firmware_protocol.decoder import DecoderStats, SequenceRules, StreamDecoder
 from firmware_protocol.spec import SPEC, Field, FrameType, Spec, load_spec
 
 __all__ = [
@@ -18,6 +18,7 @@ __all__ = [
     "Field",
     "Frame",
     "FrameType",
+    "SequenceRules",
     "Spec",
     "StreamDecoder",
     "crc16",

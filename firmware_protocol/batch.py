@@ -17,9 +17,9 @@ passes over the whole buffer:
 2. Sequence and time. Duplicates (same seq and values as the frame before) and unknown types are
    dropped; then every frame that the incremental decoder's fast path takes (a timestamped frame
    with the next seq, soon after a timestamped one) is placed by a cumulative sum, and every other
-   frame by the incremental decoder's own slow path (``StreamDecoder._place`` and ``_untimed`` on a
-   decoder holding the state): the first frame, frames without timestamp, gaps, long or backward
-   steps, held frames and restarts. One set of rules, no copy of them here.
+   frame by the rules the incremental decoder calls for it (``decoder.SequenceRules``: ``timed`` and
+   ``untimed``): the first frame, frames without timestamp, gaps, long or backward steps, held frames
+   and restarts. One set of rules, no copy of them here.
 
 Payloads are unpacked by viewing the frames' bytes as a numpy structured dtype built from the spec
 (``payload_dtype``), so raw values are the wire values, bit for bit.
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from firmware_protocol.codec import CRC_BYTES, HEADER_BYTES, SYNC
-from firmware_protocol.decoder import DecoderStats, StreamDecoder
+from firmware_protocol.decoder import DecoderStats, SequenceRules
 from firmware_protocol.spec import C_TYPES, SPEC, FrameType, Spec
 
 _OVERHEAD = HEADER_BYTES + CRC_BYTES
@@ -133,9 +133,9 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
     keep = ~duplicate & known
     kept = _Kept(buf, starts[keep], type_ids[keep], seqs[keep], tables)
     chunk_of = np.searchsorted(scan.stops, kept.starts, side="right")  # the chunk whose feed reaches the frame
-    placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, spec, progress)
+    placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, progress)
 
-    stats = placed.decoder.stats
+    stats = placed.rules.stats
     stats.bytes_in = n
     stats.frame_bytes = int((scan.ends - starts).sum())
     stats.bytes_skipped = int(scan.stops[-1]) - stats.frame_bytes if len(scan.stops) else 0
@@ -172,8 +172,8 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
         chunk = chunk_of[placed.emitter[order]]
         device = placed.t64[order] if frame_type.has_timestamp else None
         frames[frame_type.name] = FrameColumns(frame_type, order, kept.seqs[which], raw, device, chunk, chunk_t_host_ns[chunk])
-    decoder = placed.decoder
-    return BatchDecode(frames, stats, decoder.remote_fingerprint, decoder.rate_hz, n - int(stops[-1]) if len(stops) else 0,
+    rules = placed.rules
+    return BatchDecode(frames, stats, rules.remote_fingerprint, rules.rate_hz, n - int(stops[-1]) if len(stops) else 0,
                        chunk_t_host_ns, counters)
 
 
@@ -328,14 +328,14 @@ class _Placed:
     t64: np.ndarray  # its device time (0 for frames without timestamp)
     emitter: np.ndarray  # kept index of the frame whose processing returned it (a held frame: the confirming one)
     lost: np.ndarray  # (kept,) frames counted lost while processing each kept frame
-    decoder: StreamDecoder  # holding the state and the slow path's counters
+    rules: SequenceRules  # holding the state and the counters it keeps
 
 
-def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tables, spec: Spec, progress) -> _Placed:
-    """StreamDecoder's sequence and time rules over the kept frames: fast runs as arrays, the rest
-    through the decoder's own slow path."""
+def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tables, progress) -> _Placed:
+    """The sequence and time rules over the kept frames: fast runs as arrays, the rest through
+    ``SequenceRules`` as the incremental decoder calls it."""
     n = len(kept)
-    decoder = StreamDecoder(spec)
+    rules = SequenceRules(DecoderStats())
     ts, seqs, t32 = kept.timestamped, kept.seqs.astype(np.int64), kept.t32
     # Frame j continues a fast run after frame j-1 if both are timestamped, seq follows and the step is short.
     consecutive = np.zeros(n, dtype=bool)
@@ -364,26 +364,26 @@ def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tabl
         t_host_ns = int(chunk_t_host_ns[chunk_of[i]])
         advances = returned + lost_total
         if not ts[i]:
-            k = decoder._untimed(type_id, seq, raw, advances)
+            k = rules.untimed(type_id, seq, raw, advances)
             index[returned], emitter[returned] = i, i
             returned += 1
         else:
             out: list = []
-            held_before = decoder._held
-            k = decoder._place(out, types[type_id], seq, raw, int(t32[i]), t_host_ns, advances)
+            held_before = rules.held
+            k = rules.timed(out, types[type_id], seq, raw, int(t32[i]), t_host_ns, advances)
             if len(out) == 2:
                 index[returned], t64[returned], emitter[returned] = held_at, out[0][3], i
                 returned += 1
             if out:
                 index[returned], t64[returned], emitter[returned] = i, out[-1][3], i
                 returned += 1
-            if decoder._held is not None and decoder._held is not held_before:
+            if rules.held is not None and rules.held is not held_before:
                 held_at = i
         lost[i] = k
         lost_total += k
         i += 1
         # The fast run that follows: frames the incremental decoder's fast path takes.
-        fast_us = decoder._fast_us
+        fast_us = rules.fast_us
         if not fast_us or i >= n:
             continue
         breaks = breaks_for.get(fast_us)
@@ -391,20 +391,20 @@ def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tabl
             breaks = breaks_for[fast_us] = np.flatnonzero(~consecutive | (step >= fast_us))
         b = np.searchsorted(breaks, i)
         end = int(breaks[b]) if b < len(breaks) else n
-        if end == i or seqs[i] != decoder._ref_next:
+        if end == i or seqs[i] != rules.next_seq:
             continue
         steps = step[i:end]
-        run = decoder._ref_t64 + np.cumsum(steps)
+        run = rules.t64 + np.cumsum(steps)
         count = end - i
         index[returned : returned + count] = np.arange(i, end)
         emitter[returned : returned + count] = index[returned : returned + count]
         t64[returned : returned + count] = run
         returned += count
         moved = np.flatnonzero(steps)
-        if len(moved):  # the reference moved in the chunk of the last frame that moved it
-            decoder._ref_host_ns = int(chunk_t_host_ns[chunk_of[i + int(moved[-1])]])
-        decoder._ref_next, decoder._ref_t32, decoder._ref_t64 = (int(seqs[end - 1]) + 1) & 0xFF, int(t32[end - 1]), int(run[-1])
+        # The reference moved in the chunk of the last frame that moved it.
+        host_ns = int(chunk_t_host_ns[chunk_of[i + int(moved[-1])]]) if len(moved) else rules.host_ns
+        rules.ran((int(seqs[end - 1]) + 1) & 0xFF, int(t32[end - 1]), int(run[-1]), host_ns)
         i = end
     if progress is not None:
         progress(n, n)
-    return _Placed(index[:returned], t64[:returned], emitter[:returned], lost, decoder)
+    return _Placed(index[:returned], t64[:returned], emitter[:returned], lost, rules)

@@ -23,6 +23,10 @@ ahead by more than the host waited (plus a tolerance), is held back until the ne
 decides. If that one follows the held frame, the device restarted (a reboot, a clock jump): both are
 returned, ``restarts`` counts it, device time restarts from the new timestamps and no loss is counted
 across it. Otherwise the held frame was noise: it is dropped and counted in ``implausible``.
+
+These sequence and time rules are one public object, ``SequenceRules``: ``StreamDecoder`` calls it
+for every frame its inlined fast path does not take, and the columnar ``batch.decode_batch`` calls
+it for every frame its cumulative sums do not place.
 """
 
 from __future__ import annotations
@@ -86,22 +90,25 @@ class StreamDecoder:
         self.spec = spec
         self._types, self._sizes, self._unpackers, self._timestamped = _lookup(spec)
         self.stats = DecoderStats()
-        self.remote_fingerprint: int | None = None  # from the last CONFIG seen
-        self.rate_hz = DEFAULT_RATE_HZ  # from the last CONFIG seen
+        self.rules = SequenceRules(self.stats)  # sequence, device time, plausibility, restarts
         self._pending = b""
         self._last_seq: int | None = None  # duplicate detection: the last frame accepted
         self._last_raw: tuple | bytes = ()
-        # The sequence and timestamp reference: the last plausible frame (``_ref_next`` is the seq expected next).
-        self._ref_next: int | None = None
-        self._ref_t32: int | None = None
-        self._ref_t64 = 0
-        self._ref_host_ns: int | None = None
-        self._untimed_advance = 0  # seq advance taken by frames without timestamp since the reference
-        self._untimed_lost = 0  # of which counted lost (taken back if the sender turns out to have restarted)
-        self._held: tuple | None = None  # (type, seq, raw, t32): a frame whose timestamp awaits confirmation
-        self._learn_from = (0, 0)  # (seq advances, device time) where the rate measurement starts
-        self._frames_per_us: float | None = None  # the measured sending rate; None until measured
-        self._fast_us = 0  # see _fast_threshold
+
+    @property
+    def rate_hz(self) -> int:
+        """From the last CONFIG seen (``DEFAULT_RATE_HZ`` before)."""
+        return self.rules.rate_hz
+
+    @property
+    def remote_fingerprint(self) -> int | None:
+        """From the last CONFIG seen."""
+        return self.rules.remote_fingerprint
+
+    @property
+    def schema_matches(self) -> bool | None:
+        """True/False once a CONFIG frame has been seen, None before."""
+        return self.rules.schema_matches
 
     @property
     def pending_bytes(self) -> int:
@@ -122,7 +129,8 @@ class StreamDecoder:
         crc, new, frame_class = crc_hqx, _new, Frame
         skipped = crc_errors = bad_lengths = lost = duplicates = unknown = accepted = 0
         last_seq, last_raw = self._last_seq, self._last_raw
-        ref_next, ref_t32, ref_t64, fast_us = self._ref_next, self._ref_t32, self._ref_t64, self._fast_us
+        rules = self.rules
+        ref_next, ref_t32, ref_t64, fast_us = rules.next_seq, rules.t32, rules.t64, rules.fast_us
         t64_before = ref_t64  # the reference moved in this chunk if its device time did: it arrived at t_host_ns
         pos = 0
         while True:
@@ -173,22 +181,19 @@ class StreamDecoder:
                     ref_next, ref_t32 = (seq + 1) & 0xFF, t32
                     append(new(frame_class, (types[type_id], seq, raw, ref_t64)))
                     continue
-                self._ref_next, self._ref_t32, self._ref_t64 = ref_next, ref_t32, ref_t64
-                if ref_t64 != t64_before:
-                    self._ref_host_ns = t_host_ns
-                lost += self._place(out, types[type_id], seq, raw, t32, t_host_ns, stats.frames + len(out) + stats.frames_lost + lost)
-                ref_next, ref_t32, ref_t64, fast_us = self._ref_next, self._ref_t32, self._ref_t64, self._fast_us
+                rules.ran(ref_next, ref_t32, ref_t64, t_host_ns if ref_t64 != t64_before else rules.host_ns)
+                lost += rules.timed(out, types[type_id], seq, raw, t32, t_host_ns, stats.frames + len(out) + stats.frames_lost + lost)
+                ref_next, ref_t32, ref_t64, fast_us = rules.next_seq, rules.t32, rules.t64, rules.fast_us
                 t64_before = ref_t64
                 continue
-            self._ref_next, self._ref_t32, self._ref_t64 = ref_next, ref_t32, ref_t64
-            lost += self._untimed(type_id, seq, raw, stats.frames + len(out) + stats.frames_lost + lost)
-            ref_next, fast_us = self._ref_next, 0
+            rules.ran(ref_next, ref_t32, ref_t64, t_host_ns if ref_t64 != t64_before else rules.host_ns)
+            t64_before = ref_t64
+            lost += rules.untimed(type_id, seq, raw, stats.frames + len(out) + stats.frames_lost + lost)
+            ref_next, fast_us = rules.next_seq, 0
             append(new(frame_class, (types[type_id], seq, raw, None)))
         self._pending = data[pos:]
         self._last_seq, self._last_raw = last_seq, last_raw
-        self._ref_next, self._ref_t32, self._ref_t64, self._fast_us = ref_next, ref_t32, ref_t64, fast_us
-        if ref_t64 != t64_before:
-            self._ref_host_ns = t_host_ns
+        rules.ran(ref_next, ref_t32, ref_t64, t_host_ns if ref_t64 != t64_before else rules.host_ns)
         stats.frames += len(out)
         stats.bytes_skipped += skipped
         stats.frame_bytes += accepted
@@ -199,35 +204,74 @@ class StreamDecoder:
         stats.unknown_types += unknown
         return out
 
-    # -- the slow path: first frame, sequence gaps, long or backward steps, held frames ---------------
+
+class SequenceRules:
+    """The sender's sequence counter and device clock as both decoders apply them (the module's
+    docstring): lost-frame counting, device-time unwrap, plausibility, held frames and restarts.
+
+    ``StreamDecoder`` takes the common frame (timestamped, the next seq, a step shorter than
+    ``fast_us``) on its inlined fast path and ``decode_batch`` takes runs of them by cumulative sums;
+    both then report where the run left the reference with ``ran``, and hand every other frame to
+    ``timed`` or ``untimed``. The state they read is public: ``next_seq`` (the seq expected next),
+    ``t32`` and ``t64`` (the reference frame's device time as sent and unwrapped), ``host_ns`` (when
+    the reference arrived), ``fast_us`` (0: every frame comes here) and ``held`` (a frame whose
+    timestamp awaits confirmation, or None). The counters it keeps (``implausible``, ``restarts``,
+    ``schema_mismatches``) are in ``stats``.
+    """
+
+    def __init__(self, stats: DecoderStats) -> None:
+        self.stats = stats
+        self.remote_fingerprint: int | None = None  # from the last CONFIG seen
+        self.rate_hz = DEFAULT_RATE_HZ  # from the last CONFIG seen
+        self.next_seq: int | None = None
+        self.t32: int | None = None
+        self.t64 = 0
+        self.host_ns: int | None = None
+        self.fast_us = 0
+        self.held: tuple | None = None  # (type, seq, raw, t32)
+        self._untimed_advance = 0  # seq advance taken by frames without timestamp since the reference
+        self._untimed_lost = 0  # of which counted lost (taken back if the sender turns out to have restarted)
+        self._learn_from = (0, 0)  # (seq advances, device time) where the rate measurement starts
+        self._frames_per_us: float | None = None  # the measured sending rate; None until measured
+
+    @property
+    def schema_matches(self) -> bool | None:
+        """True/False once a CONFIG frame has been seen, None before."""
+        if self.remote_fingerprint is None:
+            return None
+        return self.remote_fingerprint == SPEC.fingerprint
+
+    def ran(self, next_seq: int | None, t32: int | None, t64: int, host_ns: int | None) -> None:
+        """The fast path placed frames up to here: the last one's next seq, device times and arrival."""
+        self.next_seq, self.t32, self.t64, self.host_ns = next_seq, t32, t64, host_ns
 
     def _fast_threshold(self) -> int:
-        """Steps below this need no closer look; 0 sends every frame to ``_place`` (no reference yet,
+        """Steps below this need no closer look; 0 sends every frame to ``timed`` (no reference yet,
         frames without timestamp since it, or a held frame waiting)."""
-        if self._ref_t32 is None or self._untimed_advance or self._held is not None:
+        if self.t32 is None or self._untimed_advance or self.held is not None:
             return 0
         return _FAST_PERIODS * 1_000_000 // self.rate_hz
 
-    def _place(self, out: list, frame_type, seq: int, raw: tuple, t32: int, t_host_ns: int | None, advances: int) -> int:
-        """Place a timestamped frame that is not simply the next one; returns the frames lost before it.
-
-        ``advances``: every frame returned or counted lost so far (the sender's sequence, unwrapped).
-        """
+    def timed(self, out: list, frame_type, seq: int, raw: tuple, t32: int, t_host_ns: int | None, advances: int) -> int:
+        """Place a timestamped frame that is not simply the next one: appended to ``out`` with its
+        unwrapped device time (two frames when it confirms a held one, none when it is held); returns
+        the frames lost before it. ``advances``: every frame returned or counted lost so far (the
+        sender's sequence, unwrapped)."""
         lost = 0
-        if self._ref_t32 is None:  # the first timestamped frame
-            if self._ref_next is not None:
-                lost = (seq - self._ref_next) & 0xFF
+        if self.t32 is None:  # the first timestamped frame
+            if self.next_seq is not None:
+                lost = (seq - self.next_seq) & 0xFF
             self._restart(seq, t32, t_host_ns, advances + lost)
             out.append(_new(Frame, (frame_type, seq, raw, t32)))
             return lost
-        step = (t32 - self._ref_t32) & 0xFFFFFFFF
+        step = (t32 - self.t32) & 0xFFFFFFFF
         step_us = step if step < _WRAP // 2 else step - _WRAP
-        host_us = None if t_host_ns is None or self._ref_host_ns is None else (t_host_ns - self._ref_host_ns) // 1000
+        host_us = None if t_host_ns is None or self.host_ns is None else (t_host_ns - self.host_ns) // 1000
         if step_us >= -BACK_TOLERANCE_US and (host_us is None or step_us <= host_us * 1.05 + FORWARD_TOLERANCE_US):
-            if self._held is not None:
-                self._held = None
+            if self.held is not None:
+                self.held = None
                 self.stats.implausible += 1
-            gap = (seq - self._ref_next) & 0xFF
+            gap = (seq - self.next_seq) & 0xFF
             sent = self._untimed_advance + gap + 1  # seq advance since the reference, modulo 256
             lost = gap
             rate = self._rate(advances)
@@ -235,10 +279,10 @@ class StreamDecoder:
                 elapsed_us = step_us if host_us is None else min(step_us, host_us)
                 lost += 256 * max(0, round((elapsed_us * rate - sent) / 256))
             self._untimed_advance = self._untimed_lost = 0
-            self._move(seq, t32, self._ref_t64 + step_us, t_host_ns)
-            out.append(_new(Frame, (frame_type, seq, raw, self._ref_t64)))
+            self._move(seq, t32, self.t64 + step_us, t_host_ns)
+            out.append(_new(Frame, (frame_type, seq, raw, self.t64)))
             return lost
-        held = self._held
+        held = self.held
         if held is not None:
             since = (t32 - held[3]) & 0xFFFFFFFF
             if since <= CONFIRM_US and 0 < (seq - held[1]) & 0xFF <= 32:  # it follows the held frame: a restart
@@ -248,33 +292,33 @@ class StreamDecoder:
                 self._restart(held[1], held[3], t_host_ns, advances + lost)
                 out.append(_new(Frame, (*held[:3], held[3])))
                 self._move(seq, t32, held[3] + since, t_host_ns)
-                out.append(_new(Frame, (frame_type, seq, raw, self._ref_t64)))
+                out.append(_new(Frame, (frame_type, seq, raw, self.t64)))
                 return lost
             self.stats.implausible += 1  # the held frame was noise, and this one may be too
-        self._held = (frame_type, seq, raw, t32)
-        self._fast_us = 0
+        self.held = (frame_type, seq, raw, t32)
+        self.fast_us = 0
         return 0
 
-    def _untimed(self, type_id: int, seq: int, raw: tuple, advances: int) -> int:
+    def untimed(self, type_id: int, seq: int, raw: tuple, advances: int) -> int:
         """A frame without timestamp: the sequence goes on (the next timestamped frame checks the time,
         on the slow path); returns the frames lost before it."""
         lost = 0
-        if self._ref_next is not None:
-            lost = (seq - self._ref_next) & 0xFF
+        if self.next_seq is not None:
+            lost = (seq - self.next_seq) & 0xFF
             self._untimed_lost += lost
             self._untimed_advance += lost + 1
-        self._ref_next, self._fast_us = (seq + 1) & 0xFF, 0
+        self.next_seq, self.fast_us = (seq + 1) & 0xFF, 0
         if type_id == _CONFIG_ID:
             self._config(raw, advances + lost)
         return lost
 
     def _move(self, seq: int, t32: int, t64: int, t_host_ns: int | None) -> None:
-        self._ref_next, self._ref_t32, self._ref_t64, self._ref_host_ns = (seq + 1) & 0xFF, t32, t64, t_host_ns
-        self._fast_us = self._fast_threshold()
+        self.next_seq, self.t32, self.t64, self.host_ns = (seq + 1) & 0xFF, t32, t64, t_host_ns
+        self.fast_us = self._fast_threshold()
 
     def _restart(self, seq: int, t32: int, t_host_ns: int | None, advances: int) -> None:
         """A new reference with no past: the first frame, or the first after the sender restarted."""
-        self._held = None
+        self.held = None
         self._untimed_advance = self._untimed_lost = 0
         self._move(seq, t32, t32, t_host_ns)
         self._learn_from = (advances + 1, t32)
@@ -282,7 +326,7 @@ class StreamDecoder:
     def _rate(self, advances: int) -> float | None:
         """Frames per µs of device time the sender has been sending (measured, or the last measurement)."""
         advances0, t0 = self._learn_from
-        span_us = self._ref_t64 - t0
+        span_us = self.t64 - t0
         if span_us >= LEARN_US:
             self._frames_per_us = (advances - advances0) / span_us
         return self._frames_per_us
@@ -296,11 +340,4 @@ class StreamDecoder:
         if 0 < rate_hz != self.rate_hz:  # another rate: measure again
             self.rate_hz = rate_hz
             self._frames_per_us = None
-        self._learn_from = (advances + 1, self._ref_t64)
-
-    @property
-    def schema_matches(self) -> bool | None:
-        """True/False once a CONFIG frame has been seen, None before."""
-        if self.remote_fingerprint is None:
-            return None
-        return self.remote_fingerprint == SPEC.fingerprint
+        self._learn_from = (advances + 1, self.t64)

@@ -9,6 +9,7 @@ for its CSV import.
 from __future__ import annotations
 
 import dataclasses
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -48,7 +49,7 @@ def read_csv(path) -> Trial:
         raise DatasetError(f"{path}: no such file")
     try:
         frame = pd.read_csv(path, compression="infer")
-    except (OSError, EOFError, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as error:
+    except (OSError, EOFError, zlib.error, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as error:
         raise DatasetError(f"{path}: not a readable CSV file ({str(error).strip()})") from None
     known = [c for c in ["time_s", *GYR, *ACC, *MAG, *TRUE_Q, "moving"] if c in frame.columns]
     return trial_from_columns({name: numeric_column(frame[name], path) for name in known}, path)

@@ -1,5 +1,18 @@
-"""Test-wide setup: Qt never needs a display (CI has none)."""
+"""Test-wide setup: Qt never needs a display (CI has none); hypothesis reproducible and without deadlines.
+
+hypothesis: no deadline anywhere (a loaded 2-core machine takes several times a test's usual time, and a
+deadline then fails a correct test); with the environment variable ``CI`` set, examples are derived
+from each test's name (``derandomize``), so every CI run tries the same examples; elsewhere they are
+random, and a failure prints the ``@reproduce_failure`` blob and the falsifying example, to be pinned as an
+``@example`` in the test.
+"""
 
 import os
 
+from hypothesis import settings
+
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+settings.register_profile("groundstation", deadline=None, print_blob=True)
+settings.register_profile("ci", settings.get_profile("groundstation"), derandomize=True)
+settings.load_profile("ci" if os.environ.get("CI") else "groundstation")

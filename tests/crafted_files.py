@@ -70,3 +70,18 @@ def write_all(folder: Path) -> dict[str, Path]:
 if __name__ == "__main__":
     for name, path in write_all(Path(sys.argv[1])).items():
         print(name, path)
+
+
+def damaged_csv_gz(folder: Path, name: str = "damaged") -> Path:
+    """A dataset CSV, gzip-compressed, with 40 bytes of its deflate stream inverted (zlib.error on reading)."""
+    import gzip
+
+    rows = 2000
+    columns = {"time_s": np.arange(rows) / 100.0, **{f"gyr_{a}_rad_s": np.zeros(rows) for a in "xyz"},
+               **{f"acc_{a}_m_s2": np.full(rows, 9.81 if a == "z" else 0.0) for a in "xyz"}}
+    text = ",".join(columns) + "\n" + "\n".join(",".join(f"{columns[c][i]:.6f}" for c in columns) for i in range(rows))
+    data = bytearray(gzip.compress(text.encode()))
+    data[30:70] = bytes(b ^ 0xFF for b in data[30:70])
+    path = folder / f"{name}.csv.gz"
+    path.write_bytes(bytes(data))
+    return path

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #define GS_PROTOCOL_VERSION 1u
-#define GS_SCHEMA_FINGERPRINT 0x5B4C2EFEu
+#define GS_SCHEMA_FINGERPRINT 0xA6FC8BE6u
 #define GS_SYNC 0xA5u
 #define GS_MAX_FRAME_BYTES 32u
 #define GS_HEADER_BYTES 4u
@@ -39,6 +39,12 @@
 #define GS_ACK_RESULT_BUSY 3u
 #define GS_ACK_RESULT_FAILED 4u
 
+/* gyro_calibration: CONFIG.gyro_calibration: where the gyro offsets the aircraft uses now came from. */
+#define GS_GYRO_CALIBRATION_NONE 0u
+#define GS_GYRO_CALIBRATION_BOOT 1u
+#define GS_GYRO_CALIBRATION_STORED 2u
+#define GS_GYRO_CALIBRATION_COMMAND 3u
+
 /* gps_fix: GPS.fix_type. */
 #define GS_GPS_FIX_NONE 0u
 #define GS_GPS_FIX_FIX_2D 2u
@@ -57,7 +63,7 @@
 #define GS_SCALE_ATTITUDE_Q_Z 6.103515625e-05
 #define GS_SCALE_ATTITUDE_LAMBDA_GAIN 0.001
 #define GS_ID_CONFIG 0x03u
-#define GS_PAYLOAD_CONFIG 15u
+#define GS_PAYLOAD_CONFIG 16u
 #define GS_ID_STATUS 0x04u
 #define GS_PAYLOAD_STATUS 13u
 #define GS_SCALE_STATUS_BATTERY 0.001
@@ -215,6 +221,7 @@ typedef struct {
     uint16_t rate_hz; /* Hz: output rate of IMU_RAW / ATTITUDE */
     uint8_t mode; /* enum: what is sent */
     uint8_t mounting; /* index: sensor mounting, one of the 24 axis-aligned rotations (docs/conventions.md) */
+    uint8_t gyro_calibration; /* enum: none: no calibration, the gyro's turn-on bias; boot: measured at this boot, the craft still; stored: the craft moved during the boot calibration, so the last calibration (kept over resets) is used; command: measured on calibrate_gyro */
 } gs_config_t;
 
 /* Packs m into out (room for GS_MAX_FRAME_BYTES); returns the frame's length. */
@@ -231,6 +238,7 @@ static inline size_t gs_pack_config(uint8_t *out, uint8_t seq, const gs_config_t
     gs_put_u16(p + 11, (uint16_t)m->rate_hz);
     p[13] = (uint8_t)m->mode;
     p[14] = (uint8_t)m->mounting;
+    p[15] = (uint8_t)m->gyro_calibration;
     return gs_finish_frame(out, GS_ID_CONFIG, seq, GS_PAYLOAD_CONFIG);
 }
 
@@ -247,6 +255,7 @@ static inline void gs_unpack_config(const uint8_t *p, gs_config_t *m)
     m->rate_hz = (uint16_t)gs_get_u16(p + 11);
     m->mode = (uint8_t)p[13];
     m->mounting = (uint8_t)p[14];
+    m->gyro_calibration = (uint8_t)p[15];
 }
 
 /* STATUS (0x04, down): Heartbeat at 1 Hz: power, the aircraft radio's view of the link, load. */

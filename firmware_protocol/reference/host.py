@@ -87,6 +87,7 @@ def library() -> ctypes.CDLL:
             "gs_host_flight_sample": (S, [P, ctypes.c_uint32, ctypes.POINTER(ctypes.c_int16), D, B, S]),
             "gs_host_flight_uplink": (None, [P, B, S]),
             "gs_host_flight_take_gyro_offset": (I, [P, D]),
+            "gs_host_flight_restore_gyro_offset": (None, [P, D]),
             "gs_host_flight_mode": (U, [P]), "gs_host_flight_booting": (I, [P]),
             "gs_host_deframer_init": (None, [P]),
             "gs_host_deframer_feed": (S, [P, B, S, B, S]),
@@ -138,12 +139,15 @@ class FlightCore:
     """The flight board's firmware core (gs_flight.c): register samples in, frames out, uplink commands."""
 
     def __init__(self, *, rate_hz: int, accel_fs_g: int, gyro_fs_dps: int, mounting: int, mode: int,
-                 boot_calibration_s: float, fw_version: tuple[int, int, int], ahf):
+                 boot_calibration_s: float, fw_version: tuple[int, int, int], ahf, stored_gyro_offset_dps=None):
+        """``stored_gyro_offset_dps``: the calibration the board kept over a reset (deg/s, sensor axes), or None."""
         self._lib = lib = library()
         self._state = ctypes.create_string_buffer(lib.gs_host_sizeof_flight())
         config = (ctypes.c_uint * 8)(rate_hz, accel_fs_g, gyro_fs_dps, mounting, mode, *fw_version)
         if lib.gs_host_flight_init(self._state, config, boot_calibration_s, ahf_settings(ahf)) != 0:
             raise ValueError("the C firmware core rejects this configuration")
+        if stored_gyro_offset_dps is not None:
+            lib.gs_host_flight_restore_gyro_offset(self._state, _doubles(*stored_gyro_offset_dps))
         self._out = ctypes.create_string_buffer(lib.gs_host_max_out())
         self._registers = (ctypes.c_int16 * 7)()
         self._offset = (ctypes.c_double * 3)()

@@ -2,8 +2,9 @@
 
 For the field (a laptop by the runway, no window) and for tests. Runs until ``--duration`` or Ctrl-C
 (SIGINT/SIGTERM), then closes the recording cleanly and says where it is. Exit status 0 when stopped
-that way, 1 when the source failed for good (the recording keeps what came before) or the recording
-failed (a full disk: how many seconds were not recorded is said), 2 for bad input.
+that way, 1 when the source failed for good or decoding stopped on an error (the recording keeps what
+came before; the reason is printed) or the recording failed (a full disk: how many seconds were not
+recorded is said), 2 for bad input.
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
               f"{lost_s:.1f} s of the session were not recorded", file=sys.stderr)
         status = 1
     if session.error:
-        print(f"groundstation record: the source stopped: {session.error}", file=sys.stderr)
+        print(f"groundstation record: the session stopped: {session.error}", file=sys.stderr)
         status = 1
     return status
 

@@ -2,23 +2,25 @@
 
 ``batch_replay(recording)`` gives the same tables, events, link figures, config and settings as
 ``replay(recording)`` (the incremental ``Pipeline`` fed chunk by chunk; tests/session/test_batch.py
-proves it), an order of magnitude faster: the byte stream is decoded into numpy columns per frame
-type (``firmware_protocol.batch``), units and mounting are array operations, and every estimator
-runs its batch ``run`` over the samples of each stretch between device restarts and settings changes.
-Live data keeps the incremental path; a recording opened whole (``load_session``: export, evaluate,
-the app) takes this one.
+proves it), several times faster (bench/bench_batch.out.md): the byte stream is decoded into numpy
+columns per frame type (``firmware_protocol.batch``), units and mounting are array operations, and
+every estimator runs its batch ``run`` over the samples of each stretch between device restarts and
+settings changes. Live data keeps the incremental path; a recording opened whole (``load_session``:
+export, evaluate, the app) takes this one.
 
-The pipeline's rules are not restated: its per-frame functions (``conversions``, ``in_body_axes``,
-``sample_dt_s``, ``hold_expired``, ``gap_time_s`` ...) are called on arrays, and what is inherently
-sequential and cheap runs the pipeline's own code over a column (``SessionClock`` over the frame
-times, the rest-bias calibrator until it has measured, the compass heading per magnetometer frame).
+The pipeline's rules are not restated here. Its per-frame functions (``conversions``,
+``in_body_axes``, ``sample_dt_s``, ``gap_row`` ...) are called on arrays, with the same operations in
+the same order; what is sequential runs the pipeline's own code over the columns: ``SessionClock``
+over the frame times, ``ConfigWait`` over the samples before the first CONFIG, the rest-bias
+calibrator until it has measured, and the aiding stage (``Aiding``: readings handed to the samples,
+compass heading, position) over the readings, samples and restarts merged in the pipeline's order
+(``_Readings``). Scalar and vector maths never meet: NumPy's SIMD ``exp``/``log``/``pow`` may differ
+from libm's in the last bit, so the same rule runs the same code on both paths.
 
 Order. Everything the pipeline does happens at a frame (its position among the frames the decoder
-returns) and, at one frame, in this order: recorded settings changes that apply before the chunk the
-frame came with, then the clock's discontinuity (its event, the estimators' restart, the gap rows),
-then the frame's handler. Each row and event gets that place as its key (``4 * frame + stage``),
-so held IMU samples (waiting for a CONFIG) take the key of the frame that releases them. Readings
-of the aiding sensors go to the first IMU sample processed after them, in the same device segment.
+returns), in the pipeline's order at one frame (``pipeline.stage_key``: recorded settings changes,
+then the clock's discontinuity, then the frame's handler). Each row and event gets that place as its
+key, so held IMU samples (waiting for a CONFIG) take the key of the frame that releases them.
 """
 
 from __future__ import annotations
@@ -31,24 +33,20 @@ import numpy as np
 from firmware_protocol import SPEC
 from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_batch
 from firmware_protocol.decoder import DecoderStats
-from groundstation import geodesy
-from groundstation.estimation.compass import reading_heading_rad
-from groundstation.position import linear_acc_ned_m_s2
 from groundstation.recording import Recording
-from groundstation.session.aiding import Aiding, gps_fix
+from groundstation.session.aiding import Aiding
 from groundstation.session.catalogue import session_catalogue
 from groundstation.session.clock import SessionClock
 from groundstation.session.estimators import EstimatorBank
 from groundstation.session.link import LinkStats
 from groundstation.session.pipeline import (
-    _LAMBDA_SCALE, _MAG_SCALES, _Q_SCALE, TEMPERATURE_SCALE, SensorConfig, conversions, gap_time_s, hold_expired,
-    impossible_config_message, in_body_axes, no_config_message, period_s, sample_dt_s, schema_message, sensor_of,
+    ACC_FIELDS, DISCONTINUITY, GYR_FIELDS, HANDLER, LAMBDA_SCALE, MAG_FIELDS, Q_FIELDS, Q_SCALES, SETTINGS,
+    TEMPERATURE_SCALE, ConfigWait, SensorConfig, conversions, gap_row, impossible_config_message, in_body_axes,
+    no_config_message, period_s, sample_dt_s, schema_message, sensor_of, stage_key, unexpected_frame_event,
 )
 from groundstation.session.replay import RecordedSetup, SettingsSchedule, apply_event, recorded_setup
 from groundstation.session.table import Table
 
-SETTINGS, DISCONTINUITY, HANDLER = 0, 1, 2  # the stages at one frame, in order
-_FIX_2D = SPEC.enums["gps_fix"].values["fix_2d"]
 # Shares of the whole job reported through ``progress``: reading and decoding, then the estimators.
 _DECODE_SHARE = 0.4
 
@@ -66,6 +64,7 @@ class BatchSession:
         self.config: dict | None = None
         self.sensor: SensorConfig | None = None
         self.events: list[dict] = []
+        self.unexpected_frames: dict[str, int] = {}
         self.t0_host_ns: int | None = None
         self.decoder: BatchDecode | None = None  # ``decoder.stats``: the link's counters
         self._keyed_events: list[tuple[float, dict]] = [(-math.inf, e) for e in setup.warnings]
@@ -130,6 +129,7 @@ class _Builder:
         self._settings_keys()
         self._config()
         self._frame_tables()
+        self._unexpected()
         self._imu()
         self._gaps()
         self._link()
@@ -148,7 +148,7 @@ class _Builder:
         s.events = [s._keyed_events[i][1] for i in order]
 
     def key(self, positions) -> np.ndarray:
-        return 4.0 * np.asarray(positions, dtype=float) + HANDLER
+        return stage_key(np.asarray(positions, dtype=float), HANDLER)
 
     def add(self, table: str, keys, rows) -> None:
         if len(keys):
@@ -178,7 +178,7 @@ class _Builder:
         self.time_s = np.where(last >= 0, np.append(times, math.nan)[last], math.nan)
         self.device_us = np.where(last >= 0, np.append(unwrapped, 0)[last], 0)
         self.discontinuities = discontinuities
-        self.disc_keys = np.array([4.0 * p + DISCONTINUITY for p, _ in discontinuities])
+        self.disc_keys = np.array([stage_key(p, DISCONTINUITY) for p, _ in discontinuities])
         for key, (_, event) in zip(self.disc_keys.tolist(), discontinuities):
             self.s.event(key, event)
 
@@ -190,7 +190,7 @@ class _Builder:
         for t, event in self.changes:
             chunk = np.searchsorted(latest, t, side="right")
             frame = np.searchsorted(self.chunk, chunk)
-            self.change_keys.append(4.0 * frame + SETTINGS if frame < len(self.chunk) else math.inf)
+            self.change_keys.append(stage_key(frame, SETTINGS) if frame < len(self.chunk) else math.inf)
 
     # -- frames -----------------------------------------------------------------------------------
 
@@ -205,7 +205,7 @@ class _Builder:
         self.sensors: list[SensorConfig] = []
         fingerprints = columns.raw["schema_fingerprint"]
         for k, position in enumerate(columns.order.tolist()):
-            key = 4.0 * position + HANDLER
+            key = stage_key(position, HANDLER)
             values = self._values("CONFIG", k)
             s.config = values
             t_host_ns = int(columns.t_host_ns[k])
@@ -236,14 +236,23 @@ class _Builder:
             self.add(name, self.key(columns.order), rows)
             if frame_type.name == "ACK":
                 for k, position in enumerate(columns.order.tolist()):
-                    self.s.event(4.0 * position + HANDLER, {"t_host_ns": int(columns.t_host_ns[k]), "kind": "ack",
+                    self.s.event(stage_key(position, HANDLER), {"t_host_ns": int(columns.t_host_ns[k]), "kind": "ack",
                                                             **self._values("ACK", k)})
         board = self.d.frames["ATTITUDE"]
         if len(board):
-            q = [board.raw[c].astype(float) * _Q_SCALE for c in ("q_w", "q_x", "q_y", "q_z")]
+            q = [board.raw[c].astype(float) * scale for c, scale in zip(Q_FIELDS, Q_SCALES)]
             self.add("onboard", self.key(board.order), np.column_stack([
-                self.time_s[board.order], self.device_us[board.order], *q, board.raw["lambda_gain"] * _LAMBDA_SCALE,
+                self.time_s[board.order], self.device_us[board.order], *q, board.raw["lambda_gain"] * LAMBDA_SCALE,
                 board.raw["flags"].astype(float)]))
+
+    def _unexpected(self) -> None:
+        """Frames of uplink types (the aircraft never sends one): counted, the first of each type said."""
+        for frame_type in SPEC.frames:
+            columns = self.d.frames[frame_type.name]
+            if frame_type.direction == "down" or not len(columns):
+                continue
+            self.s.unexpected_frames[frame_type.name] = len(columns)
+            self.s.event(stage_key(int(columns.order[0]), HANDLER), unexpected_frame_event(int(columns.t_host_ns[0]), frame_type.name))
 
     # -- IMU and estimators -----------------------------------------------------------------------
 
@@ -263,8 +272,8 @@ class _Builder:
             rows = sensor_index == i
             acc_m, gyr_m, _ = conversions(self.sensors[i])
             r = raw[rows]
-            acc[rows] = np.column_stack(in_body_axes(acc_m, *(r[f].astype(float) for f in ("acc_x", "acc_y", "acc_z"))))
-            gyr[rows] = np.column_stack(in_body_axes(gyr_m, *(r[f].astype(float) for f in ("gyr_x", "gyr_y", "gyr_z"))))
+            acc[rows] = np.column_stack(in_body_axes(acc_m, *(r[f].astype(float) for f in ACC_FIELDS)))
+            gyr[rows] = np.column_stack(in_body_axes(gyr_m, *(r[f].astype(float) for f in GYR_FIELDS)))
             first_dt[rows] = period_s(self.sensors[i])
         if self.sensors:
             s.sensor = self.sensors[-1]
@@ -273,85 +282,46 @@ class _Builder:
         first = np.ones(n, dtype=bool)
         first[1:] = segment[1:] != segment[:-1]
         dt = np.where(first, first_dt, sample_dt_s(device_us, np.concatenate(([0], device_us[:-1]))))
-        mag, gps = self._aiding_for_estimators(keys, segment)
+        readings = _Readings(self, keys)
+        mag, gps = readings.for_estimators()
         q, estimated = self._estimate(keys, gyr, acc, dt, mag, gps, self.t_host[positions])
         self.add("imu", keys, np.column_stack([self.time_s[positions], device_us, (self.t_host[positions] - s.t0_host_ns) * 1e-9,
                                                *acc.T, *gyr.T, raw["temperature"] * TEMPERATURE_SCALE, *estimated]))
         del estimated, mag, gps
-        self._position(keys, segment, acc, dt, q, self.time_s[positions])
-        self._magnetometer(keys, segment, q)
+        readings.stage(acc, dt, q, self.time_s[positions])
 
     def _hold(self, columns, keys: np.ndarray) -> None:
-        """IMU samples before the first usable CONFIG wait for it, up to ``HOLD_FOR_CONFIG_US``; then the
-        assumed sensor configuration applies. Sets the keys of held samples to where they are released
-        (inf: never)."""
+        """IMU samples before the first usable CONFIG wait for it (``ConfigWait``, as the pipeline's do);
+        sets the keys of held samples to where they are released (inf: never)."""
         first_config = self.sensor_keys[0] if self.sensor_keys else math.inf
         held = np.flatnonzero(keys < first_config)
-        if not len(held):
-            return
-        times = self.time_s[columns.order[held]]
-        expired = np.flatnonzero(hold_expired(times, times[0]))
-        if len(expired):
-            k = int(held[expired[0]])
-            release = float(keys[k])
-            assumed = SensorConfig()
-            self.s.event(release, {"t_host_ns": int(columns.t_host_ns[k]), "kind": "warning", "message": no_config_message(assumed)})
-            self.sensor_keys.insert(0, release)
-            self.sensors.insert(0, assumed)
-            keys[held[: expired[0] + 1]] = release
-        else:
-            keys[held] = first_config
+        wait = ConfigWait()
+        for k, time_s in zip(held.tolist(), self.time_s[columns.order[held]].tolist()):
+            released = wait.sample(k, time_s)
+            if released is not None:  # the wait expired at sample k: the assumed configuration from here
+                release = float(keys[k])
+                assumed = SensorConfig()
+                self.s.event(release, {"t_host_ns": int(columns.t_host_ns[k]), "kind": "warning", "message": no_config_message(assumed)})
+                self.sensor_keys.insert(0, release)
+                self.sensors.insert(0, assumed)
+                keys[released] = release
+                return
+        keys[wait.release()] = first_config
 
     def _sensor_at(self, keys: np.ndarray) -> np.ndarray:
         return np.searchsorted(np.array(self.sensor_keys), keys, side="right") - 1
 
-    def _readings(self, sample_keys, sample_segments, reading_keys) -> np.ndarray:
-        """For each sample: the index of the last reading after the sample before it and before this one,
-        in its device segment (the aiding stage hands each reading to the next sample); -1 for none."""
-        if not len(reading_keys) or not len(sample_keys):
-            return np.full(len(sample_keys), -1)
-        last = np.searchsorted(reading_keys, sample_keys) - 1
-        previous = np.concatenate(([-math.inf], sample_keys[:-1]))
-        ok = last >= 0
-        ok[ok] &= reading_keys[last[ok]] > previous[ok]
-        ok[ok] &= self.segment(reading_keys[last[ok]]) == sample_segments[ok]
-        return np.where(ok, last, -1)
-
-    def _rows_at(self, values: np.ndarray, index: np.ndarray) -> np.ndarray | None:
-        """``values`` (readings, width) at ``index`` (-1: a row of NaN); None when no sample has one."""
-        if not (index >= 0).any():
-            return None
-        out = np.full((len(index), values.shape[1]), math.nan)
-        out[index >= 0] = values[index[index >= 0]]
-        return out
-
-    def _mag_body(self) -> tuple[np.ndarray, np.ndarray]:
-        """Magnetometer keys and readings in body axes (µT) with the mounting in effect at each frame."""
-        columns = self.d.frames["MAG_RAW"]
+    def mag_body(self, columns) -> np.ndarray:
+        """Magnetometer readings in body axes (µT) with the mounting in effect at each frame."""
         keys = self.key(columns.order)
         body = np.empty((len(keys), 3))
         sensor_index = self._sensor_at(keys)
-        counts = [columns.raw[f].astype(float) for f in ("mag_x", "mag_y", "mag_z")]
+        counts = [columns.raw[f].astype(float) for f in MAG_FIELDS]
         for i in np.unique(sensor_index).tolist():
             rows = sensor_index == i
             _, _, mag_m = conversions(self.sensors[i] if i >= 0 else SensorConfig())
             body[rows] = np.column_stack(in_body_axes(mag_m, *(c[rows] for c in counts)))
-        return keys, body
-
-    def _fixes(self):
-        """GPS frames with at least a 2D fix (the others are ignored): keys, physical values by field."""
-        columns = self.d.frames["GPS"]
-        fixed = columns.raw["fix_type"] >= _FIX_2D
-        values = {f.name: columns.scaled(f.name)[fixed] for f in columns.type.fields}
-        return self.key(columns.order[fixed]), values
-
-    def _aiding_for_estimators(self, keys, segment):
-        mag_keys, mag_body = self._mag_body()
-        mag = self._rows_at(mag_body, self._readings(keys, segment, mag_keys))
-        gps_keys, values = self._fixes()
-        fixes = np.array([gps_fix(dict(zip(values, row))) for row in zip(*values.values())]).reshape(-1, 4)
-        gps = self._rows_at(fixes, self._readings(keys, segment, gps_keys))
-        return mag, gps
+        return body
 
     def _estimate(self, keys, gyr, acc, dt, mag, gps, t_host):
         """Every estimator over the samples, in stretches between restarts and settings changes; the
@@ -386,69 +356,16 @@ class _Builder:
                 apply_event(s, self.changes[index][1])
             elif kind == 1:
                 bank.restart()
-        columns, first_q = [], np.zeros((0, 4))
+        columns, aiding_q = [], np.zeros((0, 4))
         for name in bank.filters:
             qs, diags = outputs[name]
             q = np.concatenate(qs) if qs else np.zeros((0, 4))
             if name == bank.aiding:
-                first_q = q
+                aiding_q = q
             columns += list(q.T)
             for field in bank.diagnostics()[name]:
                 columns.append(np.concatenate([d[field] for d in diags]).astype(float) if diags else np.zeros(0))
-        return first_q, columns
-
-    # -- aiding -----------------------------------------------------------------------------------
-
-    def _position(self, keys, segment, acc, dt, first_q, time_s) -> None:
-        """Seed 004's position from the first barometer or GPS reading on, on the aiding estimator's attitude."""
-        if not self.s.filters:
-            return
-        baro = self.d.frames["BARO"]
-        gps_keys, values = self._fixes()
-        starts = [k for k in (self.key(baro.order[:1]).tolist() + gps_keys[:1].tolist())]
-        if not starts:
-            return
-        on = keys > min(starts)
-        keys, segment, acc, dt, q, time_s = keys[on], segment[on], acc[on], dt[on], first_q[on], time_s[on]
-        if not len(keys):
-            return
-        pressure = baro.scaled("pressure")
-        altitude = geodesy.pressure_altitude_m(pressure, float(pressure[0])) if len(pressure) else np.zeros(0)
-        baro_alt = self._rows_at(altitude[:, None], self._readings(keys, segment, self.key(baro.order)))
-        origin = (values["lat"][0], values["lon"][0], values["alt"][0]) if len(gps_keys) else None
-        gps_index = self._readings(keys, segment, gps_keys)
-        gps_pos = gps_vel = None
-        if origin is not None:
-            gps_pos = self._rows_at(geodesy.ned_from_geodetic(values["lat"], values["lon"], values["alt"], origin), gps_index)
-            gps_vel = self._rows_at(np.column_stack([values["vel_n"], values["vel_e"], values["vel_d"]]), gps_index)
-        acc_ned = linear_acc_ned_m_s2(acc, q)
-        position = Aiding().position
-        out = []
-        for part in np.split(np.arange(len(keys)), np.flatnonzero(np.diff(segment)) + 1):
-            position.reset()
-            pos, vel = position.run(acc_ned[part], dt[part], None if baro_alt is None else baro_alt[part, 0],
-                                    None if gps_pos is None else gps_pos[part], None if gps_vel is None else gps_vel[part])
-            out.append(np.column_stack([pos, vel]))
-        self.add("position", keys, np.column_stack([time_s, np.concatenate(out)]))
-
-    def _magnetometer(self, keys, segment, first_q) -> None:
-        """The magnetometer table, with the compass heading from the aiding estimator's latest attitude
-        in the same device segment (NaN before it has one)."""
-        columns = self.d.frames["MAG_RAW"]
-        if not len(columns):
-            return
-        mag_keys, body = self._mag_body()
-        latest = np.searchsorted(keys, mag_keys) - 1
-        heading = np.full(len(mag_keys), math.nan)
-        if self.s.filters and len(keys):
-            ok = latest >= 0
-            ok[ok] &= self.segment(keys[latest[ok]]) == self.segment(mag_keys[ok])
-            qs = first_q[latest].tolist()
-            heading_of = reading_heading_rad
-            heading = np.array([math.degrees(heading_of(q, m)) if good else math.nan
-                                for q, m, good in zip(qs, body.tolist(), ok.tolist())]).reshape(-1)
-        shown = [columns.scaled(f) for f in ("mag_x", "mag_y", "mag_z")]
-        self.add("mag_raw", mag_keys, np.column_stack([self.time_s[columns.order], *shown, heading]))
+        return aiding_q, columns
 
     # -- gaps and link ----------------------------------------------------------------------------
 
@@ -458,7 +375,7 @@ class _Builder:
             for name, parts in self.rows.items():
                 if any((k < key).any() for k, _ in parts):
                     width = len(self.s.tables[name].columns)
-                    parts.append((np.array([key]), np.array([[gap_time_s(event)] + [math.nan] * (width - 1)])))
+                    parts.append((np.array([key]), np.array([gap_row(event, width)])))
 
     def _link(self) -> None:
         """``LinkStats.on_chunk`` at each chunk that starts a new second (the others change nothing kept)."""
@@ -473,3 +390,93 @@ class _Builder:
         for c in np.flatnonzero(new).tolist():
             stats = DecoderStats(**{name: int(values[c]) for name, values in counters.items()})
             link.on_chunk(int(times[c]), stats, 0)
+
+
+class _Readings:
+    """The aiding stage of the pipeline (``session.aiding.Aiding``, the same object and methods) driven
+    over the session's columns in the pipeline's order: magnetometer, barometer and GPS readings, IMU
+    samples and device restarts merged by their ``stage_key``.
+
+    Twice, since the estimators run in between: first for what each sample hands the estimators
+    (``for_estimators``), then, with the aiding estimator's attitudes, for the compass heading and the
+    position (``stage``)."""
+
+    RESTART, MAG, BARO, GPS, SAMPLE = range(5)
+
+    def __init__(self, builder: _Builder, sample_keys: np.ndarray):
+        self.b = builder
+        frames = builder.d.frames
+        self.mag, self.baro, self.gps = frames["MAG_RAW"], frames["BARO"], frames["GPS"]
+        self.mag_body = builder.mag_body(self.mag).tolist()
+        self.pressure_pa = self.baro.scaled("pressure").tolist()
+        names = self.gps.type.field_names
+        self.gps_values = [dict(zip(names, row)) for row in zip(*(self.gps.scaled(f).tolist() for f in names))]
+        self.sample_keys = sample_keys
+        self.n = len(sample_keys)
+        parts = [(sample_keys, self.SAMPLE), (builder.disc_keys, self.RESTART), (builder.key(self.mag.order), self.MAG),
+                 (builder.key(self.baro.order), self.BARO), (builder.key(self.gps.order), self.GPS)]
+        keys = np.concatenate([k for k, _ in parts])
+        kinds = np.concatenate([np.full(len(k), kind) for k, kind in parts])
+        index = np.concatenate([np.arange(len(k)) for k, _ in parts])
+        order = np.argsort(keys, kind="stable")  # released samples share a key: they keep their order
+        self.stream = list(zip(kinds[order].tolist(), index[order].tolist()))
+        self.any = len(self.mag) + len(self.baro) + len(self.gps) > 0
+
+    def for_estimators(self) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """The magnetometer reading (body axes, µT) and GPS fix each sample hands the estimators (NaN rows
+        for none; None when no sample has one)."""
+        if not len(self.mag) and not len(self.gps):
+            return None, None
+        aiding = Aiding()
+        mag, gps = np.full((self.n, 3), math.nan), np.full((self.n, 4), math.nan)
+        with_mag, with_gps = False, False
+        SAMPLE, MAG, GPS, RESTART = self.SAMPLE, self.MAG, self.GPS, self.RESTART
+        for kind, i in self.stream:
+            if kind == SAMPLE:
+                body, fix = aiding.take_for_estimators()
+                if body is not None:
+                    mag[i], with_mag = body, True
+                if fix is not None:
+                    gps[i], with_gps = fix, True
+            elif kind == MAG:
+                aiding.magnetometer(self.mag_body[i], None)
+            elif kind == GPS:
+                aiding.gps(self.gps_values[i])
+            elif kind == RESTART:
+                aiding.restart()
+        return (mag if with_mag else None), (gps if with_gps else None)
+
+    def stage(self, acc: np.ndarray, dt: np.ndarray, aiding_q: np.ndarray, time_s: np.ndarray) -> None:
+        """The magnetometer table with the compass heading, and the position table, from the aiding
+        estimator's attitude as the pipeline has it at each reading and sample."""
+        b = self.b
+        if not self.any:
+            return
+        aiding = Aiding()
+        driven = bool(b.s.filters)  # the aiding estimator's attitude drives heading and position
+        qs, accs, dts = aiding_q.tolist(), acc.tolist(), dt.tolist()
+        heading = [math.nan] * len(self.mag)
+        at, rows = [], []
+        q = None
+        SAMPLE, MAG, BARO, GPS, RESTART = self.SAMPLE, self.MAG, self.BARO, self.GPS, self.RESTART
+        for kind, i in self.stream:
+            if kind == SAMPLE:
+                if driven:
+                    q = qs[i]
+                    if aiding.position_on:
+                        at.append(i)
+                        rows.append(aiding.position_step(accs[i], q, dts[i]))
+            elif kind == MAG:
+                heading[i] = aiding.magnetometer(self.mag_body[i], q)
+            elif kind == BARO:
+                aiding.barometer(self.pressure_pa[i])
+            elif kind == GPS:
+                aiding.gps(self.gps_values[i])
+            elif kind == RESTART:
+                aiding.restart()
+                q = None
+        if len(self.mag):
+            shown = [self.mag.scaled(f) for f in MAG_FIELDS]
+            b.add("mag_raw", b.key(self.mag.order), np.column_stack([b.time_s[self.mag.order], *shown, heading]))
+        if at:
+            b.add("position", self.sample_keys[at], np.column_stack([time_s[at], np.array(rows)]))

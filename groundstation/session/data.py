@@ -186,18 +186,26 @@ def aligned(times: np.ndarray, other_times: np.ndarray, values: np.ndarray) -> n
 
 
 def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], device_us: np.ndarray, pipeline: Pipeline) -> None:
-    """Truth stored with a simulated recording (sensor axes -> ENU, at device times) onto the body axes.
+    """Truth stored with a simulated recording (sensor axes -> ENU) onto the body axes, sample by sample.
 
-    The simulator's truth keeps the uninterrupted device time, so only samples before the first reboot
-    or clock jump have theirs; the later ones get none rather than another instant's.
+    The simulator says what the board's clock read at each truth row and how many resets and clock
+    jumps came before (``board_clock_us``, ``board_epoch``: sim/truth_file.py); the session counts the
+    same in its ``device_reset`` and ``clock_jump`` events, so each sample finds its own instant's
+    truth across every restart. A recording without those columns (older) has the board's clock in
+    ``time_s`` up to the first restart: the later samples get no truth rather than another instant's.
     """
-    truth_us = np.rint(samples["time_s"] * 1e6)
+    wrap = float(1 << 32)
+    if "board_epoch" in samples:
+        truth_key = samples["board_epoch"] * wrap + samples["board_clock_us"]
+    else:
+        truth_key = np.rint(samples["time_s"] * 1e6)
     restarts = [e["session_time_s"] for e in pipeline.events if e["kind"] in DISCONTINUITIES]
-    if restarts:
-        device_us = np.where(data.time_s < restarts[0], device_us, np.nan)
-    q_sensor = aligned(device_us, truth_us, np.column_stack([samples[c] for c in TRUE_Q]))
+    sample_key = np.searchsorted(restarts, data.time_s, side="right") * wrap + np.mod(device_us, wrap)
+    order = np.argsort(truth_key, kind="stable")
+    truth_key = truth_key[order]
+    q_sensor = aligned(sample_key, truth_key, np.column_stack([samples[c] for c in TRUE_Q])[order])
     q_body_from_sensor = quaternion.from_matrix(mounting.matrix(pipeline.sensor.mounting))
     data.true_q = quaternion.multiply(q_sensor, quaternion.conjugate(q_body_from_sensor))
     data.true_frame = "ENU"
     if "moving" in samples:
-        data.moving = aligned(device_us, truth_us, samples["moving"][:, None])[:, 0] == 1.0
+        data.moving = aligned(sample_key, truth_key, samples["moving"][order][:, None])[:, 0] == 1.0

@@ -13,6 +13,10 @@ import math
 from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.calibration import RestBiasCalibrator
 
+# Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
+# reset in flight (tests/session/test_reboot_in_flight.py); the app warns for as long.
+RECONVERGE_S = 5.0
+
 
 class EstimatorBank:
     """``filters``: estimator names; ``aiding``: the one whose attitude the compass heading and the
@@ -62,10 +66,17 @@ class EstimatorBank:
         return self.last_q[self.aiding] if self.aiding else None
 
     def restart(self) -> None:
-        """Forget every attitude (a device reset: the next sample starts each estimator afresh)."""
+        """After a device reset or clock jump: every estimator starts over from its last attitude.
+
+        The board's reset restarts its gyro calibration, not the craft: what each estimator learnt of
+        the sensors (its gyro bias above all: the board may now subtract another offset) is forgotten,
+        so a new bias is learnt from zero, but the attitude is kept. Started from gravity instead, in
+        flight the tilt would come from an accelerating accelerometer and the heading from nothing
+        (0, or the compass only for a filter whose first sample has a reading): a magnetometer filter
+        took minutes to turn 100 degrees back (tests/session/test_reboot_in_flight.py).
+        """
         for name, estimator in self.estimators.items():
-            estimator.reset()
-            self.last_q[name] = None
+            estimator.reset(q0=self.last_q[name])
 
     def change(self, name: str, overrides: dict[str, float]) -> None:
         """New settings for one estimator from now on, keeping its attitude; ValueError before any change."""

@@ -2,13 +2,15 @@
 
 Consumers (the UI, the CLI's one-line summary) pull from ``pipeline``'s tables whenever they like;
 the reader never waits for them. Each chunk is written to the recording before it is decoded, so
-a crash of the decoder or the estimators loses nothing of the flight.
+a crash of the decoder or the estimators loses nothing that came before it; such a crash stops the
+reader with ``error`` set (the window's red banner, ``record``'s exit status 1), never silently.
 """
 
 from __future__ import annotations
 
 import threading
 import time
+import traceback
 from pathlib import Path
 
 from firmware_protocol import SPEC, encode, make_frame
@@ -19,6 +21,13 @@ from groundstation.sources.base import Source, SourceClosed, SourceError
 
 RECONNECT_INTERVAL_S = 0.5
 COMMANDS = SPEC.enums["command"].values
+
+
+def reader_failure(error: BaseException) -> str:
+    """What stopped the reader: the exception and where it was raised (the window's banner and ``record``'s exit say it)."""
+    where = traceback.extract_tb(error.__traceback__)[-1] if error.__traceback__ else None
+    place = f" in {Path(where.filename).name}:{where.lineno}" if where else ""
+    return f"decoding stopped on an internal error ({type(error).__name__}: {error}{place}); the recording ends here"
 
 
 class LiveSession:
@@ -35,7 +44,7 @@ class LiveSession:
         self.source = source
         self.pipeline = pipeline
         self.lock = threading.Lock()
-        self.error: str | None = None  # why the reader stopped, when it was not asked to
+        self.error: str | None = None  # why the reader stopped, when it was not asked to (a lost source, a defect)
         self.connected = True
         self._schedule = SettingsSchedule(source.recording) if source.is_replay else None
         self._stop = threading.Event()
@@ -93,6 +102,13 @@ class LiveSession:
     # -- the reader thread ------------------------------------------------------------------------
 
     def _read_loop(self) -> None:
+        try:
+            self._read_until_stopped()
+        except Exception as error:  # a defect in decoding or estimating: said, never a dead thread behind a live display
+            self.error = reader_failure(error)
+            self._note({"kind": "error", "message": self.error})
+
+    def _read_until_stopped(self) -> None:
         while not self._stop.is_set():
             try:
                 chunk = self.source.read()

@@ -6,15 +6,22 @@ tests, so one recording always gives the same numbers. Device timestamps drive `
 jumps, the event is recorded, the estimators start over, and every table gets a gap row (NaN in all
 columns but ``time_s``).
 
-The pipeline is a dispatcher from frame type to a handler. Every downlink frame of the spec lands
-in a table (``catalogue``): most in a table of their own, in physical units; ``IMU_RAW`` through the
-IMU stage (units, mounting, estimators) into ``imu``; ``ATTITUDE`` into ``onboard``; magnetometer,
-barometer and GPS readings also go to the aiding stage (``aiding.py``) for the estimators and the
-position. ``CONFIG`` and ``ACK`` are events as well.
+The pipeline is a dispatcher from frame type to a handler, one for every frame type of the spec.
+Every downlink frame lands in a table (``catalogue``): most in a table of their own, in physical
+units; ``IMU_RAW`` through the IMU stage (units, mounting, estimators) into ``imu``; ``ATTITUDE``
+into ``onboard``; magnetometer, barometer and GPS readings also go to the aiding stage
+(``aiding.py``) for the estimators and the position. ``CONFIG`` and ``ACK`` are events as well. An
+uplink frame (a COMMAND echoed by a loopback, another sender) is counted in ``unexpected_frames``
+and said once per type; no frame stops a session. Frames are read by field name.
 
-Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames are held (up to
-``HOLD_FOR_CONFIG_US`` of device time); after that the assumed ``SensorConfig`` is used and a
-warning event is recorded. A later ``CONFIG`` takes effect from its position in the stream.
+Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames wait
+(``ConfigWait``, up to ``HOLD_FOR_CONFIG_US`` of session time); after that the assumed
+``SensorConfig`` is used and a warning event is recorded. A later ``CONFIG`` takes effect from its
+position in the stream.
+
+The rules here are the session's only copy: the batch path (``batch.py``) calls the same functions
+(``conversions``, ``in_body_axes``, ``sample_dt_s``, ``ConfigWait``, ``gap_row``, the aiding stage's
+``Aiding``) on its columns and orders what it computed by ``stage_key``.
 
 Two protocol front-ends turn bytes into the stages' input: the project's own frames (``GsFrontEnd``,
 the dispatcher above) and an autopilot's MAVLink (``session/mavlink_front.py``: records already in
@@ -26,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from operator import itemgetter
 
 from firmware_protocol import SPEC, Frame, StreamDecoder
 from firmware_protocol.spec import Spec
@@ -42,11 +50,42 @@ from groundstation.units import ACCEL_LSB_PER_G, GYRO_LSB_PER_DPS
 DEFAULT_FILTERS = ("ahf",)
 PROTOCOLS = ("gs", "mavlink")  # what a source speaks (``source.protocol``): the project's frames, an autopilot's MAVLink
 HOLD_FOR_CONFIG_US = 1_000_000
-_Q_SCALE = SPEC.frame("ATTITUDE").fields[1].scale
-_LAMBDA_SCALE = SPEC.frame("ATTITUDE").fields[5].scale
-_MAG = SPEC.frame("MAG_RAW")
-_MAG_SCALES = tuple(f.scale for f in _MAG.fields[1:4])  # mag_x, mag_y, mag_z: counts -> µT
-TEMPERATURE_SCALE = SPEC.frame("IMU_RAW").fields[-1].scale  # counts -> °C
+
+
+def scales(frame_type, *names: str) -> tuple[float, ...]:
+    """The spec's scales (counts -> physical units) of a frame type's fields, by name."""
+    by_name = {f.name: f.scale for f in frame_type.fields}
+    return tuple(by_name[name] for name in names)
+
+
+def values_of(frame_type, *names: str) -> itemgetter:
+    """Reads the named fields, in that order, from a frame's raw values (a tuple in the spec's order)."""
+    return itemgetter(*(frame_type.field_names.index(name) for name in names))
+
+
+_IMU, _ATTITUDE, _MAG = SPEC.frame("IMU_RAW"), SPEC.frame("ATTITUDE"), SPEC.frame("MAG_RAW")
+ACC_FIELDS, GYR_FIELDS, MAG_FIELDS = ("acc_x", "acc_y", "acc_z"), ("gyr_x", "gyr_y", "gyr_z"), ("mag_x", "mag_y", "mag_z")
+Q_FIELDS = ("q_w", "q_x", "q_y", "q_z")
+Q_SCALES = scales(_ATTITUDE, *Q_FIELDS)  # Q2.14 -> 1
+(LAMBDA_SCALE,) = scales(_ATTITUDE, "lambda_gain")
+MAG_SCALES = scales(_MAG, *MAG_FIELDS)  # counts -> µT
+(TEMPERATURE_SCALE,) = scales(_IMU, "temperature")  # counts -> °C
+_BARO_SCALES = scales(SPEC.frame("BARO"), "pressure", "temperature")  # -> Pa, °C
+# The fields each stage reads, by frame type, in the order it reads them.
+_STAGE_FIELDS = {"IMU_RAW": (*ACC_FIELDS, *GYR_FIELDS, "temperature"), "ATTITUDE": (*Q_FIELDS, "lambda_gain", "flags"),
+                 "MAG_RAW": MAG_FIELDS, "BARO": ("pressure", "temperature")}
+
+# What happens at one frame, in this order: the recorded settings changes that apply before the chunk
+# the frame came with (``replay.SettingsSchedule``), then the device clock's discontinuity at the frame
+# (its event, the estimators' restart, the gap rows: ``Pipeline.place``), then the frame's handler.
+# The pipeline does it by the order of its calls; the batch path sorts what it computed by ``stage_key``.
+SETTINGS, DISCONTINUITY, HANDLER = range(3)
+
+
+def stage_key(frame_position, stage: int):
+    """The place of a stage at a frame (its position among the frames the decoder returned; numbers or
+    arrays) in the pipeline's order."""
+    return 3.0 * frame_position + stage
 
 
 @dataclasses.dataclass(frozen=True)
@@ -71,7 +110,7 @@ def conversions(sensor: SensorConfig) -> tuple[list, list, list]:
     if sensor.rate_hz <= 0:
         raise ValueError(f"output rate {sensor.rate_hz} Hz")
     return (folded(m, (1.0 / ACCEL_LSB_PER_G[sensor.accel_fs_g],) * 3),
-            folded(m, (math.radians(1.0) / GYRO_LSB_PER_DPS[sensor.gyro_fs_dps],) * 3), folded(m, _MAG_SCALES))
+            folded(m, (math.radians(1.0) / GYRO_LSB_PER_DPS[sensor.gyro_fs_dps],) * 3), folded(m, MAG_SCALES))
 
 
 def in_body_axes(m, x, y, z) -> tuple:
@@ -96,14 +135,47 @@ def hold_expired(time_s, first_held_s):
     return time_s - first_held_s >= HOLD_FOR_CONFIG_US * 1e-6
 
 
-def gap_time_s(event: dict) -> float:
-    """Session time of the gap row a discontinuity puts in every table: between the times on either side."""
-    return 0.5 * (event["session_time_before_s"] + event["session_time_s"])
+def gap_row(event: dict, width: int) -> tuple:
+    """The row a discontinuity puts in every table that has rows: NaN but ``time_s``, between the
+    session times on either side."""
+    return (0.5 * (event["session_time_before_s"] + event["session_time_s"]),) + (math.nan,) * (width - 1)
+
+
+class ConfigWait:
+    """Until the first usable CONFIG the full scales are unknown, so IMU samples wait, up to
+    ``HOLD_FOR_CONFIG_US`` of session time; after that the assumed configuration applies.
+
+    ``sample(item, time_s)`` holds one (any item: the caller's) and returns every held item, this one
+    included, once the wait has expired (else None); ``release()`` hands them all over (a usable
+    CONFIG). The pipeline calls it per sample; the batch path over the samples before the first CONFIG.
+    """
+
+    def __init__(self) -> None:
+        self._held: list = []
+        self._first_s = math.nan
+
+    def sample(self, item, time_s: float) -> list | None:
+        if not self._held:
+            self._first_s = time_s
+        self._held.append(item)
+        return self.release() if hold_expired(time_s, self._first_s) else None
+
+    def release(self) -> list:
+        held, self._held = self._held, []
+        return held
 
 
 def no_config_message(s: SensorConfig) -> str:
     return (f"no CONFIG frame: converting with assumed full scales ±{s.accel_fs_g} g, ±{s.gyro_fs_dps} °/s, "
             f"mounting {s.mounting}")
+
+
+def unexpected_frame_event(t_host_ns: int, name: str) -> dict:
+    """The event of the first frame of a type the aircraft never sends (an uplink COMMAND echoed by a
+    loopback or a radio, another sender): such frames are counted and ignored, never a stopped session."""
+    return {"t_host_ns": t_host_ns, "kind": "warning",
+            "message": f"unexpected {name} frame on the downlink (a ground-to-aircraft frame: a loopback or "
+                       "another sender?); it and any more are counted and ignored"}
 
 
 def schema_message(fingerprint: int) -> str:
@@ -151,16 +223,19 @@ class Pipeline:
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
+        self.unexpected_frames: dict[str, int] = {}  # frames of uplink types that came down, by type name
         self.t0_host_ns: int | None = None  # arrival of the first chunk: the origin of host times
-        self._held: list[tuple[int, Frame, float, int]] = []  # IMU samples waiting for CONFIG, with their times
+        self._config_wait = ConfigWait()  # IMU samples (t_host_ns, frame, time_s, device_us) until a CONFIG
         self._last_us: int | None = None
         self._time_s = math.nan  # session time of the newest timestamped frame
         self._device_us = 0  # its device time, unwrapped within the clock's segment
-        self._mag_m = folded(mounting.matrix(self.assumed_sensor.mounting), _MAG_SCALES)  # until CONFIG says
+        self._mag_m = folded(mounting.matrix(self.assumed_sensor.mounting), MAG_SCALES)  # until CONFIG says
         if protocol == "gs":  # the frame handlers write to the spec's tables, which a MAVLink session lacks
             # Each frame type's value scales (timestamp excluded), looked up once: rows are value x scale.
             self._scales = {t.id: tuple(f.scale for f in t.fields[1 if t.has_timestamp else 0 :]) for t in spec.frames}
-            self._handlers = {t.id: self._frame_handler(t) for t in spec.frames if t.direction == "down"}
+            self._handlers = {t.id: self._frame_handler(t) for t in spec.frames}  # every type the decoder returns
+            self._imu_values, self._attitude_values, self._mag_values, self._baro_values = (
+                values_of(spec.frame(name), *names) for name, names in _STAGE_FIELDS.items())
 
     @property
     def estimators(self):
@@ -202,7 +277,10 @@ class Pipeline:
     # -- frames ---------------------------------------------------------------------------------
 
     def _frame_handler(self, frame_type):
-        """The handler of one frame type: a stage for the frames that feed one, else a table row."""
+        """The handler of one frame type: a stage for the frames that feed one, a table row for any other
+        downlink frame, and for an uplink type (the aircraft never sends one) a count."""
+        if frame_type.direction != "down":
+            return self._unexpected
         special = {"IMU_RAW": self._imu, "ATTITUDE": self._attitude, "CONFIG": self._config, "ACK": self._ack,
                    "MAG_RAW": self._magnetometer, "BARO": self._barometer, "GPS": self._gps}.get(frame_type.name)
         if special is not None:
@@ -227,7 +305,15 @@ class Pipeline:
             self._warn(t_host_ns, impossible_config_message(self.config))
             return
         self._use_sensor(sensor)
-        self._release_held()
+        for sample in self._config_wait.release():
+            self._imu_sample(*sample)
+
+    def _unexpected(self, t_host_ns: int, frame: Frame) -> None:
+        name = frame[0].name
+        seen = self.unexpected_frames.get(name, 0)
+        self.unexpected_frames[name] = seen + 1
+        if not seen:
+            self.events.append(unexpected_frame_event(t_host_ns, name))
 
     def _ack(self, t_host_ns: int, frame: Frame) -> None:
         """The aircraft's answer to a COMMAND (``LiveSession.send_command``)."""
@@ -239,24 +325,20 @@ class Pipeline:
         self._acc_m, self._gyr_m, self._mag_m = conversions(sensor)
         self.sensor = sensor
 
-    def _release_held(self) -> None:
-        held, self._held = self._held, []
-        for sample in held:
-            self._imu_sample(*sample)
-
     def _imu(self, t_host_ns: int, frame: Frame) -> None:
         if self.sensor is not None:
             self._imu_sample(t_host_ns, frame, self._time_s, self._device_us)
             return
-        self._held.append((t_host_ns, frame, self._time_s, self._device_us))
-        if hold_expired(self._time_s, self._held[0][2]):
+        released = self._config_wait.sample((t_host_ns, frame, self._time_s, self._device_us), self._time_s)
+        if released is not None:
             self._warn(t_host_ns, no_config_message(self.assumed_sensor))
             self._use_sensor(self.assumed_sensor)
-            self._release_held()
+            for sample in released:
+                self._imu_sample(*sample)
 
     def _imu_sample(self, t_host_ns: int, frame: Frame, time_s: float, t_us: int) -> None:
         """One IMU sample at session time ``time_s``, device time ``t_us`` (unwrapped within its segment)."""
-        _, _, (_, cx, cy, cz, rx, ry, rz, temperature), _ = frame
+        cx, cy, cz, rx, ry, rz, temperature = self._imu_values(frame[2])
         acc = in_body_axes(self._acc_m, cx, cy, cz)
         gyr = in_body_axes(self._gyr_m, rx, ry, rz)
         self.imu_stage(t_host_ns, time_s, t_us, acc, gyr, temperature * TEMPERATURE_SCALE, period_s(self.sensor))
@@ -279,9 +361,9 @@ class Pipeline:
         self.link.on_sample(t_host_ns, t_us)
 
     def _magnetometer(self, t_host_ns: int, frame: Frame) -> None:
-        _, mx, my, mz = frame[2]
+        mx, my, mz = self._mag_values(frame[2])
         body = in_body_axes(self._mag_m, mx, my, mz)
-        sx, sy, sz = _MAG_SCALES
+        sx, sy, sz = MAG_SCALES
         self.magnetometer_stage(body, (mx * sx, my * sy, mz * sz))
 
     def magnetometer_stage(self, body_ut: tuple, shown_ut: tuple) -> None:
@@ -291,8 +373,8 @@ class Pipeline:
         self.tables["mag_raw"].append((self._time_s, *shown_ut, heading))
 
     def _barometer(self, t_host_ns: int, frame: Frame) -> None:
-        row = self._row(frame)
-        self.barometer_stage(*row[1:])
+        pressure, temperature = self._baro_values(frame[2])
+        self.barometer_stage(pressure * _BARO_SCALES[0], temperature * _BARO_SCALES[1])
 
     def barometer_stage(self, pressure_pa: float, temperature_c: float) -> None:
         self.tables["baro"].append((self._time_s, pressure_pa, temperature_c))
@@ -307,9 +389,9 @@ class Pipeline:
         self.aiding.gps(values)
 
     def _attitude(self, t_host_ns: int, frame: Frame) -> None:
-        _, qw, qx, qy, qz, lam, flags = frame[2]
-        s = _Q_SCALE
-        self.onboard_stage((qw * s, qx * s, qy * s, qz * s), lam * _LAMBDA_SCALE, flags)
+        qw, qx, qy, qz, lam, flags = self._attitude_values(frame[2])
+        sw, sx, sy, sz = Q_SCALES
+        self.onboard_stage((qw * sw, qx * sx, qy * sy, qz * sz), lam * LAMBDA_SCALE, flags)
 
     def onboard_stage(self, q: tuple, lam: float, flags: float) -> None:
         """The aircraft's own attitude (w-first, body -> NED) at the current session time."""
@@ -321,10 +403,9 @@ class Pipeline:
         self.bank.restart()
         self.aiding.restart()
         self._last_us = None
-        gap_s = gap_time_s(event)
         for table in self.tables.values():
             if len(table):
-                table.append((gap_s,) + (math.nan,) * (len(table.columns) - 1))
+                table.append(gap_row(event, len(table.columns)))
         self.link.restart()
 
     def _warn(self, t_host_ns: int, message: str) -> None:

@@ -8,7 +8,11 @@ taken at the true instant of each read, so the host sees real clock drift and ji
 Boot. At power-up the board averages the gyro for ``boot_calibration_s`` (every profile starts at
 rest) and writes the result into the chip's offset registers, as flight firmwares do; it writes the
 stored accelerometer offsets too (``accel_calibrated``: the bench calibration the paper did before
-its tests, equal to the part's turn-on zero-g bias). Then it sends ``CONFIG`` and starts streaming:
+its tests, equal to the part's turn-on zero-g bias). The average is used only if the craft was still
+over the window (``still``: as ArduPilot's ``AP_InertialSensor::_init_gyro`` skips an average taken
+while the accelerometer changed); otherwise the board writes its last calibration, which it keeps
+over resets (the STM32 port: in its backup registers), or none if it never had one. ``CONFIG.gyro_calibration`` says which. Then it
+sends ``CONFIG`` and starts streaming:
 
 - each sample: ``IMU_RAW`` (mode raw or both), ``ATTITUDE`` from the onboard AHF (estimated or both);
 - every second: ``STATUS``; ``MAG_RAW``/``BARO``/``GPS`` at their rates when enabled.
@@ -20,9 +24,10 @@ device timestamps.
 
 Reboot and clock jump (to test the ground station): ``reboot_after_s`` > 0 resets the board once at
 that true time, as a brown-out does: the clock restarts at 0, the sequence counter at 0, the onboard
-filter, mode, filter settings and gyro offsets start over, and it boots again (calibration, CONFIG).
-``clock_jump_after_s`` > 0 makes the clock jump ahead by ``clock_jump_s`` at that time, the rest
-going on. The truth (``on_samples``) keeps the uninterrupted device time.
+filter, mode, filter settings and the chip's gyro offset registers start over, and it boots again
+(calibration, CONFIG); only the stored calibration survives. ``clock_jump_after_s`` > 0 makes the
+clock jump ahead by ``clock_jump_s`` at that time, the rest going on. The truth (``on_samples``)
+keeps the uninterrupted device time and says what the board's clock read.
 
 Commands (``COMMAND`` frames, uplink): ``set_mode``, ``set_filter_param`` (λ_max, λ_min, low-pass,
 error gain, gyro over-range in rad/s with ≤ 0 meaning off), ``request_config`` and
@@ -54,6 +59,13 @@ _COMMANDS = fp.SPEC.enums["command"].values
 _FILTER_PARAMS = {value: name for name, value in fp.SPEC.enums["filter_param"].values.items()}
 _RESULT = fp.SPEC.enums["ack_result"].values
 _Q14 = 1.0 / fp.SPEC.frame("ATTITUDE").fields[1].scale
+GYRO_CALIBRATION = fp.SPEC.enums["gyro_calibration"].values
+# Still enough to calibrate at boot: over the window, the RMS deviation from the mean of the gyro and of
+# the accelerometer (the three axes together). At rest the MPU-6050's noise is 0.06 deg/s and 5 mg at
+# 100 Hz (0.19 deg/s, 15 mg at 1 kHz); a turn, a tilt or a flight's vibration is far above. A steady
+# rotation about gravity looks still, as on ArduPilot. The C core has the same numbers (gs_flight.h).
+STILL_GYRO_RMS_DPS = 0.5
+STILL_ACCEL_RMS_G = 0.03
 FIRMWARE_VERSION = (0, 1, 0)
 PREFETCH_SAMPLES = 50
 
@@ -113,6 +125,40 @@ class FirmwareSettings:
                              f"not {self.sample_jitter_us!r}")
 
 
+def within_rms(n: int, sums, squares, lsb_per_unit: float, limit: float) -> bool:
+    """Whether ``n`` samples of three axes with these count sums and sums of squares (exact integers)
+    deviate from their mean by at most ``limit`` RMS (physical units, ``lsb_per_unit`` counts each):
+    Σ_axes (n·Σx² - (Σx)²) = n² × the summed variance, in double in this order, as gs_flight.c's."""
+    spread = 0.0
+    for total, square in zip(sums, squares):
+        spread += float(n) * float(square) - float(total) * float(total)
+    bound = limit * lsb_per_unit * float(n)
+    return spread <= bound * bound
+
+
+@dataclasses.dataclass
+class Calibration:
+    """A gyro calibration running over samples ``first`` .. ``end`` - 1: the gyro average, and the
+    count sums that say whether the craft was still."""
+
+    first: int
+    end: int
+    sum_dps: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))
+    counts: dict[str, list[int]] = dataclasses.field(default_factory=lambda: {k: [0, 0, 0] for k in ("gyr", "gyr2", "acc", "acc2")})
+
+    def add(self, gyr_dps: np.ndarray, raw: ImuSamples) -> None:
+        self.sum_dps += gyr_dps.sum(axis=0)
+        for name, counts in (("gyr", raw.gyr_counts), ("acc", raw.acc_counts)):
+            counts = counts.astype(np.int64)
+            self.counts[name] = [a + int(b) for a, b in zip(self.counts[name], counts.sum(axis=0))]
+            self.counts[name + "2"] = [a + int(b) for a, b in zip(self.counts[name + "2"], (counts * counts).sum(axis=0))]
+
+    def still(self, accel_fs_g: int, gyro_fs_dps: int) -> bool:
+        n, c = self.end - self.first, self.counts
+        return (within_rms(n, c["gyr"], c["gyr2"], units.GYRO_LSB_PER_DPS[gyro_fs_dps], STILL_GYRO_RMS_DPS)
+                and within_rms(n, c["acc"], c["acc2"], units.ACCEL_LSB_PER_G[accel_fs_g], STILL_ACCEL_RMS_G))
+
+
 @dataclasses.dataclass(frozen=True)
 class SentFrame:
     t_s: float  # true (simulation) time the frame leaves the board
@@ -123,8 +169,9 @@ class SentFrame:
 class Firmware:
     """Step with ``run_until(t_s)``; feed uplink frames to ``command``. Deterministic from ``seed``.
 
-    ``on_samples(t_dev_us, truth, imu_samples)``, if given, receives every streamed sample block:
-    the device time (unwrapped, µs), the truth at each read and the registers read.
+    ``on_samples(t_dev_us, truth, imu_samples, board_us, board_epoch)``, if given, receives every
+    streamed sample block: the device time (uninterrupted, µs), the truth at each read, the registers
+    read, what the board's clock read (µs, before the 32-bit wrap) and ``clock_epoch``.
     """
 
     def __init__(self, profile: Profile, settings=FirmwareSettings(), imu=MPU6050Settings(), ahf=AhfSettings(),
@@ -149,16 +196,13 @@ class Firmware:
         self._ahead_end = 0
         self._seq = 0
         self._epoch_us = 0  # device time (uninterrupted) at which the board's clock read 0
+        self._clock_epoch = 0
         self._mishaps = sorted((self._sample_at(t_s), what) for t_s, what in
                                ((settings.reboot_after_s, self._reboot), (settings.clock_jump_after_s, self._jump_clock)) if t_s > 0)
-        self._last_t_dev_us: int | None = None
+        self._last_t_us: int | None = None  # the board's timestamp of its last sample
         self._queued: list[tuple[str, dict]] = []  # frames to send before the next sample
-        self._booting = True
-        self._calibration: tuple[int, int, list] | None = None  # (first k, end k, sums of gyro dps)
-        if settings.boot_calibration_s > 0:
-            self._start_calibration(settings.boot_calibration_s)
-        else:  # a board that skips it streams its turn-on gyro bias
-            self._end_boot()
+        self.stored_gyro_offset_dps: np.ndarray | None = None  # the last calibration: survives resets
+        self._boot()
 
     # -- time --------------------------------------------------------------------------------
 
@@ -181,12 +225,12 @@ class Firmware:
         k_end = max(self._k, math.ceil(t_s * self._drift / self._period_s - 1e-9))
         out: list[SentFrame] = []
         while self._k < k_end:
-            end = k_end if self._calibration is None else min(k_end, self._calibration[1])
+            end = k_end if self._calibration is None else min(k_end, self._calibration.end)
             if self._mishaps:
                 end = min(end, self._mishaps[0][0])
             self._run_block(self._k, end, out)
             self._k = end
-            if self._calibration is not None and self._k == self._calibration[1]:
+            if self._calibration is not None and self._k == self._calibration.end:
                 self._finish_calibration()
             while self._mishaps and self._k >= self._mishaps[0][0]:
                 self._mishaps.pop(0)[1]()
@@ -196,21 +240,34 @@ class Firmware:
         """The first sample at or after true time ``t_s``."""
         return math.ceil(t_s * self._drift / self._period_s - 1e-9)
 
+    @property
+    def clock_epoch(self) -> int:
+        """How many times the board's clock restarted or jumped so far (the truth's ``board_epoch``)."""
+        return self._clock_epoch
+
+    def _boot(self) -> None:
+        """Power-up: the gyro calibration (streaming starts after it), or none (then the turn-on bias)."""
+        self._boot_k = self._k  # the board counts its samples from power-up (STATUS every second)
+        self._booting, self._calibration = True, None
+        self.gyro_calibration = GYRO_CALIBRATION["none"]
+        if self.settings.boot_calibration_s > 0:
+            self._start_calibration(self.settings.boot_calibration_s)
+        else:  # a board that skips it streams its turn-on gyro bias
+            self._end_boot()
+
     def _reboot(self) -> None:
         self._epoch_us = round(self._k * self._period_s * 1e6)
-        self._seq, self._queued, self._last_t_dev_us = 0, [], None
+        self._clock_epoch += 1
+        self._seq, self._queued, self._last_t_us = 0, [], None
         self.mode = MODES[self.settings.mode]
         self.ahf_settings = self._boot_ahf_settings
         self.onboard, self._onboard_q = Ahf(self.ahf_settings, dtype=np.float32), None
         self.imu.gyro_offset_dps = np.zeros(3)
-        self._booting, self._calibration = True, None
-        if self.settings.boot_calibration_s > 0:
-            self._start_calibration(self.settings.boot_calibration_s)
-        else:
-            self._end_boot()
+        self._boot()
 
     def _jump_clock(self) -> None:
         self._epoch_us -= round(self.settings.clock_jump_s * 1e6)
+        self._clock_epoch += 1
 
     # -- commands ----------------------------------------------------------------------------
 
@@ -262,12 +319,19 @@ class Firmware:
 
     def _start_calibration(self, seconds: float) -> None:
         n = max(1, round(seconds * self.settings.rate_hz))
-        self._calibration = (self._k, self._k + n, [np.zeros(3)])
+        self._calibration = Calibration(self._k, self._k + n)
 
     def _finish_calibration(self) -> None:
-        first, end, (sum_dps,) = self._calibration
-        self.imu.gyro_offset_dps = self.imu.gyro_offset_dps + sum_dps / (end - first)
+        c, s = self._calibration, self.settings
         self._calibration = None
+        if not self._booting or c.still(s.accel_fs_g, s.gyro_fs_dps):
+            # a commanded one is trusted: the user was told to keep the craft still
+            self.imu.gyro_offset_dps = self.imu.gyro_offset_dps + c.sum_dps / (c.end - c.first)
+            self.gyro_calibration = GYRO_CALIBRATION["boot" if self._booting else "command"]
+            self.stored_gyro_offset_dps = self.imu.gyro_offset_dps.copy()
+        elif self.stored_gyro_offset_dps is not None:  # moving at boot: the registers are 0, write the stored one
+            self.imu.gyro_offset_dps = self.stored_gyro_offset_dps.copy()
+            self.gyro_calibration = GYRO_CALIBRATION["stored"]
         if self._booting:
             self._end_boot()
 
@@ -284,6 +348,7 @@ class Firmware:
             "protocol_version": fp.SPEC.protocol_version, "schema_fingerprint": fp.SPEC.fingerprint,
             "fw_major": major, "fw_minor": minor, "fw_patch": patch, "accel_fs_g": s.accel_fs_g,
             "gyro_fs_dps": s.gyro_fs_dps, "rate_hz": s.rate_hz, "mode": self.mode, "mounting": s.mounting,
+            "gyro_calibration": self.gyro_calibration,
         }
 
     def _emit(self, out: list, t_s: float, name: str, scaled: bool = False, **values) -> None:
@@ -322,24 +387,28 @@ class Firmware:
         t_true = truth.t_s
         gyr_dps = units.gyro_counts_to_dps(raw.gyr_counts, s.gyro_fs_dps)
         if self._calibration is not None:
-            self._calibration[2][0] += gyr_dps.sum(axis=0)
+            self._calibration.add(gyr_dps, raw)
         if self._booting:
             return
         if self._on_samples is not None:
-            self._on_samples(t_dev_us, truth, raw)
+            self._on_samples(t_dev_us, truth, raw, t_dev_us - self._epoch_us, self._clock_epoch)
         # Exactly the host's conversions (the normalised-gradient AHF amplifies even 1-ulp differences).
         gyr_body = (units.gyro_counts_to_rad_s(raw.gyr_counts, s.gyro_fs_dps) @ self._body_from_sensor.T).tolist()
         acc_body = (units.accel_counts_to_g(raw.acc_counts, s.accel_fs_g) @ self._body_from_sensor.T).tolist()
         # The filter starts with the stream: its first dt is the nominal period, as a host assumes.
-        prev = self._last_t_dev_us if self._last_t_dev_us is not None else int(t_dev_us[0]) - round(self._period_s * 1e6)
-        dt_s = (np.diff(t_dev_us, prepend=prev) * 1e-6).tolist()
-        self._last_t_dev_us = int(t_dev_us[-1])
+        # dt from the board's own 32-bit timestamps as a signed difference, as the C core: a clock jump
+        # is a jump of dt too.
+        t_us_all = (t_dev_us - self._epoch_us) & 0xFFFFFFFF
+        prev = self._last_t_us if self._last_t_us is not None else int(t_us_all[0]) - round(self._period_s * 1e6)
+        dt_us = (np.diff(t_us_all, prepend=prev) + (1 << 31)) % (1 << 32) - (1 << 31)
+        dt_s = (dt_us * 1e-6).tolist()
+        self._last_t_us = int(t_us_all[-1])
         # The die temperature as the firmware reports it: TEMP_OUT counts, then counts/340 + 36.53.
         temp_c = units.temperature_counts_to_c(units.temperature_c_to_counts(raw.temperature_c))
         extras = self._extra_readings(truth)
         per_status = s.rate_hz
         acc_counts, gyr_counts = raw.acc_counts.tolist(), raw.gyr_counts.tolist()
-        t_true_list, t_us_list = t_true.tolist(), ((t_dev_us - self._epoch_us) & 0xFFFFFFFF).tolist()
+        t_true_list, t_us_list = t_true.tolist(), t_us_all.tolist()
         for i in range(n):
             t, t_us = t_true_list[i], t_us_list[i]
             for name, values in self._queued:
@@ -347,7 +416,7 @@ class Firmware:
             self._queued.clear()
             q, diag = self.onboard.step(gyr_body[i], acc_body[i], dt_s[i])
             self._onboard_q = q
-            if (k0 + i) % per_status == 0:
+            if (k0 + i - self._boot_k) % per_status == 0:
                 self._emit_status(out, t, t_us)
             if self.mode != MODES["estimated"]:
                 (ax, ay, az), (gx, gy, gz) = acc_counts[i], gyr_counts[i]
@@ -356,7 +425,7 @@ class Firmware:
             if self.mode != MODES["raw"]:
                 self._emit_attitude(out, t, t_us, q, diag)
             for name, every, values in extras:
-                if (k0 + i) % every == 0:
+                if (k0 + i - self._boot_k) % every == 0:
                     self._emit(out, t, name, scaled=True, t_us=t_us, **{key: v[i] for key, v in values.items()})
 
     def _emit_status(self, out, t: float, t_us: int) -> None:

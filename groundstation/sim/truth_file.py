@@ -6,7 +6,10 @@ included); ``gyr_{x,y,z}_rad_s`` and ``acc_{x,y,z}_m_s2`` on the sensor axes, ex
 host gets by decoding each ``IMU_RAW`` frame and converting its counts with ``groundstation.units``;
 ``true_q{w,x,y,z}`` rotating sensor-axis vectors into east-north-up, taken at the true instant of
 each read; ``moving`` 1 after the profile's initial rest (the part an evaluation scores; for
-``static`` that is the rest the paper's static test scores).
+``static`` that is the rest the paper's static test scores). ``time_s`` goes on across the board's
+resets and clock jumps; ``board_clock_us`` (the 32-bit timestamp the board put on the sample) and
+``board_epoch`` (how many resets and clock jumps came before it) say what the board's own clock read,
+so a session matches every sample to its truth however the clock restarted (``session.data``).
 
 Every sample the board streamed is a row, also those the link then lost: the file is the truth of
 the flight; the raw byte file beside it is what the link delivered.
@@ -35,7 +38,7 @@ class TruthTable:
         self._q_body_from_sensor = quat.from_matrix(mountings.matrix(mounting))
         self._blocks: list[dict[str, np.ndarray]] = []
 
-    def __call__(self, t_dev_us, truth, raw) -> None:
+    def __call__(self, t_dev_us, truth, raw, board_us, board_epoch: int) -> None:
         q_enu = quat.multiply(Q_ENU_FROM_NED, quat.multiply(truth.q_body_to_ned, self._q_body_from_sensor))
         gyr = units.gyro_counts_to_rad_s(raw.gyr_counts, self.gyro_fs_dps)
         acc = units.accel_counts_to_m_s2(raw.acc_counts, self.accel_fs_g)
@@ -44,6 +47,8 @@ class TruthTable:
         block.update({f"acc_{a}_m_s2": acc[:, i] for i, a in enumerate(AXES)})
         block.update({f"true_q{c}": q_enu[:, i] for i, c in enumerate("wxyz")})
         block["moving"] = (truth.t_s >= REST_S).astype(np.int8)
+        block["board_clock_us"] = np.asarray(board_us) & 0xFFFFFFFF
+        block["board_epoch"] = np.full(len(block["time_s"]), board_epoch)
         self._blocks.append(block)
 
     def frame(self) -> pd.DataFrame:

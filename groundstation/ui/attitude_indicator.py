@@ -1,5 +1,7 @@
 """An artificial horizon with numeric pitch, roll and yaw (degrees, docs/conventions.md), and the
-heading of the compass or the GPS when the session has one (0..360°, the source named).
+heading of the compass or the GPS when the session has one (0..360°, the source named). For
+``RECONVERGE_S`` after the device rebooted (or its clock jumped) an amber line above them says the
+estimates are re-converging: the estimators started over then (``EstimatorBank.restart``).
 
 The horizon turns by -roll (right wing down tilts the horizon the other way, as seen from the
 cockpit) and moves down by pitch (nose up shows more sky), ``VISIBLE_PITCH_DEG`` from the centre to
@@ -14,12 +16,25 @@ import numpy as np
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation import quaternion
+from groundstation.session.clock import DISCONTINUITIES
+from groundstation.session.estimators import RECONVERGE_S
 from groundstation.session.live import LiveSession
 from groundstation.ui.attitude_3d import AttitudeView3D
 from groundstation.ui.navigation import heading_now
 
 SKY, GROUND, LINE = QtGui.QColor("#3a7bd5"), QtGui.QColor("#8b5a2b"), QtGui.QColor("white")
 VISIBLE_PITCH_DEG = 30.0  # from the centre to the top edge
+RESTART_WORDS = {"device_reset": "device reboot", "clock_jump": "device clock jump"}
+
+
+def reconverging(events: list[dict], now_s: float) -> tuple[str, float] | None:
+    """The newest restart (``device_reset``, ``clock_jump``) if it was less than ``RECONVERGE_S`` before
+    session time ``now_s``: (its kind, the seconds left), else None."""
+    for event in reversed(events):
+        if event["kind"] in DISCONTINUITIES:
+            left_s = event["session_time_s"] + RECONVERGE_S - now_s
+            return (event["kind"], left_s) if left_s > 0 else None
+    return None
 
 
 class AttitudeIndicator(QtWidgets.QWidget):
@@ -82,6 +97,10 @@ class AttitudePanel(QtWidgets.QGroupBox):
         views = QtWidgets.QHBoxLayout()
         views.addWidget(self.indicator)
         views.addWidget(self.body_view)
+        self.reconverging = QtWidgets.QLabel()
+        self.reconverging.setWordWrap(True)
+        self.reconverging.setStyleSheet("background:#ffe9a8; color:#5a4000; padding:4px; border:1px solid #e0b040")
+        self.reconverging.hide()
         self.readouts = {name: QtWidgets.QLabel("—") for name in ("pitch", "roll", "yaw", "heading")}
         numbers = QtWidgets.QFormLayout()
         for name, label in self.readouts.items():
@@ -89,6 +108,7 @@ class AttitudePanel(QtWidgets.QGroupBox):
             label.setStyleSheet("font-family: monospace; font-size: 14px")
             numbers.addRow(name, label)
         layout = QtWidgets.QVBoxLayout(self)
+        layout.addWidget(self.reconverging)
         layout.addLayout(views)
         layout.addLayout(numbers)
 
@@ -104,13 +124,23 @@ class AttitudePanel(QtWidgets.QGroupBox):
         last = table.tail(1)
         if not len(last):
             return
+        self.show_reconverging(reconverging(session.pipeline.events, float(last[0][0])))
         q = last[0][[table.columns.index(f"{prefix}{c}") for c in "wxyz"]]
         self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
         if body:
             self.body_view.set_attitude(q)
 
+    def show_reconverging(self, restart: tuple[str, float] | None) -> None:
+        if restart is None:
+            self.reconverging.hide()
+            return
+        kind, left_s = restart
+        self.reconverging.setText(f"⚠ Re-converging after {RESTART_WORDS[kind]}: the estimates may be off for {math.ceil(left_s)} s more")
+        self.reconverging.show()
+
     def clear(self) -> None:
         """No attitude (a new session, before its first estimate)."""
+        self.show_reconverging(None)
         self.show_attitude(math.nan, math.nan, math.nan)
         self.body_view.set_attitude(None)
         self.readouts["heading"].setText("—")

@@ -74,7 +74,8 @@ def test_import_saves_a_recorded_mavlink_session_as_a_tlog(tmp_path, capsys):
     aircraft = MavlinkAircraft()
     chunks = aircraft.advance(3.0)
     recording = tmp_path / "live.gsrec"
-    with RecordingWriter(recording, {"source": "mavlink:udpin:0.0.0.0:14550"}) as writer:
+    header = {"source": "mavlink:udpin:0.0.0.0:14550", "protocol": "mavlink"}  # as LiveSession records it
+    with RecordingWriter(recording, header) as writer:
         for i, chunk in enumerate(chunks):
             writer.write_chunk(10_000_000_000 + int(chunk.t_s * 1e9), chunk.data)
     out = tmp_path / "live.tlog"

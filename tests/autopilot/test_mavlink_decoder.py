@@ -37,7 +37,7 @@ def oracle(data: bytes) -> list:
             for m in parser.parse_buffer(data) or () if m.get_type() != "BAD_DATA"]
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=15)
 @given(seed=st.integers(0, 10_000), cuts=st.lists(st.integers(1, 5000), max_size=30))
 def test_same_messages_as_pymavlink_for_any_chunking(seed, cuts):
     data = stream(seed)

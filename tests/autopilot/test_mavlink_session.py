@@ -7,6 +7,7 @@ import argparse
 import dataclasses
 import math
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -30,6 +31,7 @@ from groundstation.sim.options import scenario_from_args
 from groundstation.sim.stream import Scenario
 from groundstation.units import STANDARD_GRAVITY_M_S2
 from mavlink_helpers import Sender, ardupilot_heartbeat
+from tests.waiting import wait_for
 
 SCENARIO = dataclasses.replace(Scenario(), profile="flight", duration_s=60.0, seed=3)
 FILTERS = ("ahf", "hf")
@@ -121,11 +123,15 @@ def test_udp_session_from_the_bridge_sim_process(tmp_path):
     process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", *argv],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
     try:
-        run_for(session, 4.0)
-        out, err = process.communicate(timeout=30)
+        with session:  # until the process has sent its 4 s and the session has read every byte, however slow the machine
+            _, err = process.communicate(timeout=120)
+            sent = re.search(r"datagrams, (\d+) bytes", err)
+            assert sent, err
+            wait_for(lambda: session.pipeline.decoder.stats.bytes_in >= int(sent[1]), what="every datagram read")
     finally:
         process.kill()
     assert process.returncode == 0 and "refused commands []" in err
+    assert session.pipeline.decoder.stats.bytes_in == int(sent[1])
     parser = argparse.ArgumentParser()
     add_arguments(parser)
     args = parser.parse_args(argv)

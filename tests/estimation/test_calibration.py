@@ -78,7 +78,7 @@ def test_rest_bias_calibrator_restarts_on_motion_and_on_command():
         RestBiasCalibrator(duration_s=0.0)
 
 
-@settings(max_examples=60, deadline=None, derandomize=True)
+@settings(max_examples=60, derandomize=True)
 @given(st.lists(st.tuples(st.integers(1, 150), st.sampled_from(["still", "moving", "tilted", "nan", "bad_dt", "drifting"])),
                 min_size=1, max_size=12), st.integers(0, 2**32))
 def test_measure_is_step_sample_for_sample(stretches, seed):

@@ -2,6 +2,7 @@
 same kernel source run interpreted, on inputs with every kind of bad sample the guard handles; numba's
 cache follows edits of the sources shared by every kernel."""
 
+import ast
 import importlib
 import math
 import os
@@ -10,11 +11,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from estimation_samples import flight_like_samples
-from groundstation.estimation import ESTIMATORS, create
+from groundstation.estimation import ESTIMATORS, base, create
 from groundstation.estimation.base import CompiledEstimator, drop_stale_cache
 
 COMPILED = [name for name, cls in ESTIMATORS.items() if issubclass(cls, CompiledEstimator)]
@@ -69,7 +70,13 @@ def assert_same(q, diag, q_ref, table_ref, fields):
 GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
 
 
-@settings(max_examples=15, deadline=None)
+@settings(max_examples=15)
+# Failures found: hfm's compiled kernel and its interpreted source set the initial yaw from the compass with
+# np.arctan2, which numba compiles to libm's atan2 but NumPy runs through its own SIMD code (AVX-512 here),
+# 1 ulp apart on ~7 % of inputs; the normalised gradient step (ahf.py eq. 18) then turns that ulp into a
+# full β·dt step in another direction (1.2e-3 in q on the first sample).
+@example(seed=1, events=[], waiting=0, gate={}, start=None)
+@example(seed=35, events=[], waiting=0, gate=GATES[1], start=None)
 @given(
     seed=st.integers(0, 2**31),
     events=st.lists(st.tuples(st.integers(0, 10_000), st.sampled_from(sorted(EVENTS))), max_size=30),
@@ -152,3 +159,31 @@ def test_a_cache_older_than_a_shared_source_is_dropped_and_a_newer_one_kept(tmp_
     os.utime(shared, (time.time() + 100, time.time() + 100))
     drop_stale_cache(kernel, (shared,))
     assert indexes() == []  # the shared source was edited after: numba compiles anew
+
+
+# IEEE 754 rounds these correctly: every implementation (libm, NumPy's SIMD loops) gives the same bits
+CORRECTLY_ROUNDED = {"sqrt", "absolute", "fabs", "negative", "add", "subtract", "multiply", "divide", "minimum", "maximum", "copysign"}
+
+
+def numpy_functions_in_compiled_code(source: str) -> list[str]:
+    """``np.<ufunc>`` calls, other than the correctly rounded ones, inside the ``njit``/``register_jitable``
+    functions of a module's source."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.FunctionDef) and any("jit" in ast.unparse(d) for d in node.decorator_list):
+            for call in ast.walk(node):
+                if (isinstance(call, ast.Call) and isinstance(call.func, ast.Attribute) and isinstance(call.func.value, ast.Name)
+                        and call.func.value.id in ("np", "numpy") and isinstance(getattr(np, call.func.attr, None), np.ufunc)
+                        and call.func.attr not in CORRECTLY_ROUNDED):  # fmt: skip
+                    found.append(f"{node.name}: np.{call.func.attr}")
+    return found
+
+
+def test_compiled_per_sample_code_calls_math_not_numpy_functions():
+    """Compiled, numba calls libm for ``np.arctan2`` and ``math.atan2`` alike; interpreted, NumPy takes its own
+    SIMD code chosen by the CPU (AVX-512: last-bit differences), so the interpreted source would differ from
+    the compiled kernel on some machines only (hfm by 1.2e-3, above). ``compass.level_heading_rad`` did."""
+    sources = sorted(Path(base.__file__).parent.glob("*.py"))
+    found = [f"{path.name} {hit}" for path in sources for hit in numpy_functions_in_compiled_code(path.read_text())]
+    assert found == []
+    assert numpy_functions_in_compiled_code("@register_jitable\ndef f(x):\n    return np.arctan2(x, 1.0)\n") == ["f: np.arctan2"]

@@ -38,7 +38,7 @@ column_kinds = st.sampled_from([(np.float64, any_float), (np.float32, st.floats(
                                 (np.uint8, st.integers(0, 255)), (np.bool_, st.booleans())])
 
 
-@settings(max_examples=100, derandomize=True, deadline=None)
+@settings(max_examples=100, derandomize=True)
 @given(st.integers(1, 30).flatmap(lambda n: st.lists(column_kinds.flatmap(lambda k: arrays(k[0], n, elements=k[1])), min_size=2, max_size=6)))
 def test_any_numbers_read_back_bit_for_bit(tmp_path_factory, arrays_):
     columns = {f"col_{i}": a for i, a in enumerate(arrays_)}

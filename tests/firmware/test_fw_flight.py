@@ -22,7 +22,7 @@ COMMAND, MODE, PARAM, RESULT = ENUM["command"], ENUM["mode"], ENUM["filter_param
 def streamed_samples(scenario: Scenario):
     """Every sample the Python model streams (after its boot calibration): device µs and registers."""
     samples = []
-    stream = SimStream(scenario, on_samples=lambda t_us, truth, raw: samples.append((t_us, raw)))
+    stream = SimStream(scenario, on_samples=lambda t_us, truth, raw, *clock: samples.append((t_us, raw)))
     stream.advance(stream.end_s)
     t_us = np.concatenate([t for t, _ in samples])
     acc = np.concatenate([r.acc_counts for _, r in samples])
@@ -107,12 +107,21 @@ def session_bytes(scenario: Scenario, script) -> bytes:
     return b"".join(chunk.data for chunk in data + stream.flush())
 
 
-@pytest.mark.parametrize("scenario", [
-    Scenario("hover", 14.0, seed=8),
-    Scenario("fast", 14.0, seed=6, firmware=FirmwareSettings(mode="estimated", accel_fs_g=16, gyro_fs_dps=250, mounting=17, rate_hz=200)),
-    Scenario("flight", 14.0, seed=7, firmware=FirmwareSettings(boot_calibration_s=0.0, accel_calibrated=False)),
-], ids=["hover", "fast-200Hz", "no-boot-calibration"])
-def test_with_commands_the_c_core_sends_the_python_models_bytes(c_core, scenario):
+CALIBRATION = ENUM["gyro_calibration"]
+
+
+# scenario, CONFIG.gyro_calibration at power-up, after the reset (None: no reset)
+@pytest.mark.parametrize("scenario, at_power_up, after_reset", [
+    (Scenario("hover", 14.0, seed=8), "boot", None),
+    (Scenario("fast", 14.0, seed=6, firmware=FirmwareSettings(mode="estimated", accel_fs_g=16, gyro_fs_dps=250, mounting=17, rate_hz=200)),
+     "boot", None),
+    (Scenario("flight", 14.0, seed=7, firmware=FirmwareSettings(boot_calibration_s=0.0, accel_calibrated=False)), "none", None),
+    # issue 21: reset in flight, so moving at boot: the calibration kept over the reset (the last commanded one)
+    (Scenario("flight", 14.0, seed=7, firmware=FirmwareSettings(reboot_after_s=11.0)), "boot", "stored"),
+    # reset at rest: measured again; then the clock jumps
+    (Scenario("static", 14.0, seed=9, firmware=FirmwareSettings(reboot_after_s=11.0, clock_jump_after_s=13.0)), "boot", "boot"),
+], ids=["hover", "fast-200Hz", "no-boot-calibration", "reset-in-flight", "reset-at-rest"])
+def test_with_commands_the_c_core_sends_the_python_models_bytes(c_core, scenario, at_power_up, after_reset):
     python = session_bytes(scenario, SCRIPT)
     c = session_bytes(dataclasses.replace(scenario, firmware_core="c"), SCRIPT)
     assert c == python
@@ -123,10 +132,24 @@ def test_with_commands_the_c_core_sends_the_python_models_bytes(c_core, scenario
                     6: RESULT["ok"], 7: RESULT["ok"], 8: RESULT["ok"], 9: RESULT["bad_value"], 10: RESULT["bad_value"],
                     11: RESULT["ok"], 12: RESULT["ok"], 13: RESULT["busy"], 14: RESULT["bad_value"], 15: RESULT["unsupported"],
                     16: RESULT["ok"], 17: RESULT["ok"], 18: RESULT["ok"]}
-    modes = [f["mode"] for f in frames if f.name == "CONFIG"]
-    assert modes[-4:] == [MODE["raw"], MODE["estimated"], MODE["estimated"], MODE["both"]]
+    configs = [f for f in frames if f.name == "CONFIG"]
+    booted = configs[-1] if after_reset else None  # the reset's CONFIG: the commanded mode is forgotten
+    commanded = configs[1:-1] if after_reset else configs[1:]
+    assert [f["mode"] for f in commanded][-4:] == [MODE["raw"], MODE["estimated"], MODE["estimated"], MODE["both"]]
     calibrating = [f["t_us"] for f in frames if f.name == "STATUS" and f["flags"] & 1]
     assert calibrating  # STATUS says so while the commanded calibration runs
+    assert configs[0]["gyro_calibration"] == CALIBRATION[at_power_up]
+    assert commanded[-1]["gyro_calibration"] == CALIBRATION["command"]  # after the calibrate_gyro at 7 s
+    if after_reset:
+        assert (booted["gyro_calibration"], booted["mode"]) == (CALIBRATION[after_reset], MODE["both"])
+
+
+def test_a_board_moving_through_its_boot_calibration_with_none_stored_streams_uncalibrated_alike(c_core):
+    # (no commands: while booting, the core's queue holds 6 frames, the model's any number)
+    scenario = Scenario("flight", 14.0, seed=7, firmware=FirmwareSettings(boot_calibration_s=6.0))  # past the rest
+    python = session_bytes(scenario, [])
+    assert session_bytes(dataclasses.replace(scenario, firmware_core="c"), []) == python
+    assert [f["gyro_calibration"] for f in fp.StreamDecoder().feed(python) if f.name == "CONFIG"] == [CALIBRATION["none"]]
 
 
 def test_a_firmware_with_extra_sensors_is_refused(c_core):

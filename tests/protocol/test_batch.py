@@ -231,3 +231,41 @@ def test_simulated_sessions_with_reboots_clock_jumps_and_a_bad_link():
     assert jump.stats.restarts == 1
     bad = assert_same(simulated_chunks(8.0, loss=0.05, burst_loss=0.05, ber=2e-4, truncate=0.01, reboot_after_s=5.0, **sensors))
     assert bad.stats.crc_errors > 0 and bad.stats.frames_lost > 0
+
+
+def test_both_decoders_hand_the_same_frames_to_the_one_set_of_sequence_rules(monkeypatch):
+    """``SequenceRules`` is the only place the sequence and time rules live: on a damaged stream with a
+    reboot, the incremental and the batch decoder call it for the same frames with the same state."""
+    from firmware_protocol.decoder import SequenceRules
+
+    calls = []
+    timed, untimed = SequenceRules.timed, SequenceRules.untimed
+
+    def record(name, rule):
+        def called(self, *args):
+            frame = args[1:4] if name == "timed" else args[:3]
+            calls.append((name, args[-1], self.next_seq, self.t32, self.t64, self.fast_us,
+                          *(key(a) if isinstance(a, tuple) else a for a in frame)))
+            return rule(self, *args)
+        return called
+
+    monkeypatch.setattr(SequenceRules, "timed", record("timed", timed))
+    monkeypatch.setattr(SequenceRules, "untimed", record("untimed", untimed))
+    chunks = simulated_chunks(6.0, loss=0.05, burst_loss=0.05, ber=3e-4, reboot_after_s=3.0)
+    incremental(chunks)
+    by_stream, calls[:] = list(calls), []
+    decode_chunks(chunks)
+    assert len(by_stream) > 50 and calls == by_stream
+
+
+def test_the_batch_decoder_reads_no_private_state_of_another_object():
+    """The rules are driven through their public interface, never through another object's ``_`` attributes."""
+    import ast
+    import inspect
+
+    import firmware_protocol.batch
+
+    tree = ast.parse(inspect.getsource(firmware_protocol.batch))
+    private = sorted({node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute) and node.attr.startswith("_")
+                      and not node.attr.startswith("__") and not (isinstance(node.value, ast.Name) and node.value.id == "self")})
+    assert private == []

@@ -204,7 +204,7 @@ def test_impossible_length_gives_up_only_the_sync_byte():
 def config(fingerprint: int):
     return make_frame(
         "CONFIG", 0, protocol_version=1, schema_fingerprint=fingerprint, fw_major=1, fw_minor=2, fw_patch=3,
-        accel_fs_g=8, gyro_fs_dps=500, rate_hz=100, mode=0, mounting=0,
+        accel_fs_g=8, gyro_fs_dps=500, rate_hz=100, mode=0, mounting=0, gyro_calibration=1,
     )
 
 

@@ -23,7 +23,7 @@ def sender(n_samples: int, t0_us: int = 1_000_000, seq0: int = 0, config: bool =
     if config:
         frames.append((t0_us, encode(make_frame(
             "CONFIG", seq, protocol_version=1, schema_fingerprint=SPEC.fingerprint, fw_major=0, fw_minor=1, fw_patch=0,
-            accel_fs_g=4, gyro_fs_dps=500, rate_hz=100, mode=2, mounting=0))))
+            accel_fs_g=4, gyro_fs_dps=500, rate_hz=100, mode=2, mounting=0, gyro_calibration=1))))
         seq += 1
     for k in range(n_samples):
         t_sent = t0_us + k * PERIOD_US

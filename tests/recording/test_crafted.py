@@ -49,3 +49,14 @@ def test_json_nested_beyond_reason_is_damage_not_a_crash(crafted):
 
     recording = open_recording(crafted["deep_json_event"])
     assert any("is not a JSON object; skipped" in finding for finding in recording.damage)
+
+
+def test_a_dataset_csv_gz_with_a_corrupt_body_is_one_line(tmp_path, capsys):
+    from tests.crafted_files import damaged_csv_gz
+
+    path = str(damaged_csv_gz(tmp_path))
+    for argv in (["export", path, "--out", str(tmp_path / "o.csv")], ["evaluate", path],
+                 ["import", path, "--out", str(tmp_path / "o.gsrec")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "not a readable CSV file" in err and "Traceback" not in err, err

@@ -68,7 +68,7 @@ def open_recording_error(tmp_path, data: bytes) -> str:
     return str(caught.value).split(".gsrec", 1)[1].lstrip(": ").strip()
 
 
-@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=80, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(where=st.integers(min_value=0), garbage=st.binary(min_size=1, max_size=500))
 @example(where=1, garbage=b"\xf3")  # repeats the record marker's first byte: the record stays whole
 def test_garbage_inserted_anywhere_after_the_metadata_loses_only_the_record_it_lands_in(tmp_path, small, where, garbage):

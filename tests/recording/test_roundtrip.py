@@ -32,7 +32,7 @@ def new_path(tmp_path: Path) -> Path:
     return tmp_path / f"r{len(list(tmp_path.iterdir()))}.gsrec"
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=60, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(chunks=st.lists(st.tuples(INT64, LINK_BYTES), max_size=40),
        events=st.lists(st.tuples(INT64, st.dictionaries(st.text(max_size=8), JSON_VALUES, max_size=4)), max_size=5))
 def test_chunks_and_events_round_trip(tmp_path, chunks, events):
@@ -81,7 +81,7 @@ def test_chunk_access_by_index_and_from_an_index(tmp_path):
     assert list(recording.chunks(15)) == chunks[15:]
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=30, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(values=st.lists(st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=0, max_size=50))
 def test_samples_are_kept_bit_for_bit(tmp_path, values):
     path = new_path(tmp_path)

@@ -16,7 +16,7 @@ def stream_through(pipeline: Pipeline, scenario: Scenario):
     """Feed a whole simulated session; returns the truth at each sample: device µs, yaw (rad), NED position (m)."""
     times, yaws, positions = [], [], []
 
-    def keep(t_dev_us, truth, _raw):
+    def keep(t_dev_us, truth, _raw, *_clock):
         times.append(np.asarray(t_dev_us, dtype=float))
         yaws.append(quat.to_euler_zyx(truth.q_body_to_ned)[:, 0])
         positions.append(truth.pos_ned_m)

@@ -5,6 +5,12 @@ in order, the link's counters and per-second figures, the last CONFIG and the es
 at the start and the end. Recordings come from the simulator, clean and damaged, with device reboots
 and clock jumps, with settings changed while recording, cut so that the first CONFIG is missing, and
 with every aiding sensor (magnetometer, barometer, GPS: the compass heading and the position table).
+
+Bit for bit holds on every CPU because both paths run the same code for every rule (docs/session.md,
+"Two paths, one result"): where one path has arrays and the other numbers, only additions and
+multiplications meet (correctly rounded in IEEE 754, and NumPy never fuses two ufuncs into an FMA);
+transcendental functions (the barometer's ``pow``, the heading's ``atan2``), whose SIMD versions may
+differ from libm's in the last bit (AVX-512), run as the same scalar calls on both paths.
 """
 
 import math

@@ -46,7 +46,7 @@ def stream(t0_us: int, history, latency=None):
     return frames, jumps
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=200)
 @given(st.integers(0, WRAP - 1), histories)
 def test_time_is_monotonic_follows_the_host_clock_and_every_jump_is_one_event(t0_us, history):
     """No delivery delay: the session time must equal the host's elapsed time at every frame."""
@@ -62,7 +62,7 @@ def test_time_is_monotonic_follows_the_host_clock_and_every_jump_is_one_event(t0
     assert len(events) == jumps == clock.segment
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(st.integers(0, WRAP - 1), histories, st.randoms(use_true_random=False))
 def test_late_and_bunched_arrivals_never_fake_a_jump_nor_hide_one(t0_us, history, rng):
     """Each frame up to 0.2 s late; a USB bridge or a busy host hands several over in one chunk."""
@@ -114,7 +114,7 @@ def test_a_frame_stamped_a_little_before_the_last_gets_the_last_time():
     assert clock.place(20_000_000, 5_020_000) == 0.02
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(st.integers(0, WRAP - 1), histories, st.randoms(use_true_random=False), st.floats(-200.0, 200.0))
 def test_place_many_is_place_frame_by_frame(t0_us, history, rng, drift_ppm):
     """The batch path's columns: the same times, device times and events bit for bit, with late,

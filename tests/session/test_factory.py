@@ -13,6 +13,7 @@ from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import replay
 from groundstation.sources import open_source
+from tests.waiting import wait_for
 
 SAMPLE = Path(__file__).resolve().parents[2] / "recordings" / "samples" / "hover-raw.gsrec"
 
@@ -21,10 +22,7 @@ def test_a_sim_session_records_what_replays_to_its_estimates_bit_for_bit(tmp_pat
     session = open_session("sim:?scenario=hover&seed=2&sensors=", filters=("ahf", "hf"), recordings_dir=tmp_path)
     assert session.recording_path.parent == tmp_path and session.pipeline.filters == ("ahf", "hf")
     with session:
-        deadline = time.monotonic() + 20
-        while len(session.pipeline.imu) < 150:
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
+        wait_for(lambda: len(session.pipeline.imu) >= 150, what="150 IMU rows")
     recording = open_recording(session.recording_path)
     assert recording.metadata["source_spec"] == "sim:?scenario=hover&seed=2&sensors="
     assert any(e["kind"] == "ack" and e["command_seq"] == 0 for e in session.pipeline.events)  # start's request_config

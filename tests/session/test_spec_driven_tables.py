@@ -39,7 +39,7 @@ def flight_bytes(spec) -> list[bytes]:
     """CONFIG, then level IMU samples at 100 Hz and ESC telemetry at 10 Hz (rpm 1000 + 10 k, current k/100 A)."""
     config = make_frame("CONFIG", 0, protocol_version=SPEC.protocol_version, schema_fingerprint=spec.fingerprint,
                         fw_major=1, fw_minor=0, fw_patch=0, accel_fs_g=2, gyro_fs_dps=250, rate_hz=IMU_RATE_HZ,
-                        mode=0, mounting=1)
+                        mode=0, mounting=1, gyro_calibration=1)
     frames, seq = [encode(config)], 1
     for k in range(SECONDS * IMU_RATE_HZ):
         t_us = 1_000_000 + k * 10_000

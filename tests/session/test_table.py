@@ -13,7 +13,7 @@ from groundstation.session.table import Table
 COLUMNS = ("time_s", "a", "b")
 
 
-@settings(max_examples=100, derandomize=True, deadline=None)
+@settings(max_examples=100, derandomize=True)
 @given(
     st.integers(1, 7),
     st.lists(st.one_of(st.integers(0, 3), st.integers(0, 20).map(lambda n: -n - 1)), max_size=30),

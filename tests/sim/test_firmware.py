@@ -122,3 +122,28 @@ def test_extra_sensors_report_the_truth_at_their_rates():
     # ISA near the ground: about -12 Pa per metre.
     assert abs(np.polyfit(altitude_m, pressure, 1)[0] + 12.0) < 0.5
     assert np.std([g["alt"] - scenario.extra.origin_alt_m for g in gps]) > 1.0  # it climbs
+
+
+def test_the_boot_calibration_is_used_only_when_the_craft_was_still():
+    """Issue 21: a board reset in flight re-ran its gyro calibration while moving, +16.7 deg/s on x after it.
+    Now it sees the motion (gyro and accelerometer spread over the window) and keeps its stored one."""
+    calibration = ENUM["gyro_calibration"]
+    stream = SimStream(Scenario("flight", 30.0, seed=1, firmware=FirmwareSettings(reboot_after_s=20.0)))
+    board = stream.firmware
+    stream.advance(19.0)
+    before_dps = board.imu.gyro_offset_dps.copy()
+    assert board.gyro_calibration == calibration["boot"]
+    # the offset registers read the bias the part has (turn-on + warm-up + walk), to the noise of 1 s
+    assert np.abs(before_dps - board.imu.gyro_turn_on_bias_dps).max() < 0.1
+    frames = decode(b"".join(c.data for c in stream.advance(30.0)))
+    assert [f["gyro_calibration"] for f in frames if f.name == "CONFIG"] == [calibration["stored"]]
+    assert np.array_equal(board.imu.gyro_offset_dps, before_dps)  # before: 16.7 deg/s off on x
+
+    # At rest the board measures again; one that never calibrated has nothing stored and says so.
+    at_rest = SimStream(Scenario("static", 30.0, seed=1, firmware=FirmwareSettings(reboot_after_s=20.0)))
+    frames = decode(b"".join(c.data for c in at_rest.advance(30.0)))
+    assert [f["gyro_calibration"] for f in frames if f.name == "CONFIG"] == [calibration["boot"]] * 2
+    never = SimStream(Scenario("flight", 30.0, seed=1, firmware=FirmwareSettings(boot_calibration_s=8.0)))  # past the rest
+    frames = decode(b"".join(c.data for c in never.advance(30.0)))
+    assert [f["gyro_calibration"] for f in frames if f.name == "CONFIG"] == [calibration["none"]]
+    assert not never.firmware.imu.gyro_offset_dps.any()

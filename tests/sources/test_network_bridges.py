@@ -2,19 +2,11 @@
 into a session opened by spec: every byte arrives, is recorded, decoded, and uplink reaches the
 aircraft (its ACKs come back)."""
 
-import time
-
 from groundstation.recording import open_recording
 from groundstation.session.factory import open_session
+from tests.waiting import wait_for
 
 from .bridges import TcpBridge, UdpBridge
-
-
-def wait_for(condition, timeout_s: float = 15.0) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.05)
 
 
 def acked(session, seq: int) -> bool:
@@ -33,7 +25,7 @@ def test_udp_bridge_every_datagram_arrives_and_uplink_goes_back_to_the_sender(tm
         seq = session.send_command("request_config")
         wait_for(lambda: acked(session, seq))
         bridge.close()
-        time.sleep(0.3)  # the last datagrams in flight
+        wait_for(lambda: session.pipeline.decoder.stats.bytes_in >= len(bridge.sent), what="the last datagrams in flight")
     stats = session.pipeline.decoder.stats
     assert stats.bytes_in == len(bridge.sent) and stats.crc_errors == 0 and stats.frames_lost == 0
     recording = open_recording(session.recording_path)
@@ -55,7 +47,7 @@ def test_tcp_bridge_streams_and_the_session_reconnects_when_the_bridge_drops(tmp
             rows = len(session.pipeline.imu)
             wait_for(lambda: len(session.pipeline.imu) > rows + 50)  # data flows again
             bridge.close()
-            time.sleep(0.3)
+            wait_for(lambda: session.pipeline.decoder.stats.bytes_in >= len(bridge.sent), what="the last bytes in flight")
     finally:
         bridge.close()
     kinds = [e["kind"] for e in session.pipeline.events]
@@ -109,7 +101,7 @@ def test_udp_source_locks_to_its_bridge_and_a_spoofer_neither_rescales_nor_recei
             seq = session.send_command("request_config")
             wait_for(lambda: acked(session, seq))
             bridge.close()
-            time.sleep(0.3)
+            wait_for(lambda: session.pipeline.decoder.stats.bytes_in >= len(bridge.sent), what="the last datagrams in flight")
         with session.lock:
             acc = np.column_stack([session.pipeline.imu.column(f"acc_{c}_g") for c in "xyz"])[-100:]
         assert abs(np.median(np.linalg.norm(acc, axis=1)) - 1.0) < 0.25  # a hover near 1 g; the forged scale gives 4 g

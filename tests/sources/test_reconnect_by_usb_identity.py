@@ -8,7 +8,6 @@ naming the bridge's current pty with a USB identity, injected through ``SerialSo
 
 import os
 import threading
-import time
 
 import pytest
 from serial.tools.list_ports_common import ListPortInfo
@@ -18,6 +17,7 @@ from groundstation.session.pipeline import Pipeline
 from groundstation.sim.link import LinkSettings
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.sources import SerialSource
+from tests.waiting import wait_for
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
 FTDI = (0x0403, 0x6001)
@@ -46,14 +46,9 @@ def test_a_session_follows_its_adapter_to_a_new_name(tmp_path):
         source = SerialSource(first, list_ports=ports)
         assert source.usb_identity == (*FTDI, "A50285BI")
         with LiveSession(source, Pipeline(("ahf",)), recordings_dir=tmp_path) as session:
-            deadline = time.monotonic() + 15
-            while not any(e["kind"] == "reconnected" for e in session.pipeline.events):
-                assert time.monotonic() < deadline, "never reconnected"
-                time.sleep(0.05)
+            wait_for(lambda: any(e["kind"] == "reconnected" for e in session.pipeline.events), what="reconnected")
             rows = len(session.pipeline.imu)
-            while len(session.pipeline.imu) < rows + 50:
-                assert time.monotonic() < deadline, "no data after reconnecting"
-                time.sleep(0.05)
+            wait_for(lambda: len(session.pipeline.imu) >= rows + 50, what="data after reconnecting")
     finally:
         stop.set()
         thread.join()

@@ -76,7 +76,7 @@ static void queue_config(gs_flight *f)
         .protocol_version = GS_PROTOCOL_VERSION, .schema_fingerprint = GS_SCHEMA_FINGERPRINT,
         .fw_major = f->cfg.fw_version[0], .fw_minor = f->cfg.fw_version[1], .fw_patch = f->cfg.fw_version[2],
         .accel_fs_g = f->cfg.accel_fs_g, .gyro_fs_dps = f->cfg.gyro_fs_dps, .rate_hz = f->cfg.rate_hz,
-        .mode = f->mode, .mounting = f->cfg.mounting,
+        .mode = f->mode, .mounting = f->cfg.mounting, .gyro_calibration = f->gyro_calibration,
     };
     gs_pack_config(slot, 0, &m); /* seq and CRC are rewritten when it is sent */
 }
@@ -86,6 +86,25 @@ static void start_calibration(gs_flight *f, double seconds)
     long n = round_even(seconds * f->cfg.rate_hz);
     f->calibration_n = f->calibration_left = (uint32_t)(n < 1 ? 1 : n);
     f->calibration_sum_dps[0] = f->calibration_sum_dps[1] = f->calibration_sum_dps[2] = 0.0;
+    memset(f->calibration_counts, 0, sizeof f->calibration_counts);
+}
+
+/* Whether n samples of three axes with these count sums and sums of squares deviate from their mean
+ * by at most limit RMS (per_count counts a unit): sum over the axes of n Sxx - Sx^2 = n^2 x the
+ * summed variance, in double in this order, as firmware.py's within_rms. */
+static int within_rms(uint32_t n, const int64_t sums[3], const int64_t squares[3], double per_count, double limit)
+{
+    double spread = 0.0;
+    for (int i = 0; i < 3; i++) spread += (double)n * (double)squares[i] - (double)sums[i] * (double)sums[i];
+    double bound = limit * per_count * (double)n;
+    return spread <= bound * bound;
+}
+
+static int calibration_still(const gs_flight *f)
+{
+    const int64_t (*c)[3] = f->calibration_counts;
+    return within_rms(f->calibration_n, c[0], c[1], f->gyro_lsb_per_dps, GS_FLIGHT_STILL_GYRO_RMS_DPS)
+        && within_rms(f->calibration_n, c[2], c[3], f->accel_lsb_per_g, GS_FLIGHT_STILL_ACCEL_RMS_G);
 }
 
 int gs_flight_init(gs_flight *f, const gs_flight_config *cfg)
@@ -99,6 +118,7 @@ int gs_flight_init(gs_flight *f, const gs_flight_config *cfg)
         return -1;
     }
     f->mode = cfg->mode;
+    f->gyro_calibration = (uint8_t)GS_GYRO_CALIBRATION_NONE;
     f->nominal_period_us = (uint32_t)round_even(1.0 / cfg->rate_hz * 1e6);
     f->booting = 1;
     if (cfg->boot_calibration_s > 0.0) {
@@ -110,10 +130,24 @@ int gs_flight_init(gs_flight *f, const gs_flight_config *cfg)
     return 0;
 }
 
+void gs_flight_restore_gyro_offset(gs_flight *f, const double offset_dps[3])
+{
+    for (int i = 0; i < 3; i++) f->stored_offset_dps[i] = offset_dps[i];
+    f->have_stored_offset = 1;
+}
+
 static void finish_calibration(gs_flight *f)
 {
-    for (int i = 0; i < 3; i++) f->offset_dps[i] += f->calibration_sum_dps[i] / f->calibration_n;
-    f->offset_ready = 1;
+    /* a commanded one is trusted: the user was told to keep the craft still */
+    if (!f->booting || calibration_still(f)) {
+        for (int i = 0; i < 3; i++) f->offset_dps[i] += f->calibration_sum_dps[i] / f->calibration_n;
+        f->offset_ready = 1;
+        f->gyro_calibration = (uint8_t)(f->booting ? GS_GYRO_CALIBRATION_BOOT : GS_GYRO_CALIBRATION_COMMAND);
+    } else if (f->have_stored_offset) { /* moving at boot: the registers are 0, write the stored one */
+        for (int i = 0; i < 3; i++) f->offset_dps[i] = f->stored_offset_dps[i];
+        f->offset_ready = 1;
+        f->gyro_calibration = (uint8_t)GS_GYRO_CALIBRATION_STORED;
+    }
     f->calibration_n = 0;
     if (f->booting) {
         f->booting = 0;
@@ -156,7 +190,13 @@ size_t gs_flight_sample(gs_flight *f, const gs_sample *s, uint8_t *out, size_t c
     size_t n = 0;
     uint32_t k = f->k++;
     if (f->calibration_n) {
-        for (int i = 0; i < 3; i++) f->calibration_sum_dps[i] += (double)s->gyr[i] / f->gyro_lsb_per_dps;
+        for (int i = 0; i < 3; i++) {
+            f->calibration_sum_dps[i] += (double)s->gyr[i] / f->gyro_lsb_per_dps;
+            f->calibration_counts[0][i] += s->gyr[i];
+            f->calibration_counts[1][i] += (int64_t)s->gyr[i] * s->gyr[i];
+            f->calibration_counts[2][i] += s->acc[i];
+            f->calibration_counts[3][i] += (int64_t)s->acc[i] * s->acc[i];
+        }
     }
     if (!f->booting) {
         for (unsigned i = 0; i < f->queued; i++) n = emit(f, out, cap, n, f->queue[i]);

@@ -5,8 +5,10 @@
  * returns the frames to send, each a whole nRF24L01+ payload; uplink payloads go to gs_flight_uplink().
  * What it does is what groundstation/sim/firmware.py models, frame for frame:
  *
- * - boot: the first boot_calibration_s of samples average the gyro (the craft is at rest); the port
- *   writes the result into the chip's offset registers (gs_flight_take_gyro_offset) and CONFIG goes out;
+ * - boot: the first boot_calibration_s of samples average the gyro; if the craft was still over them
+ *   (GS_FLIGHT_STILL_*) the port writes the average into the chip's offset registers
+ *   (gs_flight_take_gyro_offset), else the last calibration the port keeps over resets (gs_flight_restore_gyro_offset),
+ *   if any; CONFIG.gyro_calibration says which, and CONFIG goes out;
  * - each sample: the onboard AHF (gs_ahf.h) steps; IMU_RAW (mode raw or both) and ATTITUDE (estimated
  *   or both); STATUS every rate_hz samples, counted from power-up;
  * - COMMAND: set_mode, set_filter_param, request_config, calibrate_gyro, each answered with ACK (and
@@ -30,6 +32,12 @@
 #define GS_FLIGHT_LOW_BATTERY_V 10.8
 /* The longest gyro calibration a command may ask for. */
 #define GS_FLIGHT_MAX_CALIBRATION_S 60.0
+
+/* Still enough for the boot calibration to be used: the RMS deviation from the window's mean of the
+ * gyro (deg/s) and of the accelerometer (g), the three axes together. The same numbers as
+ * groundstation/sim/firmware.py (STILL_GYRO_RMS_DPS, STILL_ACCEL_RMS_G). */
+#define GS_FLIGHT_STILL_GYRO_RMS_DPS 0.5
+#define GS_FLIGHT_STILL_ACCEL_RMS_G 0.03
 
 /* STATUS.flags bits */
 #define GS_STATUS_CALIBRATING 1u
@@ -71,6 +79,10 @@ typedef struct {
     uint32_t calibration_left; /* samples still to average; 0 = not calibrating */
     uint32_t calibration_n;
     double calibration_sum_dps[3];
+    int64_t calibration_counts[4][3]; /* sums of gyro counts, their squares, accel counts, their squares */
+    int have_stored_offset;
+    double stored_offset_dps[3];  /* the last calibration, kept over resets (gs_flight_restore_gyro_offset) */
+    uint8_t gyro_calibration; /* GS_GYRO_CALIBRATION_*: where the offsets in use came from (CONFIG) */
     int offset_ready;
     double offset_dps[3];     /* to add to the chip's gyro offset, deg/s (gs_flight_take_gyro_offset) */
     uint32_t last_t_us;
@@ -92,8 +104,13 @@ size_t gs_flight_sample(gs_flight *f, const gs_sample *s, uint8_t *out, size_t c
 void gs_flight_uplink(gs_flight *f, const uint8_t *frame, size_t len);
 
 /* 1 when a gyro calibration has finished since the last call: offset_dps (deg/s, sensor axes) is to
- * be subtracted from what the chip reports (added to its offset registers) before the next sample. */
+ * be subtracted from what the chip reports (added to its offset registers) before the next sample.
+ * What the registers then hold (they start at 0 at power-up) is the calibration to keep over resets. */
 int gs_flight_take_gyro_offset(gs_flight *f, double offset_dps[3]);
+
+/* At power-up, before the first sample: the calibration kept over resets (deg/s, sensor axes), written
+ * to the registers if the craft moves during the boot calibration. */
+void gs_flight_restore_gyro_offset(gs_flight *f, const double offset_dps[3]);
 
 /* The length of the frame at p (header byte 1 + header and CRC). */
 static inline size_t gs_frame_length(const uint8_t *p) { return (size_t)p[1] + GS_HEADER_BYTES + GS_CRC_BYTES; }

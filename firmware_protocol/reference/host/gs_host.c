@@ -71,6 +71,7 @@ size_t gs_host_flight_sample(gs_flight *f, uint32_t t_us, const int16_t register
 
 void gs_host_flight_uplink(gs_flight *f, const uint8_t *frame, size_t len) { gs_flight_uplink(f, frame, len); }
 int gs_host_flight_take_gyro_offset(gs_flight *f, double offset_dps[3]) { return gs_flight_take_gyro_offset(f, offset_dps); }
+void gs_host_flight_restore_gyro_offset(gs_flight *f, const double offset_dps[3]) { gs_flight_restore_gyro_offset(f, offset_dps); }
 unsigned gs_host_flight_mode(const gs_flight *f) { return f->mode; }
 int gs_host_flight_booting(const gs_flight *f) { return f->booting; }
 void gs_host_deframer_init(gs_deframer *d) { gs_deframer_init(d); }

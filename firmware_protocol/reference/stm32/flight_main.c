@@ -2,10 +2,14 @@
  *
  * Each period: read the MPU-6050 (timestamped), hand the sample to gs_flight_sample(), send each
  * frame as one radio payload, pass uplink payloads that came back on acknowledgements to
- * gs_flight_uplink(), and write a finished gyro calibration into the chip's offset registers.
+ * gs_flight_uplink(), and write a finished gyro calibration into the chip's offset registers. The
+ * calibration is kept in the backup registers too: after a reset in flight the core uses it when the
+ * craft moves during the boot calibration (they survive a reset, not a power cut: VBAT is VDD here).
  *
  * LED (PC13): fast blink (5 Hz) while the gyro calibrates (keep the craft still); one short flash a
  * second while streaming; steady on: no MPU-6050 or no radio (nothing is sent). */
+#include <math.h>
+
 #include "board.h"
 #include "gs_flight.h"
 #include "mpu6050.h"
@@ -41,6 +45,36 @@ static double battery_v(void)
     return (double)(ADC1_DR & 0xFFFu) * ADC_VOLTS_PER_COUNT * BATTERY_DIVIDER;
 }
 
+/* The gyro offset in the backup registers: a marker in DR1, then each axis in 1e-4 deg/s as two halves. */
+#define STORED_MARKER 0x6C01u
+#define STORED_LSB_PER_DPS 1e4
+
+static void backup_init(void)
+{
+    RCC_APB1ENR |= RCC_APB1ENR_PWREN | RCC_APB1ENR_BKPEN;
+    PWR_CR |= PWR_CR_DBP;
+}
+
+static int stored_gyro_offset(double offset_dps[3])
+{
+    if ((BKP_DR(1) & 0xFFFFu) != STORED_MARKER) return 0;
+    for (unsigned i = 0; i < 3; i++) {
+        uint32_t bits = (BKP_DR(2 + 2 * i) & 0xFFFFu) << 16 | (BKP_DR(3 + 2 * i) & 0xFFFFu);
+        offset_dps[i] = (double)(int32_t)bits / STORED_LSB_PER_DPS;
+    }
+    return 1;
+}
+
+static void store_gyro_offset(const double offset_dps[3])
+{
+    for (unsigned i = 0; i < 3; i++) {
+        uint32_t bits = (uint32_t)(int32_t)lrint(offset_dps[i] * STORED_LSB_PER_DPS);
+        BKP_DR(2 + 2 * i) = bits >> 16;
+        BKP_DR(3 + 2 * i) = bits & 0xFFFFu;
+    }
+    BKP_DR(1) = STORED_MARKER;
+}
+
 static void fault(void)
 {
     led(1);
@@ -60,6 +94,10 @@ int main(void)
     };
     gs_ahf_default_settings(&config.ahf);
     if (gs_flight_init(&flight, &config) != 0) fault();
+    backup_init();
+    double chip_offset_dps[3] = {0.0, 0.0, 0.0}; /* what the offset registers hold: 0 after mpu6050_init */
+    double stored_dps[3];
+    if (stored_gyro_offset(stored_dps)) gs_flight_restore_gyro_offset(&flight, stored_dps);
 
     static uint8_t out[GS_FLIGHT_MAX_OUT];
     uint8_t uplink[NRF24_MAX_PAYLOAD];
@@ -83,8 +121,10 @@ int main(void)
             status_sent |= out[i + 2] == GS_ID_STATUS;
         }
         double offset_dps[3];
-        if (gs_flight_take_gyro_offset(&flight, offset_dps) && mpu6050_subtract_gyro_offset(offset_dps) != 0) {
-            sample.port_flags |= GS_STATUS_IMU_ERROR;
+        if (gs_flight_take_gyro_offset(&flight, offset_dps)) {
+            if (mpu6050_subtract_gyro_offset(offset_dps) != 0) sample.port_flags |= GS_STATUS_IMU_ERROR;
+            for (unsigned i = 0; i < 3; i++) chip_offset_dps[i] += offset_dps[i];
+            store_gyro_offset(chip_offset_dps);
         }
         busy_us += micros() - t0;
         if ((int32_t)(micros() - next) > (int32_t)period_us) next = micros(); /* overrun: no burst to catch up */

@@ -27,6 +27,14 @@
 #define RCC_APB2ENR_USART1EN (1u << 14)
 #define RCC_APB1ENR_TIM2EN (1u << 0)
 #define RCC_APB1ENR_I2C1EN (1u << 21)
+#define RCC_APB1ENR_BKPEN (1u << 27)
+#define RCC_APB1ENR_PWREN (1u << 28)
+
+/* Power control and the backup registers (RM0008 5.4.1, 6.4): ten 16-bit data registers, kept over
+ * a reset while VBAT is powered; writable once PWR_CR.DBP is set */
+#define PWR_CR REG(0x40007000u)
+#define PWR_CR_DBP (1u << 8)
+#define BKP_DR(n) REG(0x40006C00u + 4u * (n)) /* n = 1..10 */
 
 /* Flash access control (RM0008 3.3.3) */
 #define FLASH_ACR REG(0x40022000u)

@@ -1,0 +1,124 @@
+"""Each session rule exists once and both paths call it (issue 20): the batch path drives the
+pipeline's own aiding stage (hand-over of readings to the IMU samples, compass heading, position) and
+its own CONFIG wait, with the same arguments in the same order as the incremental pipeline; and the
+pipeline reads frames by field name, so a spec that orders the fields otherwise gives the same session.
+"""
+
+import math
+
+import numpy as np
+
+from firmware_protocol import SPEC, StreamDecoder, encode
+from firmware_protocol.codec import new_frame
+from firmware_protocol.spec import SPEC_PATH, load_spec
+from groundstation.recording import open_recording
+from groundstation.session import aiding as aiding_module
+from groundstation.session import pipeline as pipeline_module
+from groundstation.session.batch import batch_replay
+from groundstation.session.pipeline import Pipeline
+from groundstation.session.replay import replay
+from tests.simulated import simulated_chunks, write_recording
+
+SENSORS = dict(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)
+
+
+def plain(value):
+    """Arguments and results comparable across paths: floats (NaN equal), tuples, dicts, None."""
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
+    if isinstance(value, (tuple, list, np.ndarray)):
+        return tuple(plain(v) for v in value)
+    if isinstance(value, float) and math.isnan(value):
+        return "nan"
+    return value
+
+
+def recording_calls(monkeypatch, cls, names):
+    """Every call of ``names`` on instances of ``cls``: (instance number, method, arguments, result)."""
+    calls, instances = [], {}
+    for name in names:
+        method = getattr(cls, name)
+
+        def called(self, *args, _method=method, _name=name):
+            result = _method(self, *args)
+            calls.append((instances.setdefault(id(self), len(instances)), _name, plain(args), plain(result)))
+            return result
+
+        monkeypatch.setattr(cls, name, called)
+    return calls
+
+
+def test_the_batch_path_drives_the_pipelines_aiding_stage_with_the_same_calls(tmp_path, monkeypatch):
+    """With a reboot: restarts, readings waiting for samples, heading and position, call for call."""
+    path = tmp_path / "aided.gsrec"
+    write_recording(path, simulated_chunks(8.0, reboot_after_s=4.0, **SENSORS), {"filters": ["ahf", "hf"]})
+    recording = open_recording(path)
+    stage = ("restart", "magnetometer", "barometer", "gps", "position_step")
+    calls = recording_calls(monkeypatch, aiding_module.Aiding, (*stage, "take_for_estimators"))
+    replay(recording, ("ahf", "hf"))
+    live, calls[:] = list(calls), []
+    batch_replay(recording, ("ahf", "hf"))
+    batch = list(calls)
+    # The pipeline's one Aiding; the batch path's first (the hand-over to the estimators, before they
+    # run) and second (heading and position, on their attitudes).
+    live_stage = [c[1:] for c in live if c[1] in stage and c[0] == 0]
+    batch_stage = [c[1:] for c in batch if c[1] in stage and c[0] == 2]
+    assert len([c for c in live_stage if c[0] == "position_step"]) > 300
+    assert batch_stage == live_stage
+    handed = [c[3] for c in live if c[1] == "take_for_estimators"]
+    assert [c[3] for c in batch if c[1] == "take_for_estimators" and c[0] == 1] == handed
+    assert sum(m is not None for m, _ in handed) > 100 and sum(g is not None for _, g in handed) > 10
+
+
+def test_the_batch_path_waits_for_config_through_the_pipelines_rule(tmp_path, monkeypatch):
+    """A recording cut after its boot CONFIG: the samples wait, then the assumed scales apply, sample for sample."""
+    path = tmp_path / "cut.gsrec"
+    write_recording(path, simulated_chunks(4.0, **SENSORS)[5:], {"filters": ["ahf"]})
+    recording = open_recording(path)
+    calls = recording_calls(monkeypatch, pipeline_module.ConfigWait, ("sample",))
+    replay(recording, ("ahf",))
+    live, calls[:] = [(args[1], result is None) for _, _, args, result in calls], []
+    batch_replay(recording, ("ahf",))
+    assert len(live) > 50 and live[-1][1] is False  # the wait expired
+    assert [(args[1], result is None) for _, _, args, result in calls] == live
+
+
+def reordered_spec():
+    """The project's spec with IMU_RAW's and ATTITUDE's fields in another order (the timestamp stays first)."""
+    text = SPEC_PATH.read_text(encoding="utf-8")
+
+    def move_after_timestamp(block_name, field_names):
+        nonlocal text
+        start = text.index(f'name = "{block_name}"')
+        end = text.index("[[frames]]", start)
+        block = text[start:end]
+        lines = block.splitlines(keepends=True)
+        moved = [line for name in field_names for line in lines if f'name = "{name}"' in line]
+        kept = [line for line in lines if line not in moved]
+        at = next(i for i, line in enumerate(kept) if 'name = "t_us"' in line) + 1
+        text = text[:start] + "".join(kept[:at] + moved + kept[at:]) + text[end:]
+
+    move_after_timestamp("IMU_RAW", ("temperature", "gyr_z", "gyr_y", "gyr_x"))
+    move_after_timestamp("ATTITUDE", ("flags", "lambda_gain", "q_z"))
+    return load_spec(text)
+
+
+def test_the_pipeline_reads_frames_by_field_name():
+    spec = reordered_spec()
+    assert spec.frame("IMU_RAW").field_names[1] == "temperature" and spec.frame("ATTITUDE").field_names[1] == "flags"
+    chunks = simulated_chunks(3.0, **SENSORS)
+    decoder = StreamDecoder()
+    original, other = Pipeline(("ahf",)), Pipeline(("ahf",), spec=spec)
+    for t, data in chunks:
+        frames = decoder.feed(data, t)
+        again = b""
+        for frame in frames:
+            frame_type = spec.frame(frame.name)
+            values = frame.values
+            again += encode(new_frame(frame_type, frame.seq, tuple(values[name] for name in frame_type.field_names)))
+        original.feed(t, data)
+        other.feed(t, again)
+    for name in ("imu", "onboard"):
+        assert len(original.tables[name]) > 200
+        assert np.array_equal(other.tables[name].array(), original.tables[name].array(), equal_nan=True), name
+    assert SPEC.frame("IMU_RAW").field_names[1] == "acc_x"
