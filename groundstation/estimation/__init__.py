@@ -18,7 +18,7 @@ import dataclasses
 import math
 
 from groundstation.estimation.ahf import Ahf, Hf
-from groundstation.estimation.ahf2 import Ahf2
+from groundstation.estimation.ahf2 import Ahf2, Ahf2m
 from groundstation.estimation.base import Estimator
 from groundstation.estimation.cf1 import Cf1
 from groundstation.estimation.ecf import Ecf
@@ -33,7 +33,7 @@ from groundstation.estimation.vqf import Vqf
 # label, colour, needs and whether live sessions run it (``base.Estimator``). A new estimator is its
 # module and its class added here (or ``register(cls)``); nothing else names it.
 ESTIMATORS: dict[str, type[Estimator]] = {
-    cls.name: cls for cls in (Ahf2, Vqf, Ahf, Hf, Ecf, Hfm, Ecfm, Mcf, Ukf, Sssrukf, Cf1, Kf, Ekf)
+    cls.name: cls for cls in (Ahf2, Vqf, Ahf, Hf, Ecf, Hfm, Ecfm, Mcf, Ukf, Sssrukf, Cf1, Kf, Ekf, Ahf2m)
 }
 # The estimator whose attitude turns the magnetometer into a compass heading and the acceleration
 # into position (seed 004), unless a session names another (``Pipeline(aiding=...)``).

@@ -74,6 +74,7 @@ class Mcf(Estimator):
     label = "MCF"
     colour = "sand"
     needs = frozenset({"mag"})
+    uses_magnetometer = True
     Settings = McfSettings
     Diagnostics = McfDiagnostics
 

@@ -70,6 +70,7 @@ class Vqf(Estimator):
     label = "VQF"
     colour = "orange"
     estimates_gyro_bias = True
+    uses_magnetometer = True
     Settings = VqfSettings
     Diagnostics = VqfDiagnostics
 
