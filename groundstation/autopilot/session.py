@@ -20,6 +20,7 @@ import numpy as np
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, read_log
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
+from groundstation.formats import FORMATS
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
 from groundstation.session.catalogue import Catalogue, message_table, session_catalogue
@@ -38,7 +39,6 @@ READINGS = {
     "gps": ("gps", {c: (c, 1.0) for c in GPS_COLUMNS}),
 }
 AUTOPILOT_PROTOCOL = "mavlink"  # what the window treats a flight log's aircraft as speaking: no commands of ours
-FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
 
 
 def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
@@ -121,7 +121,7 @@ def _message_tables(log: FlightLog) -> list[tuple]:
 
 def describe(log: FlightLog) -> dict:
     """What the Session sheet and the commands show about the log."""
-    meta = {"source": f"{FORMAT_NAMES[log.format]} {log.path.name}", "autopilot": log.autopilot}
+    meta = {"source": f"{FORMATS[log.format].description} {log.path.name}", "autopilot": log.autopilot}
     for name in ("imu", "onboard", "mag", "baro", "gps", "truth"):
         stream: Series | None = getattr(log, name)
         if stream is not None:

@@ -10,27 +10,21 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from groundstation.estimation import create
+from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.calibration import RestBiasCalibrator
 
-# The comparison estimators run on every live session (and so on its recording's replays), so showing one is a legend click or
-# a check box, not a restart: the IMU filters (HF, ECF), those with the magnetometer (HF+mag, ECF+mag,
-# MCF; a few µs per sample each) and the GPS-aided unscented filters (UKF, SSSRUKF; a few hundred µs
-# per sample each, in the reader thread). Hidden curves cost the UI nothing per frame.
-# The first is the one shown: AHF2, the best on the BROAD dev set (bench/bench_estimators.out.md); VQF
-# and the paper's AHF follow, one "show" click away.
-LIVE_FILTERS = ("ahf2", "vqf", "ahf", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
 # Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
 # reset in flight (tests/session/test_reboot_in_flight.py); the app warns for as long.
 RECONVERGE_S = 5.0
 
 
 class EstimatorBank:
-    """``filters``: estimator names (the first one drives the compass heading and the position);
-    ``settings``/``forced``: name -> {setting: value}."""
+    """``filters``: estimator names; ``aiding``: the one whose attitude the compass heading and the
+    position use (``estimation.aiding_estimator``); ``settings``/``forced``: name -> {setting: value}."""
 
-    def __init__(self, filters, settings=None, forced=None):
+    def __init__(self, filters, settings=None, forced=None, aiding=None):
         self.filters = tuple(dict.fromkeys(filters))
+        self.aiding = aiding_estimator(self.filters, aiding)
         self._settings = {name: dict((settings or {}).get(name, {})) for name in self.filters}
         self._forced = {name: dict((forced or {}).get(name, {})) for name in self.filters}
         self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
@@ -68,9 +62,9 @@ class EstimatorBank:
         self._bias_noted = bias
         return bias
 
-    def first_q(self):
-        """The newest attitude of the first estimator (the compass and the position use it), or None."""
-        return self.last_q[self.filters[0]] if self.filters else None
+    def aiding_q(self):
+        """The newest attitude of the aiding estimator (the compass and the position use it), or None."""
+        return self.last_q[self.aiding] if self.aiding else None
 
     def restart(self) -> None:
         """After a device reset or clock jump: every estimator starts over from its last attitude.

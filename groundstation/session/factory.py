@@ -1,7 +1,8 @@
 """Sessions from a source spec: what the app, ``app --port``, ``record`` and the tests start.
 
 ``open_session(spec)`` opens the source (``groundstation.sources.open_source``) and gives a
-``LiveSession`` (not started) with the pipeline that fits it: a live link runs ``LIVE_FILTERS`` and
+``LiveSession`` (not started) with the pipeline that fits it: a live link runs every live estimator
+(``estimation.live_estimators``) and
 is recorded; a recording is fed through the live path (paced by ``ReplaySource``) with the estimators
 and settings it was recorded with, as the live session computed it (what the live-path benchmarks
 and tests reproduce). The app and ``groundstation replay`` open files whole instead
@@ -12,8 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from groundstation.estimation import live_estimators
 from groundstation.session.data import Loading, estimators_for, load_session
-from groundstation.session.estimators import LIVE_FILTERS
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
@@ -22,12 +23,13 @@ from groundstation.sources import ReplaySource, SourceError, open_source
 DEMO_SPEC = "sim:"
 
 
-def open_session(spec: str, *, filters=LIVE_FILTERS, settings: dict | None = None, record: bool = True,
+def open_session(spec: str, *, filters=None, settings: dict | None = None, record: bool = True,
                  recordings_dir: Path | None = None, **defaults) -> LiveSession:
     """The session on ``spec`` (SourceError/UserError with a message fit for the user).
 
-    ``filters`` and ``settings`` (estimator name -> overrides) apply to live sources; a replay takes
-    the recorded ones. ``defaults`` are source options the spec may override (``baud=``, ``speed=``).
+    ``filters`` (default: every live estimator) and ``settings`` (estimator name -> overrides) apply to
+    live sources; a replay takes the recorded ones. ``defaults`` are source options the spec may
+    override (``baud=``, ``speed=``).
     """
     source = open_source(spec, **defaults)
     if source.is_replay:
@@ -36,13 +38,13 @@ def open_session(spec: str, *, filters=LIVE_FILTERS, settings: dict | None = Non
             raise SourceError(f"{spec}: a .tlog is a flight log, not a link: open it whole (groundstation app FILE, "
                               "the app's File > Open, or replay, export and evaluate FILE)")
         return replay_session(source)
-    pipeline = Pipeline(filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
+    pipeline = Pipeline(live_estimators() if filters is None else filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
     return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata={"source_spec": spec})
 
 
 def replay_session(source: ReplaySource) -> LiveSession:
     """A recording through the live path with its recorded estimators and settings (every one of
-    ``LIVE_FILTERS`` for the app's recordings), as the live session computed it."""
+    live estimator for the app's recordings), as the live session computed it."""
     return LiveSession(source, pipeline_for(source.recording), record=False)
 
 
@@ -53,7 +55,6 @@ class Sessions:
     export runs."""
 
     demo_spec = DEMO_SPEC
-    live_filters = LIVE_FILTERS
     open = staticmethod(open_session)
     load = Loading
     estimators_for = staticmethod(estimators_for)
