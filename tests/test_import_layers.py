@@ -24,14 +24,14 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("entry points", ("groundstation.cli", "groundstation.__main__", "groundstation.commands")),
     ("window", ("groundstation.ui",)),
     ("makers and exports", (
-        "groundstation.export", "groundstation.session.factory", "groundstation.session.load",
+        "groundstation.export", "groundstation.loaders", "groundstation.session.factory", "groundstation.session.load",
         "groundstation.session.live", "groundstation.session.batch", "groundstation.session.replay",
         "groundstation.session.pipeline", "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session",
     )),
     ("playback and the product", (
         "groundstation.session.playback", "groundstation.session.product", "groundstation.session.view",
     )),
-    ("the session's parts", ("groundstation.session", "groundstation.autopilot", "groundstation.sources",
+    ("the session's parts", ("groundstation.session", "groundstation.autopilot", "groundstation.formats", "groundstation.sources",
                              "groundstation.recording", "groundstation.experiments", "groundstation.sim")),
     ("computation", ("groundstation.estimation", "groundstation.position", "groundstation.analysis",
                      "groundstation.datasets", "firmware_protocol")),
@@ -41,7 +41,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 # make it, and neither may reach them, not even through another module.
 MAKERS = ("groundstation.session.pipeline", "groundstation.session.batch", "groundstation.session.live",
           "groundstation.session.factory", "groundstation.session.load", "groundstation.session.replay",
-          "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session")
+          "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session", "groundstation.loaders")
 READERS = ("groundstation.ui", "groundstation.export")
 
 

@@ -14,13 +14,14 @@ the rows they arrived at, so export and evaluate treat it like any session.
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 
-from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, read_log
+from groundstation import formats
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
-from groundstation.formats import FORMATS
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
 from groundstation.session.catalogue import Catalogue, message_table, session_catalogue
@@ -47,6 +48,21 @@ def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
     share = None if progress is None else lambda fraction: progress(round(PROGRESS_STEPS * fraction), PROGRESS_STEPS)
     reading = None if share is None else lambda done, total: share(READ_SHARE * min(done / max(total, 1), 1.0))
     return log_session(read_log(path, reading), filters or DEFAULT_FILTERS, forced or {}, share)
+
+
+def read_log(path, progress=None) -> FlightLog:
+    """The log at ``path`` by its format's reader (``formats``); UserError with a clear message when it cannot be read."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"{path}: no such file")
+    file_format = formats.sniff(path)
+    if file_format is None or file_format.read is None:
+        raise UserError(f"{path}: not a flight log ({formats.described(formats.flight_logs())})")
+    log = file_format.reader()(path, progress)
+    if log.imu is None and log.onboard is None:
+        found = f" ({'; '.join(log.notes)})" if log.notes else ""
+        raise UserError(f"{path}: holds neither IMU samples nor an attitude estimate{found}; damaged or empty?")
+    return log
 
 
 def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionData:
@@ -121,7 +137,7 @@ def _message_tables(log: FlightLog) -> list[tuple]:
 
 def describe(log: FlightLog) -> dict:
     """What the Session sheet and the commands show about the log."""
-    meta = {"source": f"{FORMATS[log.format].description} {log.path.name}", "autopilot": log.autopilot}
+    meta = {"source": f"{formats.FORMATS[log.format].description} {log.path.name}", "autopilot": log.autopilot}
     for name in ("imu", "onboard", "mag", "baro", "gps", "truth"):
         stream: Series | None = getattr(log, name)
         if stream is not None:

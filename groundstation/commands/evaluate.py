@@ -37,7 +37,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.commands.progress import ProgressBar
-    from groundstation.session.data import load_session
+    from groundstation.session.load import load_session
 
     names, overrides = estimator_options(args)
     bar = ProgressBar("computing")  # shown after a second: a long recording or log

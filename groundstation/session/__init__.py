@@ -5,8 +5,8 @@ config, settings) is what every reader reads; ``view`` is what the window reads 
 or played back. Its makers: ``pipeline.Pipeline`` (no threads, no I/O: timestamped byte chunks in,
 tables out), run live by ``live.LiveSession`` (a reader thread, a recording; ``factory.open_session``
 makes one from a source string) and over a recording by ``replay`` (chunk by chunk, as live, so it
-reproduces the live estimates bit for bit); a recording opened whole (``data.load_session``) takes the
+reproduces the live estimates bit for bit); a recording opened whole (``load.load_session``) takes the
 batch path (``batch.batch_replay``: columns, not chunks), which calls the pipeline's own rules and
-gives the same tables (tests/session/test_batch.py). ``data`` opens any file whole (a recording, a
-dataset, a flight log) and ``reveal`` plays it back. Docs: docs/session.md.
+gives the same tables (tests/session/test_batch.py). ``load`` opens any file whole (a recording, a
+dataset, a flight log) and ``playback`` plays it back. Docs: docs/session.md.
 """

@@ -6,7 +6,7 @@
 is recorded; a recording is fed through the live path (paced by ``ReplaySource``) with the estimators
 and settings it was recorded with, as the live session computed it (what the live-path benchmarks
 and tests reproduce). The app and ``groundstation replay`` open files whole instead
-(``session.reveal``). The demo is ``sim:``. No Qt here.
+(``session.playback``). The demo is ``sim:``. No Qt here.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from groundstation.estimation import live_estimators
-from groundstation.session.data import Loading, estimators_for, load_session
+from groundstation.session.load import Loading, estimators_for, load_session
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
@@ -51,7 +51,7 @@ def replay_session(source: ReplaySource) -> LiveSession:
 class Sessions:
     """How the window opens sessions, handed to it (``ui.main_window.MainWindow``) so that the window
     imports no maker of sessions: a source live (``open``), a file computed whole in a worker
-    (``load``, then ``reveal.RevealSession``), the estimators a file opens with, and the loader an
+    (``load``, then ``playback.RevealSession``), the estimators a file opens with, and the loader an
     export runs."""
 
     demo_spec = DEMO_SPEC

@@ -1,7 +1,7 @@
 """What the window reads of a session, live or played back from a file: one view, two makers.
 
 A live session (``live.LiveSession``) shows its pipeline's product as it grows; a file
-(``reveal.RevealSession``) shows a computed ``SessionData`` up to the playback clock. Both give
+(``playback.RevealSession``) shows a computed ``SessionData`` up to the playback clock. Both give
 the window a ``Session`` whose ``view`` is a ``ProductView``: the same tables, events and figures, so
 the window never asks which kind it holds, and never reads a pipeline. No Qt here.
 """
@@ -16,7 +16,7 @@ from groundstation.session.catalogue import Catalogue
 
 
 class LinkView(Protocol):
-    """Link figures (``session.link.LinkStats`` live, ``reveal.RevealedLink`` from a file)."""
+    """Link figures (``session.link.LinkStats`` live, ``playback.RevealedLink`` from a file)."""
 
     per_second: object  # a table of ``link.PER_SECOND_COLUMNS``
     last_chunk_ns: int | None

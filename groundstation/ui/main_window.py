@@ -3,7 +3,7 @@
 One ``QTimer`` (``REDRAW_HZ``) pulls from the session's tables and redraws; the session's reader
 thread never touches a widget. A file (a recording, a dataset CSV, a .tlog, .bin or .ulg) is computed
 whole in a worker thread, its progress under the connection bar, then played back by revealing it
-(``session.reveal``): seeking only moves the playback clock. Problems (a busy port, an unreadable
+(``session.playback``): seeking only moves the playback clock. Problems (a busy port, an unreadable
 file, a lost port) appear in the red banner under the connection bar, never as a traceback.
 """
 
@@ -18,7 +18,7 @@ from groundstation.errors import UserError
 from groundstation import formats
 from groundstation.estimation import ESTIMATORS, label, live_estimators
 from groundstation.recording import default_recordings_dir
-from groundstation.session.reveal import RevealSession
+from groundstation.session.playback import RevealSession
 from groundstation.session.view import Session
 from groundstation.sources import whole_file
 from groundstation.ui.attitude_indicator import AttitudePanel

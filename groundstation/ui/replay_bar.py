@@ -1,6 +1,6 @@
 """The replay transport: play/pause (Replay at the end), step, speed, a seek slider and the position.
 
-It moves the playback clock of a ``RevealSession`` (``session.reveal.Playback``) for pause, speed and
+It moves the playback clock of a ``RevealSession`` (``session.playback.Playback``) for pause, speed and
 step; a seek is the window's (views that only add rows start over when it goes back), so the bar
 only emits ``seekRequested``.
 """
@@ -11,7 +11,7 @@ import math
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.reveal import Playback
+from groundstation.session.playback import Playback
 from groundstation.session.view import Session
 from groundstation.sources.replay import MAX_SPEED, MIN_SPEED
 

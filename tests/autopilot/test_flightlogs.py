@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from groundstation.autopilot.agreement import onboard_agreement, pitch_roll_rad
-from groundstation.autopilot.flightlog import read_log
+from groundstation.autopilot.session import read_log
 from groundstation.autopilot.session import load_log
 from groundstation.export.columns import export_columns
 

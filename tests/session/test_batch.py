@@ -23,7 +23,7 @@ import pytest
 from firmware_protocol import StreamDecoder, encode
 from groundstation.recording import open_recording
 from groundstation.session.batch import batch_replay
-from groundstation.session.data import from_pipeline, load_session
+from groundstation.session.load import from_pipeline, load_session
 from groundstation.session.replay import replay
 from tests.simulated import simulated_chunks, write_recording
 

@@ -12,9 +12,9 @@ from groundstation import quaternion
 from groundstation.autopilot.tlog import write_tlog
 from groundstation.recording import RecordingWriter
 from groundstation.session import view
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.factory import open_session
-from groundstation.session.reveal import RevealSession
+from groundstation.session.playback import RevealSession
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 from groundstation.ui.series import attitude_deg
 from tests.simulated import simulated_chunks, write_recording

@@ -9,7 +9,7 @@ import pytest
 
 from groundstation.estimation.base import INITIALISED
 from groundstation.recording import RecordingWriter
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.pipeline import Pipeline
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream

@@ -1,4 +1,4 @@
-"""A computed session played back (``session.reveal``): the clock runs at its speed, stops at the end
+"""A computed session played back (``session.playback``): the clock runs at its speed, stops at the end
 and on pause; the tables show exactly the computed rows up to the clock, read as a ``Table`` is;
 the link figures at the end are the decoder's totals; ``groundstation replay`` computes any file."""
 
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.replay import replay
-from groundstation.session.reveal import Playback, RevealedTable, RevealSession, check_speed
+from groundstation.session.playback import Playback, RevealedTable, RevealSession, check_speed
 from groundstation.session.table import Table
 
 SAMPLES = Path(__file__).resolve().parents[2] / "recordings" / "samples"

@@ -9,7 +9,7 @@ import pytest
 from groundstation import quaternion
 from groundstation.recording import RecordingWriter
 from groundstation.estimation import ESTIMATORS, label, live_estimators
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.factory import DEMO_SPEC, Sessions
 from groundstation.sim.stream import SimStream
 from groundstation.sources import parse_spec

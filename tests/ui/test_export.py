@@ -2,7 +2,7 @@
 
 import pandas as pd
 
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.ui.export_dialog import ExportDialog
 
 from tests.ui.helpers import open_file

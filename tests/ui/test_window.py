@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.session.factory import Sessions
