@@ -9,6 +9,7 @@ from __future__ import annotations
 import struct
 import tomllib
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -25,6 +26,7 @@ C_TYPES: dict[str, tuple[str, int, float, float]] = {
 }
 
 TIMESTAMP_FIELD = "t_us"
+ABSENT_KEY = "absent"  # spec.toml: the field was appended later, and reads as this where an older sender left it out
 SPEC_PATH = Path(__file__).with_name("spec.toml")
 
 
@@ -40,6 +42,7 @@ class Field:
     description: str
     scale: float = 1.0
     enum: str | None = None
+    absent: int | float | None = None  # raw value read where an older sender's payload ends before the field; None: always sent
 
     @property
     def size(self) -> int:
@@ -74,12 +77,39 @@ class FrameType:
     def has_timestamp(self) -> bool:
         return bool(self.fields) and self.fields[0].name == TIMESTAMP_FIELD
 
+    @cached_property
+    def readers(self) -> dict[int, Callable[[bytes, int], tuple]]:
+        """Payload length -> ``read(data, offset)``: the raw values in field order. A frame type grows
+        only at its end, so besides this version's payload every older one is read: a payload that ends
+        at a field boundary after the last field every version sends, the fields it lacks read as their
+        ``absent`` value. Both decoders read payloads through this table (one rule)."""
+        readers = {self.payload_size: self.struct.unpack_from}
+        size = self.payload_size
+        for count in range(len(self.fields) - 1, -1, -1):
+            if self.fields[count].absent is None:
+                break
+            size -= self.fields[count].size
+            readers[size] = _older_reader(self.fields[:count], tuple(f.absent for f in self.fields[count:]))
+        return readers
+
+
+def _older_reader(sent: tuple[Field, ...], absent: tuple) -> Callable[[bytes, int], tuple]:
+    unpack_from = struct.Struct("<" + "".join(C_TYPES[f.c_type][0] for f in sent)).unpack_from
+    return lambda data, offset: unpack_from(data, offset) + absent
+
 
 @dataclass(frozen=True)
 class Enum:
     name: str
     description: str
     values: dict[str, int]
+
+    def name_of(self, value: int) -> str:
+        """The member name of a raw value (a value the spec lacks: the number, said so)."""
+        for name, member in self.values.items():
+            if member == value:
+                return name
+        return f"{value} (not in the spec)"
 
 
 @dataclass(frozen=True)
@@ -114,7 +144,8 @@ class Spec:
             parts.append(f"enum {enum.name} " + " ".join(f"{k}={v}" for k, v in enum.values.items()))
         for frame_type in self.frames:
             parts.append(f"frame {frame_type.name} {frame_type.id}")
-            parts += [f"  {f.c_type} {f.name} {f.scale!r} {f.enum}" for f in frame_type.fields]
+            parts += [f"  {f.c_type} {f.name} {f.scale!r} {f.enum}" + ("" if f.absent is None else f" absent={f.absent!r}")
+                      for f in frame_type.fields]
         return zlib.crc32("\n".join(parts).encode())
 
 
@@ -130,10 +161,7 @@ def _parse(document: dict) -> Spec:
             id=entry["id"],
             direction=entry["direction"],
             description=entry["description"],
-            fields=tuple(
-                Field(f["name"], f["type"], f["unit"], f["description"], float(f.get("scale", 1.0)), f.get("enum"))
-                for f in entry["fields"]
-            ),
+            fields=tuple(_field(f, enums, entry["name"]) for f in entry["fields"]),
         )
         for entry in document["frames"]
     )
@@ -148,6 +176,17 @@ def _parse(document: dict) -> Spec:
     )
     _check(spec)
     return spec
+
+
+def _field(f: dict, enums: dict[str, Enum], frame_name: str) -> Field:
+    """One field of spec.toml; an enum field's ``absent`` names a member of its enum."""
+    absent = f.get(ABSENT_KEY)
+    if isinstance(absent, str):
+        members = enums[f["enum"]].values if f.get("enum") in enums else {}
+        if absent not in members:
+            raise SpecError(f"{frame_name}.{f['name']}: absent = {absent!r} is not a member of its enum")
+        absent = members[absent]
+    return Field(f["name"], f["type"], f["unit"], f["description"], float(f.get("scale", 1.0)), f.get("enum"), absent)
 
 
 def _check(spec: Spec) -> None:
@@ -172,6 +211,10 @@ def _check(spec: Spec) -> None:
                 raise SpecError(f"{frame_type.name}.{field.name}: unknown C type {field.c_type}")
             if field.enum is not None and field.enum not in spec.enums:
                 raise SpecError(f"{frame_type.name}.{field.name}: unknown enum {field.enum}")
+        appended = [field.absent is not None for field in frame_type.fields]
+        if any(appended) and (appended[0] or appended != sorted(appended)):
+            raise SpecError(f"frame {frame_type.name}: a field with '{ABSENT_KEY}' (appended later) must come after "
+                            "every field that is always sent, and the first field is always sent")
 
 
 def load_spec(text: str | None = None) -> Spec:
