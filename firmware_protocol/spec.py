@@ -136,7 +136,7 @@ class Spec:
     def fingerprint(self) -> int:
         """CRC-32 of everything that decides how bytes decode (like MAVLink's crc_extra).
 
-        Names, ids, types, scales and enum values count; units and descriptions do not, so
+        Names, ids, types, scales, enum values and absent values count; units and descriptions do not, so
         a documentation change does not make old firmware incompatible.
         """
         parts = [f"v{self.protocol_version} sync{self.sync}"]
