@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from groundstation.recording import RecordingWriter
+from groundstation.recording.format import RECORD_HEADER, RECORD_OVERHEAD_BYTES
 
 PREAMBLE_BYTES = 12
 
@@ -36,3 +37,14 @@ def write_small(path: Path, n_chunks: int = 6) -> Small:
     ends.append(len(data))
     starts = [PREAMBLE_BYTES] + ends[:-1]
     return Small(data, chunks, list(zip(starts, ends)))
+
+
+def record_spans(data: bytes) -> list[tuple[int, int, int]]:
+    """(kind, start, end) of every record of an intact recording's bytes, in file order."""
+    spans, pos = [], PREAMBLE_BYTES
+    while pos < len(data):
+        _, kind, length, _ = RECORD_HEADER.unpack_from(data, pos)
+        end = pos + RECORD_OVERHEAD_BYTES + length
+        spans.append((kind, pos, end))
+        pos = end
+    return spans
