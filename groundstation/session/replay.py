@@ -54,7 +54,7 @@ def left_out_settings(recording: Recording) -> list[str]:
 def recorded_filters(recording: Recording) -> tuple[list[str], list[str]]:
     """The estimators the recorded session ran that this version has; and what the header names that
     cannot run (another version's estimator, or not a list of names)."""
-    recorded = recording.metadata.get("filters", DEFAULT_FILTERS)
+    recorded = recording.metadata.get("filters", list(DEFAULT_FILTERS))  # a header without filters: the default
     if not isinstance(recorded, list):
         return list(DEFAULT_FILTERS), [f"filters {recorded!r} (not a list of names)"]
     names = [name for name in recorded if isinstance(name, str) and name in ESTIMATORS]
