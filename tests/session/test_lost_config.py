@@ -7,15 +7,12 @@ import sys
 import numpy as np
 import pytest
 
-from firmware_protocol import SPEC
 from groundstation.recording import open_recording
-from groundstation.recording.format import Kind
 from groundstation.session.data import load_session
 from groundstation.session.replay import replay
 
-from tests.recording.helpers import record_spans
+from tests.recording.helpers import recording_without_config
 
-CONFIG = SPEC.frame("CONFIG")
 INFERRED = "accelerometer full scale ±4 g inferred"  # the simulated board's (at the assumed ±2 g: 0.5 g at rest)
 
 
@@ -25,19 +22,7 @@ def gs(*args):
 
 @pytest.fixture(scope="module")
 def without_config(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("lost-config")
-    assert gs("simulate", "--scenario", "hover", "--duration", "8", "--seed", "4", "--out", folder / "h.gsrec").returncode == 0
-    data = bytearray((folder / "h.gsrec").read_bytes())
-    header = bytes((SPEC.sync, CONFIG.payload_size, CONFIG.id))
-    cut = 0
-    for kind, start, end in record_spans(bytes(data)):
-        if kind == Kind.CHUNK and header in data[start:end]:
-            data[end - 1] ^= 0xFF  # the record's CRC fails: it is lost, and said to be
-            cut += 1
-    assert cut >= 1
-    path = folder / "damaged.gsrec"
-    path.write_bytes(bytes(data))
-    return path
+    return recording_without_config(tmp_path_factory.mktemp("lost-config"))
 
 
 def test_both_paths_warn_and_convert_at_the_inferred_scale(without_config):
