@@ -275,7 +275,9 @@ class SequenceRules:
             gap = (seq - self.next_seq) & 0xFF
             sent = self._untimed_advance + gap + 1  # seq advance since the reference, modulo 256
             lost = gap
-            rate = self._rate(advances)
+            # The rate up to the reference frame: untimed frames since (an ACK and a CONFIG answering a
+            # reconnection's request) carry losses counted modulo 256 so far, which must not inflate it.
+            rate = self._rate(advances - self._untimed_advance)
             if rate is not None:  # whole turns of the counter the gap hides
                 elapsed_us = step_us if host_us is None else min(step_us, host_us)
                 lost += 256 * max(0, round((elapsed_us * rate - sent) / 256))
@@ -341,4 +343,6 @@ class SequenceRules:
         if 0 < rate_hz != self.rate_hz:  # another rate: measure again
             self.rate_hz = rate_hz
             self._frames_per_us = None
-        self._learn_from = (advances + 1, self.t64)
+            self._learn_from = (advances + 1, self.t64)
+        # The same rate again (the answer to the request a reconnection sends) keeps the measurement going:
+        # restarting it here, just before the first sample after the outage, left no rate to count it by.

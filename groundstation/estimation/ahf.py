@@ -103,7 +103,7 @@ _LAM, _E_A, _ERR = STATE_DIAG, STATE_DIAG + 1, STATE_DIAG + 2
 @njit(cache=True, error_model="numpy")
 def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     """One sample of AHF, HF (λ fixed) or HFM (HF with the magnetometer): base.py's compiled kernels."""
-    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
     if status & NO_UPDATE:
         return status
     q1, q2, q3, q4 = state[0], state[1], state[2], state[3]

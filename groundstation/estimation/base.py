@@ -26,17 +26,36 @@ Robust stepping (every estimator, decided here once):
 
 - The first sample whose accelerometer is usable sets pitch and roll from gravity (yaw 0), so no filter
   starts upside down; until then the output is the identity with ``WAITING`` set.
-- NaN/Inf in the gyro or in ``dt_s``, or ``dt_s <= 0``: the sample is ignored, the previous estimate is
-  returned unchanged (``HELD``).
+- The interval rule, for every estimator (this guard, and the C core's gs_ahf.c mirrors it):
+
+  - NaN/Inf in the gyro or in ``dt_s``, or ``dt_s <= 0`` (a repeated or reordered sample, a clock jump
+    back): the sample is ignored, the previous estimate is returned unchanged (``HELD``).
+  - ``dt_s > max_gap_s`` (seconds of lost frames): pitch and roll are re-initialised from the accelerometer,
+    yaw kept (``REINITIALISED``); if the accelerometer is unusable too, the estimate is held.
+  - Otherwise one step integrates at most ``STEP_RATIO_MAX`` (1.5) running intervals: a longer ``dt_s``
+    (a radio dropout, a logger stall) is integrated as that (``LIMITED``). The running interval is the
+    first integrated ``dt_s``, then a low-pass (weight ``INTERVAL_WEIGHT``) of the integrated ones: it
+    follows a rate that rises (4 Hz, then 50 Hz) within a few samples, and one that falls by 1/8 a sample
+    (from 50 Hz to 4 Hz in about 20 samples, which meanwhile integrate less than their whole interval).
+
+  Why a limit and not one step over the whole interval: the corrections are Euler steps whose size grows
+  with Δt — seed 000 eq. 19, ``q(k) = q(k-1) + q̇ Δt`` with eq. 18's normalised gradient, turns the
+  estimate by λ Δt whatever the error, so one 0.161 s sample at λ = 2 rad/s turned a still AHF 32°
+  (121° for 1 s), and HF (λ = β) 1.9°; a Kalman or complementary gain ``Δt/(τ + Δt)`` saturates likewise.
+  Why not sub-steps over the interval: they would repeat one sample's gyro and accelerometer over time
+  nobody measured, so the accelerometer would pull as if seen for the whole gap; and the rate during the
+  gap is unknown, so the lost part of it is not integrated either (VQF, the reference, integrates every
+  sample over its fixed period alike). The step keeps eq. 19's form, with Δt at most 1.5 running
+  intervals; the paper's eq. 20 (AHF's λ) is unchanged. Why 1.5: intervals jittering by up to half
+  the period pass unchanged, while AHF at rest (λ Δt ≈ 2° a sample at 100 Hz) gains 0.4° of tilt error
+  from a limited step (1.4° with a limit of 2). On still data no interval moves any
+  estimator's tilt by more than 1° (tests/estimation/test_intervals.py, every registered estimator).
 - Accelerometer NaN/Inf, its norm below ``acc_min_g`` (free fall), or its norm's deviation from 1 g,
   low-passed over ``acc_window_s``, above ``acc_deviation_max_g`` (sustained shaking or acceleration):
   the gyro is integrated and the accelerometer correction skipped (``ACC_SKIPPED``). Why a low-passed
   deviation and not the instantaneous norm: under shaking the norm swings above and below 1 g, and
   rejecting only the large-norm half of each swing leaves a biased mean direction (BROAD trial 16, hf:
   12.4° with a 3 g limit, 3.0° without); the low-passed deviation ``|‖a‖ - 1|`` rejects both halves alike.
-- ``dt_s > max_gap_s`` (seconds of lost frames): integrating one stale rate over the gap would be
-  wrong, so pitch and roll are re-initialised from the accelerometer, keeping yaw (``REINITIALISED``);
-  if the accelerometer is unusable too, the estimate is held.
 - A gyro at its full-scale limit is a finite number and is integrated like any other (``ahf`` can
   also raise λ then; see its ``gyro_overrange_rad_s``).
 
@@ -48,7 +67,7 @@ status`` on scalars and two small float arrays, that starts with this module's `
 it; ``step`` calls it once per sample, ``run`` calls it in a compiled loop (the estimator's
 ``run_kernel``), so the two agree sample for sample by construction (2-6 µs a step, millions of samples a second
 in ``run``; bench/bench_kernels.out.md). ``state`` holds q, the waiting flag, the gate's deviation, the
-diagnostics after ``status`` in their order, then the estimator's own state; ``params`` the guard's
+running interval, the diagnostics after ``status`` in their order, then the estimator's own state; ``params`` the guard's
 settings, then the estimator's (``STATE_*``, ``P_*`` below). The helpers a kernel calls are
 ``register_jitable``: compiled inside a kernel, plain Python when called from Python, so the same source
 also runs interpreted on numpy.float32 numbers (``dtype=np.float32``: ahf's onboard firmware model, bit
@@ -91,6 +110,7 @@ HELD = 4  # bad gyro or dt: previous estimate returned unchanged
 ACC_SKIPPED = 8  # accelerometer unusable: gyro-only on this sample
 REINITIALISED = 16  # gap longer than max_gap_s: pitch/roll re-set from the accelerometer
 GYRO_OVERRANGE = 32  # ahf only: gyro at or above gyro_overrange_rad_s, λ forced to λ_max
+LIMITED = 64  # dt above STEP_RATIO_MAX running intervals: integrated as that many (the interval rule)
 NO_UPDATE = WAITING | HELD | REINITIALISED  # the guard has said all there is to say about the sample
 
 
@@ -110,7 +130,13 @@ STATUS_NAMES = {
     ACC_SKIPPED: "acc_skipped",
     REINITIALISED: "reinitialised",
     GYRO_OVERRANGE: "gyro_overrange",
+    LIMITED: "limited",
 }
+
+# The interval rule (module docstring): a step integrates at most STEP_RATIO_MAX running intervals; the
+# running interval follows each (limited) dt with this weight.
+STEP_RATIO_MAX = 1.5
+INTERVAL_WEIGHT = 0.25
 
 
 @dataclasses.dataclass(frozen=True)
@@ -126,10 +152,11 @@ class CommonSettings:
 
 
 @register_jitable
-def screen(gx, gy, gz, ax, ay, az, dt_s, waiting, acc_dev, acc_min2, acc_dev_max, acc_window_s, max_gap_s):
-    """The input guard of the module docstring: ``(status, acc_ok, acc_dev)``, acc_dev the new low-passed
-    deviation. The caller sets the attitude from gravity on ``INITIALISED``, then on ``REINITIALISED``
-    (yaw kept), and updates the filter unless ``status & NO_UPDATE``."""
+def screen(gx, gy, gz, ax, ay, az, dt_s, waiting, acc_dev, dt_run_s, acc_min2, acc_dev_max, acc_window_s, max_gap_s):
+    """The input guard of the module docstring: ``(status, acc_ok, acc_dev, dt_s, dt_run_s)``, acc_dev the
+    new low-passed deviation, dt_s the interval to integrate and dt_run_s the new running interval (0:
+    none yet). The caller sets the attitude from gravity on ``INITIALISED``, then on ``REINITIALISED``
+    (yaw kept), and updates the filter with that dt_s unless ``status & NO_UPDATE``."""
     n2 = ax * ax + ay * ay + az * az
     # NaN fails every comparison, so this one test rejects NaN, Inf and free fall.
     acc_ok = acc_min2 <= n2 and n2 < math.inf
@@ -141,16 +168,23 @@ def screen(gx, gy, gz, ax, ay, az, dt_s, waiting, acc_dev, acc_min2, acc_dev_max
     status = 0
     if waiting:
         if not acc_ok:
-            return WAITING, acc_ok, acc_dev
+            return WAITING, acc_ok, acc_dev, dt_s, dt_run_s
         status = INITIALISED
     total = gx + gy + gz + dt_s
     if not dt_s > 0.0 or total - total != 0.0:  # dt <= 0, or a NaN/Inf anywhere in gyro or dt
-        return status | HELD, acc_ok, acc_dev
+        return status | HELD, acc_ok, acc_dev, dt_s, dt_run_s
     if dt_s > max_gap_s:  # re-initialise from gravity; without it there is nothing to go on: held
-        return status | (REINITIALISED if acc_ok else HELD), acc_ok, acc_dev
+        return status | (REINITIALISED if acc_ok else HELD), acc_ok, acc_dev, dt_s, dt_run_s
     if not acc_ok:
         status |= ACC_SKIPPED
-    return status, acc_ok, acc_dev
+    if dt_run_s == 0.0:  # the first interval integrated sets the running one
+        dt_run_s = dt_s
+    limit_s = STEP_RATIO_MAX * dt_run_s
+    if dt_s > limit_s:
+        dt_s = limit_s
+        status |= LIMITED
+    dt_run_s = dt_run_s + (dt_s - dt_run_s) * INTERVAL_WEIGHT
+    return status, acc_ok, acc_dev, dt_s, dt_run_s
 
 
 @register_jitable
@@ -210,6 +244,7 @@ class Estimator:
         """Forget the past. ``q0`` (w, x, y, z) starts from that attitude instead of waiting for gravity."""
         self._reset_state()
         self._acc_dev = 0.0  # low-passed |‖acc‖ - 1| (g)
+        self._dt_run_s = 0.0  # the running sample interval (the interval rule); 0: none yet
         if q0 is None:
             self._q = (1.0, 0.0, 0.0, 0.0)
             self._waiting = True
@@ -223,8 +258,8 @@ class Estimator:
         self._gps = gps
         gx, gy, gz = gyr_rad_s
         ax, ay, az = acc_g
-        status, acc_ok, self._acc_dev = screen(
-            gx, gy, gz, ax, ay, az, dt_s, self._waiting, self._acc_dev, self._acc_min2, self._acc_dev_max, self._acc_window_s, self._max_gap_s
+        status, acc_ok, self._acc_dev, dt_s, self._dt_run_s = screen(
+            gx, gy, gz, ax, ay, az, dt_s, self._waiting, self._acc_dev, self._dt_run_s, self._acc_min2, self._acc_dev_max, self._acc_window_s, self._max_gap_s
         )
         if status & INITIALISED:
             self._waiting = False
@@ -283,7 +318,8 @@ def batch_inputs(gyr_rad_s, acc_g, dt_s):
 # Slots of a compiled estimator's state array
 STATE_WAITING = 4  # state[0:4] is q (w, x, y, z); this slot 1 while waiting for gravity, else 0
 STATE_ACC_DEV = 5  # the low-passed |‖acc‖ - 1| (g)
-STATE_DIAG = 6  # the diagnostics after status, in their order; then the estimator's own state
+STATE_DT_RUN = 6  # the running sample interval, s (the interval rule); 0 before the first
+STATE_DIAG = 7  # the diagnostics after status, in their order; then the estimator's own state
 # Slots of its parameter array
 P_ACC_MIN2, P_ACC_DEV_MAX, P_ACC_WINDOW_S, P_MAX_GAP_S = 0, 1, 2, 3
 P_MAGNETOMETER = 4  # 1: the estimator uses the magnetometer (marg.py): yaw from the compass on (re-)initialising
@@ -308,18 +344,21 @@ def _set_gravity_attitude(state, p, ax, ay, az, yaw_rad, mx, my, mz):
 
 @register_jitable
 def guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
-    """``screen`` on a compiled estimator's state, the attitude set as it says: ``(status, acc_ok)``."""
-    status, acc_ok, acc_dev = screen(
-        gx, gy, gz, ax, ay, az, dt_s, state[STATE_WAITING] != 0.0, state[STATE_ACC_DEV], p[P_ACC_MIN2], p[P_ACC_DEV_MAX], p[P_ACC_WINDOW_S], p[P_MAX_GAP_S]
+    """``screen`` on a compiled estimator's state, the attitude set as it says: ``(status, acc_ok, dt_s)``,
+    dt_s the interval the kernel integrates (the interval rule)."""
+    status, acc_ok, acc_dev, dt_s, dt_run_s = screen(
+        gx, gy, gz, ax, ay, az, dt_s, state[STATE_WAITING] != 0.0, state[STATE_ACC_DEV], state[STATE_DT_RUN],
+        p[P_ACC_MIN2], p[P_ACC_DEV_MAX], p[P_ACC_WINDOW_S], p[P_MAX_GAP_S]
     )
     state[STATE_ACC_DEV] = acc_dev
+    state[STATE_DT_RUN] = dt_run_s
     if status & INITIALISED:
         state[STATE_WAITING] = 0.0
         _set_gravity_attitude(state, p, ax, ay, az, 0.0, mx, my, mz)
     if status & REINITIALISED:
         yaw = euler_of((float(state[0]), float(state[1]), float(state[2]), float(state[3])))[0]
         _set_gravity_attitude(state, p, ax, ay, az, yaw, mx, my, mz)
-    return status, acc_ok
+    return status, acc_ok, dt_s
 
 
 @register_jitable
@@ -410,7 +449,7 @@ class CompiledEstimator(Estimator):
         if self._cast is not None:  # interpreted: a list of numpy scalars reads 3x faster than an array
             self._params = list(self._params)
         q = (1.0, 0.0, 0.0, 0.0) if q0 is None else quaternion.normalise(q0).tolist()
-        self._state = np.array([*q, float(q0 is None), 0.0, *self._initial_state()], dtype=self._dtype)
+        self._state = np.array([*q, float(q0 is None), 0.0, 0.0, *self._initial_state()], dtype=self._dtype)
 
     @property
     def _q(self):

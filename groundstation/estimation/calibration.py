@@ -65,89 +65,151 @@ class RestBiasCalibrator:
     ``detect_rest`` + ``gyro_bias_rad_s``)::
 
         cal = RestBiasCalibrator()
-        bias = cal.step(gyr_rad_s, acc_g, dt_s)   # None until measured, then the bias (3 floats, rad/s)
+        bias = cal.step(gyr_rad_s, acc_g, dt_s, armed, mag_ut, gps)   # None until measured, then 3 floats, rad/s
 
-    Still: every gyro axis within ``gyro_dev_max_rad_s`` of the running mean (the mean itself is the
-    bias, up to ±20 °/s on an uncalibrated MPU-6050, so magnitude says nothing) and the accelerometer
-    within ``acc_dev_max_g`` of 1 g on every sample. After ``duration_s`` of still samples the mean is the
-    bias and stays fixed; any motion first restarts the count. ``restart()`` measures again (the user's
-    command, once the craft is put down).
+    Still means, over a window of ``duration_s`` of consecutive samples: every gyro axis's standard
+    deviation below ``gyro_std_max_rad_s`` and every accelerometer axis's below ``acc_std_max_g`` (noise
+    only: no motion, no vibration), the mean accelerometer norm within ``acc_dev_max_g`` of 1 g, every
+    magnetometer axis's standard deviation below ``mag_std_max_ut`` (readings that arrived, if any) and
+    every GPS fix's speed below ``gps_speed_max_m_s``. Then the window's mean rate is the bias and stays
+    fixed; a window that is not still starts a new one. The gyro's magnitude says nothing (a board that
+    skipped its boot calibration streams a bias up to ±20 °/s), so a steady turn, whose rate has no
+    variance and whose specific force stays near 1 g at a small bank, is told from a bias by the
+    magnetometer turning with it or by the GPS speed; with neither, a steady turn at a small bank cannot
+    be told from a bias by these sensors. Refused, the window restarted: below ``min_rate_hz`` (a window of
+    2 s at 4 Hz is 8 samples, too few to tell a turn from the noise), a non-finite sample, and while a
+    MAVLink vehicle is ``armed`` (it may be flying however still it looks). ``restart()`` measures again
+    (the user's command, once the craft is put down).
     """
 
-    def __init__(self, duration_s: float = 2.0, gyro_dev_max_rad_s: float = 0.02, acc_dev_max_g: float = 0.05):
-        if not duration_s > 0 or not gyro_dev_max_rad_s > 0 or not acc_dev_max_g > 0:
-            raise ValueError("duration_s, gyro_dev_max_rad_s and acc_dev_max_g must be positive")
+    def __init__(self, duration_s: float = 2.0, gyro_std_max_rad_s: float = math.radians(0.5), acc_std_max_g: float = 0.01,
+                 acc_dev_max_g: float = 0.05, mag_std_max_ut: float = 1.5, gps_speed_max_m_s: float = 1.0, min_rate_hz: float = 20.0):
+        bounds = (duration_s, gyro_std_max_rad_s, acc_std_max_g, acc_dev_max_g, mag_std_max_ut, gps_speed_max_m_s, min_rate_hz)
+        if not all(v > 0 for v in bounds):
+            raise ValueError("duration_s, the deviation, field and speed bounds and min_rate_hz must be positive")
         self.duration_s = duration_s
-        self.gyro_dev_max_rad_s = gyro_dev_max_rad_s
+        self.gyro_std_max_rad_s = gyro_std_max_rad_s
+        self.acc_std_max_g = acc_std_max_g
         self.acc_dev_max_g = acc_dev_max_g
+        self.mag_std_max_ut = mag_std_max_ut
+        self.gps_speed_max_m_s = gps_speed_max_m_s
+        self.max_dt_s = 1.0 / min_rate_hz
         self.restart()
 
     def restart(self) -> None:
         self.bias_rad_s: tuple[float, float, float] | None = None
-        self._sum = [0.0, 0.0, 0.0]
-        self._n = 0
+        self._new_window()
+
+    def _new_window(self) -> None:
+        self._imu = _Moments(6)  # gyro x y z, acc x y z
+        self._mag = _Moments(3)
         self._still_s = 0.0
 
-    def measure(self, gyr_rad_s: np.ndarray, acc_g: np.ndarray, dt_s: np.ndarray) -> int | None:
-        """``step`` over (N, 3), (N, 3), (N,) float64 arrays from a fresh start, stopping where the bias is
-        measured: returns that sample's index (``bias_rad_s`` is then set, bit for bit as ``step`` sets
-        it), or None. The sums are running sums (``np.cumsum`` adds in order, as ``step`` does) from the
-        last restart of the count; where a sample restarts it, the next one starts over.
-        """
-        if self._n or self.bias_rad_s is not None:
+    def measure(self, gyr_rad_s, acc_g, dt_s, armed=None, mag_ut=None, gps=None) -> int | None:
+        """``step`` over (N, 3), (N, 3), (N,) float64 arrays, with the optional (N,) ``armed`` and the (N, 3)
+        ``mag_ut`` and (N, 4) ``gps`` of ``Estimator.run`` (NaN rows: none), from a fresh start, stopping
+        where the bias is measured: returns that sample's index (``bias_rad_s`` set, bit for bit as ``step``
+        sets it), or None. Window by window: the sums are running sums (``np.cumsum`` adds in order, as
+        ``step`` does) from the window's first sample."""
+        if self._imu.n or self.bias_rad_s is not None:
             raise ValueError("measure() starts from a fresh calibrator")
-        n = len(dt_s)
-        ax, ay, az = acc_g[:, 0], acc_g[:, 1], acc_g[:, 2]
-        with np.errstate(invalid="ignore", over="ignore"):
-            norm = np.sqrt(ax * ax + ay * ay + az * az)  # correctly rounded, as math.sqrt in step
-            acc_still = (np.abs(norm - 1.0) <= self.acc_dev_max_g) & (dt_s > 0)
-        candidates = np.flatnonzero(acc_still)
-        start, window = 0, 64
-        while True:
-            i = np.searchsorted(candidates, start)
-            if i == len(candidates):
-                return None
-            start = int(candidates[i])
-            end = min(n, start + window)
-            block = acc_still[start:end]
-            end = start + (int(np.argmin(block)) if not block.all() else len(block))  # the acc-still run
-            sums = np.cumsum(gyr_rad_s[start:end], axis=0)
-            counts = np.arange(1, end - start)[:, None]
-            with np.errstate(invalid="ignore"):
-                deviation = np.abs(gyr_rad_s[start + 1 : end] - sums[:-1] / counts)
-                still = np.concatenate(([True], (deviation <= self.gyro_dev_max_rad_s).all(axis=1)))
-            stop = int(np.argmin(still)) if not still.all() else end - start  # the first sample that moved
-            still_s = np.cumsum(dt_s[start : start + stop])
-            done = np.flatnonzero(still_s >= self.duration_s)
-            if len(done):
-                k = int(done[0])
-                self._n, self._still_s = k + 1, float(still_s[k])
-                self._sum = sums[k].tolist()
-                self.bias_rad_s = tuple((sums[k] / (k + 1)).tolist())
-                return start + k
-            if stop == end - start and end < n and acc_still[end - 1] and end - start == window:
-                window *= 2  # still going at the window's end: look further at once
+        imu = np.column_stack([gyr_rad_s, acc_g]).astype(float)
+        dt = np.asarray(dt_s, dtype=float)
+        n = len(dt)
+        with np.errstate(invalid="ignore"):
+            refused = ~(np.isfinite(imu).all(axis=1) & (dt > 0.0) & (dt <= self.max_dt_s))
+        if armed is not None:
+            refused |= np.asarray(armed, dtype=bool)
+        if gps is not None:
+            fixes = np.asarray(gps, dtype=float).reshape(-1, 4)
+            for k in np.flatnonzero(~np.isnan(fixes).all(axis=1)).tolist():
+                refused[k] |= not math.hypot(*fixes[k, :3].tolist()) <= self.gps_speed_max_m_s
+        mags = None if mag_ut is None else np.asarray(mag_ut, dtype=float).reshape(-1, 3)
+        refusals = np.flatnonzero(refused)
+        start, span = 0, 256
+        while start < n:
+            if refused[start]:
+                start += 1
                 continue
-            start, window = start + stop + (stop < end - start), 64
+            j = np.searchsorted(refusals, start)
+            stop = int(refusals[j]) if j < len(refusals) else n  # the window cannot reach past a refusal
+            still_s = np.cumsum(dt[start : min(stop, start + span)])
+            done = np.flatnonzero(still_s >= self.duration_s)
+            if not len(done):
+                if start + span < stop:
+                    span *= 2  # the window is longer than the samples looked at: look further
+                else:
+                    start = stop
+                continue
+            end = start + int(done[0]) + 1
+            self._imu = _Moments.of(imu[start:end])
+            if mags is not None:
+                block = mags[start:end]
+                self._mag = _Moments.of(block[np.isfinite(block).all(axis=1)])
+            self._still_s = float(still_s[done[0]])
+            if self._judge():
+                return end - 1
+            start = end
+        self._new_window()
+        return None
 
-    def step(self, gyr_rad_s, acc_g, dt_s):
+    def step(self, gyr_rad_s, acc_g, dt_s, armed: bool = False, mag_ut=None, gps=None):
+        """One sample; ``mag_ut`` the magnetometer reading (µT) and ``gps`` the fix ((vel_n, vel_e, vel_d m/s,
+        ...)) that arrived since the previous sample, None when none did."""
         if self.bias_rad_s is not None:
             return self.bias_rad_s
-        gx, gy, gz = gyr_rad_s
-        ax, ay, az = acc_g
-        n2 = ax * ax + ay * ay + az * az
-        # NaN fails every comparison: a bad sample is not still.
-        still = abs(math.sqrt(n2) - 1.0) <= self.acc_dev_max_g and dt_s > 0
-        if still and self._n:
-            m = self.gyro_dev_max_rad_s
-            sx, sy, sz = (s / self._n for s in self._sum)
-            still = abs(gx - sx) <= m and abs(gy - sy) <= m and abs(gz - sz) <= m
-        if not still:
-            self._sum, self._n, self._still_s = [0.0, 0.0, 0.0], 0, 0.0
+        values = (*gyr_rad_s, *acc_g)
+        # NaN fails every comparison: a bad sample or interval refuses like a slow rate or an armed vehicle.
+        moving = gps is not None and not math.hypot(gps[0], gps[1], gps[2]) <= self.gps_speed_max_m_s
+        if armed or moving or not (0.0 < dt_s <= self.max_dt_s) or not all(abs(v) < math.inf for v in values):
+            self._new_window()
             return None
-        self._sum = [self._sum[0] + gx, self._sum[1] + gy, self._sum[2] + gz]
-        self._n += 1
+        self._imu.add(values)
+        if mag_ut is not None and all(abs(v) < math.inf for v in mag_ut):
+            self._mag.add(mag_ut)
         self._still_s += dt_s
         if self._still_s >= self.duration_s:
-            self.bias_rad_s = tuple(s / self._n for s in self._sum)
+            self._judge()
         return self.bias_rad_s
+
+    def _judge(self) -> bool:
+        """At the end of a window: the bias if it was still (True), else a new window."""
+        mean, var = self._imu.mean_var()
+        still = all(v <= self.gyro_std_max_rad_s**2 for v in var[:3]) and all(v <= self.acc_std_max_g**2 for v in var[3:])
+        still = still and abs(math.hypot(*mean[3:]) - 1.0) <= self.acc_dev_max_g
+        if self._mag.n >= 2:
+            still = still and all(v <= self.mag_std_max_ut**2 for v in self._mag.mean_var()[1])
+        if still:
+            self.bias_rad_s = (mean[0], mean[1], mean[2])
+        else:
+            self._new_window()
+        return still
+
+
+class _Moments:
+    """Running sums of values and their squares: means and (population) variances per channel."""
+
+    def __init__(self, width: int):
+        self.n = 0
+        self._sums = [0.0] * width
+        self._squares = [0.0] * width
+
+    def add(self, values) -> None:
+        self.n += 1
+        for i, v in enumerate(values):
+            self._sums[i] += v
+            self._squares[i] += v * v
+
+    @classmethod
+    def of(cls, rows: np.ndarray) -> "_Moments":
+        """The moments of (n, width) rows, summed in order as ``add`` sums them."""
+        moments = cls(rows.shape[1])
+        moments.n = len(rows)
+        if len(rows):
+            moments._sums = np.cumsum(rows, axis=0)[-1].tolist()
+            moments._squares = np.cumsum(rows * rows, axis=0)[-1].tolist()
+        return moments
+
+    def mean_var(self):
+        mean = [s / self.n for s in self._sums]
+        return mean, [max(0.0, q / self.n - m * m) for q, m in zip(self._squares, mean)]

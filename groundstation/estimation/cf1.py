@@ -51,7 +51,7 @@ _ALPHA, _PITCH_ACC, _ROLL_ACC = STATE_DIAG, STATE_DIAG + 1, STATE_DIAG + 2
 @njit(cache=True)
 def cf1_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     """One CF1 sample: base.py's compiled kernels."""
-    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
     if status & NO_UPDATE:
         return status
     # Gyro prediction on the quaternion (no gimbal lock, whatever the mounting), blend on the angles.

@@ -64,7 +64,7 @@ _BX, _BY, _BZ, _ERR = range(STATE_DIAG, STATE_DIAG + 4)
 @njit(cache=True)
 def ecf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     """One sample of ECF or ECFM (with the magnetometer): base.py's compiled kernels."""
-    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
     if status & NO_UPDATE:
         return status
     q1, q2, q3, q4 = state[0], state[1], state[2], state[3]

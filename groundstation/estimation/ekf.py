@@ -92,7 +92,7 @@ def _plus_outer(m, u, v, c):
 @njit(cache=True)
 def ekf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     """One EKF sample: base.py's compiled kernels."""
-    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
     if status & NO_UPDATE:
         return status
     w0, w1, w2, w3 = state[0], state[1], state[2], state[3]

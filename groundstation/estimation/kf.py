@@ -80,7 +80,7 @@ def _axis(state, p, axis, angle, angle_acc, acc_ok, dt):
 @njit(cache=True)
 def kf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     """One KF sample: base.py's compiled kernels."""
-    status, acc_ok = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
     if status & NO_UPDATE:
         return status
     # The gyro's angle change comes from the quaternion (no gimbal lock, whatever the mounting);

@@ -52,9 +52,9 @@ from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 from groundstation.units import STANDARD_GRAVITY_M_S2 as G
 
 # diag.status bits of these filters (above base's)
-GPS_COMPENSATED = 64  # the tilt measurement had the manoeuvre acceleration removed
-HEADING_USED = 128  # a GPS heading was a measurement on this sample (or set yaw, the first time)
-COVARIANCE_RESET = 256  # the covariance was re-initialised: it lost positive definiteness, or the filter was lost
+GPS_COMPENSATED = 128  # the tilt measurement had the manoeuvre acceleration removed
+HEADING_USED = 256  # a GPS heading was a measurement on this sample (or set yaw, the first time)
+COVARIANCE_RESET = 512  # the covariance was re-initialised: it lost positive definiteness, or the filter was lost
 
 _N = 4
 _COS_PITCH_MIN = 0.05  # roll noise grows as 1/cos θ; capped near ±90° pitch, where roll is undefined
@@ -139,6 +139,7 @@ class _GpsUkf(Estimator):
 
     def _reset_state(self):
         self._cov = self._initial_cov((1.0, 0.0, 0.0, 0.0))  # P (ukf) or its lower Cholesky factor S (sssrukf)
+        self._starting = True  # the next _set_attitude is a start, not a re-initialisation after a gap
         self._yaw_known = False
         self._since_fix_s = math.inf  # time since the last GPS velocity
         self._fix_interval_s = math.inf  # between the last two
@@ -151,8 +152,13 @@ class _GpsUkf(Estimator):
         self._lost_s = 0.0
 
     def _set_attitude(self, q):
+        # A start takes the initial covariance about q. After a gap (base.REINITIALISED) the covariance is
+        # kept: the tilt from gravity is what a tilt measurement would have said, and a restarted covariance
+        # let the next noisy GPS-compensated measurements swing a still estimate by 1.7° (test_intervals.py).
         self._q = q
-        self._cov = self._initial_cov(q)
+        if self._starting:
+            self._cov = self._initial_cov(q)
+            self._starting = False
 
     def _initial_cov(self, q):
         qv = np.array(q)

@@ -329,7 +329,7 @@ class _Builder:
         s, bank = self.s, self.s.bank
         n = len(keys)
         calibrator = bank.gyro_calibration
-        measured_at = calibrator.measure(gyr, acc, dt)
+        measured_at = calibrator.measure(gyr, acc, dt, None, mag, gps)
         unbiased = gyr
         if measured_at is not None:
             bias = calibrator.bias_rad_s
@@ -473,8 +473,7 @@ class _Readings:
             elif kind == GPS:
                 aiding.gps(self.gps_values[i])
             elif kind == RESTART:
-                aiding.restart()
-                q = None
+                aiding.restart()  # the attitude stays: EstimatorBank.restart keeps each estimator's last one
         if len(self.mag):
             shown = [self.mag.scaled(f) for f in MAG_FIELDS]
             b.add("mag_raw", b.key(self.mag.order), np.column_stack([b.time_s[self.mag.order], *shown, heading]))

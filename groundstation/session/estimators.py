@@ -30,6 +30,7 @@ class EstimatorBank:
         self.last_q: dict[str, tuple | None] = {name: None for name in self.filters}
         self.at_start = self.settings()
         self.gyro_calibration = RestBiasCalibrator()  # restart() measures again (the user's command)
+        self.armed = False  # a MAVLink vehicle's HEARTBEAT says armed: no bias is measured meanwhile
         self._bias_noted: tuple | None = None
 
     def diagnostics(self) -> dict[str, tuple[str, ...]]:
@@ -42,7 +43,7 @@ class EstimatorBank:
         Once the craft has been still long enough to measure the gyro bias (``RestBiasCalibrator``), the
         estimators that do not estimate their own get the gyro with that bias removed.
         """
-        bias = self.gyro_calibration.step(gyr, acc, dt_s)
+        bias = self.gyro_calibration.step(gyr, acc, dt_s, self.armed, mag, gps)
         unbiased = gyr if bias is None else (gyr[0] - bias[0], gyr[1] - bias[1], gyr[2] - bias[2])
         row: list[float] = []
         for name, estimator in self.estimators.items():

@@ -177,6 +177,7 @@ class MavlinkFrontEnd:
         if r.system != self.vehicle:
             return
         self._record_row(t_host_ns, r)
+        self.pipeline.bank.armed = r.armed  # the rest calibrator refuses while armed
         if (r.mode, r.armed) != self._status:
             self._status = (r.mode, r.armed)
             self.pipeline.events.append({"t_host_ns": t_host_ns, "kind": "vehicle_status", "mode": r.mode, "armed": r.armed})

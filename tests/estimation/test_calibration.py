@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from groundstation.estimation.calibration import AccelCalibration, RestBiasCalibrator, detect_rest, gyro_bias_rad_s
+from groundstation.readings import optional_rows
 
 
 def synthetic(seed=21):
@@ -78,14 +79,18 @@ def test_rest_bias_calibrator_restarts_on_motion_and_on_command():
         RestBiasCalibrator(duration_s=0.0)
 
 
+KINDS = ["still", "moving", "tilted", "nan", "bad_dt", "drifting", "slow", "armed", "field_turning", "gps_moving"]
+
+
 @settings(max_examples=60, derandomize=True)
-@given(st.lists(st.tuples(st.integers(1, 150), st.sampled_from(["still", "moving", "tilted", "nan", "bad_dt", "drifting"])),
-                min_size=1, max_size=12), st.integers(0, 2**32))
+@given(st.lists(st.tuples(st.integers(1, 150), st.sampled_from(KINDS)), min_size=1, max_size=12), st.integers(0, 2**32))
 def test_measure_is_step_sample_for_sample(stretches, seed):
     """The batch path's calibrator: where it measures and the bias, bit for bit as step, over stretches
-    at rest, moving, tilted (the accelerometer off 1 g), with NaN, with bad dt, and slowly drifting."""
+    at rest, moving, tilted (the accelerometer off 1 g), with NaN, with bad dt, slowly drifting, below
+    20 Hz, armed, with a magnetometer turning and with a GPS saying it moves (magnetometer readings on
+    every other sample and fixes on every tenth, NaN rows between)."""
     rng = random.Random(seed)  # the samples' noise: drawn here, not by hypothesis (too many draws)
-    gyr, acc, dt = [], [], []
+    gyr, acc, dt, armed, mag, gps = [], [], [], [], [], []
     bias = [rng.uniform(-0.3, 0.3) for _ in range(3)]
     for length, kind in stretches:
         for k in range(length):
@@ -93,13 +98,18 @@ def test_measure_is_step_sample_for_sample(stretches, seed):
             drift = 0.0001 * k if kind == "drifting" else 0.0
             gyr.append([b + drift + rng.gauss(0.0, noise) for b in bias])
             acc.append([rng.gauss(0.0, 0.01), rng.gauss(0.0, 0.01), -1.0 + (0.2 if kind == "tilted" else rng.gauss(0.0, 0.01))])
-            dt.append(-0.01 if kind == "bad_dt" and k % 7 == 0 else 0.01)
+            dt.append(-0.01 if kind == "bad_dt" and k % 7 == 0 else 0.06 if kind == "slow" else 0.01)
+            armed.append(kind == "armed")
+            turn = 0.05 * k if kind == "field_turning" else 0.0
+            mag.append([20.0 * math.cos(turn), 20.0 * math.sin(turn), 45.0 + rng.gauss(0.0, 0.3)] if len(mag) % 2 else [math.nan] * 3)
+            gps.append([3.0 if kind == "gps_moving" else 0.1, 0.0, 0.0, math.nan] if len(gps) % 10 == 0 else [math.nan] * 4)
             if kind == "nan" and k % 5 == 0:
                 gyr[-1][rng.randrange(3)] = math.nan
-    gyr, acc, dt = np.array(gyr), np.array(acc), np.array(dt)
+    gyr, acc, dt, mag, gps = np.array(gyr), np.array(acc), np.array(dt), np.array(mag), np.array(gps)
     one = RestBiasCalibrator(duration_s=0.5)
-    expected = next((i for i, (g, a, d) in enumerate(zip(gyr.tolist(), acc.tolist(), dt.tolist())) if one.step(g, a, d)), None)
+    rows = zip(gyr.tolist(), acc.tolist(), dt.tolist(), armed, optional_rows(mag, len(dt), 3, "mag"), optional_rows(gps, len(dt), 4, "gps"))
+    expected = next((i for i, row in enumerate(rows) if one.step(*row)), None)
     batch = RestBiasCalibrator(duration_s=0.5)
-    assert batch.measure(gyr, acc, dt) == expected
+    assert batch.measure(gyr, acc, dt, armed, mag, gps) == expected
     assert batch.bias_rad_s == one.bias_rad_s
 

@@ -61,6 +61,21 @@ def test_an_outage_of_any_length_counts_every_frame_lost(outage, host_times):
     assert (decoder.stats.implausible, decoder.stats.restarts) == (0, 0)
 
 
+@pytest.mark.parametrize("outage", [255, 400, 1000])
+def test_a_port_that_vanished_and_came_back_counts_every_frame_lost(outage):
+    """After a reconnection the session asks for CONFIG again: the answer (untimed, the same rate) arrives
+    before the first sample after the outage, and must not make the decoder forget the rate it measured
+    (before: the outage was counted modulo 256, 148 of about 406 frames per 2 s dropout)."""
+    frames = sender(3_000)
+    start = 400
+    config_again = frames[0][1][:3] + bytes([frames[start + outage][1][3] - 1 & 0xFF]) + frames[0][1][4:-2]
+    config_again = (frames[start + outage][0], config_again + crc16(config_again[1:]).to_bytes(2, "big"))
+    kept = [*frames[:start], config_again, *frames[start + outage:]]
+    decoder = StreamDecoder()
+    assert len(feed_per_frame(decoder, kept)) == len(kept)
+    assert decoder.stats.frames_lost == outage - 1  # the CONFIG took one number of the sequence
+
+
 def test_many_outages_and_a_32_bit_wrap_of_the_device_clock():
     frames = sender(30_000, t0_us=2**32 - 30_000_000)  # the device clock wraps 30 s in
     rng = random.Random(7)

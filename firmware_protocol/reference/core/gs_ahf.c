@@ -56,6 +56,7 @@ int gs_ahf_init(gs_ahf *f, const gs_ahf_settings *s, const float *q0)
     f->acc_gated = s->acc_deviation_max_g != HUGE_VAL;
     f->acc_window_s = (float)s->acc_window_s;
     f->acc_dev = 0.0f;
+    f->dt_run = 0.0f;
     f->max_gap_s = (float)s->max_gap_s;
     f->e_a = 0.0f;
     f->lam = f->lam_max;
@@ -108,6 +109,14 @@ unsigned gs_ahf_step(gs_ahf *f, const float gyr_rad_s[3], const float acc_g[3], 
         return status | GS_AHF_REINITIALISED;
     }
     if (!acc_ok) status |= GS_AHF_ACC_SKIPPED;
+    /* The interval rule: at most GS_AHF_STEP_RATIO_MAX running intervals in one step */
+    if (f->dt_run == 0.0f) f->dt_run = dt_s;
+    float limit_s = GS_AHF_STEP_RATIO_MAX * f->dt_run;
+    if (dt_s > limit_s) {
+        dt_s = limit_s;
+        status |= GS_AHF_LIMITED;
+    }
+    f->dt_run = f->dt_run + (dt_s - f->dt_run) * GS_AHF_INTERVAL_WEIGHT;
 
     float q1 = f->q[0], q2 = f->q[1], q3 = f->q[2], q4 = f->q[3];
     /* (eq. 6) q_dot_w = 1/2 q x [0, w] */

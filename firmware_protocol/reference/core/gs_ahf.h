@@ -23,6 +23,11 @@
 #define GS_AHF_ACC_SKIPPED 8u    /* accelerometer unusable (NaN/Inf, free fall, sustained deviation): gyro only */
 #define GS_AHF_REINITIALISED 16u /* dt > max_gap_s: pitch and roll re-set from the accelerometer */
 #define GS_AHF_GYRO_OVERRANGE 32u /* a gyro axis at or above gyro_overrange_rad_s: lambda = lambda_max */
+#define GS_AHF_LIMITED 64u       /* dt above GS_AHF_STEP_RATIO_MAX running intervals: integrated as that many */
+
+/* The interval rule (estimation/base.py, STEP_RATIO_MAX and INTERVAL_WEIGHT) */
+#define GS_AHF_STEP_RATIO_MAX 1.5f
+#define GS_AHF_INTERVAL_WEIGHT 0.25f
 
 typedef struct {
     double lambda_max;            /* rad/s, 2.0 (eq. 20) */
@@ -46,6 +51,7 @@ typedef struct {
     float e_a;     /* low-passed, scaled gravity error (eq. 20) */
     float err;     /* |ex| + |ey| + |ez| of the last sample (eq. 20) */
     float acc_dev; /* low-passed |norm of acc - 1| (g), updated only while the gate is on */
+    float dt_run;  /* the running sample interval, s (the interval rule); 0 before the first */
 } gs_ahf;
 
 /* The paper's settings (the defaults of AhfSettings). */
