@@ -235,8 +235,8 @@ def _c_payload_size_function(spec: Spec) -> list[str]:
 def _absent_note(spec: Spec, field: Field) -> str:
     if field.absent is None:
         return ""
-    value = f"`{spec.enums[field.enum].name_of(field.absent)}`" if field.enum else repr(field.absent)
-    return f"; appended later: reads as {value} from an older sender"
+    name = f" (`{spec.enum_name(field, field.absent)}`)" if field.enum else ""
+    return f"; appended later: reads as {field.absent!r}{name} from an older sender"
 
 
 def protocol_markdown(spec: Spec = SPEC) -> str:
@@ -273,7 +273,7 @@ def protocol_markdown(spec: Spec = SPEC) -> str:
         "",
         "A frame type grows only at its end. A field appended after the type was first sent has an *absent* "
         "value: a payload from an older sender that ends before the field (at a field boundary) is still read, "
-        "and the field reads as that value (for an enum, a member that says it was not sent). The frame table "
+        "and the field reads as that value (for an enum, one that is none of its members: unknown). The frame table "
         "lists every payload length a type may have.",
         "",
         "## Frames",

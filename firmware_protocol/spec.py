@@ -27,6 +27,7 @@ C_TYPES: dict[str, tuple[str, int, float, float]] = {
 
 TIMESTAMP_FIELD = "t_us"
 ABSENT_KEY = "absent"  # spec.toml: the field was appended later, and reads as this where an older sender left it out
+ABSENT_NAME = "unknown"  # what an absent enum field is called
 SPEC_PATH = Path(__file__).with_name("spec.toml")
 
 
@@ -77,6 +78,9 @@ class FrameType:
     def has_timestamp(self) -> bool:
         return bool(self.fields) and self.fields[0].name == TIMESTAMP_FIELD
 
+    def field(self, name: str) -> Field:
+        return self.fields[self.field_names.index(name)]
+
     @cached_property
     def readers(self) -> dict[int, Callable[[bytes, int], tuple]]:
         """Payload length -> ``read(data, offset)``: the raw values in field order. A frame type grows
@@ -104,8 +108,11 @@ class Enum:
     description: str
     values: dict[str, int]
 
-    def name_of(self, value: int) -> str:
-        """The member name of a raw value (a value the spec lacks: the number, said so)."""
+    def name_of(self, value: int, absent: int | None = None) -> str:
+        """The member name of a raw value; ``unknown`` for the field's ``absent`` value (an older sender
+        left the field out); a value the spec lacks: the number, said so."""
+        if absent is not None and value == absent:
+            return ABSENT_NAME
         for name, member in self.values.items():
             if member == value:
                 return name
@@ -126,6 +133,10 @@ class Spec:
     def max_payload_bytes(self) -> int:
         return self.max_frame_bytes - self.header_bytes - self.crc_bytes
 
+    def enum_name(self, field: Field, raw: int) -> str:
+        """An enum field's raw value by name (``unknown`` where an older sender left the field out)."""
+        return self.enums[field.enum].name_of(raw, field.absent)
+
     def frame(self, name: str) -> FrameType:
         for frame_type in self.frames:
             if frame_type.name == name:
@@ -136,16 +147,16 @@ class Spec:
     def fingerprint(self) -> int:
         """CRC-32 of everything that decides how bytes decode (like MAVLink's crc_extra).
 
-        Names, ids, types, scales, enum values and absent values count; units and descriptions do not, so
-        a documentation change does not make old firmware incompatible.
+        Names, ids, types, scales and enum values count; units and descriptions do not, so
+        a documentation change does not make old firmware incompatible. Nor does ``absent``: what an older
+        sender's shorter payload reads as changes nothing a sender built from this spec sends.
         """
         parts = [f"v{self.protocol_version} sync{self.sync}"]
         for enum in self.enums.values():
             parts.append(f"enum {enum.name} " + " ".join(f"{k}={v}" for k, v in enum.values.items()))
         for frame_type in self.frames:
             parts.append(f"frame {frame_type.name} {frame_type.id}")
-            parts += [f"  {f.c_type} {f.name} {f.scale!r} {f.enum}" + ("" if f.absent is None else f" absent={f.absent!r}")
-                      for f in frame_type.fields]
+            parts += [f"  {f.c_type} {f.name} {f.scale!r} {f.enum}" for f in frame_type.fields]
         return zlib.crc32("\n".join(parts).encode())
 
 
@@ -161,7 +172,10 @@ def _parse(document: dict) -> Spec:
             id=entry["id"],
             direction=entry["direction"],
             description=entry["description"],
-            fields=tuple(_field(f, enums, entry["name"]) for f in entry["fields"]),
+            fields=tuple(
+                Field(f["name"], f["type"], f["unit"], f["description"], float(f.get("scale", 1.0)), f.get("enum"), f.get(ABSENT_KEY))
+                for f in entry["fields"]
+            ),
         )
         for entry in document["frames"]
     )
@@ -176,17 +190,6 @@ def _parse(document: dict) -> Spec:
     )
     _check(spec)
     return spec
-
-
-def _field(f: dict, enums: dict[str, Enum], frame_name: str) -> Field:
-    """One field of spec.toml; an enum field's ``absent`` names a member of its enum."""
-    absent = f.get(ABSENT_KEY)
-    if isinstance(absent, str):
-        members = enums[f["enum"]].values if f.get("enum") in enums else {}
-        if absent not in members:
-            raise SpecError(f"{frame_name}.{f['name']}: absent = {absent!r} is not a member of its enum")
-        absent = members[absent]
-    return Field(f["name"], f["type"], f["unit"], f["description"], float(f.get("scale", 1.0)), f.get("enum"), absent)
 
 
 def _check(spec: Spec) -> None:
@@ -211,6 +214,12 @@ def _check(spec: Spec) -> None:
                 raise SpecError(f"{frame_type.name}.{field.name}: unknown C type {field.c_type}")
             if field.enum is not None and field.enum not in spec.enums:
                 raise SpecError(f"{frame_type.name}.{field.name}: unknown enum {field.enum}")
+            if field.absent is not None and field.c_type != "float" and not (
+                    isinstance(field.absent, int) and field.raw_range[0] <= field.absent <= field.raw_range[1]):
+                raise SpecError(f"{frame_type.name}.{field.name}: absent = {field.absent!r} is not a {field.c_type}")
+            if field.absent is not None and field.enum is not None and field.absent in spec.enums[field.enum].values.values():
+                raise SpecError(f"{frame_type.name}.{field.name}: absent = {field.absent} is a member of its enum, "
+                                "so a field left out would read as one")
         appended = [field.absent is not None for field in frame_type.fields]
         if any(appended) and (appended[0] or appended != sorted(appended)):
             raise SpecError(f"frame {frame_type.name}: a field with '{ABSENT_KEY}' (appended later) must come after "

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #define GS_PROTOCOL_VERSION 1u
-#define GS_SCHEMA_FINGERPRINT 0xA99CDF59u
+#define GS_SCHEMA_FINGERPRINT 0xA6FC8BE6u
 #define GS_SYNC 0xA5u
 #define GS_MAX_FRAME_BYTES 32u
 #define GS_HEADER_BYTES 4u
@@ -39,12 +39,11 @@
 #define GS_ACK_RESULT_BUSY 3u
 #define GS_ACK_RESULT_FAILED 4u
 
-/* gyro_calibration: CONFIG.gyro_calibration: where the gyro offsets the aircraft uses now came from. unknown: never sent; a CONFIG from firmware older than the field. */
+/* gyro_calibration: CONFIG.gyro_calibration: where the gyro offsets the aircraft uses now came from. */
 #define GS_GYRO_CALIBRATION_NONE 0u
 #define GS_GYRO_CALIBRATION_BOOT 1u
 #define GS_GYRO_CALIBRATION_STORED 2u
 #define GS_GYRO_CALIBRATION_COMMAND 3u
-#define GS_GYRO_CALIBRATION_UNKNOWN 255u
 
 /* gps_fix: GPS.fix_type. */
 #define GS_GPS_FIX_NONE 0u

@@ -12,7 +12,7 @@ from groundstation.session.data import load_session
 from groundstation.session.replay import replay
 
 OLD_RECORDING = Path(__file__).resolve().parents[1] / "data" / "hover-raw-config-15-bytes.gsrec"
-UNKNOWN = SPEC.enums["gyro_calibration"].values["unknown"]
+UNKNOWN = SPEC.frame("CONFIG").field("gyro_calibration").absent
 
 
 def test_an_old_recording_converts_at_its_configs_full_scales_and_its_gyro_calibration_reads_unknown():
