@@ -213,7 +213,7 @@ class _Builder:
             # The decoder had taken the whole chunk before the pipeline saw the frame: its last CONFIG.
             latest = fingerprints[np.searchsorted(columns.chunk, columns.chunk[k], side="right") - 1]
             if latest != SPEC.fingerprint:
-                s.event(key, {"t_host_ns": t_host_ns, "kind": "warning", "message": schema_message(values["schema_fingerprint"])})
+                s.event(key, {"t_host_ns": t_host_ns, "kind": "warning", "message": schema_message(values)})
             try:
                 sensor = sensor_of(values)
             except (KeyError, ValueError):
