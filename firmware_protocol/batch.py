@@ -164,13 +164,18 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
         (order,) = np.nonzero(kept.type_ids[order_of] == frame_type.id)
         which = order_of[order]
         dtype = payload_dtype(frame_type)
-        raw = np.zeros(len(which), dtype)
         starts = kept.starts[which]
         whole = buf[starts + 1] == frame_type.payload_size
-        if whole.any():  # a whole payload lies within the buffer, so its window exists
+        shorter = np.flatnonzero(~whole)  # an older sender's shorter payloads (rare: a few CONFIG frames)
+        raw = np.zeros(len(which), dtype)
+        if len(shorter) < len(which):  # a whole payload lies within the buffer, so its window exists
             rows = np.lib.stride_tricks.sliding_window_view(buf, frame_type.payload_size)[starts[whole] + HEADER_BYTES]
-            raw[whole] = np.ascontiguousarray(rows).view(dtype).reshape(-1)
-        for k in np.flatnonzero(~whole).tolist():  # an older sender's shorter payload (rare: a few CONFIG frames)
+            wholes = np.ascontiguousarray(rows).view(dtype).reshape(-1)
+            if len(shorter):
+                raw[whole] = wholes
+            else:
+                raw = wholes
+        for k in shorter.tolist():
             raw[k] = tables.read(data, int(starts[k]))
         chunk = chunk_of[placed.emitter[order]]
         device = placed.t64[order] if frame_type.has_timestamp else None
