@@ -14,6 +14,13 @@
    as they are: it runs BROAD's sensor upright), and imufusion (gain 0.5, 10° acceleration rejection,
    5 s rejection timeout), all in the same run.
    All start from the first accelerometer sample (imufusion from its own start-up).
+4. Heading RMSE (deg; one constant offset per trial removed, estimation/evaluation.py) and inclination
+   of the estimators that use the magnetometer, fed it as ``evaluate`` does: hfm, ecfm, mcf, vqf (9D),
+   ahf2m.
+5. AHF2's settings by leave-one-trial-out: for each trial, the setting of ``AHF2_GRID`` (inclination)
+   and of ``AHF2M_GRID`` (heading) with the lowest mean over the other nine trials, scored on that one.
+   The defaults are the setting with the lowest mean over all ten (no held-out data seen).
+Sections 3-5 natively (285.7 Hz) and resampled to 100 Hz (the board's rate; ``evaluation.resampled``).
 """
 
 from __future__ import annotations
@@ -31,7 +38,7 @@ from groundstation import quaternion
 from groundstation.datasets import read_csv
 from groundstation.estimation import ESTIMATORS, create
 from groundstation.estimation.base import Estimator
-from groundstation.estimation.evaluation import inclination_error_rad, sample_periods_s, score
+from groundstation.estimation.evaluation import evaluate_trial, inclination_error_rad, resampled, sample_periods_s, score
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 from broad import per_trial
@@ -115,10 +122,16 @@ OURS = {name: (name, None) for name in IMU_ONLY} | {
     "acc-only": ("cf1", {"time_constant_s": 0.0}),
     "gyro-only": ("hf", {"beta": 0.0}),
 }
+MAG = ["hfm", "ecfm", "mcf", "vqf", "ahf2m"]
+# A few settings around the defaults (the machine is shared): the accelerometer's low-pass and the
+# in-motion bias gain for the inclination, the magnetometer's time constant for the heading.
+AHF2_GRID = {f"τ_acc {tau:g} s, k_i {ki:g} /s": {"tau_acc_s": tau, "motion_bias_ki": ki} for tau in (4.0, 5.0, 6.0) for ki in (0.03, 0.1, 0.3)}
+AHF2M_GRID = {f"τ_mag {tau:g} s": {"tau_mag_s": tau} for tau in (5.0, 9.0, 20.0)}
+UNDISTURBED = 8  # the first eight trials; 25 (tapping) and 27 (vibration) are disturbed in motion, not magnetically
+RATES = {"native (285.7 Hz)": None, "100 Hz (resampled)": 100.0}
 
 
-def broad_trial(path):
-    trial = read_csv(path)
+def inclination_row(trial):
     acc_g = trial.acc_m_s2 / STANDARD_GRAVITY_M_S2
     dt = sample_periods_s(trial.time_s)
 
@@ -158,20 +171,85 @@ def broad_trial(path):
         out.append(fusion.get_quaternion())
     # imufusion's earth z is up (NWU); a half turn about earth x makes it z-down like ours.
     row["imufusion"] = rmse(quaternion.multiply([0.0, 1.0, 0.0, 0.0], np.array(out)))
-    return path.name.split(".")[0], row
+    for label, overrides in AHF2_GRID.items():
+        row[label] = rmse(create("ahf2", overrides).run(trial.gyr_rad_s, acc_g, dt)[0])
+    return row
+
+
+def magnetometer_row(trial):
+    figures = evaluate_trial(trial, MAG)
+    for label, overrides in AHF2M_GRID.items():
+        figures[label] = evaluate_trial(trial, ["ahf2m"], {"ahf2m": overrides})["ahf2m"]
+    return figures
+
+
+def broad_trial(path):
+    native = read_csv(path)
+    rows = {}
+    for rate_label, rate_hz in RATES.items():
+        trial = native if rate_hz is None else resampled(native, rate_hz)
+        rows[rate_label] = {"incl": inclination_row(trial), "mag": magnetometer_row(trial)}
+    return path.name.split(".")[0], rows
+
+
+def leave_one_out(values: dict[str, dict[str, float]], grid) -> tuple[dict[str, tuple[str, float]], str]:
+    """For each trial the grid setting best on the others and its figure there; and the setting best on all."""
+    trials = list(values)
+    held = {}
+    for trial in trials:
+        others = [t for t in trials if t != trial]
+        best = min(grid, key=lambda label: np.mean([values[t][label] for t in others]))
+        held[trial] = (best, values[trial][best])
+    return held, min(grid, key=lambda label: np.mean([values[t][label] for t in trials]))
+
+
+def table(title, rows, columns, fmt="{:.2f}"):
+    print(f"\n### {title}\n")
+    print("| trial | " + " | ".join(columns) + " |")
+    print("|---|" + "---:|" * len(columns))
+    for trial, row in rows.items():
+        print(f"| {trial} | " + " | ".join(fmt.format(row[c]) for c in columns) + " |")
+    print("| **mean** | " + " | ".join(f"**{np.mean([r[c] for r in rows.values()]):.3f}**" for c in columns) + " |")
+    print("| worst | " + " | ".join(f"{np.max([r[c] for r in rows.values()]):.2f}" for c in columns) + " |")
+
+
+def loo_table(title, values, grid, reference, undisturbed_only=False):
+    """Leave-one-out beside the reference (VQF, same run) and the defaults' dev figures."""
+    trials = list(values)[:UNDISTURBED] if undisturbed_only else list(values)
+    values = {t: values[t] for t in trials}
+    held, chosen = leave_one_out(values, grid)
+    print(f"\n### {title}\n")
+    print("| trial | setting chosen on the other trials | held out | VQF | held out − VQF |")
+    print("|---|---|---:|---:|---:|")
+    for trial, (label, figure) in held.items():
+        print(f"| {trial} | {label} | {figure:.3f} | {values[trial][reference]:.3f} | {figure - values[trial][reference]:+.3f} |")
+    loo = np.mean([f for _, f in held.values()])
+    vqf = np.mean([values[t][reference] for t in trials])
+    worst = max(f - values[t][reference] for t, (_, f) in held.items())
+    print(f"| **leave-one-out mean** | | **{loo:.3f}** | **{vqf:.3f}** | {loo - vqf:+.3f} (worst trial {worst:+.3f}) |")
+    dev = np.mean([values[t][chosen] for t in trials])
+    print(f"\nChosen on all {len(trials)} trials (the defaults' candidate): {chosen}, dev mean {dev:.3f} (VQF {vqf:.3f}).")
 
 
 def bench_broad():
     rows = per_trial(broad_trial)
     if rows is None:
         return
-    print("\n## BROAD inclination RMSE (deg), moving samples, every estimator at its defaults\n")
-    print("| trial | " + " | ".join(COLUMNS) + " |")
-    print("|---|" + "---:|" * len(COLUMNS))
-    for trial, row in rows.items():
-        print(f"| {trial} | " + " | ".join(f"{row[c]:.2f}" for c in COLUMNS) + " |")
-    print("| **mean** | " + " | ".join(f"**{np.mean([r[c] for r in rows.values()]):.2f}**" for c in COLUMNS) + " |")
-    print("| worst | " + " | ".join(f"{np.max([r[c] for r in rows.values()]):.2f}" for c in COLUMNS) + " |")
+    for rate_label in RATES:
+        print(f"\n## BROAD, {rate_label}")
+        incl = {t: r[rate_label]["incl"] for t, r in rows.items()}
+        mag = {t: r[rate_label]["mag"] for t, r in rows.items()}
+        table("Inclination RMSE (deg), moving samples, every IMU-only estimator at its defaults", incl, COLUMNS)
+        table("With the magnetometer: heading RMSE (deg), one offset per trial removed", mag_rows(mag, "heading_rmse_deg"), MAG)
+        table("With the magnetometer: inclination RMSE (deg)", mag_rows(mag, "incl_rmse_deg"), MAG)
+        loo_table("AHF2 inclination, leave-one-trial-out over AHF2_GRID", incl, AHF2_GRID, "vqf")
+        heading = {t: {label: m[label]["heading_rmse_deg"] for label in [*AHF2M_GRID, "vqf"]} for t, m in mag.items()}
+        loo_table("AHF2M heading, leave-one-trial-out over AHF2M_GRID, all ten trials", heading, AHF2M_GRID, "vqf")
+        loo_table("AHF2M heading, leave-one-trial-out over AHF2M_GRID, the eight undisturbed trials", heading, AHF2M_GRID, "vqf", True)
+
+
+def mag_rows(mag, key):
+    return {t: {name: m[name][key] for name in MAG} for t, m in mag.items()}
 
 
 def main() -> int:

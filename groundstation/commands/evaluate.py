@@ -4,7 +4,9 @@ agreement with the aircraft's own estimate when there is no truth.
 The file is a recording with truth (a simulated flight, an imported dataset trial), a dataset CSV
 (plain or .gz; ../shared/datasets/README.md), or an autopilot's flight log (.tlog, .bin, .ulg); an
 imported trial scores exactly as its CSV. With truth the output is a table, or with ``--json`` an
-object mapping each estimator name to ``{"incl_rmse_deg": ..., "incl_max_deg": ...}``. Without truth but
+object mapping each estimator name to ``{"incl_rmse_deg": ..., "incl_max_deg": ...}``, with
+``"heading_rmse_deg"`` and ``"heading_max_deg"`` too for the estimators that use the magnetometer when
+the file has one (heading error after removing one constant offset: estimation/evaluation.py). Without truth but
 with an onboard estimate (a flight log), it is each estimator's pitch/roll difference from that
 estimate, labelled as agreement (the onboard estimate is not truth); ``--json`` gives
 ``{"agreement_with_onboard": {name: {"pitch_rms_deg", "pitch_max_deg", "roll_rms_deg", "roll_max_deg", "rows"}}}``.
@@ -53,9 +55,10 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(results, indent=2))
     else:
-        print(f"{'estimator':<10} {'incl RMSE (deg)':>16} {'incl max (deg)':>15}")
-        for name, figures in results.items():
-            print(f"{name:<10} {figures['incl_rmse_deg']:>16.3f} {figures['incl_max_deg']:>15.3f}")
+        print(f"{'estimator':<10} {'incl RMSE (deg)':>16} {'incl max (deg)':>15} {'heading RMSE (deg)':>19} {'heading max (deg)':>18}")
+        for name, f in results.items():
+            heading = f"{f['heading_rmse_deg']:>19.3f} {f['heading_max_deg']:>18.3f}" if "heading_rmse_deg" in f else f"{'-':>19} {'-':>18}"
+            print(f"{name:<10} {f['incl_rmse_deg']:>16.3f} {f['incl_max_deg']:>15.3f} {heading}")
     return 0
 
 

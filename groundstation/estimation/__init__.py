@@ -14,7 +14,7 @@ import dataclasses
 import math
 
 from groundstation.estimation.ahf import Ahf, Hf
-from groundstation.estimation.ahf2 import Ahf2
+from groundstation.estimation.ahf2 import Ahf2, Ahf2m
 from groundstation.estimation.base import Estimator
 from groundstation.estimation.cf1 import Cf1
 from groundstation.estimation.ecf import Ecf
@@ -25,7 +25,7 @@ from groundstation.estimation.mcf import Mcf
 from groundstation.estimation.ukf import Sssrukf, Ukf
 from groundstation.estimation.vqf import Vqf
 
-ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Ahf2, Hf, Ecf, Cf1, Kf, Ekf, Vqf, Ukf, Sssrukf, Hfm, Ecfm, Mcf)}
+ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Ahf2, Hf, Ecf, Cf1, Kf, Ekf, Vqf, Ukf, Sssrukf, Hfm, Ecfm, Mcf, Ahf2m)}
 GPS_AIDED = ("ukf", "sssrukf")  # need GPS velocity and heading to be more than slow tilt filters
 
 

@@ -221,6 +221,8 @@ class Estimator:
     # True when the filter estimates its own gyro bias; the session applies a bias measured at rest
     # (calibration.RestBiasCalibrator) only to the others
     estimates_gyro_bias: ClassVar[bool] = False
+    # True when its heading comes from the magnetometer when it has readings (evaluate scores that heading)
+    uses_magnetometer: ClassVar[bool] = False
     Settings: ClassVar[type]
     Diagnostics: ClassVar[type[NamedTuple]]
 
@@ -426,7 +428,6 @@ class CompiledEstimator(Estimator):
 
     kernel: ClassVar
     run_kernel: ClassVar
-    uses_magnetometer: ClassVar[bool] = False
 
     def __init__(self, settings=None, dtype=None):
         self._dtype = np.dtype(np.float64 if dtype is None else dtype)

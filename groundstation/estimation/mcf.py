@@ -71,6 +71,7 @@ class McfDiagnostics(NamedTuple):
 
 class Mcf(Estimator):
     name = "mcf"
+    uses_magnetometer = True
     Settings = McfSettings
     Diagnostics = McfDiagnostics
 

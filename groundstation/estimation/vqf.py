@@ -68,6 +68,7 @@ class Vqf(Estimator):
 
     name = "vqf"
     estimates_gyro_bias = True
+    uses_magnetometer = True
     Settings = VqfSettings
     Diagnostics = VqfDiagnostics
 

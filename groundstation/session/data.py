@@ -16,7 +16,7 @@ from groundstation.autopilot import LOG_SUFFIXES
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, read_csv, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create
-from groundstation.estimation.evaluation import inclination_error_rad, run_on_trial, score
+from groundstation.estimation.evaluation import run_on_trial, scores, uses_magnetometer
 from groundstation.recording import Recording, open_recording
 from groundstation.session.batch import BatchSession, batch_replay
 from groundstation.session.catalogue import Catalogue, session_catalogue
@@ -47,6 +47,7 @@ class SessionData:
     true_q: np.ndarray | None = None  # (N, 4) truth rotating body vectors into true_frame
     true_frame: str = "ENU"
     moving: np.ndarray | None = None  # (N,) bool: the samples an evaluation scores
+    magnetometer: bool = False  # the estimators had magnetometer readings (so heading is scored)
     damage: list[str] = dataclasses.field(default_factory=list)  # what the recording lost
     # Every table of the session as columns (``imu``, ``onboard``, one per frame, ``position``), as
     # ``catalogue`` describes them; a dataset trial has only ``imu``.
@@ -67,7 +68,8 @@ class SessionData:
         return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") == "warning")]
 
     def evaluate(self) -> dict[str, dict[str, float]]:
-        """Inclination RMSE / max of every estimator against the truth (BROAD's metric)."""
+        """Inclination RMSE / max of every estimator against the truth (BROAD's metric), and heading RMSE /
+        max of those that use the magnetometer when the session has one (``evaluation``)."""
         if self.true_q is None:
             raise UserError("this session has no truth to evaluate against (true_qw ... true_qz)")
         mask = self.moving if self.moving is not None else np.ones(len(self), dtype=bool)
@@ -75,7 +77,7 @@ class SessionData:
         if self.onboard is not None and np.isfinite(self.onboard).any():
             estimates["onboard"] = self.onboard  # the aircraft's own AHF, scored the same way
         try:
-            return {n: score(inclination_error_rad(q, self.true_q, self.true_frame), mask) for n, q in estimates.items()}
+            return {n: scores(q, self.true_q, mask, self.true_frame, self.magnetometer and uses_magnetometer(n)) for n, q in estimates.items()}
         except ValueError as error:
             raise UserError(str(error)) from None
 
@@ -150,7 +152,7 @@ def from_trial(trial: Trial, filters, settings_used, metadata: dict) -> SessionD
     settings = {name: dataclasses.asdict(create(name, (settings_used or {}).get(name, {})).settings) for name in estimates}
     return SessionData(
         metadata=dict(metadata), time_s=time_s, estimates=estimates, diagnostics=diagnostics,
-        sensors=sensors, true_q=trial.true_q, true_frame="ENU", moving=trial.moving,
+        sensors=sensors, true_q=trial.true_q, true_frame="ENU", moving=trial.moving, magnetometer=trial.mag_uT is not None,
         tables=tables, catalogue=catalogue, settings_at_start=settings, settings_at_end=settings,
     )
 
@@ -173,6 +175,7 @@ def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> Se
     data = SessionData(
         metadata=dict(recording.metadata), time_s=imu["time_s"], estimates=estimates, diagnostics=diagnostics,
         sensors=sensors, onboard=onboard, damage=list(recording.damage), **whole,
+        magnetometer=len(whole["tables"].get("mag_raw", {}).get("time_s", ())) > 0,
     )
     if "true_qw" in recording.samples:
         attach_sensor_truth(data, recording.samples, device_us, pipeline)

@@ -54,8 +54,8 @@ def left_out_settings(recording: Recording) -> list[str]:
 def recorded_filters(recording: Recording) -> tuple[list[str], list[str]]:
     """The estimators the recorded session ran that this version has; and what the header names that
     cannot run (another version's estimator, or not a list of names)."""
-    recorded = recording.metadata.get("filters", list(DEFAULT_FILTERS))  # a header without filters: the default
-    if not isinstance(recorded, list):
+    recorded = recording.metadata.get("filters", DEFAULT_FILTERS)  # JSON gives a list; the default is a tuple
+    if not isinstance(recorded, (list, tuple)):
         return list(DEFAULT_FILTERS), [f"filters {recorded!r} (not a list of names)"]
     names = [name for name in recorded if isinstance(name, str) and name in ESTIMATORS]
     return names, [repr(name) for name in recorded if name not in names]

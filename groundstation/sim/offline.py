@@ -55,15 +55,19 @@ def simulate(
     gps_rate_hz: float = 0.0,
     imu: MPU6050Settings | None = None,
     aux: extra_sensors.AuxSettings | None = None,
+    gyro_bias_left_dps: float = 0.0,
 ) -> SimRun:
-    """Sample ``profile`` (a ``Profile`` or a name for ``make_profile``) with every sensor asked for."""
+    """Sample ``profile`` (a ``Profile`` or a name for ``make_profile``) with every sensor asked for.
+
+    ``gyro_bias_left_dps``: the turn-on bias the calibration missed on every sensor axis (a board that
+    kept an old calibration, or calibrated while moving), which the estimators must find themselves."""
     if isinstance(profile, str):
         profile = make_profile(profile, duration_s, seed)
     aux = aux or extra_sensors.AuxSettings()
     n = int(round(profile.duration_s * rate_hz))
     truth = profile.truth(np.arange(n) / rate_hz)
     part = MPU6050(imu or MPU6050Settings(), accel_fs_g, gyro_fs_dps, mountings.DEFAULT_MOUNTING, rate_hz, seed)
-    part.gyro_offset_dps = part.gyro_turn_on_bias_dps.copy()
+    part.gyro_offset_dps = part.gyro_turn_on_bias_dps - gyro_bias_left_dps
     part.accel_offset_g = part.accel_turn_on_bias_g.copy()
     registers = part.sample(truth)
     to_body = mountings.matrix(mountings.DEFAULT_MOUNTING)

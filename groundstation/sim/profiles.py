@@ -19,7 +19,9 @@ firmware calibrates its gyro there, as a real board does at power-up. Profiles a
 duration; evaluation is vectorised over a block of times, so hours of flight cost seconds.
 
 Profiles (``PROFILES``): ``static`` (at rest), ``hover`` (small attitude wander, motor vibration),
-``flight`` (pitch/roll manoeuvres up to ±30°, yaw turns, climbs), ``slide`` (horizontal translation
+``flight`` (pitch/roll manoeuvres up to ±30°, yaw turns, climbs), ``aggressive`` (10 min of
+continuous manoeuvring without rest: roll and pitch swinging up to about ±50°, turns at up to 300 °/s,
+accelerations up to about 8 m/s²), ``slide`` (horizontal translation
 at zero attitude, accelerations up to ±3 m/s², the paper's sliding test), ``fast`` (flips at
 550-900 °/s, beyond a ±500 °/s gyro range), ``car`` (driving at up to
 15 m/s with speed changes and turns, yaw along the velocity: seed 001's test) and ``turntable`` (seed
@@ -45,7 +47,7 @@ _SMOOTHSTEP_PEAK_ACCEL = 10.0 / math.sqrt(3.0)
 # Largest ds/du of the same smoothstep (at u = 1/2).
 _SMOOTHSTEP_PEAK_RATE = 1.875
 
-DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "slide": 120.0, "fast": 120.0, "car": 120.0, "turntable": 765.0}
+DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "aggressive": 600.0, "slide": 120.0, "fast": 120.0, "car": 120.0, "turntable": 765.0}
 PROFILES = tuple(DEFAULT_DURATION_S)
 MAX_DURATION_S = 86_400.0  # a day: profiles are computed ahead, so their length is bounded
 
@@ -229,6 +231,25 @@ def _flight(rng, duration_s):
     }
 
 
+def _aggressive(rng, duration_s):
+    """Aggressive flight without a moment's rest: roll and pitch always swinging (three sines each,
+    up to about ±50°), yaw turning (90-360° in 2-5 s, then the next after at most 0.5 s), the
+    position always swinging (accelerations up to about 8 m/s²)."""
+    deg = math.radians
+
+    def turn(rng, value):
+        return value + deg(rng.uniform(90.0, 360.0)) * rng.choice([-1.0, 1.0]), rng.uniform(2.0, 5.0)
+
+    return {
+        "roll": [_random_sines(rng, deg(35.0), rng.uniform(0.05, 0.6, 3))],
+        "pitch": [_random_sines(rng, deg(35.0), rng.uniform(0.05, 0.6, 3))],
+        "yaw": [_moves(rng, duration_s, (0.1, 0.5), turn)],
+        "north": [_random_sines(rng, 2.5, rng.uniform(0.1, 0.3, 3))],
+        "east": [_random_sines(rng, 2.5, rng.uniform(0.1, 0.3, 3))],
+        "down": [_random_sines(rng, 1.0, rng.uniform(0.1, 0.3, 2))],
+    }
+
+
 def _slide(rng, duration_s):
     def slide(rng, value):  # back and forth along north, peak acceleration 1.5-3 m/s²
         target = -np.sign(value or 1.0) * rng.uniform(0.5, 3.0)
@@ -344,7 +365,7 @@ def _turntable(rng, duration_s):
     return {"pitch": [sine(47.0)], "roll": [sine(35.0)], "yaw": [sine(15.0)]}
 
 
-_BUILDERS = {"static": _static, "hover": _hover, "flight": _flight, "slide": _slide, "fast": _fast, "car": _car, "turntable": _turntable}
+_BUILDERS = {"static": _static, "hover": _hover, "flight": _flight, "aggressive": _aggressive, "slide": _slide, "fast": _fast, "car": _car, "turntable": _turntable}
 
 
 def make_profile(name: str, duration_s: float | None = None, seed: int = 0) -> Profile:

@@ -24,12 +24,14 @@ WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole s
 DEFAULT_WINDOW = "30 s"
 # The eleven curves the app shows together (its ten estimators and the onboard one) each get their own
 # colour of the palette (black for AHF2, shown first); the estimators only a replay of an older
-# recording has (CF1, KF, EKF) share one.
+# recording has (CF1, KF, EKF) and AHF2+mag (evaluate and replays only) share one.
 INDIGO, WINE, GREEN, TEAL, ROSE, OLIVE, CYAN, SAND, PURPLE, BLACK, ORANGE = PALETTE
 COLORS = {"ahf2": BLACK, "vqf": ORANGE, "ahf": INDIGO, "onboard": WINE, "hf": GREEN, "ecf": TEAL, "ukf": ROSE,
-          "hfm": OLIVE, "ecfm": CYAN, "mcf": SAND, "sssrukf": PURPLE, "cf1": OLIVE, "kf": CYAN, "ekf": SAND}
+          "hfm": OLIVE, "ecfm": CYAN, "mcf": SAND, "sssrukf": PURPLE, "cf1": OLIVE, "kf": CYAN, "ekf": SAND,
+          "ahf2m": PURPLE}
 LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
-          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF", "vqf": "VQF", "ahf2": "AHF2"}
+          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF", "vqf": "VQF", "ahf2": "AHF2",
+          "ahf2m": "AHF2+mag"}
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows

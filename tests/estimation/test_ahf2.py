@@ -9,7 +9,9 @@ from scipy import signal
 
 from groundstation.datasets import read_csv
 from groundstation.estimation import create
-from groundstation.estimation.evaluation import evaluate_trial
+from groundstation.estimation.evaluation import evaluate_trial, inclination_error_rad
+from groundstation.sim.imu import MPU6050Settings
+from groundstation.sim.offline import simulate
 
 # BROAD dev trials where AHF2 and VQF differ most: fast combined motion, slow translation, vibration.
 TRIALS = ["21_undisturbed_fast_combined", "11_undisturbed_slow_translation_B", "27_disturbed_phone_vibration_B"]
@@ -72,10 +74,35 @@ def test_invalid_settings_are_refused():
 
 
 def test_at_least_as_accurate_as_vqf_on_broad(broad_dir):
-    """Measured (bench/bench_ahf2.out.md): ahf2 1.58°, 0.34°, 0.34° on these trials; VQF 1.72°, 0.42°,
-    0.37°. Bounds: the measured figures plus 0.03° for rounding across machines."""
+    """Measured (bench/bench_estimators.out.md): ahf2 1.53°, 0.30°, 0.35° on these trials; VQF 1.72°,
+    0.42°, 0.37°. Bounds: the measured figures plus 0.03° for rounding across machines."""
     figures = [evaluate_trial(read_csv(broad_dir / f"{name}.csv.gz"), ["ahf2", "vqf"]) for name in TRIALS]
     ahf2 = [f["ahf2"]["incl_rmse_deg"] for f in figures]
     vqf = [f["vqf"]["incl_rmse_deg"] for f in figures]
-    assert ahf2 == pytest.approx([1.58, 0.34, 0.34], abs=0.03)
+    assert ahf2 == pytest.approx([1.53, 0.30, 0.35], abs=0.03)
     assert np.mean(ahf2) <= np.mean(vqf) - 0.05, (ahf2, vqf)
+
+
+def test_no_bias_wind_up_in_ten_minutes_of_aggressive_flight():
+    """Ten minutes of aggressive flight without a moment's rest (the simulator's ``aggressive``
+    profile) with 1 °/s of gyro bias the boot calibration missed on every axis, and no other bias
+    (no warm-up drift, no random walk), so the true bias is known: the in-motion estimate stays clear
+    of its 2 °/s clamp, its mean over the last five minutes is on the true bias, and the inclination
+    error over those minutes is below VQF's in the same run. Measured: |b| at most 1.52 °/s, the
+    mean within 0.16 °/s, 2.1° against VQF's 2.7°. Before the integral was mapped with the low-passed
+    rotation (ahf2.py, step 7) it wound up to the clamp on x and y, its mean 0.9 °/s off on y (1.1 °/s
+    on x with k_i = 0.1 /s), and the error was 2.8°, above VQF's."""
+    imu = MPU6050Settings(gyro_bias_tempco_dps_per_c=0.0, gyro_bias_walk_dps_rts=0.0)
+    run = simulate("aggressive", 600.0, seed=0, imu=imu, gyro_bias_left_dps=1.0)
+    true_bias_dps = np.degrees(np.median(run.gyr_rad_s[: int(1.0 / run.dt_s)], axis=0))  # the first second is still
+    q, diag = create("ahf2").run(run.gyr_rad_s, run.acc_g, run.dt_s)
+    bias_dps = np.degrees(np.column_stack([diag[f"bias_{a}_rad_s"] for a in "xyz"]))
+    assert np.abs(bias_dps[int(120.0 / run.dt_s) :]).max() < 1.7, np.abs(bias_dps).max(axis=0)
+    late = slice(int(300.0 / run.dt_s), None)
+    assert bias_dps[late].mean(axis=0) == pytest.approx(true_bias_dps, abs=0.25)
+    # the error is mostly the flight's accelerations; VQF in the same run is the reference
+    rmse_deg = {}
+    for name, est_q in (("ahf2", q), ("vqf", create("vqf").run(run.gyr_rad_s, run.acc_g, run.dt_s)[0])):
+        error_deg = np.degrees(inclination_error_rad(est_q[late], run.truth.q_body_to_ned[late], truth_frame="NED"))
+        rmse_deg[name] = np.sqrt(np.mean(error_deg**2))
+    assert rmse_deg["ahf2"] < rmse_deg["vqf"], rmse_deg

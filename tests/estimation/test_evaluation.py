@@ -9,8 +9,11 @@ import numpy as np
 import pytest
 from ahrs.filters import Madgwick
 
+from groundstation import quaternion as quat
 from groundstation.datasets import DatasetError, read_csv
-from groundstation.estimation.evaluation import evaluate_trial, inclination_error_rad, sample_periods_s, score
+from groundstation.datasets import Trial
+from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score
+from groundstation.sim.profiles import make_profile
 
 TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
 SLICE = 12_000  # about 42 s at 285.7 Hz: enough to include rest and motion, quick to run
@@ -39,6 +42,62 @@ def test_inclination_error_matches_the_definition():
         "incl_rmse_deg": pytest.approx(np.sqrt(25 / 3)),
         "incl_max_deg": pytest.approx(4.0),
     }
+
+
+def test_heading_error_removes_one_constant_offset_and_ignores_inclination():
+    """Estimates built from the simulator's truth with a known heading error ψ(t) = offset + e(t) about
+    the vertical, on top of a known tilt error: the score is e's RMS (e has zero mean over whole periods),
+    whatever the offset and the tilt, in either truth frame; the inclination error is the tilt's."""
+    t = np.arange(0.0, 60.0, 0.01)
+    truth_ned = make_profile("flight", 60.0, seed=2).truth(t).q_body_to_ned
+    wobble_rad = np.radians(2.0) * np.sin(2 * np.pi * t / 10.0)  # six whole periods: zero mean
+    tilt = quat.from_rotation_vector(np.column_stack([np.full_like(t, np.radians(3.0)), np.zeros_like(t), np.zeros_like(t)]))
+    half_turn = np.array([0.0, np.sqrt(0.5), np.sqrt(0.5), 0.0])  # NED <-> ENU
+    for offset_deg in (0.0, 37.0, -170.0):
+        psi = np.radians(offset_deg) + wobble_rad
+        yaw_error = np.column_stack([np.cos(psi / 2), np.zeros_like(t), np.zeros_like(t), np.sin(psi / 2)])
+        est = quat.multiply(quat.multiply(yaw_error, tilt), truth_ned)  # error turns in the earth frame
+        for q_true, frame in ((truth_ned, "NED"), (quat.multiply(half_turn, truth_ned), "ENU")):
+            error = heading_error_rad(est, q_true, frame)
+            assert np.abs(error - wobble_rad).max() < 1e-9
+            assert score(error, prefix="heading")["heading_rmse_deg"] == pytest.approx(2.0 / np.sqrt(2.0), rel=1e-6)
+            assert np.degrees(inclination_error_rad(est, q_true, frame)) == pytest.approx(np.full_like(t, 3.0))
+    # a missing truth sample is NaN and does not move the offset
+    q_true = truth_ned.copy()
+    q_true[:100] = np.nan
+    error = heading_error_rad(quat.multiply(yaw_error, truth_ned), q_true, "NED")
+    assert np.isnan(error[:100]).all() and np.abs(error[100:] - (wobble_rad[100:] - np.mean(wobble_rad[100:]))).max() < 1e-3
+
+
+def test_resampled_to_the_boards_rate_keeps_slow_signals_and_the_truth():
+    """BROAD's 2000/7 Hz to 100 Hz: a 1 Hz sine keeps its amplitude (the resampler's low-pass cuts
+    near 50 Hz), and the truth, a steady turn about z at 100 °/s, lands on its value at the new times."""
+    t = np.arange(4000) * 0.0035
+    rate = np.radians(100.0)
+    sine = np.sin(2 * np.pi * t)[:, None] * np.ones(3)
+    true_q = np.column_stack([np.cos(rate * t / 2), 0 * t, 0 * t, np.sin(rate * t / 2)])
+    true_q[1000] = np.nan  # a lost truth sample stays lost
+    trial = Trial(time_s=t, gyr_rad_s=sine, acc_m_s2=sine, mag_uT=None, true_q=true_q, moving=t > 5.0)
+    r = resampled(trial, 100.0)
+    assert len(r) == 1400 and np.allclose(np.diff(r.time_s), 0.01)
+    middle = (r.time_s > 1.0) & (r.time_s < 13.0)  # away from the resampler's edges
+    assert np.abs(r.gyr_rad_s[middle] - np.sin(2 * np.pi * r.time_s[middle])[:, None]).max() < 2e-3
+    expected = np.column_stack([np.cos(rate * r.time_s / 2), 0 * r.time_s, 0 * r.time_s, np.sin(rate * r.time_s / 2)])
+    known = np.isfinite(r.true_q).all(axis=1)
+    assert (~known).sum() == 1 and np.degrees(quat.angle_between(r.true_q[known], expected[known])).max() < 1e-4
+    far = np.abs(r.time_s - 5.0) > 0.0035  # within one input period of the switch, either is right
+    assert np.array_equal(r.moving[far], r.time_s[far] > 5.0) and r.mag_uT is None
+
+
+def test_the_magnetometer_reaches_the_estimators_that_use_it(trial_slice):
+    """On a trial with a magnetometer, hfm is not hf (before: it was, bit for bit, as the magnetometer
+    never reached it), and heading is scored for the estimators that use it, VQF with its magnetometer
+    among them, and only for those."""
+    figures = evaluate_trial(read_csv(trial_slice), ["hf", "hfm", "vqf", "ahf2m", "mcf"])
+    assert figures["hfm"]["incl_rmse_deg"] != figures["hf"]["incl_rmse_deg"]
+    assert "heading_rmse_deg" not in figures["hf"]
+    for name in ("hfm", "vqf", "ahf2m", "mcf"):
+        assert 0.0 < figures[name]["heading_rmse_deg"] < 5.0, (name, figures[name])
 
 
 def test_hf_on_broad_equals_ahrs_madgwick(trial_slice):
@@ -90,12 +149,13 @@ def run_cli(*args):
 
 
 def test_evaluate_command_json(trial_slice):
-    result = run_cli(str(trial_slice), "--filters", "hf,ecf", "--set", "hf.beta=0.033", "--json")
+    result = run_cli(str(trial_slice), "--filters", "hf,ecf,hfm", "--set", "hf.beta=0.033", "--json")
     assert result.returncode == 0, result.stderr
     figures = json.loads(result.stdout)
-    assert list(figures) == ["hf", "ecf"]
-    expected = evaluate_trial(read_csv(trial_slice), ["hf"], {"hf": {"beta": 0.033}})["hf"]
-    assert figures["hf"] == pytest.approx(expected)
+    assert list(figures) == ["hf", "ecf", "hfm"]
+    expected = evaluate_trial(read_csv(trial_slice), ["hf", "hfm"], {"hf": {"beta": 0.033}})
+    assert figures["hf"] == pytest.approx(expected["hf"])
+    assert figures["hfm"] == pytest.approx(expected["hfm"]) and "heading_rmse_deg" in figures["hfm"]  # the CLI scores heading too
 
 
 @pytest.mark.parametrize(

@@ -34,7 +34,7 @@ def static_acc(pitch_deg, roll_deg):
 
 
 def test_names_used_everywhere():
-    assert NAMES == ["ahf", "ahf2", "hf", "ecf", "cf1", "kf", "ekf", "vqf", "ukf", "sssrukf", "hfm", "ecfm", "mcf"]
+    assert NAMES == ["ahf", "ahf2", "hf", "ecf", "cf1", "kf", "ekf", "vqf", "ukf", "sssrukf", "hfm", "ecfm", "mcf", "ahf2m"]
 
 
 @pytest.mark.parametrize("name", NAMES)

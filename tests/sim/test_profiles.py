@@ -55,6 +55,10 @@ def test_profiles_do_what_their_names_say():
     assert np.ptp(-flight.pos_ned_m[:, 2]) > 5.0  # climbs
     fast = make_profile("fast", 600.0, 1).truth(t)
     assert np.degrees(np.abs(fast.rate_body_rad_s).max()) > 550.0
+    aggressive = make_profile("aggressive", 600.0, 1).truth(t)
+    rate_dps = np.degrees(np.linalg.norm(aggressive.rate_body_rad_s[t >= REST_S], axis=1))
+    assert rate_dps[: len(rate_dps) // 150 * 150].reshape(-1, 150).max(axis=1).min() > 20.0  # never still for 1.5 s
+    assert np.median(rate_dps) > 50.0 and rate_dps.max() > 250.0
     hover = make_profile("hover", 600.0, 1).truth(t)
     assert np.abs(euler(hover)[:, 1:]).max() < 5.0
 

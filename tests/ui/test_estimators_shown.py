@@ -124,7 +124,7 @@ def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_record
     for name in NEW:
         assert len(rows[f"{name}_qw"]) > 1500 and np.all(np.isfinite(rows[f"{name}_qw"])), name
     offered = list(window.estimator_panel.shown)  # the recorded ones, then those a replay can add
-    assert offered[: len(COMPARED)] == list(COMPARED) and set(offered[len(COMPARED) :]) == {"cf1", "kf", "ekf"}
+    assert offered[: len(COMPARED)] == list(COMPARED) and set(offered[len(COMPARED) :]) == {"cf1", "kf", "ekf", "ahf2m"}
     assert not any(window.estimator_panel.shown[name].isChecked() for name in NEW)
     window.estimator_panel.shown["mcf"].setChecked(True)
     mcf = curves(window.live_view.attitude, "MCF")[0]
