@@ -23,7 +23,8 @@ from groundstation.autopilot.agreement import agreement
 from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.session import load_log
 from groundstation.autopilot.tlog import packets
-from groundstation.estimation import ESTIMATORS, GPS_AIDED
+from groundstation.estimation import runnable
+from groundstation.formats import FILE_AIDING
 
 LOGS = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets" / "flightlogs"
 CHUNK = 4096
@@ -39,7 +40,7 @@ def log_figures(path: Path, repeats: int) -> str:
     head = f"| {path.name} | {data.time_s[-1]:.1f} | {meta.get('imu_rate_hz', float('nan')):.1f} | {statistics.median(times):.2f} |"
     if not data.estimates:
         return head + " no IMU logged: onboard attitude only |"
-    names = [n for n in ESTIMATORS if n not in GPS_AIDED]
+    names = runnable(FILE_AIDING)
     full = load_log(path, names)
     figures = agreement(full.estimates, full.onboard)
     cells = ", ".join(f"{n} {f['pitch_rms_deg']:.2f}/{f['roll_rms_deg']:.2f}" for n, f in figures.items())

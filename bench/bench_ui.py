@@ -41,7 +41,8 @@ from groundstation.recording import open_recording  # noqa: E402
 from groundstation.session.pipeline import Pipeline  # noqa: E402
 from groundstation.session.table import Table  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
-from groundstation.session.factory import LIVE_FILTERS, replay_session  # noqa: E402
+from groundstation.estimation import live_estimators  # noqa: E402
+from groundstation.session.factory import replay_session  # noqa: E402
 from groundstation.sources import ReplaySource  # noqa: E402
 from groundstation.ui.live_view import attitude_plots  # noqa: E402
 from groundstation.ui.main_window import MainWindow  # noqa: E402
@@ -193,7 +194,7 @@ def make_recording(path: Path, hours: float) -> None:
 
     duration_s = hours * 3600
     stream = SimStream(Scenario("flight", duration_s, seed=2))
-    with RecordingWriter(path, {"source": "bench_ui", "filters": list(LIVE_FILTERS)}) as writer:
+    with RecordingWriter(path, {"source": "bench_ui", "filters": list(live_estimators())}) as writer:
         t = 0.0
         while t < duration_s:
             t += 60.0

@@ -15,5 +15,3 @@ Frames: ArduPilot and PX4 report IMU and attitude on the body axes x forward, y 
 and attitude body -> NED, which are this project's conventions (docs/conventions.md), so no axis
 change is needed; only units change (see ``mapping``).
 """
-
-LOG_SUFFIXES = (".tlog", ".bin", ".ulg")

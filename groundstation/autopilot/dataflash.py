@@ -20,9 +20,10 @@ from pymavlink import DFReader
 from groundstation import quaternion
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
 from groundstation.errors import UserError
+from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
-MAGIC = b"\xa3\x95"  # every DataFlash record starts with these two bytes
+MAGIC = FORMATS["dataflash"].magic  # every DataFlash record starts with these two bytes
 FIELDS = {
     "IMU": ("TimeUS", "GyrX", "GyrY", "GyrZ", "AccX", "AccY", "AccZ"),
     "ATT": ("TimeUS", "Yaw", "Pitch", "Roll"),

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from groundstation import formats
 from groundstation.errors import UserError
 
 Q_COLUMNS = ("qw", "qx", "qy", "qz")
@@ -59,7 +60,7 @@ def series(time_us, columns: dict, source: str) -> Series | None:
 @dataclasses.dataclass
 class FlightLog:
     path: Path
-    format: str  # "tlog", "dataflash", "ulog"
+    format: str  # its name in ``formats.FORMATS``: "tlog", "dataflash", "ulog"
     autopilot: str  # "ArduPilot", "PX4", or what the log says
     imu: Series | None = None
     onboard: Series | None = None
@@ -73,20 +74,14 @@ class FlightLog:
 
 
 def read_log(path, progress=None) -> FlightLog:
-    """The log at ``path`` by its suffix; UserError with a clear message when it cannot be read."""
+    """The log at ``path`` by its format's reader (``formats``); UserError with a clear message when it cannot be read."""
     path = Path(path)
     if not path.is_file():
         raise UserError(f"{path}: no such file")
-    suffix = path.suffix.lower()
-    if suffix == ".tlog":
-        from groundstation.autopilot.tlog import read_tlog as reader
-    elif suffix == ".bin":
-        from groundstation.autopilot.dataflash import read_dataflash as reader
-    elif suffix == ".ulg":
-        from groundstation.autopilot.ulog import read_ulog as reader
-    else:
-        raise UserError(f"{path}: not a flight log (.tlog, .bin or .ulg)")
-    log = reader(path, progress)
+    file_format = formats.sniff(path)
+    if file_format is None or file_format.read is None:
+        raise UserError(f"{path}: not a flight log ({formats.described(formats.flight_logs())})")
+    log = file_format.reader()(path, progress)
     if log.imu is None and log.onboard is None:
         found = f" ({'; '.join(log.notes)})" if log.notes else ""
         raise UserError(f"{path}: holds neither IMU samples nor an attitude estimate{found}; damaged or empty?")

@@ -20,6 +20,7 @@ import numpy as np
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, read_log
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
+from groundstation.formats import FORMATS
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
 from groundstation.session.catalogue import Catalogue, message_table, session_catalogue
@@ -29,7 +30,6 @@ from groundstation.session.pipeline import DEFAULT_FILTERS
 MAX_GAP_S = 1.0
 READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
 PROGRESS_STEPS = 1000
-FORMAT_NAMES = {"tlog": "MAVLink telemetry log", "dataflash": "ArduPilot DataFlash log", "ulog": "PX4 ULog"}
 
 
 def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
@@ -103,7 +103,7 @@ def catalogued(log: FlightLog, estimates: dict, diagnostics: dict) -> tuple[dict
 
 def describe(log: FlightLog) -> dict:
     """What the Session sheet and the commands show about the log."""
-    meta = {"source": f"{FORMAT_NAMES[log.format]} {log.path.name}", "autopilot": log.autopilot}
+    meta = {"source": f"{FORMATS[log.format].description} {log.path.name}", "autopilot": log.autopilot}
     for name in ("imu", "onboard", "mag", "baro", "gps", "truth"):
         stream: Series | None = getattr(log, name)
         if stream is not None:

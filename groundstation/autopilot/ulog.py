@@ -19,9 +19,10 @@ from pyulog import ULog
 
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
 from groundstation.errors import UserError
+from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
-MAGIC = b"ULog\x01\x12\x35"
+MAGIC = FORMATS["ulog"].magic
 TOPICS = ["sensor_combined", "vehicle_attitude", "vehicle_attitude_groundtruth", "vehicle_magnetometer", "vehicle_air_data",
           "sensor_baro", "vehicle_gps_position"]  # fmt: skip
 GAUSS_TO_UT = 100.0

@@ -12,8 +12,9 @@ from groundstation.errors import UserError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("recording", nargs="?", metavar="FILE",
-                        help="open this file for replay: a recording (.gsrec), a dataset CSV or a flight log (.tlog, .bin, .ulg)")
+    from groundstation import formats
+
+    parser.add_argument("recording", nargs="?", metavar="FILE", help=f"open this file for replay: {formats.described()}")
     parser.add_argument("--demo", action="store_true",
                         help="stream from the built-in simulated radio bridge (also the default without --port or RECORDING)")
     parser.add_argument("--port", metavar="SPEC",

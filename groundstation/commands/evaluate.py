@@ -25,12 +25,13 @@ AGREEMENT_TITLE = "agreement with the onboard estimate (difference, not error: t
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec) with truth, a dataset CSV (.csv or .csv.gz), or a flight log (.tlog, .bin, .ulg)")
-    from groundstation.estimation import ESTIMATORS, GPS_AIDED
+    from groundstation import formats
+    from groundstation.estimation import runnable
 
-    # The GPS-aided filters are left out by default: the datasets have no GPS, and without it they are
-    # slow tilt filters at ~100x the others' cost. --filters ukf,sssrukf scores them.
-    add_estimator_options(parser, ",".join(name for name in ESTIMATORS if name not in GPS_AIDED))
+    parser.add_argument("file", metavar="FILE", help=f"a file with truth or an onboard estimate: {formats.described()}")
+    # By default the estimators whose needs a file meets (the GPS-aided filters are left out: the datasets
+    # have no GPS, and without it they are slow tilt filters at ~100x the others' cost). --filters ukf,sssrukf scores them.
+    add_estimator_options(parser, ",".join(runnable(formats.FILE_AIDING)))
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
 

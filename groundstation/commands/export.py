@@ -13,7 +13,9 @@ from groundstation.commands.progress import StagedProgress
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec) or a dataset CSV")
+    from groundstation import formats
+
+    parser.add_argument("file", metavar="FILE", help=formats.described())
     parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv, OUT.parquet or OUT.xlsx (by extension)")
     add_estimator_options(parser, None)
     parser.add_argument("--from", dest="t_from", type=float, metavar="S", help="first second to export")

@@ -24,7 +24,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from groundstation.autopilot import LOG_SUFFIXES
+    from groundstation import formats
     from groundstation.commands.progress import ProgressBar
     from groundstation.datasets import DatasetError, read_csv
     from groundstation.errors import UserError
@@ -33,7 +33,8 @@ def run(args: argparse.Namespace) -> int:
 
     if args.out.exists():
         raise UserError(f"{args.out} exists; choose another name")
-    if Path(args.file).suffix.lower() in LOG_SUFFIXES:
+    file_format = formats.sniff(args.file)
+    if file_format is not None and file_format.read is not None:
         raise UserError(f"{args.file} is a flight log: no import needed; export, evaluate and the app's Open read it directly")
     if args.out.suffix.lower() == ".tlog":
         return save_tlog(Path(args.file), args.out)

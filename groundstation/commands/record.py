@@ -22,7 +22,7 @@ from groundstation.errors import UserError
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from groundstation.session.factory import LIVE_FILTERS
+    from groundstation.estimation import live_estimators
 
     parser.add_argument("--port", required=True, metavar="SPEC",
                         help="the source: COM3, /dev/ttyUSB0, udp://HOST:PORT, tcp://HOST:PORT, sim:?scenario=NAME, "
@@ -32,7 +32,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="serial baud rate unless the spec gives ?baud= (default: 115200, or 57600 for mavlink:PORT)")
     parser.add_argument("--recordings", type=Path, default=None, metavar="DIR",
                         help="record into DIR (default: $GROUNDSTATION_RECORDINGS or the platform's recordings folder)")
-    add_estimator_options(parser, ",".join(LIVE_FILTERS))
+    add_estimator_options(parser, ",".join(live_estimators()))
 
 
 def run(args: argparse.Namespace) -> int:

@@ -9,7 +9,9 @@ from groundstation.commands.options import add_estimator_options, estimator_opti
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("file", metavar="FILE", help="a recording (.gsrec), a dataset CSV, or a flight log (.tlog, .bin, .ulg)")
+    from groundstation import formats
+
+    parser.add_argument("file", metavar="FILE", help=formats.described())
     parser.add_argument("--speed", type=float, default=None, metavar="X",
                         help="play it back at X times real time (0.25-64) with a live summary; default: the totals at once")
     add_estimator_options(parser, None)

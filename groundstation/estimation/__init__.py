@@ -6,6 +6,10 @@ explicit complementary filter, ``cf1`` first-order complementary filter, ``kf`` 
 ``ekf`` quaternion extended Kalman filter, ``ukf`` and ``sssrukf`` the GPS-aided unscented filters of seed 001
 (standard, and square-root with spherical simplex sigma points); with the magnetometer ``hfm`` (Madgwick MARG) and
 ``ecfm`` (Mahony ECF with the field error term), see ``marg``; ``mcf`` seed 003's multi-sensor complementary filter; ``vqf`` Laidig & Seel's VQF (the ``vqf`` package). ``create("hf", {"beta": 0.033})`` builds one with overrides.
+
+``ESTIMATORS`` is the registry the app, the commands, the exports and the tests take their lists from;
+``runnable`` picks those whose needs a session meets, ``aiding_estimator`` the one the compass heading
+and the position use.
 """
 
 from __future__ import annotations
@@ -25,8 +29,54 @@ from groundstation.estimation.mcf import Mcf
 from groundstation.estimation.ukf import Sssrukf, Ukf
 from groundstation.estimation.vqf import Vqf
 
-ESTIMATORS: dict[str, type[Estimator]] = {cls.name: cls for cls in (Ahf, Ahf2, Hf, Ecf, Cf1, Kf, Ekf, Vqf, Ukf, Sssrukf, Hfm, Ecfm, Mcf, Ahf2m)}
-GPS_AIDED = ("ukf", "sssrukf")  # need GPS velocity and heading to be more than slow tilt filters
+# The one list of estimators, in the order the app, evaluate and exports show them: each class says its
+# label, colour, needs and whether live sessions run it (``base.Estimator``). A new estimator is its
+# module and its class added here (or ``register(cls)``); nothing else names it.
+ESTIMATORS: dict[str, type[Estimator]] = {
+    cls.name: cls for cls in (Ahf2, Vqf, Ahf, Hf, Ecf, Hfm, Ecfm, Mcf, Ukf, Sssrukf, Cf1, Kf, Ekf, Ahf2m)
+}
+# The estimator whose attitude turns the magnetometer into a compass heading and the acceleration
+# into position (seed 004), unless a session names another (``Pipeline(aiding=...)``).
+AIDING_ESTIMATOR = "ahf2"
+
+
+def register(cls: type[Estimator]) -> type[Estimator]:
+    """Add an estimator to ``ESTIMATORS`` (usable as a class decorator)."""
+    ESTIMATORS[cls.name] = cls
+    return cls
+
+
+def label(name: str) -> str:
+    """What the app and the exports call an estimator (its name if it is none of ours)."""
+    cls = ESTIMATORS.get(name)
+    return cls.label if cls else name
+
+
+def live_estimators() -> tuple[str, ...]:
+    """The estimators every live session runs (and so its recording's replays), so showing one is a
+    legend click or a check box, not a restart: the IMU filters, those with the magnetometer (a few µs
+    per sample each) and the GPS-aided unscented filters (a few hundred µs per sample each, in the
+    reader thread). Hidden curves cost the UI nothing per frame."""
+    return tuple(name for name, cls in ESTIMATORS.items() if cls.live)
+
+
+def runnable(capabilities, names=None) -> tuple[str, ...]:
+    """Those of ``names`` (default: every estimator) whose needs ``capabilities`` ("mag", "gps") meet."""
+    return tuple(n for n in (ESTIMATORS if names is None else names) if n in ESTIMATORS and ESTIMATORS[n].needs <= set(capabilities))
+
+
+def aiding_estimator(filters, named: str | None = None) -> str | None:
+    """The estimator that aids the compass heading and position among ``filters``: ``named`` if given
+    (ValueError if it does not run), else ``AIDING_ESTIMATOR``; a session without that one is aided by
+    the first it runs, as every session was before the role had a name (so older recordings replay
+    the same). None without estimators."""
+    if named is not None:
+        if named not in filters:
+            raise ValueError(f"the aiding estimator {named!r} is not among the session's ({', '.join(filters)})")
+        return named
+    if AIDING_ESTIMATOR in filters:
+        return AIDING_ESTIMATOR
+    return filters[0] if filters else None
 
 
 def setting_names(name: str) -> frozenset[str]:

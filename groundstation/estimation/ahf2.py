@@ -166,6 +166,8 @@ def _matrix(q):
 
 class Ahf2(Estimator):
     name = "ahf2"
+    label = "AHF2"
+    colour = "black"
     estimates_gyro_bias = True
     Settings = Ahf2Settings
     Diagnostics = Ahf2Diagnostics
@@ -325,5 +327,6 @@ class Ahf2m(Ahf2):
     name = "ahf2m"
     label = "AHF2+mag"
     colour = "purple"
+    needs = frozenset({"mag"})
     live = False  # evaluate and replays; live sessions have hfm, ecfm, mcf and vqf for the heading
     uses_magnetometer = True

@@ -1,6 +1,6 @@
 """What every estimator shares: settings, the robust per-sample ``step``, the batch ``run``.
 
-Interface (the same for ``ahf``, ``hf``, ``ecf``, ``cf1``, ``kf`` and ``ekf``)::
+Interface (the same for every estimator of ``ESTIMATORS``)::
 
     est = Ahf(AhfSettings(beta=...))          # settings: a frozen dataclass, defaults = the papers'
     est.reset(q0=None)                        # q0 None: initialise from the first accelerometer sample
@@ -12,7 +12,7 @@ specific force in g (standard gravity), so a level craft at rest reads about (0,
 ``dt_s`` is the time since the previous sample in seconds.
 
 Aiding inputs, passed by every caller that has them and ignored by the estimators that do not use them
-(the first six: their yaw is gyro-only and drifts):
+(their yaw is gyro-only and drifts); ``needs`` names those an estimator is little without:
 
 - ``mag``: the magnetometer reading that arrived since the previous sample, on the body axes (x forward,
   y right, z down), µT; None when none did.
@@ -210,7 +210,8 @@ def integrate_rate(q, wx, wy, wz, dt_s):
 
 
 class Estimator:
-    """Base class; subclasses set ``name``, ``Settings``, ``Diagnostics`` and implement the hooks.
+    """Base class; subclasses set ``name``, ``label``, ``colour``, ``Settings``, ``Diagnostics`` (and ``needs``
+    when they use aiding) and implement the hooks.
 
     Hooks: ``_reset_state()``, ``_set_attitude(q)`` (q a unit quaternion tuple), ``_update(gx, gy, gz,
     ax, ay, az, acc_ok, dt_s, status) -> (q, diag)``, ``_diagnostics(status) -> diag`` (for held
@@ -218,6 +219,12 @@ class Estimator:
     """
 
     name: ClassVar[str]
+    # How the estimator describes itself to the app, evaluate and exports (``ESTIMATORS`` lists the classes):
+    label: ClassVar[str]  # what the legend, the panel and the charts call it
+    colour: ClassVar[str]  # a colour's name in the app's palette (``ui.plots.PALETTE``): Qt stays out of here
+    needs: ClassVar[frozenset[str]] = frozenset()  # aiding it is no more than a tilt filter without: "mag", "gps"
+    live: ClassVar[bool] = True  # run on every live session (so showing it is a click, not a restart)
+    tunable: ClassVar[tuple[tuple[str, str, str], ...]] = ()  # settings the app offers to tune live: (setting, symbol, unit)
     # True when the filter estimates its own gyro bias; the session applies a bias measured at rest
     # (calibration.RestBiasCalibrator) only to the others
     estimates_gyro_bias: ClassVar[bool] = False

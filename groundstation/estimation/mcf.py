@@ -71,6 +71,9 @@ class McfDiagnostics(NamedTuple):
 
 class Mcf(Estimator):
     name = "mcf"
+    label = "MCF"
+    colour = "sand"
+    needs = frozenset({"mag"})
     uses_magnetometer = True
     Settings = McfSettings
     Diagnostics = McfDiagnostics

@@ -130,6 +130,8 @@ def ned_to_body(q, v):
 class _GpsUkf(Estimator):
     """What both filters share; subclasses pick the sigma-point set and dense or square-root steps."""
 
+    needs = frozenset({"gps"})  # without GPS velocity they are slow tilt filters at ~100x the others' cost
+
     Diagnostics = GpsUkfDiagnostics
     _square_root: ClassVar[bool]
 
@@ -283,6 +285,8 @@ class Ukf(_GpsUkf):
     """Standard UKF: 2n + 1 = 9 symmetric sigma points, full covariance, Cholesky twice a sample."""
 
     name = "ukf"
+    label = "UKF"
+    colour = "rose"
     Settings = UkfSettings
     _square_root = False
 
@@ -295,6 +299,8 @@ class Sssrukf(_GpsUkf):
     """Seed 001's SSSRUKF: square-root UKF, additive noise, n + 2 = 6 spherical simplex sigma points."""
 
     name = "sssrukf"
+    label = "SSSRUKF"
+    colour = "purple"
     Settings = SssrukfSettings
     _square_root = True
 

@@ -3,8 +3,8 @@ the fused position (seed 004) they make possible.
 
 Each reading is handed to the estimators with the next IMU sample (``take_for_estimators``). Once a
 barometer or GPS reading arrives, every IMU sample also steps the dual-channel position filter on
-the first estimator's attitude: NED metres from the first GPS fix, height from the first barometer
-reading (docs/conventions.md).
+the aiding estimator's attitude (``EstimatorBank.aiding``): NED metres from the first GPS fix, height
+from the first barometer reading (docs/conventions.md).
 
 The pipeline calls it per frame; the batch path drives the same object over its columns in the
 pipeline's order (``batch._Readings``), so the hand-over, the heading and the position are one code.

@@ -55,7 +55,7 @@ class BatchSession:
     """What ``data.from_pipeline`` reads from a replayed ``Pipeline``, computed on the batch path."""
 
     def __init__(self, setup: RecordedSetup):
-        self.bank = EstimatorBank(setup.filters, setup.settings, setup.forced)
+        self.bank = EstimatorBank(setup.filters, setup.settings, setup.forced, setup.aiding)
         self.filters = self.bank.filters
         self.catalogue = session_catalogue(self.bank.diagnostics(), SPEC)
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
@@ -325,7 +325,7 @@ class _Builder:
 
     def _estimate(self, keys, gyr, acc, dt, mag, gps, t_host):
         """Every estimator over the samples, in stretches between restarts and settings changes; the
-        rest-bias calibrator first. Returns the first estimator's quaternions and the table columns."""
+        rest-bias calibrator first. Returns the aiding estimator's quaternions and the table columns."""
         s, bank = self.s, self.s.bank
         n = len(keys)
         calibrator = bank.gyro_calibration
@@ -356,16 +356,16 @@ class _Builder:
                 apply_event(s, self.changes[index][1])
             elif kind == 1:
                 bank.restart()
-        columns, first_q = [], np.zeros((0, 4))
+        columns, aiding_q = [], np.zeros((0, 4))
         for name in bank.filters:
             qs, diags = outputs[name]
             q = np.concatenate(qs) if qs else np.zeros((0, 4))
-            if name == bank.filters[0]:
-                first_q = q
+            if name == bank.aiding:
+                aiding_q = q
             columns += list(q.T)
             for field in bank.diagnostics()[name]:
                 columns.append(np.concatenate([d[field] for d in diags]).astype(float) if diags else np.zeros(0))
-        return first_q, columns
+        return aiding_q, columns
 
     # -- gaps and link ----------------------------------------------------------------------------
 
@@ -398,7 +398,7 @@ class _Readings:
     samples and device restarts merged by their ``stage_key``.
 
     Twice, since the estimators run in between: first for what each sample hands the estimators
-    (``for_estimators``), then, with the first estimator's attitudes, for the compass heading and the
+    (``for_estimators``), then, with the aiding estimator's attitudes, for the compass heading and the
     position (``stage``)."""
 
     RESTART, MAG, BARO, GPS, SAMPLE = range(5)
@@ -446,15 +446,15 @@ class _Readings:
                 aiding.restart()
         return (mag if with_mag else None), (gps if with_gps else None)
 
-    def stage(self, acc: np.ndarray, dt: np.ndarray, first_q: np.ndarray, time_s: np.ndarray) -> None:
-        """The magnetometer table with the compass heading, and the position table, from the first
+    def stage(self, acc: np.ndarray, dt: np.ndarray, aiding_q: np.ndarray, time_s: np.ndarray) -> None:
+        """The magnetometer table with the compass heading, and the position table, from the aiding
         estimator's attitude as the pipeline has it at each reading and sample."""
         b = self.b
         if not self.any:
             return
         aiding = Aiding()
-        driven = bool(b.s.filters)  # the first estimator's attitude drives heading and position
-        qs, accs, dts = first_q.tolist(), acc.tolist(), dt.tolist()
+        driven = bool(b.s.filters)  # the aiding estimator's attitude drives heading and position
+        qs, accs, dts = aiding_q.tolist(), acc.tolist(), dt.tolist()
         heading = [math.nan] * len(self.mag)
         at, rows = [], []
         q = None

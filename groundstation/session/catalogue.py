@@ -141,7 +141,7 @@ POSITION = TableInfo("position", "fused position (seed 004), NED metres from the
     ("vel_n_m_s", "m/s", "fused velocity N", 2), ("vel_e_m_s", "m/s", "fused velocity E", 2),
     ("vel_d_m_s", "m/s", "fused velocity D", 2),
 )))  # fmt: skip
-HEADING = Column("heading_deg", "deg", "compass heading", 2, "tilt-compensated, from the first estimator's pitch and roll")
+HEADING = Column("heading_deg", "deg", "compass heading", 2, "tilt-compensated, from the aiding estimator's pitch and roll")
 
 
 def estimator_columns(name: str, diagnostics: tuple[str, ...]) -> tuple[Column, ...]:

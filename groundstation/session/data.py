@@ -11,21 +11,18 @@ from pathlib import Path
 
 import numpy as np
 
-from groundstation import mounting, quaternion
-from groundstation.autopilot import LOG_SUFFIXES
-from groundstation.datasets import TRUE_Q, DatasetError, Trial, read_csv, trial_from_columns
+from groundstation import formats, mounting, quaternion
+from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import run_on_trial, scores, uses_magnetometer
-from groundstation.recording import Recording, open_recording
+from groundstation.recording import Recording
 from groundstation.session.batch import BatchSession, batch_replay
 from groundstation.session.catalogue import Catalogue, session_catalogue
 from groundstation.session.clock import DISCONTINUITIES
-from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
-from groundstation.session.replay import check_forced, recorded_filters, recorded_settings, replay
+from groundstation.session.pipeline import Pipeline
+from groundstation.session.replay import replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
-
-DATASET_SUFFIXES = (".csv", ".csv.gz", ".gz")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,34 +80,11 @@ class SessionData:
 
 
 def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
-    """Decode, import or read ``path`` and run the estimators; UserError with a clear message on bad input."""
-    path = Path(path)
-    if path.suffix.lower() in LOG_SUFFIXES:  # an autopilot's flight log (.tlog, .bin, .ulg)
-        from groundstation.autopilot.session import load_log
-
-        return load_log(path, filters, forced, progress)
-    if path.name.lower().endswith(DATASET_SUFFIXES):
-        try:
-            trial = read_csv(path)
-        except DatasetError as error:
-            raise UserError(str(error)) from None
-        filters = filters or DEFAULT_FILTERS
-        check_forced(filters, forced)
-        return from_trial(trial, filters, forced, {"source": f"dataset CSV {path.name}"})
-    recording = open_recording(path)
-    if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
-        trial = trial_from_samples(recording.samples, path)
-        filters = filters or recorded_filters(recording)[0]
-        check_forced(filters, forced)
-        settings = {**recorded_settings(recording)}
-        for name, values in (forced or {}).items():
-            settings[name] = {**settings.get(name, {}), **values}
-        data = from_trial(trial, filters, settings, recording.metadata)
-        data.damage = recording.damage
-        return data
-    if recording.chunk_count == 0:
-        raise UserError(f"{path}: the recording holds no data")
-    return from_pipeline(recording, computed(recording, filters, forced, progress))
+    """Decode, import or read ``path`` by its format (``formats``) and run the estimators; UserError with a
+    clear message on bad input. A file of no known format is tried as a recording, whose reader says
+    what the file looks like instead."""
+    file_format = formats.sniff(path) or formats.FORMATS["recording"]
+    return file_format.loader()(Path(path), filters, forced, progress)
 
 
 def computed(recording: Recording, filters=None, forced=None, progress=None) -> Pipeline | BatchSession:

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from groundstation.estimation import create
+from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.calibration import RestBiasCalibrator
 
 # Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
@@ -19,11 +19,12 @@ RECONVERGE_S = 5.0
 
 
 class EstimatorBank:
-    """``filters``: estimator names (the first one drives the compass heading and the position);
-    ``settings``/``forced``: name -> {setting: value}."""
+    """``filters``: estimator names; ``aiding``: the one whose attitude the compass heading and the
+    position use (``estimation.aiding_estimator``); ``settings``/``forced``: name -> {setting: value}."""
 
-    def __init__(self, filters, settings=None, forced=None):
+    def __init__(self, filters, settings=None, forced=None, aiding=None):
         self.filters = tuple(dict.fromkeys(filters))
+        self.aiding = aiding_estimator(self.filters, aiding)
         self._settings = {name: dict((settings or {}).get(name, {})) for name in self.filters}
         self._forced = {name: dict((forced or {}).get(name, {})) for name in self.filters}
         self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
@@ -61,9 +62,9 @@ class EstimatorBank:
         self._bias_noted = bias
         return bias
 
-    def first_q(self):
-        """The newest attitude of the first estimator (the compass and the position use it), or None."""
-        return self.last_q[self.filters[0]] if self.filters else None
+    def aiding_q(self):
+        """The newest attitude of the aiding estimator (the compass and the position use it), or None."""
+        return self.last_q[self.aiding] if self.aiding else None
 
     def restart(self) -> None:
         """After a device reset or clock jump: every estimator starts over from its last attitude.

@@ -1,7 +1,8 @@
 """Sessions from a source spec: what the app, ``app --port``, ``record`` and the tests start.
 
 ``open_session(spec)`` opens the source (``groundstation.sources.open_source``) and gives a
-``LiveSession`` (not started) with the pipeline that fits it: a live link runs ``LIVE_FILTERS`` and
+``LiveSession`` (not started) with the pipeline that fits it: a live link runs every live estimator
+(``estimation.live_estimators``) and
 is recorded; a recording is fed through the live path (paced by ``ReplaySource``) with the estimators
 and settings it was recorded with, as the live session computed it (what the live-path benchmarks
 and tests reproduce). The app and ``groundstation replay`` open files whole instead
@@ -12,27 +13,22 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from groundstation.estimation import live_estimators
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
 from groundstation.sources import ReplaySource, SourceError, open_source
 
-# The comparison estimators run on every live session (and so on its recording's replays), so showing one is a legend click or
-# a check box, not a restart: the IMU filters (HF, ECF), those with the magnetometer (HF+mag, ECF+mag,
-# MCF; a few µs per sample each) and the GPS-aided unscented filters (UKF, SSSRUKF; a few hundred µs
-# per sample each, in the reader thread). Hidden curves cost the UI nothing per frame.
-# The first is the one shown: AHF2, the best on the BROAD dev set (bench/bench_estimators.out.md); VQF
-# and the paper's AHF follow, one "show" click away.
-LIVE_FILTERS = ("ahf2", "vqf", "ahf", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
 DEMO_SPEC = "sim:"
 
 
-def open_session(spec: str, *, filters=LIVE_FILTERS, settings: dict | None = None, record: bool = True,
+def open_session(spec: str, *, filters=None, settings: dict | None = None, record: bool = True,
                  recordings_dir: Path | None = None, **defaults) -> LiveSession:
     """The session on ``spec`` (SourceError/UserError with a message fit for the user).
 
-    ``filters`` and ``settings`` (estimator name -> overrides) apply to live sources; a replay takes
-    the recorded ones. ``defaults`` are source options the spec may override (``baud=``, ``speed=``).
+    ``filters`` (default: every live estimator) and ``settings`` (estimator name -> overrides) apply to
+    live sources; a replay takes the recorded ones. ``defaults`` are source options the spec may
+    override (``baud=``, ``speed=``).
     """
     source = open_source(spec, **defaults)
     if source.is_replay:
@@ -41,11 +37,11 @@ def open_session(spec: str, *, filters=LIVE_FILTERS, settings: dict | None = Non
             raise SourceError(f"{spec}: a .tlog is a flight log, not a link: open it whole (groundstation app FILE, "
                               "the app's File > Open, or replay, export and evaluate FILE)")
         return replay_session(source)
-    pipeline = Pipeline(filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
+    pipeline = Pipeline(live_estimators() if filters is None else filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
     return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata={"source_spec": spec})
 
 
 def replay_session(source: ReplaySource) -> LiveSession:
     """A recording through the live path with its recorded estimators and settings (every one of
-    ``LIVE_FILTERS`` for the app's recordings), as the live session computed it."""
+    live estimator for the app's recordings), as the live session computed it."""
     return LiveSession(source, pipeline_for(source.recording), record=False)

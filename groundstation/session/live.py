@@ -58,6 +58,7 @@ class LiveSession:
                 "protocol": self.pipeline.protocol,  # how a replay decodes the chunks
                 **(metadata or {}),
                 "filters": list(self.pipeline.filters),
+                "aiding_estimator": self.pipeline.bank.aiding,
                 "estimator_settings": self.pipeline.settings_json(),
             },
             self._recorder_event,

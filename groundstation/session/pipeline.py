@@ -240,18 +240,18 @@ class Pipeline:
     """Feed ``(t_host_ns, bytes)`` chunks; read ``tables`` (``imu``, ``onboard`` and one per frame, as
     ``catalogue`` describes them), ``events``, ``link``, ``config``.
 
-    ``filters`` names the host estimators (the first drives the compass heading and the position:
-    ``EstimatorBank.first_q``); ``settings`` maps a name to
+    ``filters`` names the host estimators; ``aiding`` the one whose attitude the compass heading and
+    the position use (default ``estimation.aiding_estimator``); ``settings`` maps a name to
     setting overrides (the recorded settings); ``forced`` to overrides that win over everything,
     including settings changed later in the session (the what-if ``--set`` of replay and export).
     """
 
     def __init__(self, filters=DEFAULT_FILTERS, settings=None, forced=None, assumed_sensor: SensorConfig | None = None,
-                 spec: Spec = SPEC, protocol: str = "gs"):
+                 spec: Spec = SPEC, protocol: str = "gs", aiding: str | None = None):
         if protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {protocol!r} (known: {', '.join(PROTOCOLS)})")
         self.protocol = protocol
-        self.bank = EstimatorBank(filters, settings, forced)
+        self.bank = EstimatorBank(filters, settings, forced, aiding)
         self.filters = self.bank.filters
         self.assumed_sensor = assumed_sensor or SensorConfig()
         self.clock = SessionClock()
@@ -401,7 +401,7 @@ class Pipeline:
         if bias is not None:
             self.events.append({"t_host_ns": t_host_ns, "kind": "gyro_bias", "bias_rad_s": list(bias)})
         if self.aiding.position_on and self.filters:
-            self.tables["position"].append((time_s, *self.aiding.position_step(acc, self.bank.first_q(), dt_s)))
+            self.tables["position"].append((time_s, *self.aiding.position_step(acc, self.bank.aiding_q(), dt_s)))
         self.link.on_sample(t_host_ns, t_us)
 
     def _magnetometer(self, t_host_ns: int, frame: Frame) -> None:
@@ -411,9 +411,9 @@ class Pipeline:
         self.magnetometer_stage(body, (mx * sx, my * sy, mz * sz))
 
     def magnetometer_stage(self, body_ut: tuple, shown_ut: tuple) -> None:
-        """Table row (``shown_ut``: the sensor's axes) with the compass heading from the first estimator's
+        """Table row (``shown_ut``: the sensor's axes) with the compass heading from the aiding estimator's
         tilt; the body-axis field for the estimators."""
-        heading = self.aiding.magnetometer(body_ut, self.bank.first_q())
+        heading = self.aiding.magnetometer(body_ut, self.bank.aiding_q())
         self.tables["mag_raw"].append((self._time_s, *shown_ut, heading))
 
     def _barometer(self, t_host_ns: int, frame: Frame) -> None:

@@ -71,9 +71,10 @@ def check_forced(filters, forced) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class RecordedSetup:
-    """How a recorded session was set up: its protocol, estimators and settings, plus ``forced``."""
+    """How a recorded session was set up: its protocol, estimators (and which one aided) and settings, plus ``forced``."""
 
     filters: tuple[str, ...]
+    aiding: str | None  # recorded, if among ``filters``; else the default (``estimation.aiding_estimator``)
     settings: dict[str, dict[str, float]]
     forced: dict | None
     protocol: str
@@ -96,13 +97,15 @@ def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedS
     if left_out:
         warnings.append({"t_host_ns": 0, "kind": "warning", "message": "recorded settings this version's "
                          f"estimators do not have or cannot read, left out (their defaults apply): {', '.join(left_out)}"})
-    return RecordedSetup(tuple(filters), recorded_settings(recording), forced, protocol, warnings)
+    aiding = recording.metadata.get("aiding_estimator")
+    return RecordedSetup(tuple(filters), aiding if aiding in filters else None, recorded_settings(recording), forced,
+                         protocol, warnings)
 
 
 def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
     """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``."""
     setup = recorded_setup(recording, filters, forced)
-    pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol)
+    pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol, aiding=setup.aiding)
     pipeline.events += setup.warnings
     return pipeline
 

@@ -19,11 +19,11 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from groundstation.autopilot import LOG_SUFFIXES
+from groundstation import formats
 from groundstation.errors import UserError
-from groundstation.estimation import GPS_AIDED
+from groundstation.estimation import runnable
 from groundstation.session.catalogue import Catalogue
-from groundstation.session.data import DATASET_SUFFIXES, LinkSummary, SessionData, load_session
+from groundstation.session.data import LinkSummary, SessionData, load_session
 from groundstation.session.link import LATENCY_WINDOW, PER_SECOND_COLUMNS, clock_figures
 from groundstation.sources.replay import check_speed
 
@@ -35,11 +35,11 @@ PLAY_INTERVAL_S = 0.02  # how often a session started on its own (the CLI's) mov
 
 def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:
     """The estimators a file opens with: a recording's own (None); for files that record none (flight
-    logs, dataset CSVs) the app's set without the GPS-aided filters, which without GPS are slow tilt
-    filters (as ``evaluate`` leaves them out): one check box adds them."""
-    name = Path(path).name.lower()
-    if name.endswith(LOG_SUFFIXES) or name.endswith(DATASET_SUFFIXES):
-        return tuple(n for n in app_filters if n not in GPS_AIDED)
+    logs, dataset CSVs) those of the app's set whose needs such a file meets (``formats.FILE_AIDING``, as
+    ``evaluate`` chooses): one check box adds the others."""
+    file_format = formats.sniff(path)
+    if file_format is not None and not file_format.replayable:
+        return runnable(formats.FILE_AIDING, app_filters)
     return None
 
 

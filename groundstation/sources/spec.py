@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from urllib.parse import parse_qsl, urlsplit
 
-from groundstation.autopilot import LOG_SUFFIXES
+from groundstation import formats
 from groundstation.sources.base import Source, SourceError
 
 # scheme -> (module providing open_spec(spec), the form the user types, what it is).
@@ -111,7 +111,8 @@ def parse_spec(text: str, **defaults) -> Spec:
     if COM_PORT.match(target) or _is_device(target):
         return Spec(text, "serial", target, _query(text, query), defaults)
     if os.path.isfile(target):
-        if target.lower().endswith(LOG_SUFFIXES):
+        file_format = formats.sniff(target)
+        if file_format is not None and file_format.read is not None:
             raise SourceError(f"{target} is an autopilot's flight log, not a link: open it whole (groundstation app FILE, "
                               "the app's File > Open, or replay, export and evaluate FILE)")
         return Spec(text, "recording", target, _query(text, query), defaults)

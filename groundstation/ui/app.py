@@ -53,14 +53,13 @@ def prepare_estimators(app):
     them from numba's cache in well under one), which would otherwise freeze the window without a word."""
     from PySide6 import QtCore, QtGui, QtWidgets
 
-    from groundstation.estimation import create
-    from groundstation.session.factory import LIVE_FILTERS
+    from groundstation.estimation import create, live_estimators
 
     blank = QtGui.QPixmap(560, 90)
     blank.fill(QtGui.QColor("#263238"))
     splash = QtWidgets.QSplashScreen(blank)
     splash.show()
-    for name in LIVE_FILTERS:
+    for name in live_estimators():
         splash.showMessage(f"groundstation: preparing the {name} estimator…\n(compiled on the first start on this "
                            "machine, then loaded from a cache)", QtCore.Qt.AlignCenter, QtGui.QColor("white"))
         app.processEvents()

@@ -113,8 +113,8 @@ class AttitudePanel(QtWidgets.QGroupBox):
         layout.addLayout(numbers)
 
     def show_session(self, session: LiveSession, body: bool = True) -> None:
-        """The newest estimate of ``session``'s first estimator (AHF, unless a recording says otherwise);
-        ``body``: the 3D view too."""
+        """The newest estimate of ``session``'s first estimator, the one shown first (AHF2 in the app's
+        sessions; a recording's own first otherwise); ``body``: the 3D view too."""
         filters = session.pipeline.filters
         name = filters[0] if filters else "onboard"  # a log with the aircraft's estimate only
         self.setTitle(f"Attitude ({name.upper()})")

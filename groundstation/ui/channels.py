@@ -18,6 +18,8 @@ from groundstation.session.pipeline import Pipeline
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
 
+PALETTE_HEX = tuple(PALETTE.values())  # the channels' curves take the palette's colours in turn
+
 PREFIX = "channel:"  # the series of a table's plotted columns, beside the live view's own series
 
 
@@ -31,7 +33,7 @@ def pane_plots(panes: list[list[str]]) -> tuple[Plot, ...]:
     plots = []
     for index, channels in enumerate(panes):
         curves = tuple(Curve(PREFIX + name.split(".", 1)[0], name.split(".", 1)[1], name,
-                             PALETTE[i % len(PALETTE)]) for i, name in enumerate(channels))
+                             PALETTE_HEX[i % len(PALETTE_HEX)]) for i, name in enumerate(channels))
         plots.append(Plot(f"pane {index + 1}", "", curves))
     return tuple(plots)
 

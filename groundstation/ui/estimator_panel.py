@@ -1,5 +1,6 @@
-"""The estimator panel: show or hide the comparison estimators, tune AHF's λ bounds, HF's and
-HF+mag's β and ECF's and ECF+mag's Kp/Ki live, back to the defaults, or send AHF's λ bounds to the aircraft.
+"""The estimator panel: show or hide the comparison estimators, tune the settings the estimators offer
+(``Estimator.tunable``: AHF's λ bounds, HF's and HF+mag's β, ECF's and ECF+mag's Kp/Ki) live, back to
+the defaults, or send AHF's λ bounds to the aircraft.
 
 Live, a change goes through ``LiveSession.change_settings``: it applies from the next sample, keeps
 the attitude, and is written to the recording, so a replay changes it at the same point. In a replay
@@ -14,18 +15,9 @@ import dataclasses
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.estimation import ESTIMATORS
+from groundstation.estimation import ESTIMATORS, label
 from groundstation.session.live import LiveSession
-from groundstation.ui.live_view import LABELS
 
-# estimator -> (setting, label, unit); units as in the settings dataclasses.
-TUNABLE = {
-    "ahf": (("lambda_min", "λ min", "rad/s"), ("lambda_max", "λ max", "rad/s")),
-    "hf": (("beta", "β", "rad/s"),),
-    "ecf": (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²")),
-    "hfm": (("beta", "β", "rad/s"),),
-    "ecfm": (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²")),
-}
 SHOWN_COLUMNS = 4  # "show" check boxes per row
 
 
@@ -48,11 +40,13 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self._layout = QtWidgets.QFormLayout(self)
         self._shown_row = QtWidgets.QGridLayout()
         self._layout.addRow("show", self._shown_row)
-        for name, settings in TUNABLE.items():
-            for setting, label, unit in settings:
+        # estimator -> (setting, symbol, unit), as the estimators offer them (``Estimator.tunable``)
+        self.tunable = {name: cls.tunable for name, cls in ESTIMATORS.items() if cls.tunable}
+        for name, settings in self.tunable.items():
+            for setting, text, unit in settings:
                 box = QtWidgets.QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, singleStep=0.01, suffix=f" {unit}")
                 self.boxes[name, setting] = box
-                self._layout.addRow(f"{LABELS[name]} {label}", box)
+                self._layout.addRow(f"{label(name)} {text}", box)
         apply_button = QtWidgets.QPushButton("Apply")
         apply_button.clicked.connect(self.apply)
         defaults_button = QtWidgets.QPushButton("Defaults")
@@ -82,13 +76,13 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         filters = session.pipeline.filters
         offered = [*filters[1:], *(n for n in ESTIMATORS if n not in filters)] if self.replay else filters[1:]
         for index, name in enumerate(offered):
-            box = QtWidgets.QCheckBox(LABELS.get(name, name))
-            box.setChecked(LABELS.get(name, name) in visible_labels and name in filters)
+            box = QtWidgets.QCheckBox(label(name))
+            box.setChecked(label(name) in visible_labels and name in filters)
             box.toggled.connect(lambda on, name=name: self._shown_changed(name, on))
             self.shown[name] = box
             self._shown_row.addWidget(box, *divmod(index, SHOWN_COLUMNS))
         settings = session.pipeline.settings()
-        for name, fields in TUNABLE.items():
+        for name, fields in self.tunable.items():
             for setting, _, unit in fields:
                 box = self.boxes[name, setting]
                 box.setEnabled(name in settings)
@@ -103,24 +97,24 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         return self.session is not None and self.session.source.is_replay
 
     def _shown_changed(self, name: str, on: bool) -> None:
-        self.visibilityChanged.emit(LABELS.get(name, name), on)
+        self.visibilityChanged.emit(label(name), on)
         filters = self.session.pipeline.filters
         if on and name not in filters:  # only a replay offers it: compute it again with this estimator too
             self.replayAsked.emit((*filters, name), self._forced())
 
     def _forced(self) -> dict[str, dict[str, float]]:
         """The fields of every estimator the session runs: the settings a recomputed replay is to use."""
-        return {name: self.values(name) for name in TUNABLE if name in self.session.pipeline.filters}
+        return {name: self.values(name) for name in self.tunable if name in self.session.pipeline.filters}
 
     def sync_shown(self, visible_labels: set[str]) -> None:
         """Follow the legend, where curves can be switched too."""
         for name, box in self.shown.items():
             box.blockSignals(True)  # reflecting the legend, not a new request
-            box.setChecked(LABELS.get(name, name) in visible_labels)
+            box.setChecked(label(name) in visible_labels)
             box.blockSignals(False)
 
     def values(self, name: str) -> dict[str, float]:
-        return {setting: self.boxes[name, setting].value() for setting, _, _ in TUNABLE[name]}
+        return {setting: self.boxes[name, setting].value() for setting, _, _ in self.tunable[name]}
 
     def apply(self) -> None:
         """Change every estimator whose fields differ from the settings in effect (a replay: compute it again)."""
@@ -133,7 +127,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
                 self.message.setText("nothing changed")
             return
         changed = []
-        for name in TUNABLE:
+        for name in self.tunable:
             if name not in current:
                 continue
             overrides = {k: v for k, v in self.values(name).items() if v != current[name][k]}
@@ -142,9 +136,9 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             try:
                 self.session.change_settings(name, overrides)
             except ValueError as error:
-                self.message.setText(f"{LABELS[name]}: {error}")
+                self.message.setText(f"{label(name)}: {error}")
                 return
-            changed.append(f"{LABELS[name]} " + ", ".join(f"{k} = {v:g}" for k, v in overrides.items()))
+            changed.append(f"{label(name)} " + ", ".join(f"{k} = {v:g}" for k, v in overrides.items()))
         self.message.setText(("applied: " + "; ".join(changed)) if changed else "nothing changed")
 
     def restore_defaults(self) -> None:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from PySide6 import QtWidgets
 
+from groundstation import estimation
 from groundstation.session.live import LiveSession
 from groundstation.ui.navigation import aiding_series
 from groundstation.ui.channels import ChannelsView
@@ -22,16 +23,10 @@ from groundstation.ui.series import Series, imu_quantities, onboard_quantities
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
-# The eleven curves the app shows together (its ten estimators and the onboard one) each get their own
-# colour of the palette (black for AHF2, shown first); the estimators only a replay of an older
-# recording has (CF1, KF, EKF) and AHF2+mag (evaluate and replays only) share one.
-INDIGO, WINE, GREEN, TEAL, ROSE, OLIVE, CYAN, SAND, PURPLE, BLACK, ORANGE = PALETTE
-COLORS = {"ahf2": BLACK, "vqf": ORANGE, "ahf": INDIGO, "onboard": WINE, "hf": GREEN, "ecf": TEAL, "ukf": ROSE,
-          "hfm": OLIVE, "ecfm": CYAN, "mcf": SAND, "sssrukf": PURPLE, "cf1": OLIVE, "kf": CYAN, "ekf": SAND,
-          "ahf2m": PURPLE}
-LABELS = {"ahf": "AHF", "onboard": "onboard", "hf": "HF", "ecf": "ECF", "cf1": "CF1", "kf": "KF", "ekf": "EKF",
-          "hfm": "HF+mag", "ecfm": "ECF+mag", "mcf": "MCF", "ukf": "UKF", "sssrukf": "SSSRUKF", "vqf": "VQF", "ahf2": "AHF2",
-          "ahf2m": "AHF2+mag"}
+# The eleven curves the app shows together (the live estimators and the onboard one) each get their own
+# colour of the palette, the one the estimator names (``Estimator.colour``); the estimators only a replay
+# of an older recording has (CF1, KF, EKF) share one. The aircraft's own estimate is wine.
+ONBOARD_COLOUR = PALETTE["wine"]
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
@@ -41,9 +36,15 @@ AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position"
 
 def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None) -> tuple[Curve, ...]:
     """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others."""
-    host = tuple(Curve("imu", f"{n}_{angle}_deg", LABELS.get(n, n), COLORS.get(n, "#444"), wraps_at) for n in filters)
-    onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", COLORS["onboard"], wraps_at, reference=True)
+    host = tuple(Curve("imu", f"{n}_{angle}_deg", estimation.label(n), colour(n), wraps_at) for n in filters)
+    onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", ONBOARD_COLOUR, wraps_at, reference=True)
     return host[:1] + (onboard,) + host[1:]
+
+
+def colour(name: str) -> str:
+    """An estimator's colour (grey if it names none of the palette's)."""
+    cls = estimation.ESTIMATORS.get(name)
+    return PALETTE.get(cls.colour, "#444444") if cls else "#444444"
 
 
 def attitude_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
@@ -72,9 +73,9 @@ def sensor_plots(aiding: frozenset[str] = frozenset()) -> tuple[Plot, ...]:
 
 def diagnostic_plots() -> tuple[Plot, ...]:
     return (
-        Plot("λ", "rad/s", (Curve("imu", "ahf_lam", "AHF", COLORS["ahf"]),
-                            Curve("onboard", "onboard_lam", "onboard", COLORS["onboard"], reference=True))),
-        Plot("acceleration error e_a", "", (Curve("imu", "ahf_e_a", "AHF", COLORS["ahf"]),)),
+        Plot("λ", "rad/s", (Curve("imu", "ahf_lam", estimation.label("ahf"), colour("ahf")),
+                            Curve("onboard", "onboard_lam", "onboard", ONBOARD_COLOUR, reference=True))),
+        Plot("acceleration error e_a", "", (Curve("imu", "ahf_e_a", estimation.label("ahf"), colour("ahf")),)),
     )
 
 

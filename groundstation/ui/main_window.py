@@ -15,19 +15,20 @@ from pathlib import Path
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.errors import UserError
-from groundstation.estimation import ESTIMATORS
+from groundstation import formats
+from groundstation.estimation import ESTIMATORS, label, live_estimators
 from groundstation.recording import default_recordings_dir
-from groundstation.session.factory import DEMO_SPEC, LIVE_FILTERS, open_session
+from groundstation.session.factory import DEMO_SPEC, open_session
 from groundstation.session.live import LiveSession
 from groundstation.session.reveal import Loading, RevealSession, estimators_for
 from groundstation.sources import whole_file
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
-from groundstation.ui.estimator_panel import TUNABLE, EstimatorPanel
+from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.event_console import EventConsole
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
-from groundstation.ui.live_view import LABELS, LiveView
+from groundstation.ui.live_view import LiveView
 from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
@@ -37,17 +38,21 @@ REDRAW_HZ = 30
 # several times the horizon's), figures and labels at 5 Hz (each repaint costs CPU under software
 # rendering; people read numbers no faster).
 HORIZON_EVERY, BODY_EVERY, FIGURES_EVERY = 2, 6, 6
-# The comparison estimators start switched off: shown are the best (the first of LIVE_FILTERS), the
-# paper's AHF and the aircraft's own estimate.
-DEFAULT_HIDDEN = frozenset(LABELS[name] for name in ESTIMATORS if name not in (LIVE_FILTERS[0], "ahf"))
+# The comparison estimators start switched off: shown are the best (AHF2, on the BROAD dev set,
+# bench/bench_estimators.out.md), the paper's AHF and the aircraft's own estimate.
+SHOWN_AT_FIRST = ("ahf2", "ahf")
 STEP_S = 5.0  # ← and → in a replay
 PAN_FRACTION = 0.1  # of the window, ← and → live
 RECENT_RECORDINGS = 8  # listed in File > Recent recordings
 RECENT_SOURCES = 8  # listed in the source box below the ports found
 # The curves of the versions that stored "hidden_curves" without "known_curves": any other label is new
-# to the user's settings and starts hidden if it is in DEFAULT_HIDDEN.
+# to the user's settings and starts hidden if it is in default_hidden().
 FORMERLY_KNOWN = frozenset({"AHF", "onboard", "HF", "ECF"})
-FILES = "Recordings and flight logs (*.gsrec *.tlog *.bin *.ulg *.csv *.csv.gz);;All files (*)"
+
+
+def default_hidden() -> frozenset[str]:
+    """The legend labels of the estimators that start switched off."""
+    return frozenset(label(name) for name in ESTIMATORS if name not in SHOWN_AT_FIRST)
 
 
 class MainWindow(QtWidgets.QMainWindow):
@@ -183,7 +188,7 @@ class MainWindow(QtWidgets.QMainWindow):
         app's estimators); computed in a worker, then played from the start (``tick`` adopts it)."""
         self.disconnect()
         path = Path(path)
-        self._load(path, estimators_for(path, LIVE_FILTERS), None, f"computing {path.name}")
+        self._load(path, estimators_for(path, live_estimators()), None, f"computing {path.name}")
 
     def _load(self, path: Path, filters, forced, text: str, recompute: bool = False) -> None:
         if self.loading is not None:
@@ -227,7 +232,7 @@ class MainWindow(QtWidgets.QMainWindow):
             folder.mkdir(parents=True, exist_ok=True)
         except OSError:
             pass  # the dialog then starts where it can
-        dialog = QtWidgets.QFileDialog(self, "Open recording or flight log", str(folder), FILES)
+        dialog = QtWidgets.QFileDialog(self, "Open recording or flight log", str(folder), formats.dialog_filter())
         dialog.setFileMode(QtWidgets.QFileDialog.ExistingFile)
         return dialog
 
@@ -335,7 +340,8 @@ class MainWindow(QtWidgets.QMainWindow):
         if not session.source.is_replay:  # a replay's settings are the recording's, not the user's
             tuned = session.pipeline.settings()
             self.settings.setValue("estimator_settings", json.dumps(
-                {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in TUNABLE.items() if name in tuned}))
+                {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in self.estimator_panel.tunable.items()
+                 if name in tuned}))
 
     def show_error(self, message: str | None) -> None:
         self.banner.setText(message or "")
@@ -470,9 +476,10 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _stored_hidden_curves(self) -> frozenset[str]:
         hidden = self._stored_labels("hidden_curves")
+        default = default_hidden()
         if hidden is None:
-            return DEFAULT_HIDDEN
-        return hidden | (DEFAULT_HIDDEN - self._known_curves())  # estimators added since then start hidden too
+            return default
+        return hidden | (default - self._known_curves())  # estimators added since then start hidden too
 
     def _stored_labels(self, key: str) -> frozenset[str] | None:
         stored = self.settings.value(key)

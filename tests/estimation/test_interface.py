@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation
 
 from estimation_samples import flight_like_samples
 from groundstation import quaternion
-from groundstation.estimation import ESTIMATORS, create, parse_overrides
+from groundstation.estimation import ESTIMATORS, create, parse_overrides, runnable
 from groundstation.estimation import base
 
 NAMES = list(ESTIMATORS)
@@ -33,8 +33,14 @@ def static_acc(pitch_deg, roll_deg):
     return r.inv().apply([0.0, 0.0, -1.0])  # the earth's "up" reaction, in body axes
 
 
-def test_names_used_everywhere():
-    assert NAMES == ["ahf", "ahf2", "hf", "ecf", "cf1", "kf", "ekf", "vqf", "ukf", "sssrukf", "hfm", "ecfm", "mcf", "ahf2m"]
+def test_every_estimator_describes_itself():
+    """Its own name, a label no other has, and only needs the sessions know (what ``runnable`` checks)."""
+    assert all(ESTIMATORS[name].name == name for name in NAMES)
+    labels = [ESTIMATORS[name].label for name in NAMES]
+    assert len(set(labels)) == len(labels)
+    assert set().union(*(cls.needs for cls in ESTIMATORS.values())) <= {"mag", "gps"}
+    assert runnable(set(), NAMES) == tuple(n for n in NAMES if not ESTIMATORS[n].needs)
+    assert set(runnable({"mag"}, NAMES)) == set(NAMES) - {"ukf", "sssrukf"}
 
 
 @pytest.mark.parametrize("name", NAMES)

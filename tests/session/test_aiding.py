@@ -106,3 +106,35 @@ def test_fused_position_follows_truth_closer_than_the_raw_gps_and_barometer():
     horizontal_fused, horizontal_gps = np.std(fused_error[:, :2], axis=0), np.std(gps_error[:, :2], axis=0)
     assert np.all(horizontal_fused < 0.8 * horizontal_gps), (horizontal_fused, horizontal_gps)
     assert np.std(fused_error[:, 2]) < 0.3  # barometer 0.17 m noise, smoothed
+
+
+def test_the_aiding_estimator_is_a_named_setting_not_the_first_of_the_filters(tmp_path):
+    """The compass heading and the position come from the estimator the session names, wherever it stands
+    in the filters, live and from a recording (which records the name); unnamed, AHF2 when it runs."""
+    from groundstation.session.data import load_session
+    from tests.simulated import simulated_chunks, write_recording
+
+    chunks = simulated_chunks(8.0, seed=4, mode="raw", mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=10)
+
+    def aided_tables(pipeline):
+        for t_host_ns, data in chunks:
+            pipeline.feed(t_host_ns, data)
+        return {name: pipeline.tables[name].to_dict() for name in ("mag_raw", "position")}
+
+    alone = aided_tables(Pipeline(("ekf",)))
+    named = aided_tables(Pipeline(("hf", "ekf"), aiding="ekf"))
+    first = aided_tables(Pipeline(("hf", "ekf")))  # neither AHF2 nor named: the first, as recordings before the name
+    assert len(alone["position"]["time_s"]) > 100 and len(alone["mag_raw"]["time_s"]) > 300
+    for table in alone:
+        for column, values in alone[table].items():
+            np.testing.assert_array_equal(named[table][column], values)
+    assert not np.array_equal(first["mag_raw"][HEADING.name], alone["mag_raw"][HEADING.name])
+    assert Pipeline(("hf", "ahf2")).bank.aiding == "ahf2"
+
+    path = tmp_path / "named.gsrec"
+    write_recording(path, chunks, {"filters": ["hf", "ekf"], "aiding_estimator": "ekf"})
+    write_recording(tmp_path / "alone.gsrec", chunks, {"filters": ["ekf"]})
+    recorded, only = load_session(path).tables, load_session(tmp_path / "alone.gsrec").tables  # the batch path
+    for table in ("mag_raw", "position"):
+        for column, values in only[table].items():
+            np.testing.assert_array_equal(recorded[table][column], values)

@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from groundstation.recording import open_recording
-from groundstation.session.factory import LIVE_FILTERS, open_session
+from groundstation.estimation import live_estimators
+from groundstation.session.factory import open_session
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import replay
@@ -30,7 +31,7 @@ def test_a_sim_session_records_what_replays_to_its_estimates_bit_for_bit(tmp_pat
 
 def test_the_app_filters_are_the_default():
     session = open_session("loop://", record=False)
-    assert session.pipeline.filters == LIVE_FILTERS and session.recording_path is None
+    assert session.pipeline.filters == live_estimators() and session.recording_path is None
     session.source.close()
 
 

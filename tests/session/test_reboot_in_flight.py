@@ -10,11 +10,11 @@ before the reset (the truth stopped there).
 import numpy as np
 import pytest
 
+from groundstation.estimation import live_estimators
 from groundstation.estimation.evaluation import inclination_error_rad
 from groundstation.recording import RecordingWriter, open_recording
 from groundstation.session.batch import batch_replay
 from groundstation.session.data import from_pipeline, load_session
-from groundstation.session.factory import LIVE_FILTERS
 from groundstation.session.replay import replay
 from groundstation.sim.firmware import GYRO_CALIBRATION, FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
@@ -36,7 +36,7 @@ def simulated_recording(path, reboot_after_s: float):
     firmware = FirmwareSettings(reboot_after_s=reboot_after_s, mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)
     truth = TruthTable(firmware.accel_fs_g, firmware.gyro_fs_dps, firmware.mounting)
     stream = SimStream(Scenario("flight", DURATION_S, seed=1, firmware=firmware), on_samples=truth)
-    with RecordingWriter(path, {"source": "simulated bridge", "filters": list(LIVE_FILTERS)}) as writer:
+    with RecordingWriter(path, {"source": "simulated bridge", "filters": list(live_estimators())}) as writer:
         for chunk in stream.advance(stream.end_s) + stream.flush():
             writer.write_chunk(round(chunk.t_s * 1e9), chunk.data)
         writer.write_samples({name: column.to_numpy(dtype=float) for name, column in truth.frame().items()})
@@ -80,8 +80,8 @@ def test_evaluate_scores_the_whole_flight(recordings):
 
 @pytest.mark.parametrize("path", [replay, batch_replay], ids=["live pipeline", "batch"])
 def test_every_live_estimator_is_back_on_truth_within_5_s(recordings, path):
-    with_reset = from_pipeline(recordings[REBOOT_AFTER_S], path(recordings[REBOOT_AFTER_S], LIVE_FILTERS))
-    without = from_pipeline(recordings[0.0], path(recordings[0.0], LIVE_FILTERS))
+    with_reset = from_pipeline(recordings[REBOOT_AFTER_S], path(recordings[REBOOT_AFTER_S], live_estimators()))
+    without = from_pipeline(recordings[0.0], path(recordings[0.0], live_estimators()))
     reset_s = next(e["session_time_s"] for e in with_reset.events if e["kind"] == "device_reset")
     window = (reset_s + BACK_ON_TRUTH_S, DURATION_S - 1.5)
 
@@ -89,5 +89,5 @@ def test_every_live_estimator_is_back_on_truth_within_5_s(recordings, path):
         rows = (data.time_s >= window[0]) & (data.time_s < window[1])
         return float(np.sqrt(np.mean(inclination_error_deg(data, name)[rows] ** 2)))
 
-    excess = {name: round(rms_deg(with_reset, name) - rms_deg(without, name), 2) for name in LIVE_FILTERS}
+    excess = {name: round(rms_deg(with_reset, name) - rms_deg(without, name), 2) for name in live_estimators()}
     assert max(excess.values()) <= MARGIN_DEG, excess

@@ -4,13 +4,13 @@ neither: they are written as text); a replay must take them back, whatever they 
 import numpy as np
 
 from groundstation.recording import RecordingWriter, open_recording
-from groundstation.session.factory import LIVE_FILTERS
+from groundstation.estimation import live_estimators
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
 
 
 def test_the_live_estimators_settings_survive_the_recording_header(tmp_path):
-    live = Pipeline(LIVE_FILTERS)
+    live = Pipeline(live_estimators())
     path = tmp_path / "live.gsrec"
     with RecordingWriter(path, {"filters": list(live.filters), "estimator_settings": live.settings_json()}):
         pass

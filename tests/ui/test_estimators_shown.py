@@ -8,18 +8,19 @@ import pytest
 
 from groundstation import quaternion
 from groundstation.recording import RecordingWriter
-from groundstation.session.factory import DEMO_SPEC, LIVE_FILTERS
+from groundstation.estimation import ESTIMATORS, label, live_estimators
+from groundstation.session.factory import DEMO_SPEC
 from groundstation.sim.stream import SimStream
 from groundstation.sources import parse_spec
 from groundstation.sources.sim import parse_scenario
 from groundstation.ui.export_job import ExportJob
 from groundstation.ui.estimator_panel import SHOWN_COLUMNS
-from groundstation.ui.live_view import LABELS
 from groundstation.ui.main_window import MainWindow
 
 from tests.ui.helpers import open_file
 
 NEW = ("hfm", "ecfm", "mcf", "ukf", "sssrukf")
+LIVE_FILTERS = live_estimators()
 COMPARED = LIVE_FILTERS[1:]  # the first is shown; the others get a "show" box
 
 
@@ -62,19 +63,19 @@ def test_new_estimators_run_start_hidden_and_toggle_on_the_demo(window, qtbot):
         np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-6)
     for name in NEW:  # hidden: not drawn at all, on either tab
         for plots in (view.attitude, view.heading):
-            assert all(not c.isVisible() and points(c) == 0 for c in curves(plots, LABELS[name])), name
+            assert all(not c.isVisible() and points(c) == 0 for c in curves(plots, label(name))), name
 
     view.tabs.setCurrentWidget(view.heading)
     for name in NEW:
         panel.shown[name].setChecked(True)
-        label = LABELS[name]
-        heading = curves(view.heading, label)[0]
+        shown_as = label(name)
+        heading = curves(view.heading, shown_as)[0]
         qtbot.waitUntil(lambda: points(heading) > 50, timeout=3000)
-        assert all(c.isVisible() for c in curves(view.attitude, label) + curves(view.heading, label))
-        assert label in view.heading.read_at(float(heading.xData[-1]))  # the crosshair reads it too
+        assert all(c.isVisible() for c in curves(view.attitude, shown_as) + curves(view.heading, shown_as))
+        assert shown_as in view.heading.read_at(float(heading.xData[-1]))  # the crosshair reads it too
         panel.shown[name].setChecked(False)
-        assert not any(c.isVisible() for c in curves(view.attitude, label) + curves(view.heading, label))
-        assert label not in view.attitude.visible_labels()
+        assert not any(c.isVisible() for c in curves(view.attitude, shown_as) + curves(view.heading, shown_as))
+        assert shown_as not in view.attitude.visible_labels()
     view.tabs.setCurrentWidget(view.attitude)  # shown now, the attitude plots draw it too
     panel.shown["ukf"].setChecked(True)
     qtbot.waitUntil(lambda: points(curves(view.attitude, "UKF")[0]) > 50, timeout=3000)
@@ -124,7 +125,7 @@ def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_record
     for name in NEW:
         assert len(rows[f"{name}_qw"]) > 1500 and np.all(np.isfinite(rows[f"{name}_qw"])), name
     offered = list(window.estimator_panel.shown)  # the recorded ones, then those a replay can add
-    assert offered[: len(COMPARED)] == list(COMPARED) and set(offered[len(COMPARED) :]) == {"cf1", "kf", "ekf", "ahf2m"}
+    assert offered[: len(COMPARED)] == list(COMPARED) and set(offered[len(COMPARED) :]) == set(ESTIMATORS) - set(LIVE_FILTERS)
     assert not any(window.estimator_panel.shown[name].isChecked() for name in NEW)
     window.estimator_panel.shown["mcf"].setChecked(True)
     mcf = curves(window.live_view.attitude, "MCF")[0]

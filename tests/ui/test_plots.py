@@ -9,8 +9,8 @@ import pytest
 from PySide6 import QtCore, QtGui
 
 from groundstation.session.table import Table
-from groundstation.session.factory import LIVE_FILTERS
-from groundstation.ui.live_view import COLORS, PALETTE, attitude_plots, diagnostic_plots
+from groundstation.estimation import ESTIMATORS, live_estimators
+from groundstation.ui.live_view import ONBOARD_COLOUR, PALETTE, attitude_plots, colour, diagnostic_plots
 from groundstation.ui.plots import StackedPlots
 from groundstation.ui.series import Series
 
@@ -105,9 +105,9 @@ def test_the_onboard_curve_lies_beneath_the_estimators_and_is_dashed(plots):
 
 
 def test_every_estimator_has_its_own_colour_from_one_colour_blind_safe_palette():
-    shown = [COLORS[n] for n in ("onboard", *LIVE_FILTERS)]  # every estimator a live session runs
+    shown = [ONBOARD_COLOUR, *(colour(n) for n in live_estimators())]  # every estimator a live session runs
     assert len(set(shown)) == len(shown)
-    assert set(COLORS.values()) <= set(PALETTE)
+    assert {cls.colour for cls in ESTIMATORS.values()} <= set(PALETTE)  # each names one of the palette's
 
 
 def test_a_dimensionless_axis_carries_no_unit_or_scale_factor(qtbot):

@@ -13,7 +13,8 @@ import pytest
 from groundstation import quaternion
 from groundstation.session import reveal
 from groundstation.session.data import load_session
-from groundstation.session.factory import LIVE_FILTERS
+from groundstation.estimation import AIDING_ESTIMATOR, live_estimators, runnable
+from groundstation.formats import FILE_AIDING
 
 from tests.ui.helpers import open_file
 
@@ -110,7 +111,8 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     qtbot.waitUntil(lambda: window.loading is None, timeout=60000)
     assert window.banner.isHidden() and not window.loading_row.isVisible()
     session, bar = window.session, window.replay_bar
-    filters = tuple(n for n in LIVE_FILTERS if n not in ("ukf", "sssrukf"))
+    filters = runnable(FILE_AIDING, live_estimators())
+    assert "ukf" not in filters and "hfm" in filters  # a log is not counted on for GPS aiding
     assert loads == [(filters, None)] and session.pipeline.filters == filters
     data = session.data
     assert len(data) > 100 and data.link is None
@@ -119,16 +121,16 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     window.live_view.window_box.setCurrentText("whole session")
 
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(8.0))
-    qtbot.waitUntil(lambda: points(pitch_curve(window, LIVE_FILTERS[0])) > 3, timeout=5000)  # playing
+    qtbot.waitUntil(lambda: points(pitch_curve(window, AIDING_ESTIMATOR)) > 3, timeout=5000)  # playing
     bar.play_button.click()
     assert session.source.paused
     middle = float(data.time_s[len(data) // 2])
     window.seek(middle)
-    check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], middle)
+    check_plotted_up_to(window, qtbot, data, AIDING_ESTIMATOR, middle)
     window.seek(middle / 3)  # back
-    check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], middle / 3)
+    check_plotted_up_to(window, qtbot, data, AIDING_ESTIMATOR, middle / 3)
     last = np.flatnonzero(data.time_s <= middle / 3)[-1]  # the horizon shows the newest estimate shown
-    newest = f"{pitch_deg(data.estimates[LIVE_FILTERS[0]][last:last + 1])[0]:+7.1f}°"
+    newest = f"{pitch_deg(data.estimates[AIDING_ESTIMATOR][last:last + 1])[0]:+7.1f}°"
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=3000)
     assert len(loads) == 1  # seeking computed nothing
 
@@ -239,11 +241,11 @@ def test_a_dataset_csv_plays_as_a_recording_does(window, qtbot, tmp_path):
     csv = tmp_path / "f.truth.csv.gz"  # the truth and sensor values in the dataset CSV layout
     open_file(window, qtbot, csv)
     data = window.session.data
-    assert window.banner.isHidden() and window.session.pipeline.filters[0] == LIVE_FILTERS[0] and data.true_q is not None
+    assert window.banner.isHidden() and window.session.pipeline.filters[0] == AIDING_ESTIMATOR and data.true_q is not None
     window.live_view.window_box.setCurrentText("whole session")
     window.replay_bar.play_button.click()
     window.seek(6.0)
-    check_plotted_up_to(window, qtbot, data, LIVE_FILTERS[0], 6.0)
+    check_plotted_up_to(window, qtbot, data, AIDING_ESTIMATOR, 6.0)
     assert window.link_panel.headline.text().startswith("NO LINK")
 
 

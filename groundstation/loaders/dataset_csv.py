@@ -1,0 +1,27 @@
+"""A dataset CSV (plain or gzip'd, ``datasets.read_csv``; ../shared/datasets/README.md) read directly."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from groundstation.datasets import DatasetError, Trial, read_csv
+from groundstation.errors import UserError
+from groundstation.session.data import SessionData, from_trial
+from groundstation.session.pipeline import DEFAULT_FILTERS
+from groundstation.session.replay import check_forced
+
+
+def load(path, filters=None, forced=None, progress=None) -> SessionData:
+    try:
+        trial = read_csv(path)
+    except DatasetError as error:
+        raise UserError(str(error)) from None
+    return session_of_trial(trial, filters, forced, {"source": f"dataset CSV {Path(path).name}"})
+
+
+def session_of_trial(trial: Trial, filters, forced, metadata: dict) -> SessionData:
+    """A trial's session with ``filters`` (default: the pipeline's) and the ``forced`` settings: what any
+    format of sample columns (a dataset CSV, arrays) gives."""
+    filters = filters or DEFAULT_FILTERS
+    check_forced(filters, forced)
+    return from_trial(trial, filters, forced, metadata)

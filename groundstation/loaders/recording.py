@@ -1,0 +1,26 @@
+"""The project's recordings (``.gsrec``, docs/recording-format.md): the link's bytes computed again, or an
+imported dataset trial's samples."""
+
+from __future__ import annotations
+
+from groundstation.errors import UserError
+from groundstation.recording import open_recording
+from groundstation.session.data import SessionData, computed, from_pipeline, from_trial, trial_from_samples
+from groundstation.session.replay import check_forced, recorded_filters, recorded_settings
+
+
+def load(path, filters=None, forced=None, progress=None) -> SessionData:
+    recording = open_recording(path)
+    if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
+        trial = trial_from_samples(recording.samples, path)
+        filters = filters or recorded_filters(recording)[0]
+        check_forced(filters, forced)
+        settings = {**recorded_settings(recording)}
+        for name, values in (forced or {}).items():
+            settings[name] = {**settings.get(name, {}), **values}
+        data = from_trial(trial, filters, settings, recording.metadata)
+        data.damage = recording.damage
+        return data
+    if recording.chunk_count == 0:
+        raise UserError(f"{path}: the recording holds no data")
+    return from_pipeline(recording, computed(recording, filters, forced, progress))
