@@ -59,6 +59,11 @@ class SessionData:
     def __len__(self) -> int:
         return len(self.time_s)
 
+    @property
+    def warnings(self) -> list[str]:
+        """What every command says besides its result: what the recording lost, then the session's warnings."""
+        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") == "warning")]
+
     def evaluate(self) -> dict[str, dict[str, float]]:
         """Inclination RMSE / max of every estimator against the truth (BROAD's metric), and heading RMSE /
         max of those that use the magnetometer when the session has one (``evaluation``)."""
