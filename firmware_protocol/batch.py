@@ -164,11 +164,19 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
         (order,) = np.nonzero(kept.type_ids[order_of] == frame_type.id)
         which = order_of[order]
         dtype = payload_dtype(frame_type)
-        if len(which):  # a frame's payload lies within the buffer, so its window exists
-            rows = np.lib.stride_tricks.sliding_window_view(buf, frame_type.payload_size)[kept.starts[which] + HEADER_BYTES]
-            raw = np.ascontiguousarray(rows).view(dtype).reshape(len(which))
-        else:
-            raw = np.zeros(0, dtype)
+        starts = kept.starts[which]
+        whole = buf[starts + 1] == frame_type.payload_size
+        shorter = np.flatnonzero(~whole)  # an older sender's shorter payloads (rare: a few CONFIG frames)
+        raw = np.zeros(len(which), dtype)
+        if len(shorter) < len(which):  # a whole payload lies within the buffer, so its window exists
+            rows = np.lib.stride_tricks.sliding_window_view(buf, frame_type.payload_size)[starts[whole] + HEADER_BYTES]
+            wholes = np.ascontiguousarray(rows).view(dtype).reshape(-1)
+            if len(shorter):
+                raw[whole] = wholes
+            else:
+                raw = wholes
+        for k in shorter.tolist():
+            raw[k] = tables.read(data, int(starts[k]))
         chunk = chunk_of[placed.emitter[order]]
         device = placed.t64[order] if frame_type.has_timestamp else None
         frames[frame_type.name] = FrameColumns(frame_type, order, kept.seqs[which], raw, device, chunk, chunk_t_host_ns[chunk])
@@ -187,7 +195,18 @@ class _Tables:
         self.size = np.array([t.payload_size if t else -1 for t in types], dtype=np.int16)  # -1: unknown id
         self.known = self.size >= 0
         self.timestamped = np.array([bool(t and t.has_timestamp) for t in types])
-        self.unpackers = [t.struct.unpack_from if t else None for t in types]
+        self.readers = [t.readers if t else None for t in types]  # payload length -> read (older senders' too)
+        # [type id, length byte]: a length the frame type's payloads may have (any that fits, for an unknown id).
+        self.accepts = np.zeros((256, 256), dtype=bool)
+        for type_id, readers in enumerate(self.readers):
+            if readers is None:
+                self.accepts[type_id, : spec.max_payload_bytes + 1] = True
+            else:
+                self.accepts[type_id, list(readers)] = True
+
+    def read(self, data: bytes, start: int) -> tuple:
+        """The raw values of the known-type frame starting at ``start``, as ``StreamDecoder`` reads them."""
+        return self.readers[data[start + 2]][data[start + 1]](data, start + HEADER_BYTES)
 
 
 @dataclass
@@ -204,10 +223,8 @@ def _scan(buf: np.ndarray, chunk_ends: np.ndarray, tables: _Tables, spec: Spec) 
     syncs = np.flatnonzero(buf == SYNC)
     header = syncs + HEADER_BYTES <= n
     lengths = np.zeros(len(syncs), dtype=np.int64)
-    sizes = np.full(len(syncs), -1, dtype=np.int64)
     lengths[header] = buf[syncs[header] + 1]
-    sizes[header] = tables.size[buf[syncs[header] + 2]]
-    plausible = header & ((lengths == sizes) | ((sizes < 0) & (lengths <= spec.max_payload_bytes)))
+    plausible = header & tables.accepts[buf[np.minimum(syncs + 2, n - 1)], lengths]
     ends = syncs + _OVERHEAD + lengths
     complete = plausible & (ends <= n)
     valid = np.zeros(len(syncs), dtype=bool)
@@ -297,8 +314,7 @@ def _duplicates(data: bytes, starts, ends, type_ids, seqs, tables: _Tables) -> n
         while duplicate[index[previous]]:
             previous -= 1
         p = int(index[previous])
-        if tables.unpackers[type_ids[i]](data, int(starts[i]) + HEADER_BYTES) == tables.unpackers[type_ids[p]](
-                data, int(starts[p]) + HEADER_BYTES):
+        if tables.read(data, int(starts[i])) == tables.read(data, int(starts[p])):
             duplicate[i] = True
     return duplicate
 
@@ -351,7 +367,7 @@ def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tabl
     returned = 0
     lost_total = 0
     held_at = -1  # kept index of the held frame
-    types, unpackers = tables.types, tables.unpackers
+    types = tables.types
     i = 0
     next_progress = 0
     while i < n:
@@ -360,7 +376,7 @@ def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tabl
             next_progress = i + 200_000
         type_id = int(kept.type_ids[i])
         seq = int(seqs[i])
-        raw = unpackers[type_id](data, int(kept.starts[i]) + HEADER_BYTES)
+        raw = tables.read(data, int(kept.starts[i]))
         t_host_ns = int(chunk_t_host_ns[chunk_of[i]])
         advances = returned + lost_total
         if not ts[i]:

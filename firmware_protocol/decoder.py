@@ -1,7 +1,7 @@
 """Incremental stream decoder: bytes in any chunking -> frames, with link-health counters.
 
 It never raises on input bytes. It resynchronises on the sync byte; a candidate whose length is
-impossible for its type, or whose CRC fails, gives up only its sync byte, so a corrupted or
+impossible for its type (this version's payload, or an older sender's shorter one: ``FrameType.readers``), or whose CRC fails, gives up only its sync byte, so a corrupted or
 truncated frame never swallows the intact frame that follows it. Every byte fed ends up in an
 CRC-valid frame (``frame_bytes``), in ``bytes_skipped``, or still pending (less than one frame):
 ``bytes_in == frame_bytes + bytes_skipped + pending_bytes``.
@@ -52,13 +52,14 @@ _FAST_PERIODS = 4  # consecutive frames less than 4 sample periods apart need no
 _WRAP = 1 << 32
 
 
-def _lookup(spec: Spec) -> tuple[list, list, list, list]:
-    """Per type id (0..255): the frame type, its payload size, unpacker and whether it is timestamped
+def _lookup(spec: Spec) -> tuple[list, list, list, list, list]:
+    """Per type id (0..255): the frame type, its payload size, unpacker, readers of every payload length
+    it may have (``FrameType.readers``: older senders' shorter ones too) and whether it is timestamped
     (None/False for ids the spec lacks): lists indexed in the hot loop."""
     by_id = {t.id: t for t in spec.frames}
     types = [by_id.get(i) for i in range(256)]
     return (types, [t.payload_size if t else None for t in types], [t.struct.unpack_from if t else None for t in types],
-            [bool(t and t.has_timestamp) for t in types])
+            [t.readers if t else None for t in types], [bool(t and t.has_timestamp) for t in types])
 
 
 @dataclass
@@ -88,7 +89,7 @@ class StreamDecoder:
     def __init__(self, spec: Spec = SPEC) -> None:
         """``spec``: the protocol to decode (the project's own by default; tests decode others)."""
         self.spec = spec
-        self._types, self._sizes, self._unpackers, self._timestamped = _lookup(spec)
+        self._types, self._sizes, self._unpackers, self._readers, self._timestamped = _lookup(spec)
         self.stats = DecoderStats()
         self.rules = SequenceRules(self.stats)  # sequence, device time, plausibility, restarts
         self._pending = b""
@@ -125,7 +126,7 @@ class StreamDecoder:
         find = data.find
         # Locals, not globals, in the loop that runs a million times a second.
         sync, header, overhead, max_payload, crc_init = SYNC, HEADER_BYTES, _OVERHEAD, self.spec.max_payload_bytes, CRC_INIT
-        sizes, unpackers, types, timestamped = self._sizes, self._unpackers, self._types, self._timestamped
+        sizes, unpackers, readers, types, timestamped = self._sizes, self._unpackers, self._readers, self._types, self._timestamped
         crc, new, frame_class = crc_hqx, _new, Frame
         skipped = crc_errors = bad_lengths = lost = duplicates = unknown = accepted = 0
         last_seq, last_raw = self._last_seq, self._last_raw
@@ -146,7 +147,7 @@ class StreamDecoder:
             length = data[start + 1]
             type_id = data[start + 2]
             size = sizes[type_id]
-            if length != size and (size is not None or length > max_payload):
+            if length != size and (length > max_payload if size is None else length not in readers[type_id]):
                 bad_lengths += 1
                 skipped += 1
                 pos = start + 1
@@ -168,7 +169,7 @@ class StreamDecoder:
                 continue
             seq = data[start + 3]
             # Encoding is a function of (type, seq, values): equal values mean equal bytes.
-            raw = unpackers[type_id](data, start + header)
+            raw = unpackers[type_id](data, start + header) if length == size else readers[type_id][length](data, start + header)
             if seq == last_seq and raw == last_raw:
                 duplicates += 1
                 continue

@@ -232,6 +232,13 @@ def _c_payload_size_function(spec: Spec) -> list[str]:
 # --- docs/protocol.md -------------------------------------------------------------------------------
 
 
+def _absent_note(spec: Spec, field: Field) -> str:
+    if field.absent is None:
+        return ""
+    name = f" (`{spec.enum_name(field, field.absent)}`)" if field.enum else ""
+    return f"; appended later: reads as {field.absent!r}{name} from an older sender"
+
+
 def protocol_markdown(spec: Spec = SPEC) -> str:
     golden = golden_frames(spec)
     out = [
@@ -250,7 +257,7 @@ def protocol_markdown(spec: Spec = SPEC) -> str:
         "| offset | size | content |",
         "|---|---|---|",
         f"| 0 | 1 | sync `0x{spec.sync:02X}` |",
-        "| 1 | 1 | payload length in bytes (fixed per type) |",
+        "| 1 | 1 | payload length in bytes (per type: this version's, or an older sender's shorter one) |",
         "| 2 | 1 | frame type id |",
         "| 3 | 1 | sequence counter, +1 per frame sent, wraps at 256 (one counter per direction) |",
         f"| 4 | n | payload (at most {spec.max_payload_bytes} bytes), fields little-endian |",
@@ -264,6 +271,11 @@ def protocol_markdown(spec: Spec = SPEC) -> str:
         "failed CRC, gives up only its sync byte, so a damaged frame never hides the intact frame after it. "
         "A frame repeated byte for byte is dropped as a duplicate; gaps in the sequence counter count as lost frames.",
         "",
+        "A frame type grows only at its end. A field appended after the type was first sent has an *absent* "
+        "value: a payload from an older sender that ends before the field (at a field boundary) is still read, "
+        "and the field reads as that value (for an enum, one that is none of its members: unknown). The frame table "
+        "lists every payload length a type may have.",
+        "",
         "## Frames",
         "",
         "| id | frame | direction | payload bytes | frame bytes |",
@@ -271,13 +283,15 @@ def protocol_markdown(spec: Spec = SPEC) -> str:
     ]
     for t in spec.frames:
         direction = "aircraft → ground" if t.direction == "down" else "ground → aircraft"
-        frame_bytes = t.payload_size + spec.header_bytes + spec.crc_bytes
-        out.append(f"| 0x{t.id:02X} | [`{t.name}`](#{t.name.lower()}) | {direction} | {t.payload_size} | {frame_bytes} |")
+        sizes = sorted(t.readers)
+        payload = ", ".join(map(str, sizes))
+        frame_bytes = ", ".join(str(size + spec.header_bytes + spec.crc_bytes) for size in sizes)
+        out.append(f"| 0x{t.id:02X} | [`{t.name}`](#{t.name.lower()}) | {direction} | {payload} | {frame_bytes} |")
     for t in spec.frames:
         out += ["", f"### {t.name}", "", t.description, "", "| offset | field | C type | scale | unit | description |", "|---|---|---|---|---|---|"]
         offset = spec.header_bytes
         for f in t.fields:
-            description = f.description + (f" (enum `{f.enum}`)" if f.enum else "")
+            description = f.description + (f" (enum `{f.enum}`)" if f.enum else "") + _absent_note(spec, f)
             out.append(f"| {offset} | `{f.name}` | `{f.c_type}` | {f.scale!r} | {f.unit} | {description} |")
             offset += f.size
         out += ["", f"Golden vector (`firmware_protocol/golden/{t.name.lower()}.bin`): `{golden[t.name][1]['hex']}`"]

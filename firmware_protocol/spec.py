@@ -9,6 +9,7 @@ from __future__ import annotations
 import struct
 import tomllib
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -25,6 +26,8 @@ C_TYPES: dict[str, tuple[str, int, float, float]] = {
 }
 
 TIMESTAMP_FIELD = "t_us"
+ABSENT_KEY = "absent"  # spec.toml: the field was appended later, and reads as this where an older sender left it out
+ABSENT_NAME = "unknown"  # what an absent enum field is called
 SPEC_PATH = Path(__file__).with_name("spec.toml")
 
 
@@ -40,6 +43,7 @@ class Field:
     description: str
     scale: float = 1.0
     enum: str | None = None
+    absent: int | float | None = None  # raw value read where an older sender's payload ends before the field; None: always sent
 
     @property
     def size(self) -> int:
@@ -74,12 +78,45 @@ class FrameType:
     def has_timestamp(self) -> bool:
         return bool(self.fields) and self.fields[0].name == TIMESTAMP_FIELD
 
+    def field(self, name: str) -> Field:
+        return self.fields[self.field_names.index(name)]
+
+    @cached_property
+    def readers(self) -> dict[int, Callable[[bytes, int], tuple]]:
+        """Payload length -> ``read(data, offset)``: the raw values in field order. A frame type grows
+        only at its end, so besides this version's payload every older one is read: a payload that ends
+        at a field boundary after the last field every version sends, the fields it lacks read as their
+        ``absent`` value. Both decoders read payloads through this table (one rule)."""
+        readers = {self.payload_size: self.struct.unpack_from}
+        size = self.payload_size
+        for count in range(len(self.fields) - 1, -1, -1):
+            if self.fields[count].absent is None:
+                break
+            size -= self.fields[count].size
+            readers[size] = _older_reader(self.fields[:count], tuple(f.absent for f in self.fields[count:]))
+        return readers
+
+
+def _older_reader(sent: tuple[Field, ...], absent: tuple) -> Callable[[bytes, int], tuple]:
+    unpack_from = struct.Struct("<" + "".join(C_TYPES[f.c_type][0] for f in sent)).unpack_from
+    return lambda data, offset: unpack_from(data, offset) + absent
+
 
 @dataclass(frozen=True)
 class Enum:
     name: str
     description: str
     values: dict[str, int]
+
+    def name_of(self, value: int, absent: int | None = None) -> str:
+        """The member name of a raw value; ``unknown`` for the field's ``absent`` value (an older sender
+        left the field out); a value the spec lacks: the number, said so."""
+        if absent is not None and value == absent:
+            return ABSENT_NAME
+        for name, member in self.values.items():
+            if member == value:
+                return name
+        return f"{value} (not in the spec)"
 
 
 @dataclass(frozen=True)
@@ -96,6 +133,10 @@ class Spec:
     def max_payload_bytes(self) -> int:
         return self.max_frame_bytes - self.header_bytes - self.crc_bytes
 
+    def enum_name(self, field: Field, raw: int) -> str:
+        """An enum field's raw value by name (``unknown`` where an older sender left the field out)."""
+        return self.enums[field.enum].name_of(raw, field.absent)
+
     def frame(self, name: str) -> FrameType:
         for frame_type in self.frames:
             if frame_type.name == name:
@@ -107,7 +148,8 @@ class Spec:
         """CRC-32 of everything that decides how bytes decode (like MAVLink's crc_extra).
 
         Names, ids, types, scales and enum values count; units and descriptions do not, so
-        a documentation change does not make old firmware incompatible.
+        a documentation change does not make old firmware incompatible. Nor does ``absent``: what an older
+        sender's shorter payload reads as changes nothing a sender built from this spec sends.
         """
         parts = [f"v{self.protocol_version} sync{self.sync}"]
         for enum in self.enums.values():
@@ -131,7 +173,7 @@ def _parse(document: dict) -> Spec:
             direction=entry["direction"],
             description=entry["description"],
             fields=tuple(
-                Field(f["name"], f["type"], f["unit"], f["description"], float(f.get("scale", 1.0)), f.get("enum"))
+                Field(f["name"], f["type"], f["unit"], f["description"], float(f.get("scale", 1.0)), f.get("enum"), f.get(ABSENT_KEY))
                 for f in entry["fields"]
             ),
         )
@@ -172,6 +214,16 @@ def _check(spec: Spec) -> None:
                 raise SpecError(f"{frame_type.name}.{field.name}: unknown C type {field.c_type}")
             if field.enum is not None and field.enum not in spec.enums:
                 raise SpecError(f"{frame_type.name}.{field.name}: unknown enum {field.enum}")
+            if field.absent is not None and field.c_type != "float" and not (
+                    isinstance(field.absent, int) and field.raw_range[0] <= field.absent <= field.raw_range[1]):
+                raise SpecError(f"{frame_type.name}.{field.name}: absent = {field.absent!r} is not a {field.c_type}")
+            if field.absent is not None and field.enum is not None and field.absent in spec.enums[field.enum].values.values():
+                raise SpecError(f"{frame_type.name}.{field.name}: absent = {field.absent} is a member of its enum, "
+                                "so a field left out would read as one")
+        appended = [field.absent is not None for field in frame_type.fields]
+        if any(appended) and (appended[0] or appended != sorted(appended)):
+            raise SpecError(f"frame {frame_type.name}: a field with '{ABSENT_KEY}' (appended later) must come after "
+                            "every field that is always sent, and the first field is always sent")
 
 
 def load_spec(text: str | None = None) -> Spec:

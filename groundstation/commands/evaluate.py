@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from groundstation.commands.options import add_estimator_options, estimator_options
 from groundstation.errors import UserError
@@ -45,6 +46,8 @@ def run(args: argparse.Namespace) -> int:
         data = load_session(args.file, names, overrides, bar)
     finally:
         bar.done()
+    for warning in data.warnings:  # beside the JSON, not in it
+        print(f"warning: {warning}", file=sys.stderr if args.json else sys.stdout)
     if data.true_q is None and data.has_onboard():
         if not data.estimated:
             raise UserError(f"{args.file}: no IMU samples, so no host estimator ran; only the onboard estimate is there")

@@ -36,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
         result = run_export(request, load_session, progress)
     finally:
         progress.done()
-    for finding in result.damage:
-        print(f"warning: {finding}")
+    for warning in result.warnings:
+        print(f"warning: {warning}")
     print(result.message)
     return 0

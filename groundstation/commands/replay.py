@@ -34,8 +34,8 @@ def run(args: argparse.Namespace) -> int:
     progress = ProgressBar(f"computing {Path(args.file).name}")
     data = load_session(args.file, filters, overrides, progress)
     progress.done()
-    for finding in data.damage:
-        print(f"warning: {finding}")
+    for warning in data.warnings:
+        print(f"warning: {warning}")
     session = RevealSession(data, args.file, (filters, overrides), speed=paced or 1.0, position_s=0.0 if paced else float("inf"))
     if paced:
         with session:

@@ -268,9 +268,12 @@ class Ahf2(Estimator):
         if self.uses_magnetometer:
             q = quaternion_product(_yaw_turn(self._follow_magnetometer(q, dt_s)), q)
         self._q = q
-        if turn is not None and s.motion_bias_ki > 0.0 and not self._rest:
+        if turn is not None and s.motion_bias_ki > 0.0 and not self._rest and self._start is None:
             # 7. bias in motion: the correction turn in body axes drives the integral
-            # (body axes through the low-passed rotation: cᵢ = Σⱼ L̄ⱼᵢ vⱼ, v the turn in I)
+            # (body axes through the low-passed rotation: cᵢ = Σⱼ L̄ⱼᵢ vⱼ, v the turn in I). Not while
+            # the low-pass starts (its first τ, the mean so far): the correction then undoes where the
+            # start began, not a bias; integrated, it wound up after a reboot in flight (+1.9° RMS for
+            # the next 10 s, tests/session/test_reboot_in_flight.py).
             vx, vy, vz = _rotate((q_c[0], -q_c[1], -q_c[2], -q_c[3]), turn[0], turn[1], 0.0)
             m = lp[3:]
             cx = m[0] * vx + m[3] * vy + m[6] * vz

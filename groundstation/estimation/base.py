@@ -264,6 +264,13 @@ class Estimator:
             self._set_attitude(tuple(quaternion.normalise(q0).tolist()))
             self._waiting = False
 
+    def restart(self, q0=None) -> None:
+        """After the sensor's board restarted (its gyro offset may have changed): forget what was learnt of
+        the sensors, keep the attitude ``q0``, the estimator's last one (None: wait for gravity). Most
+        estimators hold nothing else worth keeping, so this is ``reset(q0)``; one whose attitude rests on
+        more state (a low-pass of the accelerometer) overrides it."""
+        self.reset(q0)
+
     def step(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
         """One sample: returns ``(q, diag)``, q = (w, x, y, z) rotating body vectors into NED."""
         self._mag = mag

@@ -11,6 +11,7 @@ import numpy as np
 from openpyxl.cell import WriteOnlyCell
 from openpyxl.styles import Font
 
+from firmware_protocol import SPEC
 from groundstation import mounting
 from groundstation.errors import UserError
 from groundstation.export.excel_columns import DATE_TIME, start_time
@@ -23,6 +24,7 @@ LINK_COUNTS = (
     ("crc_errors", "CRC failures (count)"), ("bytes_in", "bytes received (B)"),
     ("bytes_skipped", "bytes skipped (B)"), ("duplicates", "duplicate frames (count)"),
 )  # fmt: skip
+GYRO_CALIBRATION = SPEC.frame("CONFIG").field("gyro_calibration")  # "unknown" from firmware older than the field
 SHOWN_METADATA = {"source", "port", "start_utc", "app_version", "protocol_version", "estimator_settings", "filters"}
 
 
@@ -85,6 +87,7 @@ def firmware(data: SessionData) -> list[list]:
         ["output rate (Hz)", config["rate_hz"]],
         ["mounting (index)", config["mounting"]],
         ["mounting", mounting.describe(config["mounting"]) if 0 <= config["mounting"] < 24 else "invalid index"],
+        ["gyro calibration", SPEC.enum_name(GYRO_CALIBRATION, config["gyro_calibration"])],
     ]
 
 
@@ -114,7 +117,8 @@ def describe_event(event: dict) -> str:
         return ", ".join(f"{event['name']}.{k} = {v:g}" for k, v in event["settings"].items())
     if event["kind"] == "config":
         return (f"CONFIG: firmware {event['fw_major']}.{event['fw_minor']}.{event['fw_patch']}, ±{event['accel_fs_g']} g, "
-                f"±{event['gyro_fs_dps']} °/s, {event['rate_hz']} Hz, mounting {event['mounting']}")
+                f"±{event['gyro_fs_dps']} °/s, {event['rate_hz']} Hz, mounting {event['mounting']}, "
+                f"gyro calibration {SPEC.enum_name(GYRO_CALIBRATION, event['gyro_calibration'])}")
     if "message" in event:
         return str(event["message"])
     return ", ".join(f"{k} = {v}" for k, v in event.items() if k not in ("t_host_ns", "t_s", "kind"))  # e.g. an ACK

@@ -42,7 +42,7 @@ class ExportRequest:
 @dataclasses.dataclass(frozen=True)
 class ExportResult:
     message: str  # "wrote OUT: ..."
-    damage: list[str]  # what the source recording had lost, for warnings
+    warnings: list[str]  # what the source recording had lost and the session's warnings (SessionData.warnings)
 
 
 def export_request(source, out, *, filters=None, overrides=None, t_from=None, t_to=None, rate_hz=None,
@@ -104,4 +104,4 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
         columns = export_columns(data, select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz))
         (write_csv if request.format == ".csv" else write_parquet)(columns, request.out, request.overwrite)
         written = f"{len(columns['time_s'])} rows, {len(columns)} columns"
-    return ExportResult(f"wrote {request.out}: {written}", list(data.damage))
+    return ExportResult(f"wrote {request.out}: {written}", data.warnings)

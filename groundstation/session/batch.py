@@ -42,7 +42,7 @@ from groundstation.session.link import LinkStats
 from groundstation.session.pipeline import (
     ACC_FIELDS, DISCONTINUITY, GYR_FIELDS, HANDLER, LAMBDA_SCALE, MAG_FIELDS, Q_FIELDS, Q_SCALES, SETTINGS,
     TEMPERATURE_SCALE, ConfigWait, SensorConfig, conversions, gap_row, impossible_config_message, in_body_axes,
-    no_config_message, period_s, sample_dt_s, schema_message, sensor_of, stage_key, unexpected_frame_event,
+    period_s, sample_dt_s, schema_message, sensor_of, stage_key, unexpected_frame_event,
 )
 from groundstation.session.replay import RecordedSetup, SettingsSchedule, apply_event, recorded_setup
 from groundstation.session.table import Table
@@ -213,7 +213,7 @@ class _Builder:
             # The decoder had taken the whole chunk before the pipeline saw the frame: its last CONFIG.
             latest = fingerprints[np.searchsorted(columns.chunk, columns.chunk[k], side="right") - 1]
             if latest != SPEC.fingerprint:
-                s.event(key, {"t_host_ns": t_host_ns, "kind": "warning", "message": schema_message(values["schema_fingerprint"])})
+                s.event(key, {"t_host_ns": t_host_ns, "kind": "warning", "message": schema_message(values)})
             try:
                 sensor = sensor_of(values)
             except (KeyError, ValueError):
@@ -295,15 +295,15 @@ class _Builder:
         sets the keys of held samples to where they are released (inf: never)."""
         first_config = self.sensor_keys[0] if self.sensor_keys else math.inf
         held = np.flatnonzero(keys < first_config)
-        wait = ConfigWait()
-        for k, time_s in zip(held.tolist(), self.time_s[columns.order[held]].tolist()):
-            released = wait.sample(k, time_s)
-            if released is not None:  # the wait expired at sample k: the assumed configuration from here
+        wait = ConfigWait(SensorConfig())
+        counts = zip(*(columns.raw[f][held].tolist() for f in ACC_FIELDS))
+        for k, time_s, acc_counts in zip(held.tolist(), self.time_s[columns.order[held]].tolist(), counts):
+            released = wait.sample(k, time_s, acc_counts)
+            if released is not None:  # the wait expired at sample k: the configuration it says from here
                 release = float(keys[k])
-                assumed = SensorConfig()
-                self.s.event(release, {"t_host_ns": int(columns.t_host_ns[k]), "kind": "warning", "message": no_config_message(assumed)})
+                self.s.event(release, {"t_host_ns": int(columns.t_host_ns[k]), "kind": "warning", "message": wait.message})
                 self.sensor_keys.insert(0, release)
-                self.sensors.insert(0, assumed)
+                self.sensors.insert(0, wait.sensor)
                 keys[released] = release
                 return
         keys[wait.release()] = first_config

@@ -77,7 +77,7 @@ class EstimatorBank:
         took minutes to turn 100 degrees back (tests/session/test_reboot_in_flight.py).
         """
         for name, estimator in self.estimators.items():
-            estimator.reset(q0=self.last_q[name])
+            estimator.restart(q0=self.last_q[name])
 
     def change(self, name: str, overrides: dict[str, float]) -> None:
         """New settings for one estimator from now on, keeping its attitude; ValueError before any change."""

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import statistics
 from operator import itemgetter
 
 from firmware_protocol import SPEC, Frame, StreamDecoder
@@ -143,31 +144,64 @@ def gap_row(event: dict, width: int) -> tuple:
 
 class ConfigWait:
     """Until the first usable CONFIG the full scales are unknown, so IMU samples wait, up to
-    ``HOLD_FOR_CONFIG_US`` of session time; after that the assumed configuration applies.
+    ``HOLD_FOR_CONFIG_US`` of session time; after that the configuration is assumed (``without_config``:
+    the accelerometer's full scale inferred from the held samples where they allow it) and said.
 
-    ``sample(item, time_s)`` holds one (any item: the caller's) and returns every held item, this one
-    included, once the wait has expired (else None); ``release()`` hands them all over (a usable
-    CONFIG). The pipeline calls it per sample; the batch path over the samples before the first CONFIG.
+    ``sample(item, time_s, acc_counts)`` holds one (any item: the caller's; its accelerometer counts x, y,
+    z) and returns every held item, this one included, once the wait has expired (else None): then
+    ``sensor`` and ``message`` (the warning) say what applies from there. ``release()`` hands them all
+    over (a usable CONFIG). The pipeline calls it per sample; the batch path over the samples before
+    the first CONFIG.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, assumed: SensorConfig) -> None:
+        self.assumed = assumed
+        self.sensor: SensorConfig | None = None  # once the wait expired
+        self.message: str | None = None
         self._held: list = []
+        self._norms: list[float] = []  # of the held samples' accelerometer counts
         self._first_s = math.nan
 
-    def sample(self, item, time_s: float) -> list | None:
+    def sample(self, item, time_s: float, acc_counts) -> list | None:
         if not self._held:
             self._first_s = time_s
         self._held.append(item)
-        return self.release() if hold_expired(time_s, self._first_s) else None
+        self._norms.append(math.hypot(*acc_counts))
+        if not hold_expired(time_s, self._first_s):
+            return None
+        self.sensor, self.message = without_config(self.assumed, self._norms)
+        return self.release()
 
     def release(self) -> list:
-        held, self._held = self._held, []
+        held, self._held, self._norms = self._held, [], []
         return held
 
 
-def no_config_message(s: SensorConfig) -> str:
-    return (f"no CONFIG frame: converting with assumed full scales ±{s.accel_fs_g} g, ±{s.gyro_fs_dps} °/s, "
-            f"mounting {s.mounting}")
+STILL_SPREAD = 0.05  # held samples whose accelerometer norms' median absolute deviation is under 5 % are at rest
+SNAP_TOLERANCE = 0.15  # a median norm within 15 % of 1 g at a full scale is 1 g at that scale (the scales are 2x apart)
+
+
+def without_config(assumed: SensorConfig, norms_counts: list[float]) -> tuple[SensorConfig, str]:
+    """The configuration to convert with when no CONFIG came, and the warning that says so. At rest the
+    accelerometer feels 1 g, so where the held samples are still (their norms' median absolute deviation
+    under ``STILL_SPREAD``) their median norm, snapped to the full scale whose 1 g it is (within
+    ``SNAP_TOLERANCE``), gives the accelerometer's full scale; the gyro's and the mounting are assumed."""
+    median = statistics.median(norms_counts)
+    spread = statistics.median(abs(n - median) for n in norms_counts)
+    stretch = f"{len(norms_counts)} samples held for a CONFIG"
+    sensor, accel = assumed, f"accelerometer full scale ±{assumed.accel_fs_g} g assumed (the {stretch} were not still)"
+    if median > 0 and spread < STILL_SPREAD * median:
+        fs_g = min(ACCEL_LSB_PER_G, key=lambda fs: abs(math.log(median / ACCEL_LSB_PER_G[fs])))
+        at_rest_g = median / ACCEL_LSB_PER_G[fs_g]
+        if abs(at_rest_g - 1.0) < SNAP_TOLERANCE:
+            sensor = dataclasses.replace(assumed, accel_fs_g=fs_g)
+            accel = (f"accelerometer full scale ±{fs_g} g inferred (the {stretch} were still, their median norm "
+                     f"{at_rest_g:.3f} g at ±{fs_g} g)")
+        else:
+            accel = (f"accelerometer full scale ±{assumed.accel_fs_g} g assumed (the {stretch} were still, but "
+                     f"their median norm, {at_rest_g:.3f} g at ±{fs_g} g, is 1 g at no full scale)")
+    return sensor, (f"no CONFIG frame: {accel}; gyro full scale ±{sensor.gyro_fs_dps} °/s and mounting "
+                    f"{sensor.mounting} assumed; rates and attitudes are wrong if the aircraft differs")
 
 
 def unexpected_frame_event(t_host_ns: int, name: str) -> dict:
@@ -178,9 +212,17 @@ def unexpected_frame_event(t_host_ns: int, name: str) -> dict:
                        "another sender?); it and any more are counted and ignored"}
 
 
-def schema_message(fingerprint: int) -> str:
-    return (f"the firmware was built from another protocol spec (schema fingerprint 0x{fingerprint:08X}); "
-            "its frames may be mis-decoded")
+_APPENDED = [f for f in SPEC.frame("CONFIG").fields if f.absent is not None]  # fields older firmware leaves out
+
+
+def schema_message(config: dict) -> str:
+    """The warning of a CONFIG from firmware built from another spec; an older one's shorter CONFIG says which
+    fields it lacked (read as unknown)."""
+    lacking = [f.name for f in _APPENDED if config[f.name] == f.absent]
+    built = f"the firmware was built from another protocol spec (schema fingerprint 0x{config['schema_fingerprint']:08X})"
+    if lacking:
+        return f"{built}, an older one: its CONFIG lacks {', '.join(lacking)} (read as unknown); frames changed since may be mis-decoded"
+    return f"{built}; its frames may be mis-decoded"
 
 
 def impossible_config_message(values: dict) -> str:
@@ -225,7 +267,7 @@ class Pipeline:
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
         self.unexpected_frames: dict[str, int] = {}  # frames of uplink types that came down, by type name
         self.t0_host_ns: int | None = None  # arrival of the first chunk: the origin of host times
-        self._config_wait = ConfigWait()  # IMU samples (t_host_ns, frame, time_s, device_us) until a CONFIG
+        self._config_wait = ConfigWait(self.assumed_sensor)  # IMU samples (t_host_ns, frame, time_s, device_us) until a CONFIG
         self._last_us: int | None = None
         self._time_s = math.nan  # session time of the newest timestamped frame
         self._device_us = 0  # its device time, unwrapped within the clock's segment
@@ -236,6 +278,7 @@ class Pipeline:
             self._handlers = {t.id: self._frame_handler(t) for t in spec.frames}  # every type the decoder returns
             self._imu_values, self._attitude_values, self._mag_values, self._baro_values = (
                 values_of(spec.frame(name), *names) for name, names in _STAGE_FIELDS.items())
+            self._acc_values = values_of(spec.frame("IMU_RAW"), *ACC_FIELDS)  # what ConfigWait infers from
 
     @property
     def estimators(self):
@@ -298,7 +341,7 @@ class Pipeline:
         self.tables["config"].append(self._row(frame))
         self.events.append({"t_host_ns": t_host_ns, "kind": "config", **self.config})
         if self.front.decoder.schema_matches is False:
-            self._warn(t_host_ns, schema_message(frame["schema_fingerprint"]))
+            self._warn(t_host_ns, schema_message(self.config))
         try:
             sensor = sensor_of(self.config)
         except (KeyError, ValueError):
@@ -329,10 +372,11 @@ class Pipeline:
         if self.sensor is not None:
             self._imu_sample(t_host_ns, frame, self._time_s, self._device_us)
             return
-        released = self._config_wait.sample((t_host_ns, frame, self._time_s, self._device_us), self._time_s)
+        wait = self._config_wait
+        released = wait.sample((t_host_ns, frame, self._time_s, self._device_us), self._time_s, self._acc_values(frame[2]))
         if released is not None:
-            self._warn(t_host_ns, no_config_message(self.assumed_sensor))
-            self._use_sensor(self.assumed_sensor)
+            self._warn(t_host_ns, wait.message)
+            self._use_sensor(wait.sensor)
             for sample in released:
                 self._imu_sample(*sample)
 

@@ -65,6 +65,11 @@ class SessionData:
     def __len__(self) -> int:
         return len(self.time_s)
 
+    @property
+    def warnings(self) -> list[str]:
+        """What every command says besides its result: what the recording lost, then the session's warnings."""
+        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") == "warning")]
+
     def quaternion(self, name: str) -> np.ndarray:
         """(N, 4) w-first, body -> NED, on the sample rows: a host estimator's, or ``onboard`` (its rows
         at the same session time; NaN on the others: device time repeats after a reboot)."""

@@ -9,12 +9,14 @@ import math
 
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from groundstation.session.view import Session
-from groundstation.session.view import ProductView
+from firmware_protocol import SPEC
+from groundstation.session.view import ProductView, Session
 
 # Kinds a pilot must not miss, shown in red.
 ALARMS = frozenset({"warning", "disconnected", "device_reset", "clock_jump", "gap", "recording_failed"})
 HIDDEN_FIELDS = frozenset({"kind", "t_host_ns", "wall_time", "session_time_s"})
+# Events that carry a frame's values (CONFIG, ACK) show its enum fields by member name ("unknown" included).
+ENUM_FIELDS = {kind: {f.name: f for f in SPEC.frame(kind.upper()).fields if f.enum} for kind in ("config", "ack")}
 
 
 def event_time_s(view: ProductView, event: dict) -> float:
@@ -29,7 +31,8 @@ def event_time_s(view: ProductView, event: dict) -> float:
 
 
 def describe(event: dict) -> str:
-    return ", ".join(f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+    enums = ENUM_FIELDS.get(event.get("kind"), {})
+    return ", ".join(f"{k} {SPEC.enum_name(enums[k], v)}" if k in enums else f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
                      for k, v in event.items() if k not in HIDDEN_FIELDS)
 
 

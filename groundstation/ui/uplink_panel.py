@@ -21,6 +21,7 @@ HISTORY = 4  # commands listed
 MODES = SPEC.enums["mode"].values  # name -> value
 FILTER_PARAMS = SPEC.enums["filter_param"].values
 RESULTS = {value: name for name, value in SPEC.enums["ack_result"].values.items()}
+GYRO_CALIBRATION = SPEC.frame("CONFIG").field("gyro_calibration")  # "unknown" from firmware older than the field
 MODE_NAMES = {value: name for name, value in MODES.items()}
 
 
@@ -129,7 +130,8 @@ class UplinkPanel(QtWidgets.QGroupBox):
         if config is not None:
             self.config_label.setText(
                 f"mode {MODE_NAMES.get(config.get('mode'), '?')}, {config.get('rate_hz')} Hz, ±{config.get('accel_fs_g')} g, "
-                f"±{config.get('gyro_fs_dps')} °/s, mounting {config.get('mounting')}")
+                f"±{config.get('gyro_fs_dps')} °/s, mounting {config.get('mounting')}, "
+                f"gyro calibration {SPEC.enum_name(GYRO_CALIBRATION, config.get('gyro_calibration'))}")
         self._show_answers()
 
     def _show_answers(self) -> None:

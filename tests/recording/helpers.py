@@ -1,11 +1,16 @@
-"""A small recording whose record boundaries are known, for the damage tests."""
+"""Recordings whose record boundaries are known, for the damage tests."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from firmware_protocol import SPEC
+
 from groundstation.recording import RecordingWriter
+from groundstation.recording.format import RECORD_HEADER, RECORD_OVERHEAD_BYTES, Kind
 
 PREAMBLE_BYTES = 12
 
@@ -36,3 +41,30 @@ def write_small(path: Path, n_chunks: int = 6) -> Small:
     ends.append(len(data))
     starts = [PREAMBLE_BYTES] + ends[:-1]
     return Small(data, chunks, list(zip(starts, ends)))
+
+
+def record_spans(data: bytes) -> list[tuple[int, int, int]]:
+    """(kind, start, end) of every record of an intact recording's bytes, in file order."""
+    spans, pos = [], PREAMBLE_BYTES
+    while pos < len(data):
+        _, kind, length, _ = RECORD_HEADER.unpack_from(data, pos)
+        end = pos + RECORD_OVERHEAD_BYTES + length
+        spans.append((kind, pos, end))
+        pos = end
+    return spans
+
+
+def recording_without_config(folder: Path) -> Path:
+    """A simulated 8 s hover (±4 g) whose records holding a CONFIG frame fail their CRC: lost, and said to be."""
+    subprocess.run([sys.executable, "-m", "groundstation", "simulate", "--scenario", "hover", "--duration", "8",
+                    "--seed", "4", "--out", folder / "whole.gsrec"], check=True, capture_output=True, timeout=300)
+    data = bytearray((folder / "whole.gsrec").read_bytes())
+    config = SPEC.frame("CONFIG")
+    header = bytes((SPEC.sync, config.payload_size, config.id))
+    spans = [(start, end) for kind, start, end in record_spans(bytes(data)) if kind == Kind.CHUNK and header in data[start:end]]
+    assert spans
+    for _, end in spans:
+        data[end - 1] ^= 0xFF
+    path = folder / "without-config.gsrec"
+    path.write_bytes(bytes(data))
+    return path
