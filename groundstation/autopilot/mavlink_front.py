@@ -14,9 +14,9 @@ axes (FRD). They go where the project's own frames go:
 - ``GenericMessage`` -> one table per message type, added to the catalogue when the first one
   arrives (a message from another system than the vehicle: ``<type>_<system>_<component>``).
 
-Time: the vehicle's timestamps (µs since boot) of IMU, attitude, magnetometer and barometer go through
-the session's ``SessionClock``, so an autopilot reboot is a ``device_reset`` as for the project's
-aircraft. GPS and generic messages take the current session time: their ``time_usec`` is often GPS or
+Time: host times count from the arrival of the first whole message. The vehicle's timestamps (µs
+since boot) of IMU, attitude, magnetometer and barometer go through the session's ``SessionClock``, so
+an autopilot reboot is a ``device_reset`` as for the project's aircraft. GPS and generic messages take the current session time: their ``time_usec`` is often GPS or
 UNIX time, not time since boot. The vehicle is the first system whose HEARTBEAT says ArduPilot or
 PX4 (or, before any, the first to send an IMU sample or attitude).
 
@@ -69,7 +69,12 @@ class MavlinkFrontEnd:
         return Catalogue(tables)
 
     def feed(self, t_host_ns: int, data: bytes) -> None:
+        before = self.mavlink.stats.messages
         records = self.mavlink.feed(data, t_host_ns)
+        if before == 0 and self.mavlink.stats.messages:
+            # Host times start at the first whole message, not the first bytes (the tail of a packet sent
+            # before the port opened): a .tlog keeps messages only, and opens to the same host times.
+            self.pipeline.t0_host_ns = t_host_ns
         self._count()
         self.pipeline.link.on_chunk(t_host_ns, self.stats, len(records))
         for record in records:
