@@ -17,16 +17,14 @@ from collections import deque
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
 from groundstation.autopilot.records import ImuSample, VehicleStatus
-from groundstation.autopilot.vehicle import Vehicle
+from groundstation.autopilot.vehicle import AUTOPILOTS, Vehicle
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
 MAX_REQUEST_RATE_HZ = 400.0  # the fastest IMU loop ArduPilot and PX4 stream; REQUEST_DATA_STREAM takes whole Hz
 STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
                      mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
-AUTOPILOTS = (MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4)
 STREAM_GROUPS = (mavlink.MAV_DATA_STREAM_RAW_SENSORS, mavlink.MAV_DATA_STREAM_EXTRA1)
 
 
@@ -75,8 +73,7 @@ class StreamRequester:
         """The request bytes to send now (often none), given the records just decoded."""
         out = b""
         for r in records:
-            if isinstance(r, VehicleStatus) and r.autopilot in AUTOPILOTS:
-                self.vehicle.choose(r)
+            self.vehicle.choose(r)
             if not self.vehicle.sent(r):
                 continue
             if isinstance(r, ImuSample):

@@ -13,6 +13,10 @@ radio, a GCS or a spoofer), once.
 
 from __future__ import annotations
 
+from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
+from groundstation.autopilot.records import ImuSample, OnboardAttitude, VehicleStatus
+
+AUTOPILOTS = (MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4)
 MIN_SYSTEM, MAX_SYSTEM = 1, 255  # MAVLink system ids (0 is broadcast, never a sender)
 
 
@@ -25,9 +29,9 @@ class Vehicle:
         self.others: dict[int, int] = {}  # other system id -> the component first heard from it
 
     def choose(self, record) -> None:
-        """``record`` (an autopilot's HEARTBEAT, an IMU sample or an attitude) makes its sender the vehicle
-        when none is yet and the user picked its system or none."""
-        if self.sender is None and self.picked in (None, record.system):
+        """An autopilot's HEARTBEAT, an IMU sample or an attitude makes its sender the vehicle when none
+        is yet and the user picked its system or none; any other record chooses nothing."""
+        if self.sender is None and self.picked in (None, record.system) and chooses(record):
             self.sender = (record.system, record.component)
 
     def sent(self, record) -> bool:
@@ -40,3 +44,11 @@ class Vehicle:
             return False
         self.others[record.system] = record.component
         return True
+
+
+def chooses(record) -> bool:
+    """Whether ``record`` may make its sender the vehicle: an autopilot's status (not a gimbal's, camera's
+    or GCS's), or an IMU sample or attitude before any autopilot's HEARTBEAT."""
+    if isinstance(record, VehicleStatus):
+        return record.autopilot in AUTOPILOTS
+    return isinstance(record, (ImuSample, OnboardAttitude))

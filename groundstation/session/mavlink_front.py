@@ -40,7 +40,7 @@ import math
 from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
-from groundstation.autopilot.streams import AUTOPILOTS, StreamRequester, slow_imu_note
+from groundstation.autopilot.streams import StreamRequester, slow_imu_note
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.catalogue import Catalogue, message_table
 from groundstation.session.table import Table
@@ -140,10 +140,9 @@ class MavlinkFrontEnd:
 
     # -- records ----------------------------------------------------------------------------------
 
-    def _from_vehicle(self, record, may_choose: bool = False) -> bool:
-        """Whether ``record`` comes from the vehicle (an IMU sample or attitude chooses it if no HEARTBEAT did)."""
-        if may_choose:
-            self.vehicle.choose(record)
+    def _from_vehicle(self, record) -> bool:
+        """Whether ``record`` comes from the vehicle (which it may choose: ``Vehicle.choose``)."""
+        self.vehicle.choose(record)
         return self.vehicle.sent(record)
 
     def _place(self, t_host_ns: int, record) -> None:
@@ -151,7 +150,7 @@ class MavlinkFrontEnd:
             self.pipeline.place(t_host_ns, record.time_us)
 
     def _imu(self, t_host_ns: int, r: rec.ImuSample) -> None:
-        if not self._from_vehicle(r, may_choose=True) or self._imu_source not in (None, r.source):
+        if not self._from_vehicle(r) or self._imu_source not in (None, r.source):
             label = f"{r.source} of system {r.system}, component {r.component} (not the IMU the estimators use)"
             name = f"{r.source}_{r.system}" + ("" if self.vehicle.sent(r) else f"_{r.component}")
             self._table_row(t_host_ns, name.lower(), label, list(IMU_UNITS), IMU_UNITS, (*r.acc_g, *r.gyr_rad_s), self.vehicle.sent(r))
@@ -162,7 +161,7 @@ class MavlinkFrontEnd:
         p.imu_stage(t_host_ns, p._time_s, p._device_us, r.acc_g, r.gyr_rad_s, r.temperature_c, 1.0 / self.requester.rate_hz)
 
     def _attitude(self, t_host_ns: int, r: rec.OnboardAttitude) -> None:
-        if self._from_vehicle(r, may_choose=True):
+        if self._from_vehicle(r):
             self._place(t_host_ns, r)
             self.pipeline.onboard_stage(r.q, _NAN, _NAN)
 
@@ -189,7 +188,7 @@ class MavlinkFrontEnd:
             self.pipeline.tables["gps"].append([self.pipeline._time_s, *list(values.values())[1:]])
 
     def _vehicle_status(self, t_host_ns: int, r: rec.VehicleStatus) -> None:
-        if not self._from_vehicle(r, may_choose=r.autopilot in AUTOPILOTS):
+        if not self._from_vehicle(r):
             return
         self._record_row(t_host_ns, r)
         self.pipeline.bank.armed = r.armed  # the rest calibrator refuses while armed

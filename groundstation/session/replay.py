@@ -6,8 +6,8 @@ import dataclasses
 import math
 from collections.abc import Callable
 
-from groundstation.errors import UserError
 from groundstation.autopilot.vehicle import MAX_SYSTEM, MIN_SYSTEM
+from groundstation.errors import UserError
 from groundstation.estimation import ESTIMATORS, setting_names
 from groundstation.recording import Recording
 from groundstation.session.pipeline import DEFAULT_FILTERS, PROTOCOLS, Pipeline

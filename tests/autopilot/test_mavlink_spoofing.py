@@ -139,7 +139,7 @@ def test_the_vehicle_is_picked_in_the_spec(spec, system):
 
 @pytest.mark.parametrize("value", ["0", "256", "x"])
 def test_a_bad_system_is_a_clear_error(value):
-    with pytest.raises(SourceError, match="system"):
+    with pytest.raises(SourceError, match="bad system="):
         open_source(f"mavlink:udpin:127.0.0.1:0?system={value}")
 
 
