@@ -188,23 +188,32 @@ class MavlinkFrontEnd:
             self.pipeline.tables["gps"].append([self.pipeline._time_s, *list(values.values())[1:]])
 
     def _vehicle_status(self, t_host_ns: int, r: rec.VehicleStatus) -> None:
-        if not self._from_vehicle(r):
+        vehicle = self._from_vehicle(r)
+        self._record_row(t_host_ns, r)  # another sender's in a table of its own
+        if not vehicle:
             return
-        self._record_row(t_host_ns, r)
         self.pipeline.bank.armed = r.armed  # the rest calibrator refuses while armed
         if (r.mode, r.armed) != self._status:
             self._status = (r.mode, r.armed)
             self.pipeline.events.append({"t_host_ns": t_host_ns, "kind": "vehicle_status", "mode": r.mode, "armed": r.armed})
 
     def _record_row(self, t_host_ns: int, r) -> None:
+        """A mapped record's row: the vehicle's table, another sender's own (any radio's: ``radio_status``)."""
         name, label, columns = RECORD_TABLES[type(r)]
-        self._table_row(t_host_ns, name, label, *_fields_units(columns), tuple(float(getattr(r, a)) for a in columns))
+        name, vehicle = (name, True) if isinstance(r, rec.LinkHealth) else self._table_of(r, name)
+        self._table_row(t_host_ns, name, label, *_fields_units(columns), tuple(float(getattr(r, a)) for a in columns), vehicle)
 
     def _generic(self, t_host_ns: int, r: rec.GenericMessage) -> None:
-        vehicle = self.vehicle.sender in (None, (r.system, r.component))  # before one is chosen: the vehicle's
-        name = r.msg_type if vehicle else f"{r.msg_type}_{r.system}_{r.component}"
-        self._table_row(t_host_ns, name.lower(), f"MAVLink {r.msg_type} from system {r.system}, component {r.component}",
+        name, vehicle = self._table_of(r, r.msg_type)
+        self._table_row(t_host_ns, name, f"MAVLink {r.msg_type} from system {r.system}, component {r.component}",
                         list(r.fields), r.units, tuple(r.fields.values()), vehicle)
+
+    def _table_of(self, r, name: str) -> tuple[str, bool]:
+        """The table of ``r``'s message ``name`` and whether it is the vehicle's: the vehicle's own (also before
+        one is chosen, from the picked system if any), else ``<name>_<system>_<component>``."""
+        v = self.vehicle
+        vehicle = v.sent(r) or (v.sender is None and v.picked in (None, r.system))
+        return (name if vehicle else f"{name}_{r.system}_{r.component}").lower(), vehicle
 
     def _table_row(self, t_host_ns: int, name: str, label: str, fields: list, units: dict, values: tuple, vehicle: bool = True) -> None:
         """A row of table ``name``, catalogued on its first row (copy on write: readers in other threads

@@ -82,9 +82,13 @@ def test_a_spoofer_on_the_vehicles_system_id_neither_arms_restarts_nor_inflates_
         armed = mavlink.MAV_MODE_FLAG_SAFETY_ARMED if i % 2 else 0
         beat = spoofer.heartbeat(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, DISARMED | armed, i % 7,
                                  mavlink.MAV_STATE_ACTIVE)
-        return beat + spoofer.attitude(rng.randrange(1, 2**32 - 1), 1.0, -1.0, 2.0, 0, 0, 0)
+        battery = spoofer.sys_status(0, 0, 0, 0, 100 + i, 1, 1, 0, 0, 0, 0, 0, 0)  # a nearly flat battery
+        return beat + spoofer.attitude(rng.randrange(1, 2**32 - 1), 1.0, -1.0, 2.0, 0, 0, 0) + battery
 
     uplink = fly(pipeline, vehicle, 4, spoof=spoof)
+    pipeline.feed(6 * SECOND_NS, vehicle.sys_status(0, 0, 0, 0, 12_600, 500, 80, 0, 0, 0, 0, 0, 0))
+    assert list(pipeline.tables["sys_status"].to_dict()["voltage_V"]) == [12.6]
+    assert len(pipeline.tables["sys_status_1_0"]) == 200 and len(pipeline.tables["heartbeat_1_0"]) == 200  # kept apart
     assert len(kinds(pipeline, "vehicle_status")) == 1  # the vehicle's own, armed in mode 5, once
     assert pipeline.bank.armed is True
     assert not kinds(pipeline, "device_reset")
