@@ -150,10 +150,11 @@ class MavlinkFrontEnd:
             self.pipeline.place(t_host_ns, record.time_us)
 
     def _imu(self, t_host_ns: int, r: rec.ImuSample) -> None:
-        if not self._from_vehicle(r) or self._imu_source not in (None, r.source):
+        vehicle = self._from_vehicle(r)
+        if not vehicle or self._imu_source not in (None, r.source):  # the vehicle's second IMU: <source>_<system>
             label = f"{r.source} of system {r.system}, component {r.component} (not the IMU the estimators use)"
-            name = f"{r.source}_{r.system}" + ("" if self.vehicle.sent(r) else f"_{r.component}")
-            self._table_row(t_host_ns, name.lower(), label, list(IMU_UNITS), IMU_UNITS, (*r.acc_g, *r.gyr_rad_s), self.vehicle.sent(r))
+            name = f"{r.source}_{r.system}" + ("" if vehicle else f"_{r.component}")
+            self._table_row(t_host_ns, name.lower(), label, list(IMU_UNITS), IMU_UNITS, (*r.acc_g, *r.gyr_rad_s), vehicle)
             return
         self._imu_source = r.source
         p = self.pipeline
