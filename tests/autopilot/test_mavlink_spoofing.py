@@ -152,7 +152,7 @@ def test_the_picked_vehicle_is_recorded_and_replayed_over_a_real_udp_link(tmp_pa
     the picked system 1, and so does the replay of its recording."""
     import socket
 
-    from groundstation.session.data import load_session
+    from groundstation.session.load import load_session
     from groundstation.session.factory import open_session
     from tests.waiting import wait_for
 

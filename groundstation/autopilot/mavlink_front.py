@@ -40,30 +40,16 @@ import math
 from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
-from groundstation.autopilot.streams import StreamRequester, slow_imu_note
+from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.catalogue import Catalogue, message_table
 from groundstation.session.table import Table
 
-REQUESTED_RATE_HZ = 50.0
 SLOW_WARNING_S = 5.0  # the requester's retry interval: one retry's chance before the warning
 OTHER_TABLES_MAX = 256  # tables of senders other than the vehicle
 OTHER_COLUMNS_MAX = 4096  # and their columns: with the vehicle's 7,628 at most, well inside Excel's 16,384
 KEPT_TABLES = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the project's tables a MAVLink session fills
 _NAN = math.nan
-# The mapped records' tables: name, label, and per record attribute its column's field and unit.
-RECORD_TABLES = {
-    rec.VehicleStatus: ("heartbeat", "HEARTBEAT: what the vehicle is and does",
-                        {"autopilot": ("autopilot", ""), "vehicle_type": ("vehicle_type", ""), "armed": ("armed", ""),
-                         "system_status": ("system_status", "")}),
-    rec.Battery: ("sys_status", "SYS_STATUS: battery and the autopilot's view of the link",
-                  {"voltage_v": ("voltage", "V"), "current_a": ("current", "A"), "remaining_pct": ("remaining", "%"),
-                   "drop_rate_comm_pct": ("drop_rate_comm", "%"), "errors_comm": ("errors_comm", "")}),
-    rec.LinkHealth: ("radio_status", "RADIO_STATUS: both radios' signal (SiK units)",
-                     {"rssi": ("rssi", ""), "remote_rssi": ("remote_rssi", ""), "noise": ("noise", ""),
-                      "remote_noise": ("remote_noise", ""), "rx_errors": ("rx_errors", ""), "fixed": ("fixed", ""),
-                      "tx_buffer_pct": ("tx_buffer", "%")}),
-}  # fmt: skip
 IMU_UNITS = {"acc_x": "g", "acc_y": "g", "acc_z": "g", "gyr_x": "rad/s", "gyr_y": "rad/s", "gyr_z": "rad/s"}
 
 
@@ -91,8 +77,9 @@ class MavlinkFrontEnd:
     def catalogue(catalogue: Catalogue) -> Catalogue:
         """The project's tables a MAVLink session fills, and the tables of the mapped records."""
         tables = {name: catalogue[name] for name in KEPT_TABLES}
-        for name, label, columns in RECORD_TABLES.values():
-            tables[name] = message_table(name, label, *_fields_units(columns))
+        for record_type in rec.RECORD_TABLES:
+            name, label, fields, units = rec.table_fields(record_type)
+            tables[name] = message_table(name, label, fields, units)
         return Catalogue(tables)
 
     def feed(self, t_host_ns: int, data: bytes) -> None:
@@ -200,9 +187,10 @@ class MavlinkFrontEnd:
 
     def _record_row(self, t_host_ns: int, r) -> None:
         """A mapped record's row: the vehicle's table, another sender's own (any radio's: ``radio_status``)."""
-        name, label, columns = RECORD_TABLES[type(r)]
+        name, label, fields, units = rec.table_fields(type(r))
         name, vehicle = (name, True) if isinstance(r, rec.LinkHealth) else self._table_of(r, name)
-        self._table_row(t_host_ns, name, label, *_fields_units(columns), tuple(float(getattr(r, a)) for a in columns), vehicle)
+        values = tuple(float(getattr(r, a)) for a in rec.RECORD_TABLES[type(r)][2])
+        self._table_row(t_host_ns, name, label, fields, units, values, vehicle)
 
     def _generic(self, t_host_ns: int, r: rec.GenericMessage) -> None:
         name, vehicle = self._table_of(r, r.msg_type)
@@ -253,7 +241,3 @@ def other_vehicle_event(t_host_ns: int, record, vehicle: Vehicle) -> dict:
                        f"radio, a ground station?): listed, never used as the vehicle, which is {chosen} "
                        f"(?system={system} on the mavlink: spec picks {system} instead)"}
 
-
-def _fields_units(columns: dict) -> tuple[list, dict]:
-    fields = [field for field, _ in columns.values()]
-    return fields, {field: unit for field, unit in columns.values() if unit}
