@@ -32,7 +32,7 @@ from groundstation.autopilot.decoder import MavlinkDecoder, new_parser
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, series
 from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
 from groundstation.errors import UserError
-from groundstation.autopilot.streams import AUTOPILOTS
+from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.clock import DRIFT_TOLERANCE, JUMP_TOLERANCE_S
 
 STAMP = struct.Struct(">Q")
@@ -145,15 +145,13 @@ def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
     time reached so far), if the log's receive times are compressed; else None. Judged over the log's
     later half by receive time: a live link's backlog at the start (bytes queued before the session
     read them) arrives "compressed" too, and is no reason to distrust the receive clock."""
-    decoder, vehicle = MavlinkDecoder(), None
+    decoder, vehicle = MavlinkDecoder(), Vehicle()  # the front-end's choice of the vehicle
     reached_us, latest_us, times = 0, None, []
     for t_ns, packet in stamped:
         for r in decoder.feed(packet, t_ns):
-            if vehicle is None and (isinstance(r, (rec.ImuSample, rec.OnboardAttitude))
-                                    or (isinstance(r, rec.VehicleStatus) and r.autopilot in AUTOPILOTS)):  # fmt: skip
-                vehicle = r.system  # the front-end's rule (mavlink_front)
+            vehicle.choose(r)
             timed = isinstance(r, (rec.ImuSample, rec.OnboardAttitude, rec.MagReading, rec.BaroReading))
-            if timed and r.system == vehicle and r.time_us is not None:
+            if timed and vehicle.sent(r) and r.time_us is not None:
                 if latest_us is not None and r.time_us > latest_us:
                     reached_us += r.time_us - latest_us
                 if latest_us is None or r.time_us > latest_us or r.time_us < latest_us - BACK_TOLERANCE_US:

@@ -36,7 +36,7 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
             progress(i, total)
     if progress is not None:
         progress(total, total)
-    if pipeline.front.vehicle is None:
+    if pipeline.front.vehicle.sender is None:
         raise UserError(f"{path}: no autopilot found (no heartbeat naming ArduPilot or PX4, no IMU or attitude message)")
     metadata = {"source": f"{formats.FORMATS['tlog'].description} {path.name}", "protocol": "mavlink",
                 "filters": list(filters)}
