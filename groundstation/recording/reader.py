@@ -207,14 +207,15 @@ class _Walk:
             self.chunk_t_host_ns.append, self.chunk_offsets.append, self.chunk_lengths.append,
         )
         chunk = Kind.CHUNK.value
+        searched_from, searched_until, intact = self._searched_from, self._searched_until, self._intact
         while position < size:
             if size - position >= RECORD_OVERHEAD_BYTES:
                 marker, kind, length, t_host_ns = unpack_header(buffer, position)
                 payload = position + HEADER_BYTES
                 end = payload + length
                 if (
-                    position in self._intact
-                    if self._searched_from <= position < self._searched_until
+                    position in intact
+                    if searched_from <= position < searched_until
                     else marker == MARKER
                     and length <= MAX_PAYLOAD_BYTES
                     and end + CRC.size <= size
@@ -229,6 +230,7 @@ class _Walk:
                     position = end + CRC.size
                     continue
             position = self._skip_damage(position)
+            searched_from, searched_until, intact = self._searched_from, self._searched_until, self._intact
 
     def is_valid_at(self, position: int) -> bool:
         if len(self.buffer) - position < RECORD_OVERHEAD_BYTES:

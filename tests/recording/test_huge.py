@@ -122,6 +122,6 @@ def test_a_silence_adds_two_rows_of_zeros_not_one_per_second():
     assert rows[:, 1].tolist() == [100, 0, 0, 50]  # every frame counted once, as before
 
 
-def test_a_missing_or_foreign_file_is_still_one_line(tmp_path):
+def test_a_folder_is_one_line(tmp_path):
     with pytest.raises(RecordingError, match="is a folder"):
         open_recording(tmp_path)
