@@ -15,6 +15,7 @@ import functools
 import json
 import mmap
 import os
+import stat
 import zlib
 from array import array
 from collections.abc import Iterator
@@ -117,16 +118,16 @@ def _map(path: Path) -> mmap.mmap | bytes:
     """The file's bytes, mapped read-only (an empty file, which cannot be mapped, as b"")."""
     try:
         with path.open("rb") as file:
-            size = os.fstat(file.fileno()).st_size
-            return mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_READ) if size else b""
+            status = os.fstat(file.fileno())
+            if not stat.S_ISREG(status.st_mode):  # /dev/zero would never end, a pipe never be mapped
+                raise RecordingError(f"{path}: not a regular file (a device or a pipe), so not a recording")
+            return mmap.mmap(file.fileno(), 0, access=mmap.ACCESS_READ) if status.st_size else b""
     except FileNotFoundError:
         raise RecordingError(f"{path}: no such file") from None
     except IsADirectoryError:
         raise RecordingError(f"{path}: is a folder, not a recording") from None
     except OSError as error:
         raise RecordingError(f"{path}: cannot be read ({error.strerror})") from None
-    except ValueError as error:  # mmap refuses what is not a regular file (a pipe, a device)
-        raise RecordingError(f"{path}: cannot be read ({error})") from None
 
 
 def _read_preamble(path: Path, buffer, damage: list[str]) -> tuple[int, int]:

@@ -10,10 +10,10 @@ import zlib
 
 import pytest
 
+from firmware_protocol import DecoderStats
 from groundstation.recording import open_recording
 from groundstation.recording.format import RecordingError
 from groundstation.session.link import LinkStats
-from firmware_protocol import DecoderStats
 from tests.crafted_files import chunk_time_jump, false_markers, link_recording, sparse_zeros
 
 
@@ -122,6 +122,8 @@ def test_a_silence_adds_two_rows_of_zeros_not_one_per_second():
     assert rows[:, 1].tolist() == [100, 0, 0, 50]  # every frame counted once, as before
 
 
-def test_a_folder_is_one_line(tmp_path):
+def test_a_folder_or_a_device_is_one_line(tmp_path):
     with pytest.raises(RecordingError, match="is a folder"):
         open_recording(tmp_path)
+    with pytest.raises(RecordingError, match="not a regular file"):
+        open_recording("/dev/zero")  # read whole, it would never end
