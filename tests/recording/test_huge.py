@@ -94,7 +94,7 @@ def test_opening_a_recording_allocates_a_fraction_of_its_size(tmp_path):
 
 
 def test_a_jump_of_2_62_ns_in_chunk_time_is_damage_and_costs_nothing(tmp_path):
-    from groundstation.session.data import load_session
+    from groundstation.session.load import load_session
 
     path = chunk_time_jump(tmp_path, "jump", jump_ns=2**62)
     tracemalloc.start()
