@@ -44,7 +44,7 @@ MARKER_BYTES = len(MARKER)
 # one longest record of its start; a file without one there is not a recording.
 FIRST_RECORD_WITHIN_BYTES = PREAMBLE.size + RECORD_OVERHEAD_BYTES + MAX_PAYLOAD_BYTES
 # The writer stamps chunks with the host's monotonic clock, and nobody records for a year: a step
-# forward beyond this between two chunks is damage (what reads the times bounds its work by it).
+# forward beyond this between two chunks is damage (a crafted 2^62 ns step once hung the session).
 MAX_CHUNK_STEP_NS = 365 * 24 * 3600 * 10**9
 
 
@@ -80,7 +80,7 @@ class Recording:
         offset = self._chunk_offsets[index]
         return self._chunk_t_host_ns[index], self._buffer[offset:offset + self._chunk_lengths[index]]
 
-    def stream(self) -> tuple[bytes, np.ndarray, np.ndarray]:
+    def stream(self) -> tuple[bytearray, np.ndarray, np.ndarray]:
         """Every chunk's bytes joined (a bytearray: one copy of them, no more), each chunk's end offset
         in them and its arrival time (the batch path)."""
         ends = np.cumsum(np.frombuffer(self._chunk_lengths, dtype=np.int64))
@@ -186,7 +186,7 @@ def _recorded_format_version(buffer: bytes) -> int | None:
 
 
 class _Walk:
-    """One pass over the records: chunk positions in lists (the hot path), other records kept aside."""
+    """One pass over the records: chunk positions in int64 arrays (the hot path), other records kept aside."""
 
     def __init__(self, buffer):
         self.buffer = buffer
