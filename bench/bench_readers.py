@@ -38,7 +38,7 @@ import json, sys, time, tracemalloc, zlib
 from pathlib import Path
 from groundstation.recording import open_recording
 from groundstation.recording.format import RecordingError
-from groundstation.autopilot.flightlog import read_log
+from groundstation.autopilot.session import read_log
 def hwm_kib():
     status = Path("/proc/self/status").read_text()
     return int(status.split("VmHWM:")[1].split()[0]), int(status.split("VmRSS:")[1].split()[0])
@@ -72,7 +72,9 @@ def measure(reader: str, path: Path, repeats: int) -> dict:
     runs = []
     for _ in range(repeats):
         code = MEASURE.format(reader=READERS[reader])
-        out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True, check=True)
+        out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True, text=True)
+        if out.returncode:
+            sys.exit(f"measuring {reader} on {path.name} failed:\n{out.stderr}")
         runs.append(json.loads(out.stdout))
     return {key: statistics.median(r[key] for r in runs) if key != "outcome" else runs[0][key] for key in runs[0]}
 
