@@ -85,3 +85,31 @@ def damaged_csv_gz(folder: Path, name: str = "damaged") -> Path:
     path = folder / f"{name}.csv.gz"
     path.write_bytes(bytes(data))
     return path
+
+
+def dataset_csv(folder: Path, name: str = "trial", rows: int = 2000, rate_hz: float = 100.0) -> Path:
+    """A dataset CSV at rest (1 g on z), ``rows`` rows from t = 0 at ``rate_hz``."""
+    columns = {"time_s": np.arange(rows) / rate_hz, **{f"gyr_{a}_rad_s": np.zeros(rows) for a in "xyz"},
+               **{f"acc_{a}_m_s2": np.full(rows, 9.81 if a == "z" else 0.0) for a in "xyz"}}
+    path = folder / f"{name}.csv"
+    path.write_text(",".join(columns) + "\n" + "\n".join(",".join(repr(float(columns[c][i])) for c in columns)
+                                                        for i in range(rows)) + "\n")
+    return path
+
+
+def first_samples_block_damaged(recording: Path) -> Path:
+    """The imported recording with one byte of its first samples block's values inverted (its CRC fails)."""
+    data = bytearray(recording.read_bytes())
+    header = data.find(b'{"columns"')
+    data[header + 200] ^= 0xFF
+    recording.write_bytes(bytes(data))
+    return recording
+
+
+def byte_range_duplicated(recording: Path, start_fraction: float = 0.3, length_fraction: float = 0.1) -> Path:
+    """The recording with a range of its bytes written twice (a copy tool that retried a block): the
+    repeated range holds whole records, with their valid CRCs, and is cut anywhere."""
+    data = recording.read_bytes()
+    start, length = int(len(data) * start_fraction), int(len(data) * length_fraction)
+    recording.write_bytes(data[:start + length] + data[start:start + length] + data[start + length:])
+    return recording

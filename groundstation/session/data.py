@@ -103,8 +103,10 @@ def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
         raise UserError(str(error)) from None
 
 
-def from_trial(trial: Trial, filters, settings_used, metadata: dict) -> SessionData:
-    """A dataset trial, run exactly as ``evaluate_trial`` runs it (the same numbers)."""
+def from_trial(trial: Trial, filters, settings_used, metadata: dict, origin_s: float | None = None) -> SessionData:
+    """A dataset trial, run exactly as ``evaluate_trial`` runs it (the same numbers). Session time counts
+    from ``origin_s``, the trial's first time (default: its first row's; an imported recording says it,
+    so rows after a lost first block keep their own times)."""
     try:
         runs = run_on_trial(trial, filters, settings_used)
     except ValueError as error:
@@ -114,7 +116,7 @@ def from_trial(trial: Trial, filters, settings_used, metadata: dict) -> SessionD
     acc_g = trial.acc_m_s2 / STANDARD_GRAVITY_M_S2
     sensors = {f"acc_{a}_g": acc_g[:, i] for i, a in enumerate("xyz")}
     sensors.update({f"gyr_{a}_dps": np.degrees(trial.gyr_rad_s[:, i]) for i, a in enumerate("xyz")})
-    time_s = trial.time_s - trial.time_s[0]
+    time_s = trial.time_s - (trial.time_s[0] if origin_s is None else origin_s)
     catalogue = session_catalogue({name: tuple(diag) for name, diag in diagnostics.items()})
     imu = {"time_s": time_s, **{f"acc_{a}_g": acc_g[:, i] for i, a in enumerate("xyz")},
            **{f"gyr_{a}_rad_s": trial.gyr_rad_s[:, i] for i, a in enumerate("xyz")}}
