@@ -43,10 +43,12 @@ def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
 def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionData:
     """``share(fraction)``: told after each estimator's run, from ``READ_SHARE`` to 1."""
     metadata = describe(log)
+    damage = list(log.damage)
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
         return SessionData(metadata=metadata, time_s=(t_us - t_us[0]) / 1e6, estimates={}, diagnostics={}, sensors={},
-                           onboard=log.onboard.stack(Q_COLUMNS), true_q=interpolated(t_us, log.truth), true_frame="NED")  # fmt: skip
+                           onboard=log.onboard.stack(Q_COLUMNS), true_q=interpolated(t_us, log.truth), true_frame="NED",
+                           damage=damage)  # fmt: skip
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
     mag = on_rows(t_us, log.mag, MAG_COLUMNS)
@@ -76,7 +78,7 @@ def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionDat
         metadata=metadata, time_s=(t_us - t_us[0]) / 1e6,
         estimates={name: q for name, (q, _) in runs.items()}, diagnostics=diagnostics,
         sensors=sensors, onboard=interpolated(t_us, log.onboard), true_q=interpolated(t_us, log.truth), true_frame="NED",
-        settings_at_start=settings, settings_at_end=settings, tables=tables, catalogue=catalogue,
+        settings_at_start=settings, settings_at_end=settings, tables=tables, catalogue=catalogue, damage=damage,
     )  # fmt: skip
 
 
