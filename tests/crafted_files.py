@@ -113,3 +113,28 @@ def byte_range_duplicated(recording: Path, start_fraction: float = 0.3, length_f
     start, length = int(len(data) * start_fraction), int(len(data) * length_fraction)
     recording.write_bytes(data[:start + length] + data[start:start + length] + data[start + length:])
     return recording
+
+
+def forged_config_recording(folder: Path, name: str = "forged", at_s: float = 4.0, duration_s: float = 8.0,
+                            firmware=None, **changes) -> Path:
+    """A simulated hover (±4 g, ±500 °/s) with one extra CONFIG chunk at ``at_s`` saying ``changes`` (e.g.
+    ``accel_fs_g=16``): a forged or corrupted CONFIG from another sender, its checksum valid."""
+    from firmware_protocol import encode, make_frame
+    from groundstation.session.pipeline import Pipeline
+    from groundstation.sim.firmware import FirmwareSettings
+
+    stream = SimStream(Scenario(profile="hover", duration_s=duration_s, seed=3, firmware=firmware or FirmwareSettings()))
+    chunks = [(round(c.t_s * 1e9), c.data) for c in [*stream.advance(stream.end_s), *stream.flush()]]
+    probe = Pipeline(())
+    for t_ns, data in chunks:
+        probe.feed(t_ns, data)
+        if probe.config is not None:
+            break
+    forged = encode(make_frame("CONFIG", 0, **{**probe.config, **changes}))
+    at = next(i for i, (t_ns, _) in enumerate(chunks) if t_ns >= at_s * 1e9)
+    chunks.insert(at, (chunks[at][0], forged))
+    path = folder / f"{name}.gsrec"
+    with RecordingWriter(path, {"source": "crafted", "filters": ["ahf"]}) as writer:
+        for t_ns, data in chunks:
+            writer.write_chunk(t_ns, data)
+    return path

@@ -11,7 +11,7 @@ from groundstation.session.data import SessionData, computed, from_pipeline, fro
 from groundstation.session.replay import check_forced, recorded_filters, recorded_settings
 
 
-def load(path, filters=None, forced=None, progress=None) -> SessionData:
+def load(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
     recording = open_recording(path)
     if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
@@ -32,4 +32,4 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
         return data
     if recording.chunk_count == 0:
         raise UserError(f"{path}: the recording holds no data")
-    return from_pipeline(recording, computed(recording, filters, forced, progress))
+    return from_pipeline(recording, computed(recording, filters, forced, progress, accept_config_changes))

@@ -62,7 +62,7 @@ class SessionData:
     @property
     def warnings(self) -> list[str]:
         """What every command says besides its result: what the recording lost, then the session's warnings."""
-        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") == "warning")]
+        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") in ("warning", "config_conflict"))]
 
     def evaluate(self) -> dict[str, dict[str, float]]:
         """Inclination RMSE / max of every estimator against the truth (BROAD's metric), and heading RMSE /
@@ -79,21 +79,27 @@ class SessionData:
             raise UserError(str(error)) from None
 
 
-def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
+def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
     """Decode, import or read ``path`` by its format (``formats``) and run the estimators; UserError with a
     clear message on bad input. A file of no known format is tried as a recording, whose reader says
-    what the file looks like instead."""
+    what the file looks like instead. ``accept_config_changes``: a recording's CONFIG that changes the
+    scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``)."""
     file_format = formats.sniff(path) or formats.FORMATS["recording"]
-    return file_format.loader()(Path(path), filters, forced, progress)
+    if not accept_config_changes:
+        return file_format.loader()(Path(path), filters, forced, progress)
+    if file_format.name != "recording":
+        raise UserError(f"{path}: a {file_format.description} has no CONFIG frames whose changes could be accepted")
+    return file_format.loader()(Path(path), filters, forced, progress, accept_config_changes=True)
 
 
-def computed(recording: Recording, filters=None, forced=None, progress=None) -> Pipeline | BatchSession:
+def computed(recording: Recording, filters=None, forced=None, progress=None,
+             accept_config_changes: bool = False) -> Pipeline | BatchSession:
     """A recording's session computed whole: the project's frames on the batch path (the same tables as
     a replay, tests/session/test_batch.py); an autopilot's MAVLink through the incremental pipeline
     (its front-end turns messages into stage calls one by one; it has no batch form)."""
     if recording.metadata.get("protocol", "gs") == "gs":
-        return batch_replay(recording, filters, forced, progress)
-    return replay(recording, filters, forced, progress)
+        return batch_replay(recording, filters, forced, progress, accept_config_changes)
+    return replay(recording, filters, forced, progress, accept_config_changes)
 
 
 def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:

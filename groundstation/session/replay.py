@@ -102,10 +102,12 @@ def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedS
                          protocol, warnings)
 
 
-def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
-    """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``."""
+def pipeline_for(recording: Recording, filters=None, forced=None, accept_config_changes: bool = False) -> Pipeline:
+    """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``;
+    ``accept_config_changes``: a CONFIG that changes the scales without a device restart applies (else held)."""
     setup = recorded_setup(recording, filters, forced)
-    pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol, aiding=setup.aiding)
+    pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol, aiding=setup.aiding,
+                        accept_config_changes=accept_config_changes)
     pipeline.events += setup.warnings
     return pipeline
 
@@ -145,9 +147,10 @@ class SettingsSchedule:
             self._next += 1
 
 
-def replay(recording: Recording, filters=None, forced=None, progress: Callable[[int, int], None] | None = None) -> Pipeline:
+def replay(recording: Recording, filters=None, forced=None, progress: Callable[[int, int], None] | None = None,
+           accept_config_changes: bool = False) -> Pipeline:
     """Feed every chunk, re-applying settings changes where they happened; returns the pipeline."""
-    pipeline = pipeline_for(recording, filters, forced)
+    pipeline = pipeline_for(recording, filters, forced, accept_config_changes)
     schedule = SettingsSchedule(recording)
     total = recording.chunk_count
     for i, (t_host_ns, data) in enumerate(recording.chunks()):
