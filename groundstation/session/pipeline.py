@@ -17,10 +17,12 @@ and said once per type; no frame stops a session. Frames are read by field name.
 Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames wait
 (``ConfigWait``, up to ``HOLD_FOR_CONFIG_US`` of session time); after that the assumed
 ``SensorConfig`` is used and a warning event is recorded. A later ``CONFIG`` takes effect from its
-position in the stream.
+position in the stream, unless it changes the full scales or the mounting without a device restart
+since the CONFIG in use (``ConfigGuard``): then a ``config_conflict`` event says what changed and the
+scales in use stay until the user accepts (``resolve_config``; files: ``accept_config_changes``).
 
 The rules here are the session's only copy: the batch path (``batch.py``) calls the same functions
-(``conversions``, ``in_body_axes``, ``sample_dt_s``, ``ConfigWait``, ``gap_row``, the aiding stage's
+(``conversions``, ``in_body_axes``, ``sample_dt_s``, ``ConfigWait``, ``ConfigGuard``, ``gap_row``, the aiding stage's
 ``Aiding``) on its columns and orders what it computed by ``stage_key``.
 
 Two protocol front-ends turn bytes into the stages' input: the project's own frames (``GsFrontEnd``,
