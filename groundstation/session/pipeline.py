@@ -266,9 +266,12 @@ class ConfigGuard:
 
     def config(self, t_host_ns: int, sensor: SensorConfig) -> tuple[bool, dict | None]:
         """(whether ``sensor`` applies from here, the ``config_conflict`` event to record, if any)."""
-        changes = [] if self.trusted is None or self.restarted else config_changes(self.trusted, sensor)
-        if not changes:
+        if self.trusted is None or self.restarted:
             self._trust(sensor)
+            return True, None
+        changes = config_changes(self.trusted, sensor)
+        if not changes:  # the scales and mounting in use (the device answering a request): a held one stays held
+            self.trusted = sensor
             return True, None
         if self.accept_changes:
             self._trust(sensor)

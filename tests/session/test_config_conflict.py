@@ -95,3 +95,18 @@ def test_the_commands_say_so_and_accept_on_request(forged, tmp_path, command, ca
     assert main([args[0], str(forged), *args[1:], "--accept-config-changes"]) == 0
     printed = capsys.readouterr()
     assert "accepted (--accept-config-changes)" in printed.out + printed.err
+
+
+def test_the_guard_holds_until_a_restart_or_an_answer_and_says_each_conflict_once():
+    from groundstation.session.pipeline import ConfigGuard, SensorConfig
+
+    real, forged = SensorConfig(accel_fs_g=4, gyro_fs_dps=500), SensorConfig(accel_fs_g=16, gyro_fs_dps=500, mounting=3)
+    guard = ConfigGuard()
+    assert guard.config(1, real) == (True, None)
+    applies, event = guard.config(2, forged)
+    assert not applies and event["changes"] == ["accelerometer full scale ±4 g → ±16 g", "mounting 1 → 3"]
+    assert guard.config(3, real) == (True, None) and guard.held == forged  # the device's own CONFIG again
+    assert guard.config(4, forged) == (False, None)  # said once
+    assert guard.config(5, SensorConfig(accel_fs_g=8, gyro_fs_dps=500))[1] is not None  # another change: said
+    guard.device_reset()
+    assert guard.config(6, forged) == (True, None) and guard.held is None and guard.trusted == forged
