@@ -217,11 +217,18 @@ class _Walk:
         t = self.chunk_t_host_ns
         if any(later <= earlier for earlier, later in itertools.pairwise(t)):
             seen: dict = {}
-            kept = [i for i, (t_ns, offset, length) in enumerate(zip(t, self.chunk_offsets, self.chunk_lengths))
-                    if not repeats(Kind.CHUNK, t_ns, offset, offset + length, seen)]
-            self.chunk_t_host_ns[:] = [t[i] for i in kept]
-            self.chunk_offsets[:] = [self.chunk_offsets[i] for i in kept]
-            self.chunk_lengths[:] = [self.chunk_lengths[i] for i in kept]
+            dropped = [i for i, (t_ns, offset, length) in enumerate(zip(t, self.chunk_offsets, self.chunk_lengths))
+                       if repeats(Kind.CHUNK, t_ns, offset, offset + length, seen)]
+            # A repeated range is a run of indices: delete run by run, from the end (lists or arrays alike).
+            runs = [[i, i + 1] for i in dropped[:1]]
+            for i in dropped[1:]:
+                if i == runs[-1][1]:
+                    runs[-1][1] = i + 1
+                else:
+                    runs.append([i, i + 1])
+            for start, stop in reversed(runs):
+                for values in (self.chunk_t_host_ns, self.chunk_offsets, self.chunk_lengths):
+                    del values[start:stop]
         seen = {}
         self.others[:] = [record for record in self.others if not repeats(*record, seen)]
         if first_repeat:
