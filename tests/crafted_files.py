@@ -116,9 +116,10 @@ def byte_range_duplicated(recording: Path, start_fraction: float = 0.3, length_f
 
 
 def forged_config_recording(folder: Path, name: str = "forged", at_s: float = 4.0, duration_s: float = 8.0,
-                            firmware=None, **changes) -> Path:
+                            firmware=None, events=(), **changes) -> Path:
     """A simulated hover (±4 g, ±500 °/s) with one extra CONFIG chunk at ``at_s`` saying ``changes`` (e.g.
-    ``accel_fs_g=16``): a forged or corrupted CONFIG from another sender, its checksum valid."""
+    ``accel_fs_g=16``): a forged or corrupted CONFIG from another sender, its checksum valid. ``events``:
+    (t_host_ns, event) recorded as well (a live session's answer to the held CONFIG)."""
     from firmware_protocol import encode, make_frame
     from groundstation.session.pipeline import Pipeline
     from groundstation.sim.firmware import FirmwareSettings
@@ -137,4 +138,6 @@ def forged_config_recording(folder: Path, name: str = "forged", at_s: float = 4.
     with RecordingWriter(path, {"source": "crafted", "filters": ["ahf"]}) as writer:
         for t_ns, data in chunks:
             writer.write_chunk(t_ns, data)
+        for t_ns, event in events:
+            writer.write_event(t_ns, event)
     return path

@@ -44,7 +44,7 @@ from groundstation.session.pipeline import (
     TEMPERATURE_SCALE, ConfigGuard, ConfigWait, SensorConfig, conversions, gap_row, impossible_config_message, in_body_axes,
     period_s, sample_dt_s, schema_message, sensor_of, stage_key, unexpected_frame_event,
 )
-from groundstation.session.replay import RecordedSetup, SettingsSchedule, apply_event, recorded_setup
+from groundstation.session.replay import CONFIG_ANSWERS, RecordedSetup, SettingsSchedule, apply_event, recorded_setup
 from groundstation.session.table import Table
 
 # Shares of the whole job reported through ``progress``: reading and decoding, then the estimators.
@@ -201,19 +201,29 @@ class _Builder:
 
     def _config(self) -> None:
         """CONFIG frames (few): events, the sensor configuration from each (``ConfigGuard``, told of the device
-        restarts before it), and what it says about the schema."""
+        restarts and the recorded answers to a held CONFIG in the pipeline's order), and what it says about
+        the schema."""
         s, columns = self.s, self.d.frames["CONFIG"]
         self.sensor_keys: list[float] = []
         self.sensors: list[SensorConfig] = []
         fingerprints = columns.raw["schema_fingerprint"]
-        resets = iter(key for key, (_, event) in zip(self.disc_keys.tolist(), self.discontinuities)
-                      if event["kind"] == "device_reset")
-        next_reset = next(resets, math.inf)
-        for k, position in enumerate(columns.order.tolist()):
-            key = stage_key(position, HANDLER)
-            while next_reset < key:
+        steps = [(key, None) for key, (_, event) in zip(self.disc_keys.tolist(), self.discontinuities)
+                 if event["kind"] == "device_reset"]
+        steps += [(key, event) for key, (_, event) in zip(self.change_keys, self.changes) if event["kind"] in CONFIG_ANSWERS]
+        steps += [(stage_key(position, HANDLER), k) for k, position in enumerate(columns.order.tolist())]
+        for key, step in sorted(steps, key=lambda item: item[0]):
+            if step is None:
                 self.guard.device_reset()
-                next_reset = next(resets, math.inf)
+                continue
+            if isinstance(step, dict):
+                sensor, event = self.guard.resolve(step.get("t_host_ns", 0), step["kind"] == CONFIG_ANSWERS[0])
+                if event is not None:
+                    s.event(key, event)
+                if sensor is not None:
+                    self.sensor_keys.append(key)
+                    self.sensors.append(sensor)
+                continue
+            k = step
             values = self._values("CONFIG", k)
             s.config = values
             t_host_ns = int(columns.t_host_ns[k])
@@ -349,7 +359,8 @@ class _Builder:
             unbiased = gyr.copy()
             unbiased[measured_at:] = gyr[measured_at:] - np.array(bias)
             s.event(keys[measured_at], {"t_host_ns": int(t_host[measured_at]), "kind": "gyro_bias", "bias_rad_s": list(bias)})
-        breaks = sorted([(k, 0, i) for i, k in enumerate(self.change_keys)] + [(k, 1, i) for i, k in enumerate(self.disc_keys.tolist())])
+        settings = [(k, 0, i) for i, k in enumerate(self.change_keys) if self.changes[i][1]["kind"] == "settings"]
+        breaks = sorted(settings + [(k, 1, i) for i, k in enumerate(self.disc_keys.tolist())])
         outputs = {name: ([], []) for name in bank.filters}
         start = 0
         for key, kind, index in breaks + [(math.inf, 2, -1)]:

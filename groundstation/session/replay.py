@@ -112,14 +112,20 @@ def pipeline_for(recording: Recording, filters=None, forced=None, accept_config_
     return pipeline
 
 
+CONFIG_ANSWERS = ("config_accepted", "config_kept")  # the user's answers to a held CONFIG (``ConfigGuard``)
+
+
 def apply_event(pipeline: Pipeline, event: dict) -> None:
-    """Re-apply a recorded settings change (other events are informational)."""
+    """Re-apply a recorded settings change or answer to a held CONFIG (other events are informational)."""
     if event.get("kind") == "settings" and event.get("name") in pipeline.estimators:
         pipeline.change_settings(event["name"], event.get("settings", {}), event.get("t_host_ns", 0))
+    elif event.get("kind") in CONFIG_ANSWERS:
+        pipeline.resolve_config(event["kind"] == CONFIG_ANSWERS[0], event.get("t_host_ns", 0))
 
 
 class SettingsSchedule:
-    """A recording's settings changes, handed out where they happened in the chunk stream.
+    """A recording's settings changes (and answers to a held CONFIG), handed out where they happened in the
+    chunk stream.
 
     A change recorded at ``t`` applies after every chunk that arrived at or before ``t`` (the live
     session stamps it with the last chunk it had fed), so a replay repeats the live session exactly.
@@ -133,6 +139,8 @@ class SettingsSchedule:
                 kept, _ = checked_settings(name, event.get("settings"))  # what is left out: left_out_settings
                 if kept:
                     changes.append((t, i, {**event, "settings": kept}))
+            elif event.get("kind") in CONFIG_ANSWERS:
+                changes.append((t, i, event))
         self._events = sorted(changes, key=lambda x: x[:2])
         self._next = 0
 

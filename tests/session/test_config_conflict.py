@@ -75,6 +75,30 @@ def test_the_user_answers_a_held_config_in_the_pipeline(forged):
     assert pipeline.sensor.accel_fs_g == 16 and pipeline.events[-1]["kind"] == "config_accepted"
 
 
+def test_an_answer_recorded_live_is_replayed_where_it_was_given(tmp_path):
+    answer_s = AT_S + 1.0
+    path = forged_config_recording(tmp_path, at_s=AT_S, accel_fs_g=16,
+                                   events=[(round(answer_s * 1e9), {"t_host_ns": round(answer_s * 1e9), "kind": "config_accepted"})])
+    pipeline = replay(open_recording(path))
+    data = load_session(path)
+    assert [e for e in pipeline.events if e["kind"] == "config_accepted"] == [
+        {k: v for k, v in e.items() if k != "t_s"} for e in data.events if e["kind"] == "config_accepted"]
+    (forged_s,) = [e["t_s"] for e in data.events if e["kind"] == "config_conflict"]  # session times
+    (accepted_s,) = [e["t_s"] for e in data.events if e["kind"] == "config_accepted"]
+    assert accepted_s - forged_s == pytest.approx(answer_s - AT_S, abs=0.05)
+    # Against the same recording kept at ±4 g throughout: equal up to the answer, 4x after it (counts
+    # over 2048 LSB/g instead of 8192: powers of two, so exactly 4x).
+    kept_time_s, kept = of_data(load_session(forged_config_recording(tmp_path, "kept", at_s=AT_S, accel_fs_g=16)))
+    for time_s, acc in (of_pipeline(pipeline), of_data(data)):
+        np.testing.assert_array_equal(time_s, kept_time_s)
+        switch = int(np.argmax(np.any(acc != kept, axis=1)))  # the first row converted otherwise
+        assert time_s[switch] == pytest.approx(accepted_s, abs=0.05)  # where the answer was given
+        after = np.arange(len(time_s)) >= switch
+        np.testing.assert_array_equal(acc[~after], kept[~after])
+        np.testing.assert_array_equal(acc[after], 4 * kept[after])
+    np.testing.assert_array_equal(of_pipeline(pipeline)[1], of_data(data)[1])  # the same rule, the same numbers
+
+
 def test_after_a_device_restart_a_new_config_applies(tmp_path):
     path = forged_config_recording(tmp_path, at_s=AT_S, firmware=FirmwareSettings(reboot_after_s=2.0), accel_fs_g=16)
     data = load_session(path)
