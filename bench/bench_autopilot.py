@@ -19,7 +19,7 @@ from pathlib import Path
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from groundstation.autopilot.agreement import agreement
+from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.session import load_log
 from groundstation.autopilot.tlog import packets
@@ -38,11 +38,11 @@ def log_figures(path: Path, repeats: int) -> str:
         times.append(time.perf_counter() - start)
     meta = data.metadata
     head = f"| {path.name} | {data.time_s[-1]:.1f} | {meta.get('imu_rate_hz', float('nan')):.1f} | {statistics.median(times):.2f} |"
-    if not data.estimates:
+    if not data.estimated:
         return head + " no IMU logged: onboard attitude only |"
     names = runnable(FILE_AIDING)
     full = load_log(path, names)
-    figures = agreement(full.estimates, full.onboard)
+    figures = onboard_agreement(full)
     cells = ", ".join(f"{n} {f['pitch_rms_deg']:.2f}/{f['roll_rms_deg']:.2f}" for n, f in figures.items())
     slow = " (IMU too slow for host filtering)" if "imu_warning" in meta else ""
     return head + f" {cells}{slow} |"

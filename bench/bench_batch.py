@@ -79,7 +79,7 @@ elif kind == "estimators":
         result[name] = time.perf_counter() - t
     result["samples"] = len(dt)
 elif kind in ("load_session", "incremental"):
-    from groundstation.session.data import from_pipeline, load_session
+    from groundstation.session.load import from_pipeline, load_session
     from groundstation.session.replay import replay
     if kind == "load_session":
         data = load_session(path, ("ahf", "hf", "ecf"))

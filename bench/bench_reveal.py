@@ -26,9 +26,10 @@ from timing import median_seconds  # noqa: E402
 from PySide6 import QtCore, QtWidgets  # noqa: E402
 
 from groundstation.recording import RecordingWriter, open_recording  # noqa: E402
-from groundstation.session.data import load_session  # noqa: E402
+from groundstation.session.load import load_session  # noqa: E402
 from groundstation.session.replay import pipeline_for  # noqa: E402
-from groundstation.session.reveal import RevealSession  # noqa: E402
+from groundstation.session.playback import RevealSession  # noqa: E402
+from groundstation.session.factory import Sessions
 from groundstation.ui.main_window import MainWindow  # noqa: E402
 
 
@@ -98,7 +99,7 @@ def main() -> None:
     args = parser.parse_args()
     app = QtWidgets.QApplication(sys.argv[:1])  # noqa: F841 (alive while the window lives)
     settings = QtCore.QSettings(str(Path(tempfile.mkdtemp()) / "bench.ini"), QtCore.QSettings.Format.IniFormat)
-    window = MainWindow(settings)
+    window = MainWindow(settings, Sessions())
     window.resize(1280, 800)
     window.show()
     window.timer.stop()  # the bench ticks it itself

@@ -37,7 +37,7 @@ if sys.argv[2] == "decode":
 else:
     from groundstation.export.columns import export_columns
     from groundstation.export.tabular import write_csv
-    from groundstation.session.data import from_pipeline
+    from groundstation.session.load import from_pipeline
     from groundstation.session.replay import replay
     pipeline = replay(recording, filters=("ahf", "hf", "ecf"))
     t_replay = time.perf_counter() - t0

@@ -45,6 +45,7 @@ from groundstation.estimation import live_estimators  # noqa: E402
 from groundstation.session.factory import replay_session  # noqa: E402
 from groundstation.sources import ReplaySource  # noqa: E402
 from groundstation.ui.live_view import attitude_plots  # noqa: E402
+from groundstation.session.factory import Sessions
 from groundstation.ui.main_window import MainWindow  # noqa: E402
 from groundstation.ui.plots import StackedPlots  # noqa: E402
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities  # noqa: E402
@@ -158,7 +159,7 @@ def ui_thread_cpu_s() -> float:
 def live_run(start, seconds: float) -> tuple[float, float, float, list[float]]:
     with tempfile.TemporaryDirectory() as folder:
         settings = QtCore.QSettings(str(Path(folder) / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-        window = MainWindow(settings, recordings_dir=Path(folder))
+        window = MainWindow(settings, Sessions(), recordings_dir=Path(folder))
         window.resize(1280, 800)
         window.show()
         start(window)
@@ -226,7 +227,7 @@ def memory_child(kind: str, path: str) -> None:
     window = None
     if kind == "window":
         settings = QtCore.QSettings(str(Path(path).with_suffix(".ini")), QtCore.QSettings.Format.IniFormat)
-        window = MainWindow(settings)
+        window = MainWindow(settings, Sessions())
         window.resize(1280, 800)
         window.show()
         window.live_view.window_box.setCurrentText("whole session")
@@ -241,7 +242,7 @@ def memory_child(kind: str, path: str) -> None:
         wait(0.5)
     wait(0.5)
     print(json.dumps({
-        "growth_mb": rss_mb() - before, "tables_mb": table_mb(session.pipeline), "samples": len(session.pipeline.imu),
+        "growth_mb": rss_mb() - before, "tables_mb": table_mb(session.view), "samples": len(session.view.imu),
         "seconds": time.monotonic() - t0,
         "buffers_mb": sum(s.nbytes() for s in window.live_view.series.values()) / 1e6 if window else 0.0,
     }))

@@ -4,9 +4,9 @@ As PlotJuggler's ``DataLoader::compatibleFileExtensions()``: each format says it
 the first bytes its files start with (when they have any) and the loader that turns a file into the
 session product, ``load(path, filters, forced, progress) -> SessionData`` (``loaders``, or
 ``autopilot.session.load_log`` for flight logs, which also name their reader into a ``FlightLog``).
-The app's Open dialog, the CLI's help and ``session.data.load_session`` (which the app, ``export``,
+The app's Open dialog, the CLI's help and ``session.load.load_session`` (which the app, ``export``,
 ``evaluate`` and ``replay`` open files with) derive from it; so do ``sources`` (which files replay as a
-link) and ``autopilot.flightlog`` (which reader a flight log takes). A new format is its loader module
+link) and ``autopilot.session.read_log`` (which reader a flight log takes). A new format is its loader module
 and one ``register`` line here (or a call from anywhere, before the file is opened).
 
 Loaders and readers are named as ``"module:function"`` and imported on first use: this module imports

@@ -128,6 +128,18 @@ def to_euler_zyx(q) -> np.ndarray:
     return np.stack([yaw, pitch, roll], axis=-1)
 
 
+def euler_deg(q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(yaw, pitch, roll)`` in degrees of ``to_euler_zyx``: the one conversion every view and export
+    shows. Yaw in (-180°, 180°] (docs/conventions.md); a compass shows it as ``heading_deg(yaw)``."""
+    yaw, pitch, roll = np.moveaxis(np.degrees(to_euler_zyx(q)), -1, 0)
+    return yaw, pitch, roll
+
+
+def heading_deg(yaw_deg):
+    """Yaw as a compass reads it: 0..360°, clockwise from north (the same angle as ``euler_deg``'s yaw)."""
+    return np.mod(yaw_deg, 360.0)
+
+
 def from_rotation_vector(rv) -> np.ndarray:
     """Exponential map: rotation vector (axis × angle, rad; shape (..., 3)) to unit quaternion.
 

@@ -7,8 +7,11 @@ this project's units and frames, with no Qt and no session machinery.
 - ``decoder.MavlinkDecoder``: raw link bytes (MAVLink 1 and 2) -> records: ``feed(bytes) -> list``.
 - ``streams``: the only uplink we send (stream-rate requests) and the IMU-rate check.
 - ``tlog``: the standard ``.tlog`` file (8-byte big-endian µs timestamp + raw message).
-- ``flightlog``: ``.tlog``, DataFlash ``.bin`` and PX4 ``.ulg`` read into arrays (``FlightLog``).
-- ``session.load_log``: a flight log as a ``SessionData`` with the host estimators run on it.
+- ``flightlog``: what a flight log is read into (``FlightLog``: arrays on the autopilot's clock); the
+  readers ``tlog``, ``dataflash`` and ``ulog`` fill it.
+- ``session``: ``read_log`` (a log by its format's reader, ``formats``) and ``load_log``: a flight log
+  as a ``SessionData`` with the host estimators run on it.
+- ``mavlink_front``: the live pipeline's MAVLink front-end (records into the session's stages and tables).
 - ``agreement``: host estimators' pitch/roll difference from the autopilot's own estimate.
 
 Frames: ArduPilot and PX4 report IMU and attitude on the body axes x forward, y right, z down (FRD)

@@ -37,3 +37,8 @@ def agreement(estimates: dict[str, np.ndarray], onboard: np.ndarray) -> dict[str
             "rows": int(keep.sum()),
         }  # fmt: skip
     return out
+
+
+def onboard_agreement(data) -> dict[str, dict[str, float]]:
+    """``agreement`` of a ``SessionData``'s host estimators with its onboard estimate, on its sample rows."""
+    return agreement({name: data.quaternion(name) for name in data.estimated}, data.quaternion("onboard"))

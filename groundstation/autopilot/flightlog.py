@@ -19,8 +19,6 @@ from pathlib import Path
 
 import numpy as np
 
-from groundstation import formats
-from groundstation.errors import UserError
 
 Q_COLUMNS = ("qw", "qx", "qy", "qz")
 IMU_COLUMNS = ("gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s", "acc_x_g", "acc_y_g", "acc_z_g")
@@ -95,18 +93,3 @@ class FlightLog:
     units: dict[str, dict[str, str]] = dataclasses.field(default_factory=dict)  # table -> column -> unit
     notes: list[str] = dataclasses.field(default_factory=list)
     damage: list[str] = dataclasses.field(default_factory=list)  # what the reader dropped as damaged
-
-
-def read_log(path, progress=None) -> FlightLog:
-    """The log at ``path`` by its format's reader (``formats``); UserError with a clear message when it cannot be read."""
-    path = Path(path)
-    if not path.is_file():
-        raise UserError(f"{path}: no such file")
-    file_format = formats.sniff(path)
-    if file_format is None or file_format.read is None:
-        raise UserError(f"{path}: not a flight log ({formats.described(formats.flight_logs())})")
-    log = file_format.reader()(path, progress)
-    if log.imu is None and log.onboard is None:
-        found = f" ({'; '.join(log.notes)})" if log.notes else ""
-        raise UserError(f"{path}: holds neither IMU samples nor an attitude estimate{found}; damaged or empty?")
-    return log

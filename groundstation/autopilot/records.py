@@ -119,3 +119,25 @@ class GenericMessage(NamedTuple):
 
 
 Record = ImuSample | OnboardAttitude | MagReading | BaroReading | GpsReading | LinkHealth | VehicleStatus | Battery | GenericMessage
+
+
+# The tables a session keeps of these records, live (``session``'s MAVLink front-end) and logged
+# (``tlog``): name, label, and per record attribute its column's field and unit.
+RECORD_TABLES = {
+    VehicleStatus: ("heartbeat", "HEARTBEAT: what the vehicle is and does",
+                    {"autopilot": ("autopilot", ""), "vehicle_type": ("vehicle_type", ""), "armed": ("armed", ""),
+                     "system_status": ("system_status", "")}),
+    Battery: ("sys_status", "SYS_STATUS: battery and the autopilot's view of the link",
+              {"voltage_v": ("voltage", "V"), "current_a": ("current", "A"), "remaining_pct": ("remaining", "%"),
+               "drop_rate_comm_pct": ("drop_rate_comm", "%"), "errors_comm": ("errors_comm", "")}),
+    LinkHealth: ("radio_status", "RADIO_STATUS: both radios' signal (SiK units)",
+                 {"rssi": ("rssi", ""), "remote_rssi": ("remote_rssi", ""), "noise": ("noise", ""),
+                  "remote_noise": ("remote_noise", ""), "rx_errors": ("rx_errors", ""), "fixed": ("fixed", ""),
+                  "tx_buffer_pct": ("tx_buffer", "%")}),
+}  # fmt: skip
+
+
+def table_fields(record_type) -> tuple[str, str, list[str], dict[str, str]]:
+    """The table of a mapped record type (``RECORD_TABLES``): its name, label, fields and their units."""
+    name, label, columns = RECORD_TABLES[record_type]
+    return name, label, [field for field, _ in columns.values()], {field: unit for field, unit in columns.values() if unit}

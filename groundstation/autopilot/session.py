@@ -14,22 +14,32 @@ the rows they arrived at, so export and evaluate treat it like any session.
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 
-from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, read_log
+from groundstation import formats
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
-from groundstation.formats import FORMATS
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
 from groundstation.session.catalogue import Catalogue, message_table, session_catalogue
-from groundstation.session.data import SessionData
 from groundstation.session.pipeline import DEFAULT_FILTERS
+from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns
 
 MAX_GAP_S = 1.0
 READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
 PROGRESS_STEPS = 1000
+# The log's slower sensors in the tables a live session fills with the same readings (the spec's
+# MAG_RAW, BARO and GPS tables: one description, live and logged; a log has no compass heading column):
+# stream -> (table, {column: (the stream's column, factor)}).
+READINGS = {
+    "mag": ("mag_raw", {c: (c, 1.0) for c in MAG_COLUMNS}),
+    "baro": ("baro", {"pressure_Pa": ("pressure_hpa", 100.0), "temperature_degC": ("temperature_c", 1.0)}),
+    "gps": ("gps", {c: (c, 1.0) for c in GPS_COLUMNS}),
+}
+AUTOPILOT_PROTOCOL = "mavlink"  # what the window treats a flight log's aircraft as speaking: no commands of ours
 
 
 def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
@@ -40,15 +50,28 @@ def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
     return log_session(read_log(path, reading), filters or DEFAULT_FILTERS, forced or {}, share)
 
 
+def read_log(path, progress=None) -> FlightLog:
+    """The log at ``path`` by its format's reader (``formats``); UserError with a clear message when it cannot be read."""
+    path = Path(path)
+    if not path.is_file():
+        raise UserError(f"{path}: no such file")
+    file_format = formats.sniff(path)
+    if file_format is None or file_format.read is None:
+        raise UserError(f"{path}: not a flight log ({formats.described(formats.flight_logs())})")
+    log = file_format.reader()(path, progress)
+    if log.imu is None and log.onboard is None:
+        found = f" ({'; '.join(log.notes)})" if log.notes else ""
+        raise UserError(f"{path}: holds neither IMU samples nor an attitude estimate{found}; damaged or empty?")
+    return log
+
+
 def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionData:
     """``share(fraction)``: told after each estimator's run, from ``READ_SHARE`` to 1."""
-    metadata = describe(log)
-    damage = list(log.damage)
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
-        return SessionData(metadata=metadata, time_s=(t_us - t_us[0]) / 1e6, estimates={}, diagnostics={}, sensors={},
-                           onboard=log.onboard.stack(Q_COLUMNS), true_q=interpolated(t_us, log.truth), true_frame="NED",
-                           damage=damage)  # fmt: skip
+        tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0])}
+        return build_product(describe(log), log_catalogue(log, {}), tables, (), protocol=AUTOPILOT_PROTOCOL,
+                             true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage))
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
     mag = on_rows(t_us, log.mag, MAG_COLUMNS)
@@ -64,48 +87,57 @@ def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionDat
                 share(READ_SHARE + (1.0 - READ_SHARE) * i / len(names))
     except ValueError as error:
         raise UserError(str(error)) from None
-    sensors = {name: log.imu.columns[name] for name in IMU_COLUMNS if name.startswith("acc")}
-    sensors.update({f"gyr_{a}_dps": np.degrees(gyr[:, i]) for i, a in enumerate("xyz")})
-    sensors.update({name: mag[:, i] for i, name in enumerate(MAG_COLUMNS)} if log.mag is not None else {})
-    for prefix, stream in (("baro", log.baro), ("gps", log.gps)):
-        if stream is not None:
-            values = on_rows(t_us, stream, list(stream.columns))
-            sensors.update({f"{prefix}_{name}": values[:, i] for i, name in enumerate(stream.columns)})
     settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
-    diagnostics = {name: d for name, (_, d) in runs.items()}
-    tables, catalogue = catalogued(log, {name: q for name, (q, _) in runs.items()}, diagnostics)
-    return SessionData(
-        metadata=metadata, time_s=(t_us - t_us[0]) / 1e6,
-        estimates={name: q for name, (q, _) in runs.items()}, diagnostics=diagnostics,
-        sensors=sensors, onboard=interpolated(t_us, log.onboard), true_q=interpolated(t_us, log.truth), true_frame="NED",
-        settings_at_start=settings, settings_at_end=settings, tables=tables, catalogue=catalogue, damage=damage,
-    )  # fmt: skip
-
-
-def catalogued(log: FlightLog, estimates: dict, diagnostics: dict) -> tuple[dict, Catalogue]:
-    """The session's ``imu`` table (samples and estimates) and one table per other logged message type
-    (a tlog's VFR_HUD, SYS_STATUS, ...: "plot any channel"), with their catalogue; columns named
-    ``<field>_<unit>`` from pymavlink's units, on session time."""
-    t_us = log.imu.time_us
-    imu_info = session_catalogue({name: tuple(d) for name, d in diagnostics.items()})["imu"]
     imu = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
-    for name, q in estimates.items():
-        imu.update({f"{name}_q{c}": q[:, i] for i, c in enumerate("wxyz")})
-        imu.update({f"{name}_{d}": values for d, values in diagnostics[name].items()})
-    nan = np.full(len(t_us), np.nan)
-    tables = {"imu": {c: imu.get(c, nan) for c in imu_info.column_names}}
-    infos = {"imu": imu_info}
-    for name, stream in log.tables.items():
-        info = message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {}))
-        infos[info.name] = info
-        columns = zip(info.column_names[1:], stream.columns.values())
-        tables[info.name] = {"time_s": (stream.time_us - t_us[0]) / 1e6, **dict(columns)}
-    return tables, Catalogue(infos)
+    for name, (q, diagnostics) in runs.items():
+        imu.update(estimate_columns(name, q, diagnostics))
+    tables = {"imu": imu, **reading_tables(log, t_us[0])}
+    if log.onboard is not None:
+        tables[ONBOARD] = onboard_columns(t_us, t_us[0], interpolated(t_us, log.onboard))
+    catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()})
+    return build_product(describe(log), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
+                         true_q=interpolated(t_us, log.truth), true_frame="NED",
+                         settings_at_start=settings, settings_at_end=settings, damage=list(log.damage))
+
+
+def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np.ndarray]:
+    """The ``onboard`` table of rows at ``t_us`` (λ and flags: a log has none)."""
+    return {"time_s": (t_us - t0_us) / 1e6, "device_time_us": t_us.astype(float),
+            **{c: q[:, i] for i, c in enumerate(Q_COLUMNS)}}
+
+
+def reading_tables(log: FlightLog, t0_us: int) -> dict[str, dict[str, np.ndarray]]:
+    """The slower sensors and every other logged message type (a tlog's VFR_HUD, SYS_STATUS, ...: "plot
+    any channel"), each a table on its own rows in session time."""
+    out = {}
+    for key, (name, columns) in READINGS.items():
+        stream: Series | None = getattr(log, key)
+        if stream is not None:
+            out[name] = {"time_s": (stream.time_us - t0_us) / 1e6,
+                         **{c: stream.columns[source] * factor for c, (source, factor) in columns.items()}}
+    for info, stream in _message_tables(log):
+        out[info.name] = {"time_s": (stream.time_us - t0_us) / 1e6, **dict(zip(info.column_names[1:], stream.columns.values()))}
+    return out
+
+
+def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]]) -> Catalogue:
+    """The log's tables: ``imu`` with the estimators' columns, ``onboard`` and the slower sensors as the
+    live session describes them; one per other message type, columns named ``<field>_<unit>`` from the
+    log's units."""
+    tables = session_catalogue(diagnostics)
+    readings = [name for key, (name, _) in READINGS.items() if getattr(log, key) is not None]
+    return Catalogue({name: tables[name] for name in ("imu", ONBOARD, *readings)} | {i.name: i for i, _ in _message_tables(log)})
+
+
+def _message_tables(log: FlightLog) -> list[tuple]:
+    """(``TableInfo``, ``Series``) of every other message type the log holds."""
+    return [(message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {})), stream)
+            for name, stream in log.tables.items()]
 
 
 def describe(log: FlightLog) -> dict:
     """What the Session sheet and the commands show about the log."""
-    meta = {"source": f"{FORMATS[log.format].description} {log.path.name}", "autopilot": log.autopilot}
+    meta = {"source": f"{formats.FORMATS[log.format].description} {log.path.name}", "autopilot": log.autopilot}
     for name in ("imu", "onboard", "mag", "baro", "gps", "truth"):
         stream: Series | None = getattr(log, name)
         if stream is not None:

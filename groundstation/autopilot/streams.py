@@ -22,6 +22,7 @@ from groundstation.autopilot.records import ImuSample, VehicleStatus
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
+REQUESTED_RATE_HZ = 50.0  # what a session asks an autopilot for unless the user asks otherwise
 MAX_REQUEST_RATE_HZ = 400.0  # the fastest IMU loop ArduPilot and PX4 stream; REQUEST_DATA_STREAM takes whole Hz
 STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
                      mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
@@ -61,7 +62,7 @@ class StreamRequester:
     again every ``retry_s`` while its IMU stays slower than ``MIN_FILTER_RATE_HZ`` (a request can be
     lost on a radio link, and ArduPilot's SRx_ parameters may override it)."""
 
-    def __init__(self, rate_hz: float = 50.0, retry_s: float = 5.0):
+    def __init__(self, rate_hz: float = REQUESTED_RATE_HZ, retry_s: float = 5.0):
         self.rate_hz = rate_hz
         self.retry_ns = int(retry_s * 1e9)
         self.monitors: dict[int, ImuRateMonitor] = {}

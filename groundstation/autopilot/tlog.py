@@ -169,12 +169,9 @@ def _device_clock(records):
     return lambda t_host_ns: np.interp(t_host_ns, host, device)
 
 
-TABLE_KINDS = {rec.LinkHealth: "RADIO_STATUS", rec.Battery: "SYS_STATUS", rec.VehicleStatus: "HEARTBEAT"}
-RECORD_UNITS = {"voltage_v": "V", "current_a": "A", "remaining_pct": "%", "drop_rate_comm_pct": "%", "tx_buffer_pct": "%"}
-
-
 def _tables(mine, by_kind, device_us) -> tuple[dict[str, Series], dict[str, dict[str, str]]]:
-    """Every other message as a table per type (and link health, battery, status), on the device clock."""
+    """Every other message as a table per type, and link health, battery and status as the live session
+    keeps them (``records.RECORD_TABLES``), on the device clock."""
     if device_us is None:
         return {}, {}
     tables, units = {}, {}
@@ -188,13 +185,12 @@ def _tables(mine, by_kind, device_us) -> tuple[dict[str, Series], dict[str, dict
         values = np.array([list(r.fields.values()) for r in rows], dtype=float).reshape(len(rows), len(fields))  # one layout per type
         tables[name] = series(times, dict(zip(fields, values.T)), name)
         units[name] = dict(rows[0].units)
-    for kind, name in TABLE_KINDS.items():
+    for kind, (name, _, columns) in rec.RECORD_TABLES.items():
         rows = by_kind[kind]
         if rows:
-            fields = [f for f in kind._fields if f not in ("system", "component", "t_host_ns", "mode")]
             tables[name] = series(device_us(np.array([r.t_host_ns for r in rows], dtype=float)),
-                                  {f: [float(getattr(r, f)) for r in rows] for f in fields}, name)  # fmt: skip
-            units[name] = {f: RECORD_UNITS.get(f, "") for f in fields}
+                                  {field: [float(getattr(r, a)) for r in rows] for a, (field, _) in columns.items()}, name)
+            units[name] = rec.table_fields(kind)[3]
     return tables, units
 
 

@@ -37,9 +37,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundstation.autopilot.agreement import agreement
+    from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.commands.progress import ProgressBar
-    from groundstation.session.data import load_session
+    from groundstation.session.load import load_session
 
     names, overrides = estimator_options(args)
     bar = ProgressBar("computing")  # shown after a second: a long recording or log
@@ -49,10 +49,10 @@ def run(args: argparse.Namespace) -> int:
         bar.done()
     for warning in data.warnings:  # beside the JSON, not in it
         print(f"warning: {warning}", file=sys.stderr if args.json else sys.stdout)
-    if data.true_q is None and data.onboard is not None:
-        if not data.estimates:
+    if data.true_q is None and data.has_onboard():
+        if not data.estimated:
             raise UserError(f"{args.file}: no IMU samples, so no host estimator ran; only the onboard estimate is there")
-        return print_agreement(agreement(data.estimates, data.onboard), data.metadata.get("imu_warning"), args.json)
+        return print_agreement(onboard_agreement(data), data.metadata.get("imu_warning"), args.json)
     results = data.evaluate()
     if args.json:
         print(json.dumps(results, indent=2))

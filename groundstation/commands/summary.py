@@ -9,21 +9,21 @@ import time
 import numpy as np
 
 from groundstation import quaternion
-from groundstation.session.live import LiveSession
+from groundstation.session.view import Session
 
 
 SILENT_AFTER_S = 1.0  # a live link with no frame for this long is said to be silent
 
 
-def summary_line(session: LiveSession) -> str:
-    """A replay of a file with no link in it (a flight log, a dataset: ``pipeline.link`` None) says no link figures."""
-    p = session.pipeline
+def summary_line(session: Session) -> str:
+    """A replay of a file with no link in it (a flight log, a dataset: ``view.link`` None) says no link figures."""
+    p = session.view
     with session.lock:
         last = p.imu.tail(1)
         if p.link is None:
-            stats, rates, silent_s = None, None, 0.0
+            counters, rates, silent_s = None, None, 0.0
         else:
-            stats = p.decoder.stats
+            counters = p.counters()
             rates = p.link.rates()
             silent_s = p.link.since_last_frame_s(time.monotonic_ns())
     if not session.connected:
@@ -36,30 +36,30 @@ def summary_line(session: LiveSession) -> str:
     attitude = ""
     if p.filters:  # a log with the aircraft's estimate only has none of its own
         name = p.filters[0]
-        _, pitch, roll = np.degrees(quaternion.to_euler_zyx(np.array([row[f"{name}_q{c}"] for c in "wxyz"])))
+        _, pitch, roll = quaternion.euler_deg(np.array([row[f"{name}_q{c}"] for c in "wxyz"]))
         attitude = f"  {name} pitch {pitch:+6.1f}° roll {roll:+6.1f}°"
-    if stats is None:
+    if counters is None:
         return f"t {row['time_s']:8.2f} s{attitude}"
     fps = rates["frames_per_s"]
     fps_text = "-" if math.isnan(fps) else f"{fps:.0f}"
-    return f"t {row['time_s']:8.2f} s{attitude}  {fps_text} frames/s  lost {stats.frames_lost}  CRC errors {stats.crc_errors}"
+    return f"t {row['time_s']:8.2f} s{attitude}  {fps_text} frames/s  lost {counters['frames_lost']}  CRC errors {counters['crc_errors']}"
 
 
-def totals_line(session: LiveSession) -> str:
+def totals_line(session: Session) -> str:
     """What the session decoded in all: the last line of ``replay`` and ``record`` (equal for a
     recording and its replay)."""
-    p = session.pipeline
+    p = session.view
     with session.lock:
-        if p.decoder is None:  # a flight log or a dataset: no link was decoded
+        if p.link is None:  # a flight log or a dataset: no link was decoded
             return f"{len(p.imu)} IMU samples" if p.filters else f"{len(p.onboard)} onboard attitude samples, no IMU"
-        stats = p.decoder.stats
-        line = (f"{len(p.imu)} IMU samples, {stats.frames} frames, {stats.frames_lost} lost, "
-                f"{stats.crc_errors} CRC errors, {stats.bytes_skipped} bytes skipped")
+        c = p.counters()
+        line = (f"{len(p.imu)} IMU samples, {c['frames']} frames, {c['frames_lost']} lost, "
+                f"{c['crc_errors']} CRC errors, {c['bytes_skipped']} bytes skipped")
     ignored = getattr(session.source, "ignored", None)  # a UDP source locked to its sender
     return f"{line}; {ignored}" if ignored and ignored.datagrams else line
 
 
-def follow(session: LiveSession, stream=None, interval_s: float = 0.25, until=None) -> None:
+def follow(session: Session, stream=None, interval_s: float = 0.25, until=None) -> None:
     """Rewrite the summary line until the session's reader stops (or ``until()`` is true); on standard
     output unless ``stream`` says otherwise (looked up at the call: it may have been replaced since import)."""
     stream = stream or sys.stdout

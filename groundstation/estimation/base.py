@@ -4,8 +4,11 @@ Interface (the same for every estimator of ``ESTIMATORS``)::
 
     est = Ahf(AhfSettings(beta=...))          # settings: a frozen dataclass, defaults = the papers'
     est.reset(q0=None)                        # q0 None: initialise from the first accelerometer sample
-    q, diag = est.step(gyr_rad_s, acc_g, dt_s)   # q = (w, x, y, z) body -> NED; diag a NamedTuple
-    q_n4, diag_arrays = est.run(gyr_rad_s_n3, acc_g_n3, dt_s_n)   # exactly the numbers of step
+    q, diag = est.step(gyr_rad_s, acc_g, dt_s, mag, gps)   # q = (w, x, y, z) body -> NED; diag a NamedTuple
+    q_n4, diag_arrays = est.run(gyr_rad_s_n3, acc_g_n3, dt_s_n, mag_n3, gps_n4)   # exactly the numbers of step
+
+``mag`` and ``gps`` (None, or NaN where a sample has no reading) reach the estimators that use them
+(a magnetometer: ``hfm``, ``ecfm``, ``mcf``; GPS velocity and heading: ``ukf``, ``sssrukf``); the others ignore them.
 
 ``gyr_rad_s`` is the body-frame rate (x forward, y right, z down) in rad/s; ``acc_g`` the body-frame
 specific force in g (standard gravity), so a level craft at rest reads about (0, 0, -1);

@@ -1,9 +1,10 @@
-"""The exported columns of a session, the same for CSV, Parquet and Excel.
+"""The exported columns of a session, the same for CSV, Parquet and Excel, read from its tables.
 
 ``time_s``; per estimator ``<name>_qw .. _qz`` (body to NED) and ``<name>_pitch_deg, _roll_deg,
-_yaw_deg`` (ZYX, docs/conventions.md); ``onboard_*`` for the aircraft's own estimate; the sensors
-in physical units; the truth quaternion when the session has one; the magnetometer, barometer, GPS
-and fused-position readings when the session has them (``aux_columns``).
+_yaw_deg`` (ZYX, yaw ±180°: ``quaternion.euler_deg``, docs/conventions.md); ``onboard_*`` for the
+aircraft's own estimate; the sensors in physical units; the truth quaternion when the session has
+one; the magnetometer, barometer, GPS and fused-position readings when the session has them
+(``aux_columns``).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import numpy as np
 
 from groundstation import quaternion
 from groundstation.errors import UserError
-from groundstation.session.data import SessionData
+from groundstation.session.product import SessionData
 
 
 def check_row_options(t_from: float | None, t_to: float | None, rate_hz: float | None) -> None:
@@ -47,20 +48,30 @@ def select_rows(time_s: np.ndarray, t_from: float | None = None, t_to: float | N
 
 
 def attitude_columns(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:
-    yaw, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
+    yaw, pitch, roll = quaternion.euler_deg(q)
     out = {f"{prefix}_q{c}": q[:, i] for i, c in enumerate("wxyz")}
     out.update({f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll, f"{prefix}_yaw_deg": yaw})
+    return out
+
+
+def sensor_columns(data: SessionData) -> dict[str, np.ndarray]:
+    """The ``imu`` table's sensors as exported: acceleration in g, rates in °/s, temperature; none for a
+    session without IMU samples."""
+    if data.sample_table != "imu":
+        return {}
+    imu = data.tables["imu"]
+    out = {f"acc_{a}_g": imu[f"acc_{a}_g"] for a in "xyz"}
+    out.update({f"gyr_{a}_dps": np.degrees(imu[f"gyr_{a}_rad_s"]) for a in "xyz"})
+    out["temperature_c"] = imu["temperature_c"]
     return out
 
 
 def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[str, np.ndarray]:
     rows = np.arange(len(data)) if rows is None else rows
     out = {"time_s": data.time_s[rows]}
-    for name, q in data.estimates.items():
+    for name, q in data.attitudes().items():
         out.update(attitude_columns(name, q[rows]))
-    if data.onboard is not None:
-        out.update(attitude_columns("onboard", data.onboard[rows]))
-    out.update({name: values[rows] for name, values in data.sensors.items()})
+    out.update({name: values[rows] for name, values in sensor_columns(data).items()})
     if data.true_q is not None:
         out.update({f"true_q{c}": data.true_q[rows, i] for i, c in enumerate("wxyz")})
     out.update(aux_columns(data, rows))

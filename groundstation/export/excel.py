@@ -18,7 +18,7 @@ from groundstation.export.excel_columns import attitude_block, chart_block, link
 from groundstation.export.excel_session import session_rows, write_session_sheet
 from groundstation.export.excel_stream import EXCEL_MAX_ROWS, as_os_error, discard, save, table_rows, write_table
 from groundstation.export.files import atomic_output
-from groundstation.session.data import SessionData
+from groundstation.session.product import SessionData
 
 
 class ExportCancelled(Exception):

@@ -10,10 +10,10 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from groundstation.export.columns import attitude_columns, reading_tables, select_rows
+from groundstation.export.columns import attitude_columns, reading_tables, select_rows, sensor_columns
 from groundstation.export.excel_stream import Block, Column
 from groundstation.session.catalogue import LINK_TABLES
-from groundstation.session.data import SessionData
+from groundstation.session.product import SessionData
 
 SECONDS = "0.000"
 TWO_PLACES = "0.00"
@@ -48,25 +48,17 @@ def excel_days(moment: datetime) -> float:
     return (moment - EXCEL_EPOCH).total_seconds() / 86400.0
 
 
-def estimates(data: SessionData) -> dict:
-    """The exported estimators and then the aircraft's own estimate, by column prefix."""
-    out = dict(data.estimates)
-    if data.onboard is not None:
-        out["onboard"] = data.onboard
-    return out
-
-
 def attitude_block(data: SessionData, rows: np.ndarray) -> Block:
     time_s = data.time_s[rows]
     block = [Column("time (s)", time_s, SECONDS, 10)]
     start = start_time(data.metadata)
     if start is not None and data.link is not None:  # from the link: start_utc is when its recording began
         block.append(Column("time (UTC)", excel_days(start) + time_s / 86400.0, DATE_TIME, 24))
-    for name, q in estimates(data).items():
+    for name, q in data.attitudes().items():
         angles = attitude_columns(name, q[rows])
         block += [Column(f"{name} {a} (°)", angles[f"{name}_{a}_deg"], TWO_PLACES, 14) for a in ("pitch", "roll", "yaw")]
-    if "lam" in data.diagnostics.get("ahf", {}):
-        block.append(Column("ahf λ (rad/s)", data.diagnostics["ahf"]["lam"][rows], "0.0000", 13))
+    if "ahf" in data.estimated and "ahf_lam" in data.tables["imu"]:
+        block.append(Column("ahf λ (rad/s)", data.tables["imu"]["ahf_lam"][rows], "0.0000", 13))
     return block
 
 
@@ -95,7 +87,8 @@ def table_block(data: SessionData, info, window, rate_hz) -> Block:
 
 
 def sensor_blocks(data: SessionData, rows: np.ndarray, window, rate_hz) -> list[Block]:
-    imu = [Column(header, data.sensors[name][rows], fmt, 14) for name, header, fmt in SENSORS if name in data.sensors]
+    sensors = sensor_columns(data)
+    imu = [Column(header, sensors[name][rows], fmt, 14) for name, header, fmt in SENSORS if name in sensors]
     blocks = [[Column("time (s)", data.time_s[rows], SECONDS, 10), *imu]] if imu else []  # none: "estimated" mode
     return blocks + [table_block(data, info, window, rate_hz) for info in reading_tables(data) if info.name not in LINK_TABLES]
 
@@ -116,7 +109,7 @@ def chart_block(data: SessionData, rows: np.ndarray) -> Block:
     """Time, then every estimate's pitch, then every estimate's roll, at most CHART_POINTS rows."""
     rows = rows[:: max(1, math.ceil(len(rows) / CHART_POINTS))]
     block = [Column("time (s)", data.time_s[rows], "0.0", 10)]
-    angles = {name: attitude_columns(name, q[rows]) for name, q in estimates(data).items()}
+    angles = {name: attitude_columns(name, q[rows]) for name, q in data.attitudes().items()}
     for angle in ("pitch", "roll"):
         block += [Column(f"{name} {angle} (°)", a[f"{name}_{angle}_deg"], TWO_PLACES, 14) for name, a in angles.items()]
     return block

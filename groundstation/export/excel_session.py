@@ -16,7 +16,7 @@ from groundstation import mounting
 from groundstation.errors import UserError
 from groundstation.export.excel_columns import DATE_TIME, start_time
 from groundstation.export.excel_stream import text_cell
-from groundstation.session.data import SessionData
+from groundstation.session.product import SessionData
 
 WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70, "E": 24}
 LINK_COUNTS = (
@@ -37,12 +37,12 @@ def session_rows(data: SessionData, rows: np.ndarray, forced: dict | None = None
     out = [[Heading("Session")], *facts(data, rows), []]
     if data.link is not None:
         out += [[Heading("Link")], *([label, data.link.counters[name]] for name, label in LINK_COUNTS), []]
-    if data.estimates:
+    if data.estimated:
         out += settings_table(data, forced or {})
     out += events_table(data)
     if data.true_q is not None:
         out += error_table(data)
-    elif data.onboard is not None and data.estimates:
+    elif data.has_onboard() and data.estimated:
         out += agreement_table(data)
     return out
 
@@ -94,7 +94,7 @@ def firmware(data: SessionData) -> list[list]:
 def settings_table(data: SessionData, forced: dict) -> list[list]:
     """Every estimator's settings at the start (recorded, then forced) and at the end (changed during the session)."""
     out = [[Heading("Estimator settings"), Heading("at start"), Heading("at end")]]
-    for name in data.estimates:
+    for name in data.estimated:
         start, end = data.settings_at_start[name], data.settings_at_end[name]
         out += [[f"{name}.{param}", cell_number(value), cell_number(end[param])] for param, value in start.items()]
     if forced:
@@ -137,12 +137,12 @@ def error_table(data: SessionData) -> list[list]:
 
 def agreement_table(data: SessionData) -> list[list]:
     """Without truth: each estimator's pitch/roll difference from the aircraft's own estimate."""
-    from groundstation.autopilot.agreement import agreement
+    from groundstation.autopilot.agreement import onboard_agreement
 
     out = [[Heading("Agreement with the onboard estimate (whole session; a difference, not an error: the onboard estimate is not truth)")],
            [Heading("estimator"), Heading("pitch RMS difference (°)"), Heading("pitch max difference (°)"),
             Heading("roll RMS difference (°)"), Heading("roll max difference (°)")]]  # fmt: skip
-    for name, f in agreement(data.estimates, data.onboard).items():
+    for name, f in onboard_agreement(data).items():
         out.append([name, f["pitch_rms_deg"], f["pitch_max_deg"], f["roll_rms_deg"], f["roll_max_deg"]])
     return out + [[]]
 

@@ -6,7 +6,7 @@ costs no waiting; ``run_export`` decodes and writes atomically (``files.atomic_o
 or a cancel leaves nothing at the destination.
 
     request = export_request("flight.gsrec", "flight.xlsx", t_from=10, t_to=70)   # UserError if wrong
-    result = run_export(request, progress=lambda stage, done, total: ..., cancel=threading.Event())
+    result = run_export(request, load_session, progress=lambda stage, done, total: ..., cancel=threading.Event())
 """
 
 from __future__ import annotations
@@ -79,15 +79,15 @@ def check_destination(out: Path, overwrite: bool) -> None:
     probe.unlink()
 
 
-def run_export(request: ExportRequest, progress: Callable[[str, int, int], None] | None = None,
+def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, int, int], None] | None = None,
                cancel=None) -> ExportResult:
-    """Decodes ``request.source`` and writes ``request.out``; ``progress(stage, done, total)`` with stage
-    "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises ExportCancelled, nothing written."""
+    """Computes ``request.source`` with ``load`` (``session.load.load_session``: the caller's, so that the
+    exports import no maker of sessions) and writes ``request.out``; ``progress(stage, done, total)``
+    with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises ExportCancelled,
+    nothing written."""
     from groundstation.export.columns import export_columns, select_rows
     from groundstation.export.excel import ExportCancelled, write_workbook
     from groundstation.export.tabular import write_csv, write_parquet
-    from groundstation.session.data import load_session
-
     report = progress or (lambda stage, done, total: None)
 
     def decoding(done: int, total: int) -> None:
@@ -95,7 +95,7 @@ def run_export(request: ExportRequest, progress: Callable[[str, int, int], None]
             raise ExportCancelled("export cancelled; nothing was written")
         report("decoding", done, total)
 
-    data = load_session(request.source, request.filters, request.overrides, decoding, request.accept_config_changes)
+    data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes)
     decoding(1, 1)
     if request.format == ".xlsx":
         sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,

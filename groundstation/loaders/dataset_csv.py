@@ -6,7 +6,7 @@ from pathlib import Path
 
 from groundstation.datasets import DatasetError, Trial, read_csv
 from groundstation.errors import UserError
-from groundstation.session.data import SessionData, from_trial
+from groundstation.session.load import SessionData, from_trial
 from groundstation.session.pipeline import DEFAULT_FILTERS
 from groundstation.session.replay import check_forced
 

@@ -7,7 +7,7 @@ import math
 
 from groundstation.errors import UserError
 from groundstation.recording import open_recording
-from groundstation.session.data import SessionData, computed, from_pipeline, from_trial, trial_from_samples
+from groundstation.session.load import SessionData, computed, from_pipeline, from_trial, trial_from_samples
 from groundstation.session.replay import check_forced, recorded_filters, recorded_settings
 
 

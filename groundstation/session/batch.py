@@ -52,7 +52,7 @@ _DECODE_SHARE = 0.4
 
 
 class BatchSession:
-    """What ``data.from_pipeline`` reads from a replayed ``Pipeline``, computed on the batch path."""
+    """What ``load.from_pipeline`` reads from a replayed ``Pipeline``, computed on the batch path."""
 
     def __init__(self, setup: RecordedSetup):
         self.bank = EstimatorBank(setup.filters, setup.settings, setup.forced, setup.aiding)

@@ -6,7 +6,7 @@
 is recorded; a recording is fed through the live path (paced by ``ReplaySource``) with the estimators
 and settings it was recorded with, as the live session computed it (what the live-path benchmarks
 and tests reproduce). The app and ``groundstation replay`` open files whole instead
-(``session.reveal``). The demo is ``sim:``. No Qt here.
+(``session.playback``). The demo is ``sim:``. No Qt here.
 """
 
 from __future__ import annotations
@@ -14,6 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from groundstation.estimation import live_estimators
+from groundstation.session.load import Loading, estimators_for, load_session
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
@@ -45,3 +46,16 @@ def replay_session(source: ReplaySource) -> LiveSession:
     """A recording through the live path with its recorded estimators and settings (every one of
     live estimator for the app's recordings), as the live session computed it."""
     return LiveSession(source, pipeline_for(source.recording), record=False)
+
+
+class Sessions:
+    """How the window opens sessions, handed to it (``ui.main_window.MainWindow``) so that the window
+    imports no maker of sessions: a source live (``open``), a file computed whole in a worker
+    (``load``, then ``playback.RevealSession``), the estimators a file opens with, and the loader an
+    export runs."""
+
+    demo_spec = DEMO_SPEC
+    open = staticmethod(open_session)
+    load = Loading
+    estimators_for = staticmethod(estimators_for)
+    load_session = staticmethod(load_session)

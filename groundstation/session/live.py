@@ -30,8 +30,35 @@ def reader_failure(error: BaseException) -> str:
     return f"decoding stopped on an internal error ({type(error).__name__}: {error}{place}); the recording ends here"
 
 
+class PipelineView:
+    """What the window reads of a live pipeline (``view.ProductView``): its product so far, nothing
+    that feeds it. Attributes are read through, as the pipeline replaces some (a MAVLink session adds
+    tables as their first message arrives)."""
+
+    def __init__(self, pipeline: Pipeline):
+        self._pipeline = pipeline
+
+    tables = property(lambda self: self._pipeline.tables)
+    catalogue = property(lambda self: self._pipeline.catalogue)
+    filters = property(lambda self: self._pipeline.filters)
+    imu = property(lambda self: self._pipeline.imu)
+    onboard = property(lambda self: self._pipeline.onboard)
+    events = property(lambda self: self._pipeline.events)
+    config = property(lambda self: self._pipeline.config)
+    protocol = property(lambda self: self._pipeline.protocol)
+    t0_host_ns = property(lambda self: self._pipeline.t0_host_ns)
+    link = property(lambda self: self._pipeline.link)
+
+    def counters(self) -> dict[str, int]:
+        return self._pipeline.decoder.stats.as_dict()
+
+    def settings(self) -> dict[str, dict[str, float]]:
+        return self._pipeline.settings()
+
+
 class LiveSession:
-    """``source`` through ``pipeline`` (``session.factory.open_session`` makes both from a spec).
+    """``source`` through ``pipeline`` (``session.factory.open_session`` makes both from a spec); the
+    window reads ``view`` (``view.Session``).
 
     ``record``: write a recording into ``recordings_dir`` (default: ``default_recordings_dir()``)
     through ``recorder``, which never stops the session: a failing disk stops the recording, not the
@@ -39,10 +66,14 @@ class LiveSession:
     Replays are not re-recorded, and their recorded settings changes are re-applied as they pass.
     """
 
+    seekable = False  # live: the clock is the aircraft's
+    setup = (None, None)  # the estimators and settings of the session itself
+
     def __init__(self, source: Source, pipeline: Pipeline, record: bool = True,
                  recordings_dir: Path | None = None, metadata: dict | None = None):
         self.source = source
         self.pipeline = pipeline
+        self.view = PipelineView(pipeline)
         self.lock = threading.Lock()
         self.error: str | None = None  # why the reader stopped, when it was not asked to (a lost source, a defect)
         self.connected = True
@@ -93,6 +124,19 @@ class LiveSession:
     def recording_path(self) -> Path | None:
         """The file being recorded (or the last one); None for a session that never recorded."""
         return self.recorder.path
+
+    def advance(self) -> None:
+        """Nothing to move: the reader thread brings the rows."""
+
+    def seek(self, t_s: float) -> bool:
+        return False
+
+    def file(self) -> tuple[Path, float] | None:
+        """The recording being made and how far it has come (s); None when not recording."""
+        if self.recording_path is None:
+            return None
+        last = self.pipeline.imu.tail(1)
+        return self.recording_path, float(last[0][0]) if len(last) else 0.0
 
     def resume_recording(self) -> bool:
         """The user's "Resume recording": a new file now; False (``recorder.error`` says why) if it cannot."""
@@ -170,6 +214,13 @@ class LiveSession:
         with self.lock:
             self.pipeline.change_settings(name, overrides, self._last_chunk_ns)
             self.recorder.write_event(self._last_chunk_ns, self.pipeline.events[-1])
+
+    def held_config(self) -> str | None:
+        """The ``config_conflict`` message of a CONFIG held for the user's answer; None when none is held."""
+        with self.lock:
+            if self.pipeline.config_guard.held is None:
+                return None
+            return next(e["message"] for e in reversed(self.pipeline.events) if e["kind"] == "config_conflict")
 
     def resolve_config(self, accept: bool) -> None:
         """The user's answer to a held CONFIG (``pipeline.config_guard.held``: it changes the scales without a

@@ -3,7 +3,7 @@
 Chunks keep their recorded arrival times, so the link statistics of a replay are those of the
 flight; ``read`` paces against the wall clock. This feeds a recording through the live path (what
 ``open_session`` on a recording, the live-path benchmarks and tests do); the app and ``replay``
-compute a file whole and play the result back instead (``session.reveal``), seeking included.
+compute a file whole and play the result back instead (``session.playback``), seeking included.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from groundstation.errors import UserError
 from groundstation.recording import Recording, open_recording
 from groundstation.sources.base import Chunk, SourceClosed, SourceError, refuse_reopen, refuse_uplink
 
-MIN_SPEED, MAX_SPEED = 0.25, 64.0  # the replay speeds, here and in the app's playback (session.reveal)
+MIN_SPEED, MAX_SPEED = 0.25, 64.0  # the replay speeds, here and in the app's playback (session.playback)
 IDLE_WAIT_S = 0.05
 
 

@@ -18,8 +18,9 @@ def check_display() -> None:
                         "or under Xvfb (xvfb-run groundstation app)")
 
 
-def run(port: str | None, baud: int | None, recording: str | None) -> int:
-    """Open the window on ``recording``, else ``port``, else the simulated bridge."""
+def run(port: str | None, baud: int | None, recording: str | None, sessions) -> int:
+    """Open the window on ``recording``, else ``port``, else the simulated bridge; ``sessions`` opens
+    them (``session.factory.Sessions``)."""
     check_display()
     import pyqtgraph as pg
     from PySide6 import QtCore, QtWidgets
@@ -31,7 +32,7 @@ def run(port: str | None, baud: int | None, recording: str | None) -> int:
     app.setApplicationName(APPLICATION)
     pg.setConfigOptions(antialias=False)  # antialiased lines cost several times more per frame
     splash = prepare_estimators(app)
-    window = MainWindow(QtCore.QSettings())
+    window = MainWindow(QtCore.QSettings(), sessions)
     # Ctrl-C or a kill closes the window as its close button does: the session stops, the recording
     # is closed and the settings saved. (Python runs the handler at the redraw timer's next tick.)
     for signum in (signal.SIGINT, signal.SIGTERM):

@@ -18,7 +18,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from groundstation import quaternion
 from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.estimators import RECONVERGE_S
-from groundstation.session.live import LiveSession
+from groundstation.session.view import Session
 from groundstation.ui.attitude_3d import AttitudeView3D
 from groundstation.ui.navigation import heading_now
 
@@ -112,21 +112,21 @@ class AttitudePanel(QtWidgets.QGroupBox):
         layout.addLayout(views)
         layout.addLayout(numbers)
 
-    def show_session(self, session: LiveSession, body: bool = True) -> None:
+    def show_session(self, session: Session, body: bool = True) -> None:
         """The newest estimate of ``session``'s first estimator, the one shown first (AHF2 in the app's
         sessions; a recording's own first otherwise); ``body``: the 3D view too."""
-        filters = session.pipeline.filters
+        filters = session.view.filters
         name = filters[0] if filters else "onboard"  # a log with the aircraft's estimate only
         self.setTitle(f"Attitude ({name.upper()})")
-        heading = heading_now(session.pipeline)
+        heading = heading_now(session.view)
         self.readouts["heading"].setText("—" if heading is None else f"{heading[0]:5.1f}° {heading[1]}")
-        table, prefix = (session.pipeline.imu, f"{name}_q") if filters else (session.pipeline.onboard, "q")
+        table, prefix = (session.view.imu, f"{name}_q") if filters else (session.view.onboard, "q")
         last = table.tail(1)
         if not len(last):
             return
-        self.show_reconverging(reconverging(session.pipeline.events, float(last[0][0])))
+        self.show_reconverging(reconverging(session.view.events, float(last[0][0])))
         q = last[0][[table.columns.index(f"{prefix}{c}") for c in "wxyz"]]
-        self.show_attitude(*np.degrees(quaternion.to_euler_zyx(q)))
+        self.show_attitude(*quaternion.euler_deg(q))
         if body:
             self.body_view.set_attitude(q)
 

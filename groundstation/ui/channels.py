@@ -3,7 +3,7 @@ fills from it (double-click a channel, or "Add to pane"); the panes share the li
 axis and window. The layout (which channels in which pane) is kept as a list of lists of
 "table.column" names, which the window remembers in its settings.
 
-The channels are the session's catalogue (``Pipeline.catalogue``, derived from the protocol spec and
+The channels are the session's catalogue (``ProductView.catalogue``, derived from the protocol spec and
 the estimators): each listed by its label and unit.
 """
 
@@ -13,8 +13,8 @@ import json
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
+from groundstation.session.view import Session
+from groundstation.session.view import ProductView
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
 
@@ -23,9 +23,9 @@ PALETTE_HEX = tuple(PALETTE.values())  # the channels' curves take the palette's
 PREFIX = "channel:"  # the series of a table's plotted columns, beside the live view's own series
 
 
-def channel_names(pipeline: Pipeline) -> set[str]:
+def channel_names(view: ProductView) -> set[str]:
     """Every "table.column" the session can plot (all columns but the time)."""
-    return {f"{table.name}.{column.name}" for table, column in pipeline.catalogue.channels()}
+    return {f"{table.name}.{column.name}" for table, column in view.catalogue.channels()}
 
 
 def pane_plots(panes: list[list[str]]) -> tuple[Plot, ...]:
@@ -43,7 +43,7 @@ class ChannelsView(QtWidgets.QWidget):
 
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.session: LiveSession | None = None
+        self.session: Session | None = None
         self.panes: list[list[str]] = [[]]
         self.selected_pane = 0
         self.series: dict[str, Series] = {}
@@ -99,12 +99,12 @@ class ChannelsView(QtWidgets.QWidget):
 
     # -- the session and the layout ----------------------------------------------------------------
 
-    def set_session(self, session: LiveSession | None) -> None:
+    def set_session(self, session: Session | None) -> None:
         self.session = session
         self.tree.clear()
         if session is not None:
             parents: dict[str, QtWidgets.QTreeWidgetItem] = {}
-            for table, column in session.pipeline.catalogue.channels():
+            for table, column in session.view.catalogue.channels():
                 if table.name not in parents:
                     parents[table.name] = QtWidgets.QTreeWidgetItem([table.name])  # the label is a sentence
                     parents[table.name].setToolTip(0, table.label)
@@ -188,11 +188,11 @@ class ChannelsView(QtWidgets.QWidget):
         self.series = {}
         if self.session is None:
             return
-        known = channel_names(self.session.pipeline)
+        known = channel_names(self.session.view)
         wanted: dict[str, list[str]] = {}
         for channel in (c for pane in self.panes for c in pane if c in known):
             table, column = channel.split(".", 1)
             wanted.setdefault(table, []).append(column)
         for table, columns in wanted.items():
-            self.series[PREFIX + table] = Series(self.session.pipeline.tables[table], lambda rows, names, columns=tuple(
+            self.series[PREFIX + table] = Series(self.session.view.tables[table], lambda rows, names, columns=tuple(
                 columns): {c: rows[:, names.index(c)] for c in columns})

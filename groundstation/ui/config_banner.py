@@ -1,7 +1,7 @@
 """The warning banner of a held CONFIG: the aircraft (or something posing as it) said other full scales
 or another mounting without a device restart, so the data keeps the ones in use until the user
 decides: "Accept new scales" applies them from now on, "Keep current" keeps the ones in use
-(``LiveSession.resolve_config``; ``pipeline.ConfigGuard`` holds it)."""
+(``Session.held_config`` and ``resolve_config``; ``pipeline.ConfigGuard`` holds it)."""
 
 from __future__ import annotations
 
@@ -9,13 +9,13 @@ import html
 
 from PySide6 import QtWidgets
 
-from groundstation.session.live import LiveSession
+from groundstation.session.view import Session
 
 
 class ConfigBanner(QtWidgets.QFrame):
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.session: LiveSession | None = None
+        self.session: Session | None = None
         self.setObjectName("configBanner")
         self.setStyleSheet("#configBanner { background:#fff3cd; border:1px solid #e0b000; border-radius:4px; }"
                            "#configBanner QLabel { color:#5c4400; }")
@@ -33,17 +33,14 @@ class ConfigBanner(QtWidgets.QFrame):
         layout.addWidget(self.keep_button)
         self.hide()
 
-    def refresh(self, session: LiveSession | None) -> None:
-        """Shown while ``session``'s pipeline holds a CONFIG; hidden otherwise."""
+    def refresh(self, session: Session | None) -> None:
+        """Shown while ``session`` holds a CONFIG for the user's answer; hidden otherwise."""
         self.session = session
-        pipeline = getattr(session, "pipeline", None)
-        guard = getattr(pipeline, "config_guard", None)
-        if guard is None or guard.held is None:
+        held = session.held_config() if session is not None else None
+        if held is None:
             self.hide()
             return
-        conflict = next((e for e in reversed(pipeline.events) if e.get("kind") == "config_conflict"), None)
-        said = html.escape(conflict["message"]) if conflict is not None else ""
-        self.label.setText(f"<b>⚠ THE SENSOR'S SCALES CHANGED WITHOUT A RESTART</b> — {said}<br>"
+        self.label.setText(f"<b>⚠ THE SENSOR'S SCALES CHANGED WITHOUT A RESTART</b> — {html.escape(held)}<br>"
                            "The data keeps the scales in use until you decide.")
         self.show()
 

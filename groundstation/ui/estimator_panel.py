@@ -2,7 +2,7 @@
 (``Estimator.tunable``: AHF's λ bounds, HF's and HF+mag's β, ECF's and ECF+mag's Kp/Ki) live, back to
 the defaults, or send AHF's λ bounds to the aircraft.
 
-Live, a change goes through ``LiveSession.change_settings``: it applies from the next sample, keeps
+Live, a change goes through ``Session.change_settings``: it applies from the next sample, keeps
 the attitude, and is written to the recording, so a replay changes it at the same point. In a replay
 every estimator can be shown, those the file lacks too, and a change is a what-if (the CLI's
 ``--set``): the window computes the file again with the estimators and settings asked, and the
@@ -16,7 +16,7 @@ import dataclasses
 from PySide6 import QtCore, QtWidgets
 
 from groundstation.estimation import ESTIMATORS, label
-from groundstation.session.live import LiveSession
+from groundstation.session.view import Session
 
 SHOWN_COLUMNS = 4  # "show" check boxes per row
 
@@ -32,7 +32,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
 
     def __init__(self, parent=None):
         super().__init__(parent)  # titled by its tab
-        self.session: LiveSession | None = None
+        self.session: Session | None = None
         self.shown: dict[str, QtWidgets.QCheckBox] = {}
         self.boxes: dict[tuple[str, str], QtWidgets.QDoubleSpinBox] = {}
         self.message = QtWidgets.QLabel()
@@ -60,7 +60,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self._layout.addRow(self.message)
         self.setEnabled(False)
 
-    def set_session(self, session: LiveSession | None, visible_labels: set[str]) -> None:
+    def set_session(self, session: Session | None, visible_labels: set[str]) -> None:
         """Fill the fields from the settings in effect; one "show" box per comparison estimator."""
         self.session = session
         self.setEnabled(session is not None)
@@ -72,8 +72,8 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.shown = {}
         if session is None:
             return
-        self.send_button.setEnabled(session.source.can_send and session.pipeline.protocol == "gs")  # an autopilot has no AHF
-        filters = session.pipeline.filters
+        self.send_button.setEnabled(session.source.can_send and session.view.protocol == "gs")  # an autopilot has no AHF
+        filters = session.view.filters
         offered = [*filters[1:], *(n for n in ESTIMATORS if n not in filters)] if self.replay else filters[1:]
         for index, name in enumerate(offered):
             box = QtWidgets.QCheckBox(label(name))
@@ -81,7 +81,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             box.toggled.connect(lambda on, name=name: self._shown_changed(name, on))
             self.shown[name] = box
             self._shown_row.addWidget(box, *divmod(index, SHOWN_COLUMNS))
-        settings = session.pipeline.settings()
+        settings = session.view.settings()
         for name, fields in self.tunable.items():
             for setting, _, unit in fields:
                 box = self.boxes[name, setting]
@@ -98,13 +98,13 @@ class EstimatorPanel(QtWidgets.QGroupBox):
 
     def _shown_changed(self, name: str, on: bool) -> None:
         self.visibilityChanged.emit(label(name), on)
-        filters = self.session.pipeline.filters
+        filters = self.session.view.filters
         if on and name not in filters:  # only a replay offers it: compute it again with this estimator too
             self.replayAsked.emit((*filters, name), self._forced())
 
     def _forced(self) -> dict[str, dict[str, float]]:
         """The fields of every estimator the session runs: the settings a recomputed replay is to use."""
-        return {name: self.values(name) for name in self.tunable if name in self.session.pipeline.filters}
+        return {name: self.values(name) for name in self.tunable if name in self.session.view.filters}
 
     def sync_shown(self, visible_labels: set[str]) -> None:
         """Follow the legend, where curves can be switched too."""
@@ -118,11 +118,11 @@ class EstimatorPanel(QtWidgets.QGroupBox):
 
     def apply(self) -> None:
         """Change every estimator whose fields differ from the settings in effect (a replay: compute it again)."""
-        current = self.session.pipeline.settings()
+        current = self.session.view.settings()
         if self.replay:
             if any(v != current[name][k] for name, values in self._forced().items() for k, v in values.items()):
                 self.message.setText("recomputing the session with these settings…")
-                self.replayAsked.emit(self.session.pipeline.filters, self._forced())
+                self.replayAsked.emit(self.session.view.filters, self._forced())
             else:
                 self.message.setText("nothing changed")
             return

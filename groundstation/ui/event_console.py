@@ -1,4 +1,4 @@
-"""The event console: the session's events (``pipeline.events``: configuration, warnings, commands
+"""The event console: the session's events (``view.events``: configuration, warnings, commands
 and their ACKs, settings changes, reboots and clock jumps, gaps, the port lost and back, the
 recording started, stopped or failed) with their session times; a click moves the view there.
 """
@@ -10,9 +10,7 @@ import math
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from firmware_protocol import SPEC
-
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
+from groundstation.session.view import ProductView, Session
 
 # Kinds a pilot must not miss, shown in red.
 ALARMS = frozenset({"warning", "config_conflict", "disconnected", "device_reset", "clock_jump", "gap", "recording_failed"})
@@ -21,12 +19,12 @@ HIDDEN_FIELDS = frozenset({"kind", "t_host_ns", "wall_time", "session_time_s"})
 ENUM_FIELDS = {kind: {f.name: f for f in SPEC.frame(kind.upper()).fields if f.enum} for kind in ("config", "ack")}
 
 
-def event_time_s(pipeline: Pipeline, event: dict) -> float:
+def event_time_s(view: ProductView, event: dict) -> float:
     """Seconds into the session: the clock's own when the event carries it, else the host time since
     the session's first chunk (to a few ms the session time of the samples that came with it)."""
     if "session_time_s" in event:
         return float(event["session_time_s"])
-    t0_ns = pipeline.t0_host_ns
+    t0_ns = view.t0_host_ns
     if t0_ns is None or not event.get("t_host_ns"):
         return 0.0
     return max((event["t_host_ns"] - t0_ns) / 1e9, 0.0)
@@ -43,7 +41,7 @@ class EventConsole(QtWidgets.QWidget):
 
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.session: LiveSession | None = None
+        self.session: Session | None = None
         self.shown = 0  # events listed
         self.table = QtWidgets.QTableWidget(0, 3)
         self.table.setHorizontalHeaderLabels(["time (s)", "event", "details"])
@@ -58,7 +56,7 @@ class EventConsole(QtWidgets.QWidget):
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.table)
 
-    def set_session(self, session: LiveSession | None) -> None:
+    def set_session(self, session: Session | None) -> None:
         self.session = session
         self.shown = 0
         self.table.setRowCount(0)
@@ -66,16 +64,16 @@ class EventConsole(QtWidgets.QWidget):
     def refresh(self) -> None:
         if self.session is None:
             return
-        pipeline = self.session.pipeline
+        view = self.session.view
         with self.session.lock:
-            new = pipeline.events[self.shown :]
+            new = view.events[self.shown :]
         if not new:
             return
         at_bottom = self.table.verticalScrollBar().value() == self.table.verticalScrollBar().maximum()
         for event in new:
             row = self.table.rowCount()
             self.table.insertRow(row)
-            t_s = event_time_s(pipeline, event)
+            t_s = event_time_s(view, event)
             cells = (QtWidgets.QTableWidgetItem(f"{t_s:9.2f}"), QtWidgets.QTableWidgetItem(event.get("kind", "?")),
                      QtWidgets.QTableWidgetItem(describe(event)))
             cells[0].setData(QtCore.Qt.UserRole, t_s)

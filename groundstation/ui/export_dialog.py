@@ -15,10 +15,11 @@ MIN_WIDTH_PX = 560
 
 
 class ExportDialog(QtWidgets.QDialog):
-    def __init__(self, source: Path, duration_s: float, parent=None, setup: tuple = (None, None)):
-        """``setup``: the estimators and forced settings the file is computed with (None: its own),
-        those the window shows."""
+    def __init__(self, load, source: Path, duration_s: float, parent=None, setup: tuple = (None, None)):
+        """``load``: how the file is computed (``session.load.load_session``); ``setup``: the estimators
+        and forced settings it is computed with (None: its own), those the window shows."""
         super().__init__(parent)
+        self._load = load
         self.setWindowTitle(f"Export {source.name}")
         self.source = Path(source)
         self.setup = setup
@@ -87,7 +88,7 @@ class ExportDialog(QtWidgets.QDialog):
     def start(self) -> None:
         whole = self.t_from.value() == 0.0 and self.t_to.value() == self.t_to.maximum()
         try:
-            self.job = ExportJob(self.source, Path(self.path_edit.text()), None if whole else self.t_from.value(),
+            self.job = ExportJob(self._load, self.source, Path(self.path_edit.text()), None if whole else self.t_from.value(),
                                  None if whole else self.t_to.value(), self.rate.value() or None,
                                  self.overwrite.isChecked(), *self.setup).start()
         except UserError as error:

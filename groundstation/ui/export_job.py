@@ -22,8 +22,11 @@ FORMATS = {suffix: (label, DECODE_SHARE[suffix]) for suffix, label in export.FOR
 
 
 class ExportJob:
-    def __init__(self, source: Path, out: Path, t_from: float | None = None, t_to: float | None = None,
+    """``load``: how the file is computed (``session.load.load_session``, handed down from the window)."""
+
+    def __init__(self, load, source: Path, out: Path, t_from: float | None = None, t_to: float | None = None,
                  rate_hz: float | None = None, overwrite: bool = False, filters=None, overrides=None):
+        self._load = load
         self.request = export.export_request(source, out, filters=filters, overrides=overrides, t_from=t_from, t_to=t_to,
                                              rate_hz=rate_hz, overwrite=overwrite)
         self.source, self.out = self.request.source, self.request.out
@@ -51,7 +54,7 @@ class ExportJob:
 
     def _run(self) -> None:
         try:
-            self.message = export.run_export(self.request, self._progress, self._cancel).message
+            self.message = export.run_export(self.request, self._load, self._progress, self._cancel).message
             self.fraction = 1.0
         except ExportCancelled:
             self.message = "cancelled; nothing was written"

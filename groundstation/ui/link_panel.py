@@ -2,8 +2,8 @@
 MAVLink link also both radios' signal (RADIO_STATUS) and the battery (SYS_STATUS) when they arrive.
 
 The headline turns amber when the link degrades (losses, CRC failures, a late frame) and red when
-frames stop or the port is gone. Figures of the last complete second, from the pipeline's
-``LinkStats`` and the decoder's counters.
+frames stop or the port is gone. Figures of the last complete second, from the session view's link
+figures and the decoder's counters.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import time
 
 from PySide6 import QtWidgets
 
-from groundstation.session.live import LiveSession
+from groundstation.session.view import Session
 
 LATE_FRAME_S = 0.25  # 25 samples missing at 100 Hz
 NO_DATA_S = 1.0
@@ -25,7 +25,7 @@ STYLES = {
     "idle": "background:#9e9e9e; color:white; padding:4px; font-weight:bold",
 }
 FIELDS = ("frames/s", "loss", "CRC failures", "bytes/s", "since last frame", "latency p50 / p99")
-# A MAVLink session's radio and battery (session/mavlink_front.py tables), shown once they have a row:
+# A MAVLink session's radio and battery (autopilot/mavlink_front.py tables), shown once they have a row:
 # row label -> (table, format of its last row's columns). RSSI and noise are in the radio's own units
 # (SiK: about 1.9 per dB above -127 dBm), as Mission Planner and QGroundControl show them.
 RADIO_FIELDS = {
@@ -36,9 +36,9 @@ RADIO_FIELDS = {
 }
 
 
-def link_figures(session: LiveSession, now_ns: int) -> dict[str, float]:
-    link = session.pipeline.link
-    stats = session.pipeline.decoder.stats
+def link_figures(session: Session, now_ns: int) -> dict[str, float]:
+    link = session.view.link
+    counters = session.view.counters()
     with session.lock:
         last = link.per_second.tail(1)
         clock = link.clock()
@@ -53,14 +53,14 @@ def link_figures(session: LiveSession, now_ns: int) -> dict[str, float]:
         "bytes_per_s": bytes_per_s,
         "loss_pct": 100.0 * lost / (frames + lost) if frames + lost > 0 else math.nan,
         "crc_per_s": crc,
-        "crc_total": stats.crc_errors,
-        "lost_total": stats.frames_lost,
+        "crc_total": counters["crc_errors"],
+        "lost_total": counters["frames_lost"],
         "since_last_frame_s": link.since_last_frame_s(now_ns),
         **clock,
     }
 
 
-def link_state(session: LiveSession, figures: dict[str, float]) -> tuple[str, str]:
+def link_state(session: Session, figures: dict[str, float]) -> tuple[str, str]:
     """(style key, headline)."""
     if not session.connected:
         return "down", "PORT GONE — reconnecting…"
@@ -74,9 +74,9 @@ def link_state(session: LiveSession, figures: dict[str, float]) -> tuple[str, st
     return "ok", "LINK OK"
 
 
-def radio_figures(session: LiveSession) -> dict[str, str]:
+def radio_figures(session: Session) -> dict[str, str]:
     """RADIO_FIELDS' text for the tables that have a row (none on the project's own link)."""
-    tables = session.pipeline.tables
+    tables = session.view.tables
     shown = {}
     with session.lock:
         last = {name: tables[name].tail(1) for name in {t for t, _ in RADIO_FIELDS.values()} if name in tables}
@@ -114,8 +114,8 @@ class LinkPanel(QtWidgets.QGroupBox):
             self.form.setRowVisible(self.values[name], name in figures)
             self.values[name].setText(figures.get(name, "—"))
 
-    def refresh(self, session: LiveSession | None) -> None:
-        if session is None or session.pipeline.link is None:  # disconnected, or a file with no link in it
+    def refresh(self, session: Session | None) -> None:
+        if session is None or session.view.link is None:  # disconnected, or a file with no link in it
             self._show_state("idle", "no source" if session is None else "NO LINK (a log or dataset)")
             for label in self.values.values():
                 label.setText("—")
@@ -124,7 +124,7 @@ class LinkPanel(QtWidgets.QGroupBox):
         self._show_radio(radio_figures(session))
         # A replay's link times are the recorded ones: measure "since" against the newest chunk.
         replay = session.source.is_replay
-        now_ns = (session.pipeline.link.last_chunk_ns or 0) if replay else time.monotonic_ns()
+        now_ns = (session.view.link.last_chunk_ns or 0) if replay else time.monotonic_ns()
         f = link_figures(session, now_ns)
         self._show_state(*link_state(session, f))
         self.values["frames/s"].setText(_number(f["frames_per_s"], ".0f"))

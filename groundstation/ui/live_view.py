@@ -1,7 +1,7 @@
 """The live view: attitude, raw sensors, AHF diagnostics, heading, position and any channel over a
 chosen time window.
 
-``refresh`` is called by the window's redraw timer: it pulls the rows the pipeline added since the
+``refresh`` is called by the window's redraw timer: it pulls the rows the session added since the
 last call into the ``Series`` buffers and redraws the visible tab. The heading and position tabs
 appear, and the Sensors tab gains the magnetometer and barometer, once the session has delivered
 their frames. "Pause view" freezes the plots (acquisition and recording go on) and frees zoom and
@@ -14,7 +14,7 @@ from __future__ import annotations
 from PySide6 import QtWidgets
 
 from groundstation import estimation
-from groundstation.session.live import LiveSession
+from groundstation.session.view import Session
 from groundstation.ui.navigation import aiding_series
 from groundstation.ui.channels import ChannelsView
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
@@ -84,9 +84,9 @@ class LiveView(QtWidgets.QWidget):
 
     def __init__(self, hidden: frozenset[str] = frozenset(), parent=None):
         super().__init__(parent)
-        self.session: LiveSession | None = None
+        self.session: Session | None = None
         self.series: dict[str, Series] = {}
-        self._pipeline = None
+        self._view = None
         self.frames_drawn = 0  # for the tests and the benchmark
         self._browsing: StackedPlots | None = None  # paused, and drawn whole to look back in time
         self.window_box = QtWidgets.QComboBox()
@@ -139,13 +139,13 @@ class LiveView(QtWidgets.QWidget):
     def paused(self) -> bool:
         return self.pause_button.isChecked()
 
-    def set_session(self, session: LiveSession | None) -> None:
+    def set_session(self, session: Session | None) -> None:
         """Show ``session``; its estimators decide the attitude curves."""
         self.session = session
-        self._pipeline = None
+        self._view = None
         self._browsing = None
         self.series = {}
-        filters = session.pipeline.filters if session is not None else self._filters
+        filters = session.view.filters if session is not None else self._filters
         if filters != self._filters:
             self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
@@ -224,11 +224,11 @@ class LiveView(QtWidgets.QWidget):
         """Take the new rows; redraw the visible plots if anything grew. True when it drew."""
         if self.session is None:
             return False
-        pipeline = self.session.pipeline
-        if pipeline is not self._pipeline:  # a new session, or a replay restarted by a seek
-            self._pipeline = pipeline
-            self.series = {"imu": Series(pipeline.imu, imu_quantities(pipeline.filters)),
-                           "onboard": Series(pipeline.onboard, onboard_quantities), **aiding_series(pipeline.tables)}
+        view = self.session.view
+        if view is not self._view:  # a new session, or a replay restarted by a seek
+            self._view = view
+            self.series = {"imu": Series(view.imu, imu_quantities(view.filters)),
+                           "onboard": Series(view.onboard, onboard_quantities), **aiding_series(view.tables)}
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}
         if grew - {"imu", "onboard"}:
             self._show_aiding_tabs()

@@ -3,7 +3,7 @@
 One ``QTimer`` (``REDRAW_HZ``) pulls from the session's tables and redraws; the session's reader
 thread never touches a widget. A file (a recording, a dataset CSV, a .tlog, .bin or .ulg) is computed
 whole in a worker thread, its progress under the connection bar, then played back by revealing it
-(``session.reveal``): seeking only moves the playback clock. Problems (a busy port, an unreadable
+(``session.playback``): seeking only moves the playback clock. Problems (a busy port, an unreadable
 file, a lost port) appear in the red banner under the connection bar, never as a traceback.
 """
 
@@ -18,9 +18,8 @@ from groundstation.errors import UserError
 from groundstation import formats
 from groundstation.estimation import ESTIMATORS, label, live_estimators
 from groundstation.recording import default_recordings_dir
-from groundstation.session.factory import DEMO_SPEC, open_session
-from groundstation.session.live import LiveSession
-from groundstation.session.reveal import Loading, RevealSession, estimators_for
+from groundstation.session.playback import RevealSession
+from groundstation.session.view import Session
 from groundstation.sources import whole_file
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
@@ -57,13 +56,17 @@ def default_hidden() -> frozenset[str]:
 
 
 class MainWindow(QtWidgets.QMainWindow):
-    def __init__(self, settings: QtCore.QSettings, recordings_dir: Path | None = None):
+    """``sessions``: how sessions are opened (``session.factory.Sessions``): handed in, so that the
+    window reads sessions (``session.view``) and imports nothing that makes them."""
+
+    def __init__(self, settings: QtCore.QSettings, sessions, recordings_dir: Path | None = None):
         super().__init__()
         self.setWindowTitle("groundstation")
         self.settings = settings
+        self.sessions = sessions
         self.recordings_dir = recordings_dir
-        self.session: LiveSession | RevealSession | None = None
-        self.loading: Loading | None = None  # a file being computed
+        self.session: Session | None = None
+        self.loading = None  # a file being computed (``sessions.load``)
         self._recomputing = False  # the loading is a what-if of the session shown: it keeps the position
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
         self.bar = ConnectionBar()
@@ -158,8 +161,8 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- sessions -------------------------------------------------------------------------------
 
     def start_demo(self, note: str = "") -> None:
-        self._start(lambda: open_session(DEMO_SPEC, settings=self._stored_estimator_settings(),
-                                         recordings_dir=self.recordings_dir).start(), note)
+        self._start(lambda: self.sessions.open(self.sessions.demo_spec, settings=self._stored_estimator_settings(),
+                                               recordings_dir=self.recordings_dir).start(), note)
 
     def connect_serial(self, port: str, baud: int = 0) -> None:
         """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the
@@ -172,8 +175,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
         rate = {"baud": baud} if baud else {}
-        self._start(lambda: open_session(port, settings=self._stored_estimator_settings(), recordings_dir=self.recordings_dir,
-                                         **rate).start())
+        self._start(lambda: self.sessions.open(port, settings=self._stored_estimator_settings(),
+                                               recordings_dir=self.recordings_dir, **rate).start())
         if self.session is not None:
             recent = [port, *(s for s in self.recent_sources() if s != port)][:RECENT_SOURCES]
             self.settings.setValue("recent_sources", recent)
@@ -191,13 +194,13 @@ class MainWindow(QtWidgets.QMainWindow):
         app's estimators); computed in a worker, then played from the start (``tick`` adopts it)."""
         self.disconnect()
         path = Path(path)
-        self._load(path, estimators_for(path, live_estimators()), None, f"computing {path.name}")
+        self._load(path, self.sessions.estimators_for(path, live_estimators()), None, f"computing {path.name}")
 
     def _load(self, path: Path, filters, forced, text: str, recompute: bool = False) -> None:
         if self.loading is not None:
             self.loading.cancel()
         self.show_error(None)
-        self.loading = Loading(path, filters, forced)
+        self.loading = self.sessions.load(path, filters, forced)
         self._recomputing = recompute
         self.loading_bar.setFormat(f"{text}… %p %")
         self.loading_bar.setValue(0)
@@ -216,7 +219,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if loading.error is not None:
             self.show_error(loading.error)
             return
-        shown = self.session if self._recomputing and isinstance(self.session, RevealSession) else None
+        shown = self.session if self._recomputing and self.session is not None and self.session.seekable else None
         if shown is not None:
             shown.advance()
             playback = {"paused": shown.source.paused, "position_s": shown.source.position_s}
@@ -265,7 +268,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """Move the replay's clock to ``t_s`` (nothing is recomputed); its pause and speed stay. Back in
         time, the views that only ever add rows start over."""
         session = self.session
-        if isinstance(session, RevealSession) and session.seek(t_s):
+        if session is not None and session.seek(t_s):
             self.live_view.set_session(session)
             self.event_console.set_session(session)
 
@@ -273,7 +276,7 @@ class MainWindow(QtWidgets.QMainWindow):
         """The what-if: the file computed again with ``filters`` and ``forced`` settings, in a worker;
         the replay goes on meanwhile and continues from where it is."""
         session = self.session
-        if isinstance(session, RevealSession):
+        if session is not None and session.seekable:
             self._load(session.source.path, tuple(filters), forced, f"recomputing {session.source.path.name} with "
                        f"{', '.join(filters)}", recompute=True)
 
@@ -291,26 +294,17 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def export(self) -> ExportDialog | None:
         """The export dialog on the current session's file (or the last one's), with the estimators shown."""
-        file = self._session_file(self.session) if self.session is not None else self.last_file
+        file = self.session.file() if self.session is not None else self.last_file
         if file is None:
             self.show_error("Nothing to export yet: connect, start the simulated bridge or open a recording first.")
             return None
-        setup = self.session.setup if isinstance(self.session, RevealSession) else (None, None)
-        dialog = ExportDialog(*file, parent=self, setup=setup)
+        setup = self.session.setup if self.session is not None else (None, None)
+        dialog = ExportDialog(self.sessions.load_session, *file, parent=self, setup=setup)
         dialog.setModal(False)  # the live view goes on while it exports
         dialog.show()
         return dialog
 
-    @staticmethod
-    def _session_file(session: LiveSession | RevealSession) -> tuple[Path, float] | None:
-        if isinstance(session, RevealSession):
-            return session.source.path, session.source.duration_s
-        if session.recording_path is None:
-            return None
-        last = session.pipeline.imu.tail(1)
-        return session.recording_path, float(last[0][0]) if len(last) else 0.0
-
-    def _adopt(self, session: LiveSession) -> None:
+    def _adopt(self, session: Session) -> None:
         self.session = session
         self.attitude_panel.clear()  # nothing of the previous session's attitude
         self.live_view.set_session(session)
@@ -339,9 +333,9 @@ class MainWindow(QtWidgets.QMainWindow):
     def _stop_session(self) -> None:
         session, self.session = self.session, None
         session.stop()
-        self.last_file = self._session_file(session)
+        self.last_file = session.file()
         if not session.source.is_replay:  # a replay's settings are the recording's, not the user's
-            tuned = session.pipeline.settings()
+            tuned = session.view.settings()
             self.settings.setValue("estimator_settings", json.dumps(
                 {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in self.estimator_panel.tunable.items()
                  if name in tuned}))
@@ -419,7 +413,7 @@ class MainWindow(QtWidgets.QMainWindow):
             if self.loading.done:
                 self._loaded()
         session = self.session
-        if isinstance(session, RevealSession):
+        if session is not None:
             session.advance()
         self.ticks += 1
         figures = self.ticks % FIGURES_EVERY == 0
@@ -443,7 +437,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_error(f"The session stopped: {session.error}")
 
     @staticmethod
-    def _recording_text(session: LiveSession | RevealSession) -> str:
+    def _recording_text(session: Session) -> str:
         if session.recorder is None:
             return "not recording (replay)"
         if session.recorder.state == "failed":

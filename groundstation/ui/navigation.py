@@ -4,8 +4,8 @@ newest heading with its source; no Qt.
 Headings are wrapped to 0..360° as a compass reads them. The GPS track is north/east metres from the
 first fix (flat earth: fine for flights of a few km); heights are relative to the first reading, the
 barometer's from pressure by the ISA formula (``geodesy.pressure_altitude_m``) with the first reading's
-pressure and temperature as the ground. A fused position table (``pipeline.tables["position"]``,
-NED metres) is plotted when the pipeline has one.
+pressure and temperature as the ground. A fused position table (``view.tables["position"]``,
+NED metres) is plotted when the session has one.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 
 from firmware_protocol import SPEC
 from groundstation.geodesy import ned_from_geodetic, pressure_altitude_m
-from groundstation.session.pipeline import Pipeline
+from groundstation.session.view import ProductView
 from groundstation.session.table import Table
 from groundstation.ui.series import Series
 
@@ -37,7 +37,7 @@ def valid_heading_deg(heading_deg: np.ndarray) -> np.ndarray:
 
 
 def compass_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The pipeline's tilt-compensated compass heading, 0..360°, and the field in sensor axes (µT)."""
+    """The session's tilt-compensated compass heading, 0..360°, and the field in sensor axes (µT)."""
     col = columns_of(rows, columns)
     return {"compass_heading_deg": np.mod(col["heading_deg"], 360.0), **{f"mag_{a}_uT": col[f"mag_{a}_uT"] for a in "xyz"}}
 
@@ -86,7 +86,7 @@ class GpsQuantities:
 
 
 def aiding_series(tables: dict[str, Table]) -> dict[str, Series]:
-    """A ``Series`` for each aiding table the pipeline has: "mag", "baro", "gps", "position"."""
+    """A ``Series`` for each aiding table the session has: "mag", "baro", "gps", "position"."""
     derive = {"mag_raw": ("mag", compass_quantities), "baro": ("baro", BaroQuantities()),
               "gps": ("gps", GpsQuantities()), "position": ("position", fused_quantities)}
     return {name: Series(tables[table], quantities) for table, (name, quantities) in derive.items()
@@ -100,11 +100,11 @@ def newest_row(table: Table | None) -> dict[str, float] | None:
     return dict(zip(table.columns, last[0].tolist())) if len(last) else None
 
 
-def heading_now(pipeline: Pipeline) -> tuple[float, str] | None:
+def heading_now(view: ProductView) -> tuple[float, str] | None:
     """The newest heading (0..360°) and its source: the GPS when its newest solution has a fix and
     a heading, else the compass; None when neither has a reading within ``HEADING_STALE_S`` of the
     newest sample."""
-    gps, mag, imu = newest_row(pipeline.tables.get("gps")), newest_row(pipeline.tables.get("mag_raw")), newest_row(pipeline.imu)
+    gps, mag, imu = newest_row(view.tables.get("gps")), newest_row(view.tables.get("mag_raw")), newest_row(view.imu)
     now_s = max(row["time_s"] for row in (gps, mag, imu) if row is not None) if gps or mag or imu else math.nan
     candidates = []
     if gps is not None and gps["fix_type"] >= FIX_2D:

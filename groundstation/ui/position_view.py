@@ -1,7 +1,7 @@
 """The Position tab: the GPS track on a map of equal axes, height over time, the newest fix in numbers.
 
 The track (east right, north up, metres from the first fix) is the whole session, with the fused
-position's when the pipeline has one and a dot at the newest fix, thinned by a stride to at most
+position's when the session has one and a dot at the newest fix, thinned by a stride to at most
 ``MAX_TRACK_POINTS``; older than ``series.RECENT_S`` it runs through the corners of its bins' boxes
 (the minima and maxima of ``series.BIN_ROWS`` samples). The track and the numbers (from the newest
 GPS row, float64, not the plotted float32) are set after every ``TRACK_EVERY_S`` of new samples
@@ -136,7 +136,7 @@ class PositionView(QtWidgets.QWidget):
             view.setRange(xRange=east, yRange=north, padding=0)
 
     def _list_fused(self, present: bool) -> None:
-        """The fused position in the legends only when the pipeline has one."""
+        """The fused position in the legends only when the session has one."""
         if present == self._fused_listed:
             return
         self._fused_listed = present

@@ -8,13 +8,13 @@ import html
 from PySide6 import QtWidgets
 
 from groundstation.recording.recorder import RESUME_MIN_FREE_BYTES
-from groundstation.session.live import LiveSession
+from groundstation.session.view import Session
 
 
 class RecordingBanner(QtWidgets.QFrame):
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.session: LiveSession | None = None
+        self.session: Session | None = None
         self.setObjectName("recordingBanner")
         self.setStyleSheet("#recordingBanner { background:#b00020; border-radius:4px; }"
                            "#recordingBanner QLabel { color:white; font-size:11pt; }")
@@ -28,7 +28,7 @@ class RecordingBanner(QtWidgets.QFrame):
         layout.addWidget(self.resume_button)
         self.hide()
 
-    def refresh(self, session: LiveSession | None) -> None:
+    def refresh(self, session: Session | None) -> None:
         """Shown while ``session``'s recorder has failed; hidden otherwise."""
         self.session = session
         recorder = session.recorder if session is not None else None

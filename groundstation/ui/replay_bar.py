@@ -1,6 +1,6 @@
 """The replay transport: play/pause (Replay at the end), step, speed, a seek slider and the position.
 
-It moves the playback clock of a ``RevealSession`` (``session.reveal.Playback``) for pause, speed and
+It moves the playback clock of a ``RevealSession`` (``session.playback.Playback``) for pause, speed and
 step; a seek is the window's (views that only add rows start over when it goes back), so the bar
 only emits ``seekRequested``.
 """
@@ -11,7 +11,8 @@ import math
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.reveal import Playback, RevealSession
+from groundstation.session.playback import Playback
+from groundstation.session.view import Session
 from groundstation.sources.replay import MAX_SPEED, MIN_SPEED
 
 SPEEDS = tuple(MIN_SPEED * 2.0**i for i in range(round(math.log2(MAX_SPEED / MIN_SPEED)) + 1))  # 0.25x, 0.5x ... 64x
@@ -32,7 +33,7 @@ class ReplayBar(QtWidgets.QWidget):
 
     def __init__(self, parent=None):
         super().__init__(parent)
-        self.session: RevealSession | None = None
+        self.session: Session | None = None  # a seekable one: a file played back
         self.play_button = QtWidgets.QPushButton("Pause")
         self.play_button.clicked.connect(self.toggle)
         self.step_button = QtWidgets.QPushButton("Step")
@@ -64,7 +65,7 @@ class ReplayBar(QtWidgets.QWidget):
 
     def set_session(self, session) -> None:
         """Show the bar for a replay (hidden otherwise); a recomputed replay keeps the pause and speed."""
-        replay = isinstance(session, RevealSession)
+        replay = session is not None and session.seekable
         self.session = session if replay else None
         self.setVisible(replay)
         if replay:

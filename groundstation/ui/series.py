@@ -154,8 +154,8 @@ class Series:
 
 def attitude_deg(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:
     """Pitch, roll and heading (the yaw as a compass reads it, 0..360°)."""
-    yaw, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
-    return {f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll, f"{prefix}_heading_deg": np.mod(yaw, 360.0)}
+    yaw, pitch, roll = quaternion.euler_deg(q)
+    return {f"{prefix}_pitch_deg": pitch, f"{prefix}_roll_deg": roll, f"{prefix}_heading_deg": quaternion.heading_deg(yaw)}
 
 
 def imu_quantities(filters: tuple[str, ...]) -> Derive:
@@ -168,8 +168,8 @@ def imu_quantities(filters: tuple[str, ...]) -> Derive:
         # eight estimators cost about what three did (numpy's per-call overhead dominates a frame's few rows).
         index = [columns.index(f"{name}_q{c}") for name in filters for c in "wxyz"]
         q = rows[:, index].reshape(len(rows), len(filters), 4)
-        yaw, pitch, roll = np.moveaxis(np.degrees(quaternion.to_euler_zyx(q)), -1, 0)
-        yaw = np.mod(yaw, 360.0)
+        yaw, pitch, roll = quaternion.euler_deg(q)
+        yaw = quaternion.heading_deg(yaw)
         for i, name in enumerate(filters):
             out[f"{name}_pitch_deg"], out[f"{name}_roll_deg"], out[f"{name}_heading_deg"] = pitch[:, i], roll[:, i], yaw[:, i]
         for axis in "xyz":

@@ -13,9 +13,8 @@ from dataclasses import dataclass
 from PySide6 import QtWidgets
 
 from firmware_protocol import SPEC
-from groundstation.autopilot.streams import MAX_REQUEST_RATE_HZ
-from groundstation.session.live import LiveSession
-from groundstation.session.mavlink_front import REQUESTED_RATE_HZ
+from groundstation.autopilot.streams import MAX_REQUEST_RATE_HZ, REQUESTED_RATE_HZ
+from groundstation.session.view import Session
 
 ACK_TIMEOUT_S = 1.0
 HISTORY = 4  # commands listed
@@ -37,7 +36,7 @@ class Sent:
 class UplinkPanel(QtWidgets.QGroupBox):
     def __init__(self, parent=None):
         super().__init__(parent)  # titled by its tab
-        self.session: LiveSession | None = None
+        self.session: Session | None = None
         self.sent: list[Sent] = []
         self._events_seen = 0
         self.mode_box = QtWidgets.QComboBox()
@@ -87,12 +86,12 @@ class UplinkPanel(QtWidgets.QGroupBox):
             row.addWidget(widget)
         return row
 
-    def set_session(self, session: LiveSession | None) -> None:
+    def set_session(self, session: Session | None) -> None:
         """Enabled only when the source can send (a replay has no aircraft to command)."""
         can_send = session is not None and session.source.can_send
         self.session = session if can_send else None
         self.setEnabled(can_send)
-        mavlink = session is not None and session.pipeline.protocol == "mavlink"
+        mavlink = session is not None and session.view.protocol == "mavlink"
         self.gs_controls.setVisible(not mavlink)
         self.mavlink_controls.setVisible(mavlink)
         self.sent = []
@@ -119,7 +118,7 @@ class UplinkPanel(QtWidgets.QGroupBox):
     def refresh(self) -> None:
         if self.session is None:
             return
-        events = self.session.pipeline.events
+        events = self.session.view.events
         new, self._events_seen = events[self._events_seen :], len(events)
         for event in new:
             if event["kind"] == "ack":
@@ -127,7 +126,7 @@ class UplinkPanel(QtWidgets.QGroupBox):
                     if sent.seq == event["command_seq"] and not sent.answer:
                         ms = (event["t_host_ns"] - sent.sent_ns) / 1e6
                         sent.answer = f"ACK {RESULTS.get(event['result'], event['result'])} ({ms:.0f} ms)"
-        config = self.session.pipeline.config
+        config = self.session.view.config
         if config is not None:
             self.config_label.setText(
                 f"mode {MODE_NAMES.get(config.get('mode'), '?')}, {config.get('rate_hz')} Hz, ±{config.get('accel_fs_g')} g, "

@@ -11,10 +11,12 @@ from groundstation.sim.udp_bridge import UdpBridge
 def mavlink_window(qtbot, tmp_path):
     from PySide6 import QtCore
 
+    from groundstation.session.factory import Sessions
+
     from groundstation.ui.main_window import MainWindow
 
     settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    window = MainWindow(settings, recordings_dir=tmp_path / "recordings")
+    window = MainWindow(settings, Sessions(), recordings_dir=tmp_path / "recordings")
     qtbot.addWidget(window)
     window.show()
     port = free_udp_port()

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 from pymavlink import mavutil
 
-from groundstation.autopilot.agreement import agreement
+from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.session import load_log
 from groundstation.cli import main
 from groundstation.recording import RecordingWriter
@@ -36,7 +36,7 @@ def test_evaluate_without_truth_reports_agreement_labelled_as_such(px4_log, caps
     assert main(["evaluate", str(px4_log), "--filters", "hf,ecf", "--json"]) == 0
     reported = json.loads(capsys.readouterr().out)["agreement_with_onboard"]
     data = load_log(px4_log, ["hf", "ecf"])
-    assert reported == agreement(data.estimates, data.onboard)
+    assert reported == onboard_agreement(data)
     hf = reported["hf"]
     assert f"{hf['pitch_rms_deg']:.3f}" in text and f"{hf['roll_max_deg']:.3f}" in text
 
@@ -62,7 +62,7 @@ def test_export_every_format_with_onboard_columns_and_the_agreement_sheet(px4_lo
     title = next(i for i, row in enumerate(session) if row[0] and str(row[0]).startswith("Agreement with the onboard estimate"))
     assert "not an error" in session[title][0]
     data = load_log(px4_log, ["ahf", "hf"])
-    expected = agreement(data.estimates, data.onboard)
+    expected = onboard_agreement(data)
     rows = {row[0]: row[1:5] for row in session[title + 2 : title + 4]}
     for name in ("ahf", "hf"):
         e = expected[name]

@@ -6,9 +6,10 @@ truth scores both. Large files are cut to their start to keep each test within s
 import numpy as np
 import pytest
 
-from groundstation.autopilot.agreement import agreement, pitch_roll_rad
-from groundstation.autopilot.flightlog import read_log
+from groundstation.autopilot.agreement import onboard_agreement, pitch_roll_rad
+from groundstation.autopilot.session import read_log
 from groundstation.autopilot.session import load_log
+from groundstation.export.columns import export_columns
 
 from mavlink_helpers import flightlog
 
@@ -24,17 +25,17 @@ def test_arducopter_dataflash_flight():
     meta = data.metadata
     assert meta["autopilot"] == "ArduPilot" and meta["imu_rate_hz"] == pytest.approx(25.0, rel=0.01)
     assert data.time_s[-1] == pytest.approx(98.0, abs=0.5) and "imu_warning" not in meta
-    pitch, roll = np.degrees(pitch_roll_rad(data.onboard))
+    pitch, roll = np.degrees(pitch_roll_rad(data.quaternion("onboard")))
     # README: roll up to 44 degrees and pitch up to 30 in LOITER/RTL.
     assert np.nanmax(np.abs(roll)) == pytest.approx(44, abs=3) and np.nanmax(np.abs(pitch)) == pytest.approx(30, abs=3)
-    agree = agreement(data.estimates, data.onboard)["hf"]
+    agree = onboard_agreement(data)["hf"]
     assert agree["pitch_rms_deg"] < 5.0 and agree["roll_rms_deg"] < 5.0  # measured 3.4 / 3.7 at 25 Hz
-    assert np.nanmax(data.sensors["gps_satellites"]) in (21, 22) and np.nanmax(data.sensors["gps_fix_type"]) == 3
+    assert np.nanmax(data.tables["gps"]["satellites"]) in (21, 22) and np.nanmax(data.tables["gps"]["fix_type"]) == 3
 
 
 def test_arduplane_dataflash_without_imu_opens_with_the_onboard_attitude_only():
     data = load_log(flightlog("arduplane_omnibusf4_ground_pilot_0004.bin"))
-    assert data.estimates == {} and data.onboard is not None and len(data) == 2375
+    assert data.estimated == () and data.sample_table == "onboard" and len(data) == 2375
     assert "no IMU" in data.metadata["notes"]
     assert data.time_s[-1] == pytest.approx(99.4, abs=0.5)
 
@@ -44,17 +45,17 @@ def test_px4_bench_log_old_layout_at_250_hz_agrees_while_still():
     assert log.imu.rate_hz == pytest.approx(250.0, rel=0.01) and log.onboard.rate_hz == pytest.approx(83, rel=0.05)
     assert log.mag.source == "sensor_combined" and log.gps is None and log.baro is None  # README: no baro found
     data = load_log(log.path, ["ecf"])
-    agree = agreement(data.estimates, data.onboard)["ecf"]
+    agree = onboard_agreement(data)["ecf"]
     assert agree["pitch_rms_deg"] < 0.5 and agree["roll_rms_deg"] < 0.5  # on a bench: measured 0.11 / 0.12
 
 
 def test_px4_modern_log_attitude_starts_late():
     data = load_log(flightlog("px4_fmuv5_quad_hop.ulg"), ["hf"])
-    have = np.isfinite(data.onboard[:, 0])
+    have = np.isfinite(data.quaternion("onboard")[:, 0])
     assert not have[: int(3.0 * 200)].any()  # README: vehicle_attitude only for the last 5.6 s
     assert have.sum() / 200 == pytest.approx(5.55, abs=0.1)
-    assert agreement(data.estimates, data.onboard)["hf"]["rows"] == have.sum()
-    assert {"mag_x_uT", "baro_pressure_hpa", "gps_lat_deg"} <= data.sensors.keys()
+    assert onboard_agreement(data)["hf"]["rows"] == have.sum()
+    assert {"mag_x_uT", "baro_pressure_Pa", "gps_lat_deg"} <= export_columns(data).keys()
 
 
 def test_px4_sitl_truth_scores_the_onboard_and_host_estimates():

@@ -6,11 +6,11 @@ import numpy as np
 
 def test_window_shows_and_records_a_mavlink_link(qtbot, mavlink_window):
     window = mavlink_window
-    qtbot.waitUntil(lambda: len(window.session.pipeline.imu) > 100, timeout=8000)  # the window ticks meanwhile
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 100, timeout=8000)  # the window ticks meanwhile
     qtbot.wait(300)
     session = window.session
-    assert session.pipeline.protocol == "mavlink" and session.error is None
-    periods_us = np.diff(session.pipeline.imu.to_dict()["device_time_us"])
+    assert session.view.protocol == "mavlink" and session.error is None
+    periods_us = np.diff(session.view.imu.to_dict()["device_time_us"])
     assert np.median(periods_us) == 20_000  # the session asked for 50 Hz
     assert session.recording_path is not None and session.recording_path.stat().st_size > 0
     assert not window.banner.isVisible(), window.banner.text()

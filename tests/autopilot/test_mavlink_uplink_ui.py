@@ -10,7 +10,7 @@ from groundstation.sim.mavlink_aircraft import BATTERY, RADIO_STATUS
 
 def imu_period_us(window, last: int) -> float:
     with window.session.lock:
-        times = window.session.pipeline.imu.column("device_time_us")[-last:]
+        times = window.session.view.imu.column("device_time_us")[-last:]
     return float(np.median(np.diff(times)))
 
 
@@ -20,14 +20,14 @@ def test_uplink_panel_requests_another_stream_rate_and_the_aircraft_follows(qtbo
     assert panel.isEnabled()
     assert panel.mavlink_controls.isVisibleTo(panel) and not panel.gs_controls.isVisibleTo(panel)
     assert not window.estimator_panel.send_button.isEnabled()  # no AHF on an autopilot
-    qtbot.waitUntil(lambda: len(window.session.pipeline.imu) > 60, timeout=8000)
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 60, timeout=8000)
     assert imu_period_us(window, 20) == 20_000  # the session's own request: 50 Hz
     panel.stream_rate_hz.setValue(25)
     panel.streams_button.click()
-    events = [e for e in window.session.pipeline.events if e.get("command") == "request_streams"]
+    events = [e for e in window.session.view.events if e.get("command") == "request_streams"]
     assert events and events[-1]["rate_hz"] == 25
-    count = len(window.session.pipeline.imu)
-    qtbot.waitUntil(lambda: len(window.session.pipeline.imu) > count + 40, timeout=8000)
+    count = len(window.session.view.imu)
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > count + 40, timeout=8000)
     assert imu_period_us(window, 20) == 40_000
 
 
@@ -48,14 +48,16 @@ def test_link_panel_shows_both_radios_signal_and_the_battery(qtbot, mavlink_wind
 def test_the_projects_own_link_shows_no_radio_rows_and_its_own_uplink(qtbot, tmp_path):
     from PySide6 import QtCore
 
+    from groundstation.session.factory import Sessions
+
     from groundstation.ui.main_window import MainWindow
 
     settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    window = MainWindow(settings, recordings_dir=tmp_path / "recordings")
+    window = MainWindow(settings, Sessions(), recordings_dir=tmp_path / "recordings")
     qtbot.addWidget(window)
     window.show()
     window.start_demo()
-    qtbot.waitUntil(lambda: len(window.session.pipeline.imu) > 50, timeout=8000)
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 50, timeout=8000)
     qtbot.wait(300)
     panel = window.uplink_panel
     assert panel.gs_controls.isVisibleTo(panel) and not panel.mavlink_controls.isVisibleTo(panel)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from pymavlink import mavutil
 
-from groundstation.autopilot.flightlog import read_log
+from groundstation.autopilot.session import read_log
 from groundstation.autopilot.tlog import packets_of_chunks, write_tlog
 from groundstation.errors import UserError
 

@@ -4,8 +4,8 @@ back through the importer; the host filters scored against that truth and agains
 import numpy as np
 import pytest
 
-from groundstation.autopilot.agreement import agreement
-from groundstation.autopilot.flightlog import read_log
+from groundstation.autopilot.agreement import onboard_agreement
+from groundstation.autopilot.session import read_log
 from groundstation.autopilot.session import load_log
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import inclination_error_rad, score
@@ -48,7 +48,7 @@ def test_host_filters_against_the_simulator_truth_and_the_onboard_copy(ulg):
         direct = score(inclination_error_rad(q, truth.q_body_to_ned, "NED"))
         assert errors[name]["incl_rmse_deg"] == pytest.approx(direct["incl_rmse_deg"], abs=0.02)
     assert errors["onboard"]["incl_rmse_deg"] < 0.05  # the onboard copy is the truth, interpolated from 50 Hz
-    agree = agreement(data.estimates, data.onboard)
+    agree = onboard_agreement(data)
     assert agree["hf"]["rows"] == len(data) - 3  # the last rows lie after the last 50 Hz sample
     # Against the onboard copy of the truth, pitch and roll differences make up the inclination error.
     pitch, roll = agree["hf"]["pitch_rms_deg"], agree["hf"]["roll_rms_deg"]

@@ -102,7 +102,7 @@ def test_a_file_size_limit_gets_a_message_and_leaves_nothing(sim_recording, tmp_
         import os, resource, signal, tempfile
         from groundstation.errors import UserError
         from groundstation.export.excel import write_workbook
-        from groundstation.session.data import load_session
+        from groundstation.session.load import load_session
         data = load_session({str(sim_recording)!r})
         tempfile.tempdir = {str(temporaries)!r}
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a failing write, not a killed process

@@ -8,10 +8,10 @@ from openpyxl import load_workbook
 
 from groundstation.estimation import create
 from groundstation.export import excel_columns
-from groundstation.export.columns import select_rows
+from groundstation.export.columns import select_rows, sensor_columns
 from groundstation.export.excel import write_workbook
 from groundstation.recording import open_recording
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 
 from .conftest import CHANGE_AT_S, simulated_recording
 
@@ -76,13 +76,13 @@ def test_sheets_headers_row_counts_and_layout(sim_session, sim_book):
 def test_attitude_values_are_the_sessions(sim_session, sim_book):
     got = columns(sim_book[1]["Attitude"])
     np.testing.assert_allclose(floats(got["time (s)"]), sim_session.time_s, rtol=1e-15)
-    for name, q in [*sim_session.estimates.items(), ("onboard", sim_session.onboard)]:
+    for name, q in sim_session.attitudes().items():
         for angle, expected in zip(("pitch", "roll", "yaw"), euler_deg(q)):
             np.testing.assert_allclose(floats(got[f"{name} {angle} (°)"]), expected, rtol=1e-12, atol=1e-12)
-    missing = np.isnan(sim_session.onboard[:, 0])
+    missing = np.isnan(sim_session.quaternion("onboard")[:, 0])
     assert missing.any()  # the lossy link lost ATTITUDE frames: those cells are empty, not NaN text
     assert all(v is None for v, m in zip(got["onboard pitch (°)"], missing) if m)
-    np.testing.assert_allclose(floats(got["ahf λ (rad/s)"]), sim_session.diagnostics["ahf"]["lam"], rtol=1e-15)
+    np.testing.assert_allclose(floats(got["ahf λ (rad/s)"]), sim_session.tables["imu"]["ahf_lam"], rtol=1e-15)
     start = datetime(2024, 5, 1, 12, 0, 0)
     for i in (0, 777, len(sim_session) - 1):
         expected = start + timedelta(seconds=float(sim_session.time_s[i]))
@@ -93,7 +93,7 @@ def test_sensor_and_link_values_are_the_sessions(sim_session, sim_book):
     book = sim_book[1]
     got = columns(book["Sensors"])
     for name, header in (("acc_y_g", "acc y (g)"), ("gyr_z_dps", "gyro z (°/s)"), ("temperature_c", "temperature (°C)")):
-        np.testing.assert_allclose(floats(got[header]), sim_session.sensors[name], rtol=1e-15)
+        np.testing.assert_allclose(floats(got[header]), sensor_columns(sim_session)[name], rtol=1e-15)
     baro = sim_session.tables["baro"]
     n = len(baro["time_s"])
     np.testing.assert_allclose(floats(got["baro time (s)"][:n]), baro["time_s"], rtol=1e-15)
@@ -140,7 +140,7 @@ def test_error_table_and_rows_of_a_session_with_truth(trial_session, tmp_path):
     got = columns(book["Attitude"])
     assert "time (UTC)" not in got  # a dataset has no wall clock
     np.testing.assert_allclose(floats(got["time (s)"]), trial_session.time_s[expected], rtol=1e-15)
-    pitch, _, _ = euler_deg(trial_session.estimates["hf"][expected])
+    pitch, _, _ = euler_deg(trial_session.quaternion("hf")[expected])
     np.testing.assert_allclose(floats(got["hf pitch (°)"]), pitch, rtol=1e-12, atol=1e-12)
     assert book["Link"].max_row == 1  # no link: the header only
     assert rows["exported rows (count)"][0] == len(expected)
@@ -178,20 +178,20 @@ def test_charts_of_pitch_and_roll_read_a_decimated_range(sim_session, tmp_path, 
     step = -(-len(sim_session) // 100)
     assert len(data["time (s)"]) <= 100
     np.testing.assert_allclose(floats(data["time (s)"]), sim_session.time_s[::step], rtol=1e-15)
-    pitch, _, _ = euler_deg(sim_session.estimates["ahf"][::step])
+    pitch, _, _ = euler_deg(sim_session.quaternion("ahf")[::step])
     np.testing.assert_allclose(floats(data["ahf pitch (°)"]), pitch, rtol=1e-12, atol=1e-12)
 
 
 def test_a_session_without_raw_imu_samples(tmp_path):
     """"estimated" mode: the aircraft sends its attitude only; no estimator runs on the host."""
     data = load_session(simulated_recording(tmp_path / "estimated.gsrec", duration_s=5, mode="estimated"))
-    assert data.estimates == {} and data.sensors == {}
+    assert data.sample_table == "onboard" and sensor_columns(data) == {}
     path = tmp_path / "estimated.xlsx"
     write_workbook(data, path)
     book = load_workbook(path)
     got = columns(book["Attitude"])
     assert list(got) == ["time (s)", "time (UTC)", "onboard pitch (°)", "onboard roll (°)", "onboard yaw (°)"]
-    pitch, _, _ = euler_deg(data.onboard)
+    pitch, _, _ = euler_deg(data.quaternion("onboard"))
     np.testing.assert_allclose(floats(got["onboard pitch (°)"]), pitch, rtol=1e-12, atol=1e-12)
     assert book["Sensors"]["A1"].value == "mag time (s)"  # no IMU block; the other sensors still
     assert all(len(chart.series) == 1 for chart in book["Chart"]._charts)

@@ -9,6 +9,7 @@ import pytest
 from groundstation.cli import main
 from groundstation.errors import UserError
 from groundstation.export.request import export_request, run_export
+from groundstation.session.load import load_session
 from groundstation.ui.export_job import ExportJob
 from tests.session.full_disk import tiny_tmpfs
 
@@ -16,7 +17,7 @@ from tests.session.full_disk import tiny_tmpfs
 @pytest.fixture
 def no_decoding(monkeypatch):
     """Decoding is what takes seconds: these mistakes must be found without it."""
-    import groundstation.session.data as data
+    import groundstation.session.load as data
 
     def decode(*args, **kwargs):
         raise AssertionError("decoded before the mistake was found")
@@ -69,7 +70,7 @@ def test_exporting_a_file_onto_itself_is_refused(tmp_path, no_decoding):
 
 def test_the_cli_and_the_app_write_the_same_file(sim_recording, tmp_path):
     assert main(["export", str(sim_recording), "--out", str(tmp_path / "cli.csv"), "--rate", "10"]) == 0
-    job = ExportJob(sim_recording, tmp_path / "app.csv", rate_hz=10).start()
+    job = ExportJob(load_session, sim_recording, tmp_path / "app.csv", rate_hz=10).start()
     job.wait(60)
     assert job.error is None and job.fraction == 1.0
     assert (tmp_path / "cli.csv").read_bytes() == (tmp_path / "app.csv").read_bytes()
@@ -91,7 +92,7 @@ def test_a_full_disk_leaves_nothing_and_a_retry_is_not_blocked(sim_recording, tm
 
 def test_run_export_reports_its_stages(sim_recording, tmp_path):
     stages = []
-    result = run_export(export_request(sim_recording, tmp_path / "out.xlsx", rate_hz=5),
+    result = run_export(export_request(sim_recording, tmp_path / "out.xlsx", rate_hz=5), load_session,
                         lambda stage, done, total: stages.append(stage))
     assert result.message.startswith(f"wrote {tmp_path / 'out.xlsx'}: sheets Session, Attitude")
     assert stages[0] == "decoding" and stages[-1] == "writing" and set(stages) == {"decoding", "writing"}

@@ -111,7 +111,7 @@ def test_fused_position_follows_truth_closer_than_the_raw_gps_and_barometer():
 def test_the_aiding_estimator_is_a_named_setting_not_the_first_of_the_filters(tmp_path):
     """The compass heading and the position come from the estimator the session names, wherever it stands
     in the filters, live and from a recording (which records the name); unnamed, AHF2 when it runs."""
-    from groundstation.session.data import load_session
+    from groundstation.session.load import load_session
     from tests.simulated import simulated_chunks, write_recording
 
     chunks = simulated_chunks(8.0, seed=4, mode="raw", mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=10)

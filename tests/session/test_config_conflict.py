@@ -8,7 +8,7 @@ import pytest
 
 from groundstation.cli import main
 from groundstation.recording import open_recording
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.replay import replay
 from groundstation.sim.firmware import FirmwareSettings
 from tests.crafted_files import forged_config_recording
@@ -29,7 +29,8 @@ def of_pipeline(pipeline):
 
 
 def of_data(data):
-    return data.time_s, np.column_stack([data.sensors[f"acc_{a}_g"] for a in "xyz"])
+    imu = data.tables["imu"]
+    return imu["time_s"], np.column_stack([imu[f"acc_{a}_g"] for a in "xyz"])
 
 
 def conflicts(events):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.pipeline import SensorConfig, without_config
 from groundstation.session.replay import replay
 
@@ -29,7 +29,7 @@ def damaged(tmp_path_factory):
 def test_both_paths_warn_and_convert_at_the_inferred_scale(damaged):
     data = load_session(damaged)
     assert data.config is None and data.damage
-    norm_g = np.linalg.norm([data.sensors[f"acc_{a}_g"] for a in "xyz"], axis=0)
+    norm_g = np.linalg.norm([data.tables["imu"][f"acc_{a}_g"] for a in "xyz"], axis=0)
     assert abs(np.median(norm_g) - 1.0) < 0.05
     pipeline = replay(open_recording(damaged))
     live = [e["message"] for e in pipeline.events if e["kind"] == "warning"]

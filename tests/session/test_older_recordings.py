@@ -8,7 +8,7 @@ import numpy as np
 from firmware_protocol import SPEC
 from groundstation.export.excel_session import describe_event, firmware
 from groundstation.recording import open_recording
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.replay import replay
 
 OLD_RECORDING = Path(__file__).resolve().parents[1] / "data" / "hover-raw-config-15-bytes.gsrec"
@@ -21,7 +21,7 @@ def test_an_old_recording_converts_at_its_configs_full_scales_and_its_gyro_calib
     for config in (data.config, pipeline.config):
         assert (config["accel_fs_g"], config["gyro_fs_dps"], config["gyro_calibration"]) == (4, 500, UNKNOWN)
     # The hovering craft feels 1 g (at the assumed ±2 g it would read 0.5 g).
-    norm_g = np.linalg.norm([data.sensors[f"acc_{a}_g"] for a in "xyz"], axis=0)
+    norm_g = np.linalg.norm([data.tables["imu"][f"acc_{a}_g"] for a in "xyz"], axis=0)
     assert len(norm_g) > 200 and abs(np.median(norm_g) - 1.0) < 0.05
     assert np.array_equal(norm_g, np.linalg.norm([pipeline.tables["imu"].column(f"acc_{a}_g") for a in "xyz"], axis=0))
     warnings = [e["message"] for e in data.events if e["kind"] == "warning"]

@@ -9,7 +9,7 @@ import pytest
 
 from groundstation.estimation.base import INITIALISED
 from groundstation.recording import RecordingWriter
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.pipeline import Pipeline
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
@@ -78,8 +78,8 @@ def test_every_table_shows_the_gap_and_the_estimators_start_over(case):
 def test_the_onboard_estimate_stays_aligned_after_it(case):
     data, *_ = case
     samples = np.isfinite(data.tables["imu"]["device_time_us"])
-    assert np.isfinite(data.onboard[samples]).all()  # before: NaN in half the rows after a reboot
-    assert np.isnan(data.onboard[~samples]).all()
+    assert np.isfinite(data.quaternion("onboard")[samples]).all()  # before: NaN in half the rows after a reboot
+    assert np.isnan(data.quaternion("onboard")[~samples]).all()
 
 
 def simulated_pipeline(firmware: FirmwareSettings, duration_s: float, until_s: float | None = None) -> Pipeline:

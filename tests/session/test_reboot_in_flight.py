@@ -14,7 +14,7 @@ from groundstation.estimation import live_estimators
 from groundstation.estimation.evaluation import inclination_error_rad
 from groundstation.recording import RecordingWriter, open_recording
 from groundstation.session.batch import batch_replay
-from groundstation.session.data import from_pipeline, load_session
+from groundstation.session.load import from_pipeline, load_session
 from groundstation.session.replay import replay
 from groundstation.sim.firmware import GYRO_CALIBRATION, FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
@@ -50,7 +50,7 @@ def recordings(tmp_path_factory):
 
 
 def inclination_error_deg(data, name):
-    return np.degrees(inclination_error_rad(data.estimates[name], data.true_q, data.true_frame))
+    return np.degrees(inclination_error_rad(data.quaternion(name), data.true_q, data.true_frame))
 
 
 def test_the_truth_is_attached_across_the_reset(recordings):
@@ -62,7 +62,7 @@ def test_the_truth_is_attached_across_the_reset(recordings):
     # The truth is the sample's own: the aircraft's AHF (which runs on), ahf, agrees with it after the
     # reset as before (a truth of another instant would be tens of degrees off in this flight).
     after = data.time_s > resets[0]["session_time_s"] + BACK_ON_TRUTH_S
-    onboard_error_deg = np.degrees(inclination_error_rad(data.onboard, data.true_q, data.true_frame))
+    onboard_error_deg = np.degrees(inclination_error_rad(data.quaternion("onboard"), data.true_q, data.true_frame))
     assert np.nanmax(onboard_error_deg[after]) < 20.0
     # and the board said how it calibrated: at rest at power-up, the stored one after the reset in flight
     assert [e["gyro_calibration"] for e in data.events if e["kind"] == "config"] == [GYRO_CALIBRATION["boot"], GYRO_CALIBRATION["stored"]]

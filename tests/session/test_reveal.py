@@ -1,4 +1,4 @@
-"""A computed session played back (``session.reveal``): the clock runs at its speed, stops at the end
+"""A computed session played back (``session.playback``): the clock runs at its speed, stops at the end
 and on pause; the tables show exactly the computed rows up to the clock, read as a ``Table`` is;
 the link figures at the end are the decoder's totals; ``groundstation replay`` computes any file."""
 
@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.data import load_session
+from groundstation.session.load import load_session
 from groundstation.session.replay import replay
-from groundstation.session.reveal import Playback, RevealedTable, RevealSession, check_speed
+from groundstation.session.playback import Playback, RevealedTable, RevealSession, check_speed
 from groundstation.session.table import Table
 
 SAMPLES = Path(__file__).resolve().parents[2] / "recordings" / "samples"
@@ -73,20 +73,20 @@ def test_a_revealed_table_reads_as_the_table_of_the_same_rows(layout):
 def test_a_recording_played_to_the_end_shows_every_row_and_the_decoders_totals():
     data = load_session(LOSSY)
     session = RevealSession(data, LOSSY, paused=True)
-    assert len(session.pipeline.imu) == int((data.time_s <= 0.0).sum())
+    assert len(session.view.imu) == int((data.time_s <= 0.0).sum())
     session.seek(data.time_s[-1] / 2)
-    half = session.pipeline.tables["onboard"].to_dict()
+    half = session.view.tables["onboard"].to_dict()
     rows = data.tables["onboard"]["time_s"] <= data.time_s[-1] / 2
     for name, values in data.tables["onboard"].items():
         np.testing.assert_array_equal(half[name], values[rows], err_msg=name)
-    assert 0 < session.pipeline.link.stats.frames_lost < data.link.counters["frames_lost"]  # the lost so far
+    assert 0 < session.view.counters()["frames_lost"] < data.link.counters["frames_lost"]  # the lost so far
     assert session.seek(session.source.duration_s) is False and not session.running
     for name, table in data.tables.items():
-        assert len(session.pipeline.tables[name]) == len(table["time_s"]), name
-    stats = session.pipeline.decoder.stats
-    assert (stats.frames, stats.frames_lost, stats.crc_errors) == tuple(data.link.counters[k] for k in ("frames", "frames_lost", "crc_errors"))
+        assert len(session.view.tables[name]) == len(table["time_s"]), name
+    counters = session.view.counters()
+    assert all(counters[k] == data.link.counters[k] for k in ("frames", "frames_lost", "crc_errors"))
     live = replay(open_recording(LOSSY)).link.clock()  # the live path's latency over the same last samples
-    shown = session.pipeline.link.clock()
+    shown = session.view.link.clock()
     for figure in ("latency_p50_ms", "latency_p99_ms"):
         assert shown[figure] == pytest.approx(live[figure], abs=1e-3), figure  # µs: host_time_s is a float
     assert session.seek(1.0) is True  # back in time: the views start over
@@ -121,7 +121,7 @@ def test_replay_command_reads_flight_logs(name):
     done = gs("replay", path, "--speed", "64")
     assert done.returncode == 0, done.stderr
     last = done.stdout.splitlines()[-1]
-    assert last == (f"{len(data)} IMU samples" if data.estimates else f"{len(data)} onboard attitude samples, no IMU")
+    assert last == (f"{len(data)} IMU samples" if data.sample_table == "imu" else f"{len(data)} onboard attitude samples, no IMU")
 
 
 def test_a_flight_logs_progress_moves_through_its_estimators():

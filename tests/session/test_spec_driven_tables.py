@@ -13,7 +13,7 @@ from groundstation.export.excel import write_workbook
 from groundstation.export.tabular import write_csv
 from groundstation.recording import RecordingWriter, open_recording
 from groundstation.session.catalogue import COMPUTED_FROM
-from groundstation.session.data import from_pipeline
+from groundstation.session.load import from_pipeline
 from groundstation.session.pipeline import Pipeline
 
 ESC_FRAME = """

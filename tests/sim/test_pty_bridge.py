@@ -109,7 +109,7 @@ def test_a_board_rebooting_mid_session_through_the_pty(tmp_path):
     time monotonic and in step with the host clock, and a replay of its recording finds the same."""
     import numpy as np
 
-    from groundstation.session.data import load_session
+    from groundstation.session.load import load_session
     from groundstation.session.live import LiveSession
     from groundstation.session.pipeline import Pipeline
     from groundstation.sources import SerialSource

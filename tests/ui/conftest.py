@@ -3,13 +3,15 @@
 import pytest
 from PySide6 import QtCore
 
+from groundstation.session.factory import Sessions
+
 from groundstation.ui.main_window import MainWindow
 
 
 @pytest.fixture
 def window(qtbot, tmp_path):
     settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    main = MainWindow(settings, recordings_dir=tmp_path / "recordings")
+    main = MainWindow(settings, Sessions(), recordings_dir=tmp_path / "recordings")
     qtbot.addWidget(main)  # closed (and its session stopped) after the test
     main.show()
     return main

@@ -3,6 +3,8 @@ the table's numbers; the panes are remembered."""
 
 import numpy as np
 
+from groundstation.session.factory import Sessions
+
 from groundstation.ui.main_window import MainWindow
 
 
@@ -21,7 +23,7 @@ def shown_texts(view) -> dict[str, str]:
 def test_channels_are_listed_plotted_in_panes_and_remembered(window, qtbot, tmp_path):
     window.start_demo()
     view = window.live_view
-    pipeline = window.session.pipeline
+    pipeline = window.session.view
     tables = {"imu": pipeline.imu, "onboard": pipeline.onboard, **pipeline.tables}
     assert listed(view) == {f"{n}.{c}" for n, t in tables.items() for c in t.columns if c != "time_s"}
     shown = shown_texts(view)  # a person's label and unit, from the session's catalogue (the spec's units)
@@ -41,7 +43,7 @@ def test_channels_are_listed_plotted_in_panes_and_remembered(window, qtbot, tmp_
         row = np.flatnonzero(times == curve.xData[-1])[0]
         assert curve.yData[-1] == np.float32(values[row])
     window.close()
-    again = MainWindow(window.settings, recordings_dir=tmp_path / "recordings")
+    again = MainWindow(window.settings, Sessions(), recordings_dir=tmp_path / "recordings")
     qtbot.addWidget(again)
     assert again.live_view.channels.panes == [["imu.gyr_x_rad_s"], ["baro.pressure_Pa", "onboard.lambda"]]
     again.live_view.channels.remove_pane()  # the selected one: the first

@@ -6,6 +6,7 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.sources import SourceError, open_source
 from groundstation.ui import connection_bar
+from groundstation.session.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 
 FTDI = {"device": "/dev/ttyUSB7", "description": "FT232R USB UART", "vid_pid": "0403:6001"}
@@ -34,7 +35,7 @@ def test_a_typed_sim_source_connects_and_is_remembered_as_recent(qtbot, ports, w
     assert "sim" in window.source_label.text().lower()
     assert window.bar.listed() == ["sim:?seed=4"]
     window.disconnect()
-    again = MainWindow(window.settings, recordings_dir=tmp_path / "recordings")  # the next start of the app
+    again = MainWindow(window.settings, Sessions(), recordings_dir=tmp_path / "recordings")  # the next start of the app
     qtbot.addWidget(again)
     assert again.bar.listed() == ["sim:?seed=4"] and again.bar.source == "sim:?seed=4"
 

@@ -9,7 +9,8 @@ import pytest
 from groundstation import quaternion
 from groundstation.recording import RecordingWriter
 from groundstation.estimation import ESTIMATORS, label, live_estimators
-from groundstation.session.factory import DEMO_SPEC
+from groundstation.session.load import load_session
+from groundstation.session.factory import DEMO_SPEC, Sessions
 from groundstation.sim.stream import SimStream
 from groundstation.sources import parse_spec
 from groundstation.sources.sim import parse_scenario
@@ -38,14 +39,14 @@ def angle_between_deg(a, b):
 
 def imu_rows(window) -> dict[str, np.ndarray]:
     with window.session.lock:
-        return window.session.pipeline.imu.to_dict()
+        return window.session.view.imu.to_dict()
 
 
 def test_new_estimators_run_start_hidden_and_toggle_on_the_demo(window, qtbot):
     assert set(NEW) <= set(LIVE_FILTERS)
     window.start_demo()
     view, panel = window.live_view, window.estimator_panel
-    assert window.session.pipeline.filters == LIVE_FILTERS
+    assert window.session.view.filters == LIVE_FILTERS
     assert list(panel.shown) == list(COMPARED)  # one box per comparison estimator, none checked
     assert [n for n, box in panel.shown.items() if box.isChecked()] == ["ahf"]  # the paper's AHF shown beside VQF
     assert {name: panel.shown[name].text() for name in NEW} == {
@@ -55,7 +56,7 @@ def test_new_estimators_run_start_hidden_and_toggle_on_the_demo(window, qtbot):
     assert {(name, setting) for name, setting in panel.boxes if name in NEW} == {
         ("hfm", "beta"), ("ecfm", "kp"), ("ecfm", "ki")}
 
-    qtbot.waitUntil(lambda: view.frames_drawn > 20 and len(window.session.pipeline.imu) > 300, timeout=10000)
+    qtbot.waitUntil(lambda: view.frames_drawn > 20 and len(window.session.view.imu) > 300, timeout=10000)
     rows = imu_rows(window)
     for name in NEW:  # the columns fill: unit quaternions from the start
         q = np.column_stack([rows[f"{name}_q{c}"] for c in "wxyz"])
@@ -84,7 +85,7 @@ def test_new_estimators_run_start_hidden_and_toggle_on_the_demo(window, qtbot):
 
 def test_hfm_yaw_follows_the_compass_on_the_demo(window, qtbot):
     window.start_demo()
-    pipeline = window.session.pipeline
+    pipeline = window.session.view
     qtbot.waitUntil(lambda: len(pipeline.imu) > 800 and len(pipeline.tables["mag_raw"]) > 400, timeout=15000)
     rows = imu_rows(window)
     with window.session.lock:
@@ -120,7 +121,7 @@ def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_record
     open_file(window, qtbot, app_recording)
     window.replay_bar.speed_box.setCurrentIndex(window.replay_bar.speed_box.findData(64.0))
     qtbot.waitUntil(lambda: not window.session.running, timeout=20000)
-    assert window.session.pipeline.filters == LIVE_FILTERS
+    assert window.session.view.filters == LIVE_FILTERS
     rows = imu_rows(window)
     for name in NEW:
         assert len(rows[f"{name}_qw"]) > 1500 and np.all(np.isfinite(rows[f"{name}_qw"])), name
@@ -132,7 +133,7 @@ def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_record
     qtbot.waitUntil(lambda: points(mcf) > 0, timeout=3000)  # drawn on switching on, with nothing new arriving
 
     out = tmp_path / "demo.csv"
-    job = ExportJob(app_recording, out).start()
+    job = ExportJob(load_session, app_recording, out).start()
     job.wait(60)
     assert job.done and job.error is None, job.error
     header = out.read_text().splitlines()[0]
@@ -141,7 +142,7 @@ def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_record
 
 def test_settings_from_before_the_new_estimators_keep_them_hidden(window, qtbot, tmp_path):
     window.settings.setValue("hidden_curves", ["ECF"])  # stored by a version with AHF, HF and ECF only
-    again = MainWindow(window.settings, recordings_dir=tmp_path / "recordings")
+    again = MainWindow(window.settings, Sessions(), recordings_dir=tmp_path / "recordings")
     qtbot.addWidget(again)
     again.start_demo()
     shown = again.estimator_panel.shown
@@ -149,7 +150,7 @@ def test_settings_from_before_the_new_estimators_keep_them_hidden(window, qtbot,
     assert not any(shown[name].isChecked() for name in NEW)
     shown["ukf"].setChecked(True)
     again.close()
-    third = MainWindow(window.settings, recordings_dir=tmp_path / "recordings")
+    third = MainWindow(window.settings, Sessions(), recordings_dir=tmp_path / "recordings")
     qtbot.addWidget(third)
     third.start_demo()
     assert third.estimator_panel.shown["ukf"].isChecked() and not third.estimator_panel.shown["mcf"].isChecked()

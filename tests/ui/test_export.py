@@ -2,6 +2,7 @@
 
 import pandas as pd
 
+from groundstation.session.load import load_session
 from groundstation.ui.export_dialog import ExportDialog
 
 from tests.ui.helpers import open_file
@@ -24,7 +25,7 @@ def test_export_dialog_writes_the_selected_range(window, qtbot, recording, tmp_p
 
 
 def test_export_dialog_writes_a_workbook(qtbot, recording, tmp_path):
-    dialog = ExportDialog(recording, 30.0)
+    dialog = ExportDialog(load_session, recording, 30.0)
     qtbot.addWidget(dialog)
     assert dialog.format_box.currentData() == ".xlsx"  # the first choice
     out = tmp_path / "flight.xlsx"
@@ -36,7 +37,7 @@ def test_export_dialog_writes_a_workbook(qtbot, recording, tmp_path):
 
 
 def test_cancel_leaves_no_file(qtbot, recording, tmp_path):
-    dialog = ExportDialog(recording, 30.0)
+    dialog = ExportDialog(load_session, recording, 30.0)
     qtbot.addWidget(dialog)
     out = tmp_path / "cancelled.parquet"
     dialog.format_box.setCurrentIndex(dialog.format_box.findData(".parquet"))

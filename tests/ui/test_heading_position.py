@@ -36,7 +36,7 @@ def replay_to_the_end(window, qtbot, path) -> Pipeline:
     bar = window.replay_bar
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(64.0))
     qtbot.waitUntil(lambda: not window.session.running, timeout=15000)
-    return window.session.pipeline
+    return window.session.view
 
 
 def points(curve) -> int:
@@ -113,7 +113,7 @@ def test_the_demo_shows_heading_and_position(window, qtbot):
     view = window.live_view
     qtbot.waitUntil(lambda: view.tabs.isTabVisible(view.tabs.indexOf(view.position))
                     and window.attitude_panel.readouts["heading"].text().endswith("GPS"), timeout=8000)
-    tables = window.session.pipeline.tables
+    tables = window.session.view.tables
     assert len(tables["mag_raw"]) and len(tables["baro"]) and len(tables["gps"])
     view.tabs.setCurrentWidget(view.position)
     qtbot.waitUntil(lambda: view.position.readouts["fix"].text() == "3D", timeout=3000)

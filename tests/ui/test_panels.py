@@ -43,6 +43,7 @@ def test_uplink_commands_are_acknowledged(window, qtbot):
 
 
 def test_tuned_settings_and_shown_estimators_are_remembered(window, qtbot, tmp_path):
+    from groundstation.session.factory import Sessions
     from groundstation.ui.main_window import MainWindow
 
     window.start_demo()
@@ -50,7 +51,7 @@ def test_tuned_settings_and_shown_estimators_are_remembered(window, qtbot, tmp_p
     window.estimator_panel.apply()
     window.estimator_panel.shown["ecf"].setChecked(True)
     window.close()
-    again = MainWindow(window.settings, recordings_dir=tmp_path / "recordings")
+    again = MainWindow(window.settings, Sessions(), recordings_dir=tmp_path / "recordings")
     qtbot.addWidget(again)
     again.start_demo()
     assert again.session.pipeline.estimators["ahf"].settings.lambda_min == 0.3

@@ -24,7 +24,7 @@ def drawn_segments(curve):
 def test_a_device_reboot_breaks_every_curve_and_the_link_panel_shows_no_restart_figures(window, qtbot):
     window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     session = window.session
-    events = session.pipeline.events
+    events = session.view.events
     qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=10000)
     reset = next(e for e in events if e["kind"] == "device_reset")
     before_s, after_s = reset["session_time_before_s"], reset["session_time_s"]
@@ -55,15 +55,15 @@ def test_after_a_device_reboot_the_attitude_panel_warns_while_the_estimates_re_c
 
     window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     warning = window.attitude_panel.reconverging
-    events = window.session.pipeline.events
-    qtbot.waitUntil(lambda: window.session.pipeline.imu.tail(1).size and window.session.pipeline.imu.tail(1)[0][0] > 1.0, timeout=10000)
+    events = window.session.view.events
+    qtbot.waitUntil(lambda: window.session.view.imu.tail(1).size and window.session.view.imu.tail(1)[0][0] > 1.0, timeout=10000)
     window.tick()
     assert not warning.isVisible()  # nothing restarted yet
     qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=10000)
     reset_s = next(e for e in events if e["kind"] == "device_reset")["session_time_s"]
     qtbot.waitUntil(lambda: (window.tick(), warning.isVisible())[1], timeout=5000)
     assert "Re-converging after device reboot" in warning.text()
-    assert window.session.pipeline.imu.tail(1)[0][0] < reset_s + RECONVERGE_S
+    assert window.session.view.imu.tail(1)[0][0] < reset_s + RECONVERGE_S
     # gone once every estimator is back on truth (RECONVERGE_S of samples after the restart)
     qtbot.waitUntil(lambda: (window.tick(), not warning.isVisible())[1], timeout=int((RECONVERGE_S + 5) * 1000))
-    assert window.session.pipeline.imu.tail(1)[0][0] >= reset_s + RECONVERGE_S
+    assert window.session.view.imu.tail(1)[0][0] >= reset_s + RECONVERGE_S

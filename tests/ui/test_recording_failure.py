@@ -48,7 +48,7 @@ def test_a_full_disk_shows_a_banner_the_plots_go_on_and_resume_starts_a_new_file
         second = session.recording_path
         assert second != first and second.exists()
         qtbot.waitUntil(lambda: f"● recording {second}" in window.recording_label.text(), timeout=2_000)
-        assert [e["kind"] for e in session.pipeline.events].count("recording_resumed") == 1
+        assert [e["kind"] for e in session.view.events].count("recording_resumed") == 1
 
         window.disconnect()
         assert window.recording_label.text() == "not recording"  # not the stopped session's "● recording"

@@ -67,7 +67,7 @@ def test_a_registered_estimator_and_file_format_reach_the_app_the_cli_and_an_exp
     assert any("*.imu.npz" in f for f in window.recording_dialog().nameFilters())
     open_file(window, qtbot, npz_trial)
     assert window.banner.isHidden(), window.banner.text()
-    assert "twin" in window.session.pipeline.filters
+    assert "twin" in window.session.view.filters
     box = window.estimator_panel.shown["twin"]
     assert box.text() == "Twin"
     box.setChecked(True)

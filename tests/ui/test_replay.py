@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from groundstation import quaternion
-from groundstation.session import reveal
-from groundstation.session.data import load_session
+from groundstation.session import load as opening
+from groundstation.session.load import load_session
 from groundstation.estimation import AIDING_ESTIMATOR, live_estimators, runnable
 from groundstation.formats import FILE_AIDING
 
@@ -40,7 +40,7 @@ def loads(monkeypatch):
         calls.append(args[1:3])
         return load_session(*args, **kwargs)
 
-    monkeypatch.setattr(reveal, "load_session", counted)
+    monkeypatch.setattr(opening, "load_session", counted)
     return calls
 
 
@@ -62,7 +62,7 @@ def check_plotted_up_to(window, qtbot, data, name: str, t_s: float) -> None:
     curve = pitch_curve(window, name)
     qtbot.waitUntil(lambda: points(curve) == rows.sum(), timeout=3000)
     np.testing.assert_array_equal(curve.xData, data.time_s[rows])
-    expected = pitch_deg(data.estimates[name][rows] if name != "onboard" else data.onboard[rows])
+    expected = pitch_deg(data.quaternion(name)[rows])
     np.testing.assert_allclose(curve.yData, expected, atol=1e-4)  # the plot keeps float32
 
 
@@ -71,7 +71,7 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     assert len(loads) == 1 and window.banner.isHidden()
     session, bar = window.session, window.replay_bar
     data = load_session(recording)  # the export's and evaluate's session, computed apart
-    assert session.pipeline.filters == tuple(data.estimates) == ("ahf",)
+    assert session.view.filters == data.filters == ("ahf",)
     window.live_view.window_box.setCurrentText("whole session")
     qtbot.waitUntil(lambda: session.source.position_s > 0.5, timeout=5000)
 
@@ -80,9 +80,9 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     paused_at = session.source.position_s
     qtbot.wait(200)
     assert session.source.position_s == paused_at
-    shown = len(session.pipeline.imu)
+    shown = len(session.view.imu)
     bar.step_button.click()  # one more sample
-    assert len(session.pipeline.imu) == shown + 1 and session.source.position_s == data.time_s[shown]
+    assert len(session.view.imu) == shown + 1 and session.source.position_s == data.time_s[shown]
 
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(4.0))
     assert session.source.speed == 4.0
@@ -92,15 +92,15 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     check_plotted_up_to(window, qtbot, data, "ahf", 7.5)
     assert window.session is session and window.loading is None and len(loads) == 1
     assert session.source.paused and session.source.speed == 4.0  # kept across the seeks
-    shown = session.pipeline.imu.to_dict()
+    shown = session.view.imu.to_dict()
     for column, values in data.tables["imu"].items():  # every column, bit for bit, up to the clock
         np.testing.assert_array_equal(shown[column], values[data.time_s <= 7.5], err_msg=column)
     times = [e.get("session_time_s", e["t_s"]) for e in data.events]
-    assert [e["session_time_s"] for e in session.pipeline.events] == sorted(t for t in times if t <= 7.5)
+    assert [e["session_time_s"] for e in session.view.events] == sorted(t for t in times if t <= 7.5)
 
     bar.play_button.click()
     qtbot.waitUntil(lambda: session.source.position_s > 8.5, timeout=3000)  # 4x from 7.5 s
-    assert session.pipeline.link.stats.frames > 0 and window.link_panel.values["frames/s"].text() not in ("—", "")
+    assert session.view.counters()["frames"] > 0 and window.link_panel.values["frames/s"].text() not in ("—", "")
 
 
 @pytest.mark.parametrize("name", LOGS)
@@ -113,7 +113,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     session, bar = window.session, window.replay_bar
     filters = runnable(FILE_AIDING, live_estimators())
     assert "ukf" not in filters and "hfm" in filters  # a log is not counted on for GPS aiding
-    assert loads == [(filters, None)] and session.pipeline.filters == filters
+    assert loads == [(filters, None)] and session.view.filters == filters
     data = session.data
     assert len(data) > 100 and data.link is None
     assert not window.uplink_panel.isEnabled() and not window.estimator_panel.send_button.isEnabled()  # no uplink
@@ -130,27 +130,27 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     window.seek(middle / 3)  # back
     check_plotted_up_to(window, qtbot, data, AIDING_ESTIMATOR, middle / 3)
     last = np.flatnonzero(data.time_s <= middle / 3)[-1]  # the horizon shows the newest estimate shown
-    newest = f"{pitch_deg(data.estimates[AIDING_ESTIMATOR][last:last + 1])[0]:+7.1f}°"
+    newest = f"{pitch_deg(data.quaternion(AIDING_ESTIMATOR)[last:last + 1])[0]:+7.1f}°"
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=3000)
     assert len(loads) == 1  # seeking computed nothing
 
     window.estimator_panel.shown["cf1"].setChecked(True)  # a what-if: one more estimator
-    qtbot.waitUntil(lambda: window.loading is None and "cf1" in window.session.pipeline.filters, timeout=60000)
+    qtbot.waitUntil(lambda: window.loading is None and "cf1" in window.session.view.filters, timeout=60000)
     assert loads[-1][0] == (*filters, "cf1")
     session = window.session
     assert session.source.position_s == middle / 3 and session.source.paused  # the position kept
     window.live_view.set_visible("CF1", True)
     check_plotted_up_to(window, qtbot, session.data, "cf1", middle / 3)
     alone = load_session(path, ("cf1",))  # the same estimator computed by itself
-    np.testing.assert_array_equal(session.data.estimates["cf1"], alone.estimates["cf1"])
+    np.testing.assert_array_equal(session.data.quaternion("cf1"), alone.quaternion("cf1"))
 
 
 def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
     path = flightlog("arduplane_omnibusf4_ground_pilot_0004.bin")
     open_file(window, qtbot, path)
     session = window.session
-    assert session.pipeline.filters == () and session.data.onboard is not None
-    assert any("IMU" in e["message"] for e in session.pipeline.events if e["kind"] == "warning")  # said, at 0 s
+    assert session.view.filters == () and session.data.has_onboard()
+    assert any("IMU" in e["message"] for e in session.view.events if e["kind"] == "warning")  # said, at 0 s
     window.live_view.window_box.setCurrentText("whole session")
     window.replay_bar.play_button.click()
     window.seek(30.0)
@@ -211,7 +211,7 @@ def test_the_export_dialog_writes_the_estimators_a_flight_log_is_shown_with(wind
     qtbot.waitUntil(lambda: dialog.job.done, timeout=60000)
     assert dialog.job.error is None, dialog.job.error
     header = out.read_text().splitlines()[0].split(",")
-    for name in window.session.pipeline.filters:  # the window's estimators, not the CLI's default
+    for name in window.session.view.filters:  # the window's estimators, not the CLI's default
         assert f"{name}_pitch_deg" in header, name
 
 
@@ -241,7 +241,7 @@ def test_a_dataset_csv_plays_as_a_recording_does(window, qtbot, tmp_path):
     csv = tmp_path / "f.truth.csv.gz"  # the truth and sensor values in the dataset CSV layout
     open_file(window, qtbot, csv)
     data = window.session.data
-    assert window.banner.isHidden() and window.session.pipeline.filters[0] == AIDING_ESTIMATOR and data.true_q is not None
+    assert window.banner.isHidden() and window.session.view.filters[0] == AIDING_ESTIMATOR and data.true_q is not None
     window.live_view.window_box.setCurrentText("whole session")
     window.replay_bar.play_button.click()
     window.seek(6.0)

@@ -15,7 +15,7 @@ def test_magnetometer_and_barometer_appear_on_the_sensors_tab(window, qtbot, rec
     mag_x = next(c for s, c in view.sensors.curves if s.quantity == "mag_x_uT")
     pressure = next(c for s, c in view.sensors.curves if s.quantity == "baro_pressure_hPa")
     qtbot.waitUntil(lambda: mag_x.xData is not None and len(mag_x.xData) > 20 and pressure.xData is not None, timeout=5000)
-    mag, baro = window.session.pipeline.tables["mag_raw"], window.session.pipeline.tables["baro"]
+    mag, baro = window.session.view.tables["mag_raw"], window.session.view.tables["baro"]
     row = np.flatnonzero(mag.column("time_s") == mag_x.xData[-1])[0]
     assert mag_x.yData[-1] == np.float32(mag.column("mag_x_uT")[row])
     row = np.flatnonzero(baro.column("time_s") == pressure.xData[-1])[0]

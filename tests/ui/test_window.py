@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtWidgets
 
+from groundstation.session.load import load_session
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.ui.export_dialog import ExportDialog
+from groundstation.session.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 
 from tests.ui.helpers import open_file, play_to_the_end
@@ -20,7 +22,7 @@ from tests.ui.helpers import open_file, play_to_the_end
 
 def new_window(qtbot, tmp_path, recordings_dir):
     settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    window = MainWindow(settings, recordings_dir=recordings_dir)
+    window = MainWindow(settings, Sessions(), recordings_dir=recordings_dir)
     qtbot.addWidget(window)
     window.show()
     return window
@@ -97,12 +99,12 @@ def test_the_replay_ends_with_a_replay_button_that_plays_it_again(window, qtbot,
     bar = window.replay_bar
     play_to_the_end(window, qtbot)
     qtbot.waitUntil(lambda: bar.play_button.text() == "Replay", timeout=2000)
-    assert len(window.session.pipeline.imu) == len(window.session.data.tables["imu"]["time_s"])  # every row shown
+    assert len(window.session.view.imu) == len(window.session.data.tables["imu"]["time_s"])  # every row shown
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(1.0))
     bar.play_button.click()
     assert window.session.running and window.session.source.position_s == 0.0 and bar.play_button.text() == "Pause"
     qtbot.waitUntil(lambda: window.session.source.position_s > 0.2, timeout=3000)  # playing again
-    assert len(window.session.pipeline.imu) < 100
+    assert len(window.session.view.imu) < 100
 
 
 def test_a_click_on_the_slider_track_seeks_there(window, qtbot, recording):
@@ -115,7 +117,7 @@ def test_a_click_on_the_slider_track_seeks_there(window, qtbot, recording):
 
 
 def test_the_export_dialog_keeps_its_fields_when_the_result_appears(qtbot, recording):
-    dialog = ExportDialog(recording, 30.0)
+    dialog = ExportDialog(load_session, recording, 30.0)
     qtbot.addWidget(dialog)
     dialog.show()
     qtbot.waitExposed(dialog)
@@ -133,26 +135,25 @@ def test_fields_of_an_estimator_the_session_lacks_show_no_number(window, qtbot, 
 
 
 def test_an_estimator_added_to_a_replay_recomputes_it_with_the_settings_asked(window, qtbot, recording):
-    from groundstation.session.data import load_session
 
     open_file(window, qtbot, recording)
     panel = window.estimator_panel
-    assert "hf" in panel.shown and "hf" not in window.session.pipeline.filters
+    assert "hf" in panel.shown and "hf" not in window.session.view.filters
     window.replay_bar.play_button.click()  # paused: the what-if keeps the position
     window.seek(12.0)
     panel.shown["hf"].setChecked(True)  # add HF to the replay: the file is computed again with it
     assert window.loading_row.isVisible()
-    qtbot.waitUntil(lambda: window.loading is None and "hf" in window.session.pipeline.filters, timeout=20000)
+    qtbot.waitUntil(lambda: window.loading is None and "hf" in window.session.view.filters, timeout=20000)
     assert window.session.source.position_s == 12.0 and window.session.source.paused
     panel = window.estimator_panel
     assert panel.boxes["hf", "beta"].isEnabled()
     panel.boxes["hf", "beta"].setValue(0.2)
     panel.apply()  # the what-if: computed again with HF's beta forced
-    qtbot.waitUntil(lambda: window.loading is None and window.session.pipeline.settings()["hf"]["beta"] == 0.2,
+    qtbot.waitUntil(lambda: window.loading is None and window.session.view.settings()["hf"]["beta"] == 0.2,
                     timeout=20000)
     assert window.session.source.position_s == 12.0
     play_to_the_end(window, qtbot)
-    shown = window.session.pipeline.imu.to_dict()
+    shown = window.session.view.imu.to_dict()
     headless = load_session(recording, ("ahf", "hf"), {"hf": {"beta": 0.2}}).tables["imu"]  # the CLI's --set
     assert list(shown) == list(headless)
     for name, column in headless.items():

@@ -32,27 +32,13 @@ import math
 from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
-from groundstation.autopilot.streams import AUTOPILOTS, StreamRequester, slow_imu_note
+from groundstation.autopilot.streams import AUTOPILOTS, REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.session.catalogue import Catalogue, message_table
 from groundstation.session.table import Table
 
-REQUESTED_RATE_HZ = 50.0
 SLOW_WARNING_S = 5.0  # the requester's retry interval: one retry's chance before the warning
 KEPT_TABLES = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the project's tables a MAVLink session fills
 _NAN = math.nan
-# The mapped records' tables: name, label, and per record attribute its column's field and unit.
-RECORD_TABLES = {
-    rec.VehicleStatus: ("heartbeat", "HEARTBEAT: what the vehicle is and does",
-                        {"autopilot": ("autopilot", ""), "vehicle_type": ("vehicle_type", ""), "armed": ("armed", ""),
-                         "system_status": ("system_status", "")}),
-    rec.Battery: ("sys_status", "SYS_STATUS: battery and the autopilot's view of the link",
-                  {"voltage_v": ("voltage", "V"), "current_a": ("current", "A"), "remaining_pct": ("remaining", "%"),
-                   "drop_rate_comm_pct": ("drop_rate_comm", "%"), "errors_comm": ("errors_comm", "")}),
-    rec.LinkHealth: ("radio_status", "RADIO_STATUS: both radios' signal (SiK units)",
-                     {"rssi": ("rssi", ""), "remote_rssi": ("remote_rssi", ""), "noise": ("noise", ""),
-                      "remote_noise": ("remote_noise", ""), "rx_errors": ("rx_errors", ""), "fixed": ("fixed", ""),
-                      "tx_buffer_pct": ("tx_buffer", "%")}),
-}  # fmt: skip
 IMU_UNITS = {"acc_x": "g", "acc_y": "g", "acc_z": "g", "gyr_x": "rad/s", "gyr_y": "rad/s", "gyr_z": "rad/s"}
 
 
@@ -77,8 +63,9 @@ class MavlinkFrontEnd:
     def catalogue(catalogue: Catalogue) -> Catalogue:
         """The project's tables a MAVLink session fills, and the tables of the mapped records."""
         tables = {name: catalogue[name] for name in KEPT_TABLES}
-        for name, label, columns in RECORD_TABLES.values():
-            tables[name] = message_table(name, label, *_fields_units(columns))
+        for record_type in rec.RECORD_TABLES:
+            name, label, fields, units = rec.table_fields(record_type)
+            tables[name] = message_table(name, label, fields, units)
         return Catalogue(tables)
 
     def feed(self, t_host_ns: int, data: bytes) -> None:
@@ -183,8 +170,7 @@ class MavlinkFrontEnd:
             self.pipeline.events.append({"t_host_ns": t_host_ns, "kind": "vehicle_status", "mode": r.mode, "armed": r.armed})
 
     def _record_row(self, t_host_ns: int, r) -> None:
-        name, label, columns = RECORD_TABLES[type(r)]
-        self._table_row(name, label, *_fields_units(columns), tuple(float(getattr(r, a)) for a in columns))
+        self._table_row(*rec.table_fields(type(r)), tuple(float(getattr(r, a)) for a in rec.RECORD_TABLES[type(r)][2]))
 
     def _generic(self, t_host_ns: int, r: rec.GenericMessage) -> None:
         name = r.msg_type if self.vehicle in (None, r.system) else f"{r.msg_type}_{r.system}_{r.component}"
@@ -202,8 +188,3 @@ class MavlinkFrontEnd:
             table = Table(info.column_names)
             p.tables = {**p.tables, name: table}
         table.append((p._time_s, *values))
-
-
-def _fields_units(columns: dict) -> tuple[list, dict]:
-    fields = [field for field, _ in columns.values()]
-    return fields, {field: unit for field, unit in columns.values() if unit}

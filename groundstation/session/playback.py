@@ -5,8 +5,8 @@ Opening a file computes the whole session once, ``load_session`` (a recording, a
 rows up to a clock running at the chosen speed (0.25x-64x): pause, step and seek only move that
 clock, so seeking anywhere in an hour is immediate, and a what-if (other estimators or settings) is
 another ``load_session`` that keeps the position. The window reads a ``RevealSession`` as it reads a
-``LiveSession``: ``pipeline``'s tables (the rows up to the clock), events, link figures, config and
-estimator settings; its source cannot send. No Qt here.
+``LiveSession`` (``view.Session``): ``view``'s tables (the rows up to the clock), events, link
+figures, config and estimator settings; its source cannot send. No Qt here.
 """
 
 from __future__ import annotations
@@ -15,32 +15,15 @@ import bisect
 import threading
 import time
 from pathlib import Path
-from types import SimpleNamespace
 
 import numpy as np
 
-from groundstation import formats
-from groundstation.errors import UserError
-from groundstation.estimation import runnable
-from groundstation.session.catalogue import Catalogue
-from groundstation.session.data import LinkSummary, SessionData, load_session
 from groundstation.session.link import LATENCY_WINDOW, PER_SECOND_COLUMNS, clock_figures
+from groundstation.session.product import LinkSummary, SessionData
 from groundstation.sources.replay import check_speed
 
-ONBOARD_COLUMNS = ("time_s", "qw", "qx", "qy", "qz", "lambda")  # what the window plots of the aircraft's estimate
-SENSOR_COLUMNS = tuple(f"{s}_{a}_{u}" for s, u in (("acc", "g"), ("gyr", "rad_s")) for a in "xyz")
 TOTALS = ("frames", "crc_errors", "frames_lost", "bytes_skipped")  # the decoder's counters a replay shows
 PLAY_INTERVAL_S = 0.02  # how often a session started on its own (the CLI's) moves its clock
-
-
-def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:
-    """The estimators a file opens with: a recording's own (None); for files that record none (flight
-    logs, dataset CSVs) those of the app's set whose needs such a file meets (``formats.FILE_AIDING``, as
-    ``evaluate`` chooses): one check box adds the others."""
-    file_format = formats.sniff(path)
-    if file_format is not None and not file_format.replayable:
-        return runnable(formats.FILE_AIDING, app_filters)
-    return None
 
 
 def rows_of(columns: list[np.ndarray]) -> np.ndarray | None:
@@ -121,14 +104,14 @@ class RevealedLink:
         self._sums = {c: np.cumsum(summary.per_second[c]) for c in TOTALS}
         self._totals = summary.counters
         self._frames = frames  # the tables whose newest row is the newest frame
-        self.stats = SimpleNamespace(**{c: 0 for c in TOTALS})
+        self.totals = dict.fromkeys(TOTALS, 0)
         self.last_chunk_ns: int | None = None
         self.last_frame_ns: int | None = None
 
     def reveal(self, t_s: float, ended: bool) -> None:
         shown = len(self.per_second)
         for name in TOTALS:
-            setattr(self.stats, name, int(self._totals[name] if ended else self._sums[name][shown - 1] if shown else 0))
+            self.totals[name] = int(self._totals[name] if ended else self._sums[name][shown - 1] if shown else 0)
         self.last_chunk_ns = int(t_s * 1e9)
         newest = [t.tail(1)[0, 0] for t in self._frames if len(t)]  # time_s comes first in every table
         self.last_frame_ns = int(max(newest) * 1e9) if newest else None
@@ -150,29 +133,19 @@ class RevealedLink:
 
 
 class Revealed:
-    """What the window reads of a ``Pipeline``, from a computed session up to the clock. ``link`` and
-    ``decoder`` are None for a file with no link in it (a flight log, a dataset)."""
+    """What the window reads of a session (``view.ProductView``), from a computed session up to the
+    clock. ``link`` is None for a file with no link in it (a flight log, a dataset)."""
 
     def __init__(self, data: SessionData):
-        self.filters = tuple(data.estimates)
-        self.catalogue = data.catalogue if data.catalogue is not None else Catalogue({})  # no table of its own
+        self.filters = data.filters
+        self.catalogue = data.catalogue
         self.config = data.config
         self.t0_host_ns = None  # every event carries its session time
-        # What the link spoke: a recording says; a flight log is an autopilot's
-        self.protocol = data.metadata.get("protocol", "mavlink" if "autopilot" in data.metadata else "gs")
+        self.protocol = data.protocol
         self._settings = data.settings_at_end
-        tables = {name: RevealedTable(columns) for name, columns in data.tables.items()}
-        nan = np.full(len(data.time_s), np.nan)
-        if "imu" not in tables:  # the aircraft's estimate only: its rows give the plots their time
-            tables["imu"] = RevealedTable({"time_s": data.time_s, **dict.fromkeys(SENSOR_COLUMNS, nan)})
-        if "onboard" not in tables:  # a flight log's or a dataset's: on the IMU rows
-            q = data.onboard if data.onboard is not None else np.full((len(data.time_s), 4), np.nan)
-            tables["onboard"] = RevealedTable({"time_s": data.time_s, **{f"q{c}": q[:, i] for i, c in enumerate("wxyz")},
-                                               "lambda": nan})
-        self.tables = tables
+        self.tables = tables = {name: RevealedTable(columns) for name, columns in data.tables.items()}
         self.imu, self.onboard = tables["imu"], tables["onboard"]
         self.link = RevealedLink(data.link, self.imu, [self.imu, self.onboard]) if data.link is not None else None
-        self.decoder = SimpleNamespace(stats=self.link.stats) if self.link is not None else None
         notes = [*data.damage, *(data.metadata[k] for k in ("imu_warning", "notes") if data.metadata.get(k))]
         timed = [{**{k: v for k, v in e.items() if k != "t_s"}, "session_time_s": float(e.get("session_time_s", e["t_s"]))}
                  for e in data.events]
@@ -192,6 +165,10 @@ class Revealed:
         if self.link is not None:
             self.link.per_second.reveal(t_s)
             self.link.reveal(t_s, t_s >= self.end_s)
+
+    def counters(self) -> dict[str, int]:
+        """The decoder's totals up to the clock (none for a file with no link in it)."""
+        return dict(self.link.totals) if self.link is not None else {}
 
     def settings(self) -> dict[str, dict[str, float]]:
         """The estimators' settings as computed (after any recorded change)."""
@@ -269,15 +246,17 @@ class Playback:
 
 class RevealSession:
     """``data`` (computed from ``path`` with ``setup``: the estimators and forced settings asked, None
-    for the file's own) played back. The window calls ``advance`` on its timer; ``seek`` says whether
-    the clock went back, so that views which only ever add rows start over."""
+    for the file's own) played back (``view.Session``). The window calls ``advance`` on its timer;
+    ``seek`` says whether the clock went back, so that views which only ever add rows start over."""
+
+    seekable = True
 
     def __init__(self, data: SessionData, path, setup: tuple = (None, None), *, speed: float = 1.0,
                  paused: bool = False, position_s: float = 0.0):
         self.data = data
         self.setup = setup
-        self.pipeline = Revealed(data)
-        self.source = Playback(path, self.pipeline.end_s, speed, paused, position_s)
+        self.view = Revealed(data)
+        self.source = Playback(path, self.view.end_s, speed, paused, position_s)
         self.lock = threading.Lock()  # the window's readers take it, as they do a live session's
         self.connected = True
         self.error: str | None = None
@@ -317,11 +296,24 @@ class RevealSession:
 
     def _reveal(self) -> None:
         with self.lock:
-            self.pipeline.reveal(self.source.position_s)
+            self.view.reveal(self.source.position_s)
 
     def advance(self) -> None:
         self.source.advance()
         self._reveal()
+
+    @staticmethod
+    def held_config() -> None:
+        """Nothing: a file's CONFIGs were answered when it was computed (the answer recorded live, or
+        ``--accept-config-changes``)."""
+        return None
+
+    def resolve_config(self, accept: bool) -> None:
+        """Nothing is held in a file."""
+
+    def file(self) -> tuple[Path, float]:
+        """The file played and its length (s)."""
+        return self.source.path, self.source.duration_s
 
     def seek(self, t_s: float) -> bool:
         """Move the clock to ``t_s``: immediate, nothing is recomputed. True when it moved back."""
@@ -332,53 +324,7 @@ class RevealSession:
 
     def step(self) -> None:
         """One more IMU sample (the clock to the next sample's time)."""
-        imu = self.pipeline.imu
+        imu = self.view.imu
         if len(imu) < len(imu.reveal_times):
             self.source.move_to(float(imu.reveal_times[len(imu)]))
             self._reveal()
-
-
-class Loading:
-    """``load_session(path, filters, forced)`` in a worker thread. The window polls ``fraction`` and
-    ``done``; then ``data`` is the computed session, or ``error`` says, for the user, why there is none.
-    ``cancel`` stops it at its next progress report (its result is dropped in any case)."""
-
-    def __init__(self, path, filters=None, forced=None):
-        self.path = Path(path)
-        self.setup = (filters, forced)
-        self.fraction = 0.0
-        self.done = False
-        self.data: SessionData | None = None
-        self.error: str | None = None
-        self._cancel = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="groundstation-load", daemon=True)
-        self._thread.start()
-
-    def _progress(self, done: int, total: int) -> None:
-        if self._cancel.is_set():
-            raise _Cancelled
-        self.fraction = done / total if total else 0.0
-
-    def _run(self) -> None:
-        try:
-            self.data = load_session(self.path, *self.setup, progress=self._progress)
-            self.fraction = 1.0
-        except _Cancelled:
-            self.error = "cancelled"
-        except UserError as error:
-            self.error = str(error)
-        except OSError as error:
-            self.error = f"{self.path}: cannot be read ({error.strerror or error})"
-        except Exception as error:  # noqa: BLE001 — a reader's bug must reach the window as a message, not a traceback
-            self.error = f"{self.path}: cannot be opened ({type(error).__name__}: {error})"
-        self.done = True
-
-    def cancel(self) -> None:
-        self._cancel.set()
-
-    def wait(self, timeout_s: float | None = None) -> None:
-        self._thread.join(timeout_s)
-
-
-class _Cancelled(Exception):
-    """Raised from the progress callback to stop a load nobody waits for any more."""

@@ -1,0 +1,179 @@
+"""Opening a file whole: a recording of the link, an imported dataset CSV (a recording holding sample
+columns), a dataset CSV read directly, or a flight log, each computed into a ``SessionData``
+(``session.product``) by the maker that fits it; ``Loading`` does it in a worker thread.
+
+Exports and evaluation read ``SessionData``; they never know the source.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from groundstation import formats, mounting, quaternion
+from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
+from groundstation.errors import UserError
+from groundstation.estimation import create, runnable
+from groundstation.estimation.evaluation import run_on_trial
+from groundstation.recording import Recording
+from groundstation.session.batch import BatchSession, batch_replay
+from groundstation.session.catalogue import Catalogue, session_catalogue
+from groundstation.session.clock import DISCONTINUITIES
+from groundstation.session.pipeline import Pipeline
+from groundstation.session.product import ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns
+from groundstation.session.replay import replay
+from groundstation.units import STANDARD_GRAVITY_M_S2
+
+
+def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
+    """Decode, import or read ``path`` by its format (``formats``) and run the estimators; UserError with a
+    clear message on bad input. A file of no known format is tried as a recording, whose reader says
+    what the file looks like instead. ``accept_config_changes``: a recording's CONFIG that changes the
+    scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``)."""
+    file_format = formats.sniff(path) or formats.FORMATS["recording"]
+    if not accept_config_changes:
+        return file_format.loader()(Path(path), filters, forced, progress)
+    if file_format.name != "recording":
+        raise UserError(f"{path}: a {file_format.description} has no CONFIG frames whose changes could be accepted")
+    return file_format.loader()(Path(path), filters, forced, progress, accept_config_changes=True)
+
+
+def computed(recording: Recording, filters=None, forced=None, progress=None,
+             accept_config_changes: bool = False) -> Pipeline | BatchSession:
+    """A recording's session computed whole: the project's frames on the batch path (the same tables as
+    a replay, tests/session/test_batch.py); an autopilot's MAVLink through the incremental pipeline
+    (its front-end turns messages into stage calls one by one; it has no batch form)."""
+    if recording.metadata.get("protocol", "gs") == "gs":
+        return batch_replay(recording, filters, forced, progress, accept_config_changes)
+    return replay(recording, filters, forced, progress, accept_config_changes)
+
+
+def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
+    try:
+        return trial_from_columns(samples, f"{path} (imported samples)")
+    except DatasetError as error:
+        raise UserError(str(error)) from None
+
+
+def from_trial(trial: Trial, filters, settings_used, metadata: dict, origin_s: float | None = None) -> SessionData:
+    """A dataset trial, run exactly as ``evaluate_trial`` runs it (the same numbers). Session time counts
+    from ``origin_s``, the trial's first time (default: its first row's; an imported recording says it,
+    so rows after a lost first block keep their own times)."""
+    try:
+        runs = run_on_trial(trial, filters, settings_used)
+    except ValueError as error:
+        raise UserError(str(error)) from None
+    time_s = trial.time_s - (trial.time_s[0] if origin_s is None else origin_s)
+    tables = session_catalogue({name: tuple(diag) for name, (_, diag) in runs.items()})
+    catalogue = Catalogue({"imu": tables["imu"], ONBOARD: tables[ONBOARD]})  # a dataset has no onboard estimate: no rows
+    imu = {"time_s": time_s, **{f"acc_{a}_g": trial.acc_m_s2[:, i] / STANDARD_GRAVITY_M_S2 for i, a in enumerate("xyz")},
+           **{f"gyr_{a}_rad_s": trial.gyr_rad_s[:, i] for i, a in enumerate("xyz")}}
+    for name, (q, diagnostics) in runs.items():
+        imu.update(estimate_columns(name, q, diagnostics))
+    settings = {name: dataclasses.asdict(create(name, (settings_used or {}).get(name, {})).settings) for name in runs}
+    return build_product(metadata, catalogue, {"imu": imu}, runs, true_q=trial.true_q, true_frame="ENU",
+                         moving=trial.moving, magnetometer=trial.mag_uT is not None, settings_at_start=settings,
+                         settings_at_end=settings)
+
+
+def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> SessionData:
+    """A decoded session's product: what the pipeline (or the batch path) computed, as it computed it."""
+    t0_ns = pipeline.t0_host_ns or 0
+    data = build_product(
+        recording.metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
+        pipeline.filters, protocol=recording.metadata.get("protocol", "gs"),
+        link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
+        events=[{**event, "t_s": (event["t_host_ns"] - t0_ns) / 1e9} for event in pipeline.events],
+        settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=list(recording.damage),
+        magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
+    )
+    if "true_qw" in recording.samples:
+        device_us = data.tables[data.sample_table]["device_time_us"]
+        attach_sensor_truth(data, recording.samples, device_us, pipeline)
+    return data
+
+
+def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], device_us: np.ndarray, pipeline: Pipeline) -> None:
+    """Truth stored with a simulated recording (sensor axes -> ENU) onto the body axes, sample by sample.
+
+    The simulator says what the board's clock read at each truth row and how many resets and clock
+    jumps came before (``board_clock_us``, ``board_epoch``: sim/truth_file.py); the session counts the
+    same in its ``device_reset`` and ``clock_jump`` events, so each sample finds its own instant's
+    truth across every restart. A recording without those columns (older) has the board's clock in
+    ``time_s`` up to the first restart: the later samples get no truth rather than another instant's.
+    """
+    wrap = float(1 << 32)
+    if "board_epoch" in samples:
+        truth_key = samples["board_epoch"] * wrap + samples["board_clock_us"]
+    else:
+        truth_key = np.rint(samples["time_s"] * 1e6)
+    restarts = [e["session_time_s"] for e in pipeline.events if e["kind"] in DISCONTINUITIES]
+    sample_key = np.searchsorted(restarts, data.time_s, side="right") * wrap + np.mod(device_us, wrap)
+    order = np.argsort(truth_key, kind="stable")
+    truth_key = truth_key[order]
+    q_sensor = aligned(sample_key, truth_key, np.column_stack([samples[c] for c in TRUE_Q])[order])
+    q_body_from_sensor = quaternion.from_matrix(mounting.matrix(pipeline.sensor.mounting))
+    data.true_q = quaternion.multiply(q_sensor, quaternion.conjugate(q_body_from_sensor))
+    data.true_frame = "ENU"
+    if "moving" in samples:
+        data.moving = aligned(sample_key, truth_key, samples["moving"][order][:, None])[:, 0] == 1.0
+
+
+
+def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:
+    """The estimators a file opens with: a recording's own (None); for files that record none (flight
+    logs, dataset CSVs) those of the app's set whose needs such a file meets (``formats.FILE_AIDING``, as
+    ``evaluate`` chooses): one check box adds the others."""
+    file_format = formats.sniff(path)
+    if file_format is not None and not file_format.replayable:
+        return runnable(formats.FILE_AIDING, app_filters)
+    return None
+
+
+class Loading:
+    """``load_session(path, filters, forced)`` in a worker thread. The window polls ``fraction`` and
+    ``done``; then ``data`` is the computed session, or ``error`` says, for the user, why there is none.
+    ``cancel`` stops it at its next progress report (its result is dropped in any case)."""
+
+    def __init__(self, path, filters=None, forced=None):
+        self.path = Path(path)
+        self.setup = (filters, forced)
+        self.fraction = 0.0
+        self.done = False
+        self.data: SessionData | None = None
+        self.error: str | None = None
+        self._cancel = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="groundstation-load", daemon=True)
+        self._thread.start()
+
+    def _progress(self, done: int, total: int) -> None:
+        if self._cancel.is_set():
+            raise _Cancelled
+        self.fraction = done / total if total else 0.0
+
+    def _run(self) -> None:
+        try:
+            self.data = load_session(self.path, *self.setup, progress=self._progress)
+            self.fraction = 1.0
+        except _Cancelled:
+            self.error = "cancelled"
+        except UserError as error:
+            self.error = str(error)
+        except OSError as error:
+            self.error = f"{self.path}: cannot be read ({error.strerror or error})"
+        except Exception as error:  # noqa: BLE001 — a reader's bug must reach the window as a message, not a traceback
+            self.error = f"{self.path}: cannot be opened ({type(error).__name__}: {error})"
+        self.done = True
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    def wait(self, timeout_s: float | None = None) -> None:
+        self._thread.join(timeout_s)
+
+
+class _Cancelled(Exception):
+    """Raised from the progress callback to stop a load nobody waits for any more."""

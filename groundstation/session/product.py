@@ -1,0 +1,143 @@
+"""The product of a session, whatever made it: the live pipeline, the batch path, a flight-log reader
+or the dataset reader. One shape, filled by one builder (``build_product``):
+
+- ``tables``: every table as columns, exactly as ``catalogue`` describes them (``imu`` with every
+  estimator's quaternion and diagnostics, ``onboard``, one per frame or message type, ``position``);
+- ``events``, ``link`` (the decoder's counters), ``config``, the estimators' settings at start and end;
+- ``protocol``: what the link spoke ("gs", "mavlink"; None for a dataset), ``metadata``, ``damage``;
+- the truth an evaluation scores against, on the sample rows, where the session has one.
+
+Readers (exports, evaluation, the window) read the tables; what they show beyond them (angles in
+degrees) is derived by one function each (``quaternion.euler_deg``). No pipeline here: this module
+is the layer the readers and the makers share.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from groundstation.errors import UserError
+from groundstation.estimation.evaluation import scores, uses_magnetometer
+from groundstation.session.catalogue import Catalogue
+
+ONBOARD = "onboard"  # the aircraft's own estimate: a table, and an attitude scored beside the host estimators
+
+
+@dataclasses.dataclass(frozen=True)
+class LinkSummary:
+    """How the link did: the decoder's counters over the whole session, and per second of host time."""
+
+    counters: dict[str, int]  # firmware_protocol.DecoderStats fields
+    per_second: dict[str, np.ndarray]  # session.link.PER_SECOND_COLUMNS, each (seconds,)
+
+
+@dataclasses.dataclass
+class SessionData:
+    metadata: dict
+    tables: dict[str, dict[str, np.ndarray]]  # name -> column -> (rows,), as ``catalogue`` describes them
+    catalogue: Catalogue
+    filters: tuple[str, ...]  # the host estimators: their columns are in ``imu``
+    protocol: str | None = None  # what the link spoke; None: no link (a dataset)
+    magnetometer: bool = False  # the estimators had magnetometer readings (so heading is scored)
+    link: LinkSummary | None = None  # None: not decoded from a link (a dataset, a flight log)
+    config: dict | None = None  # the aircraft's last CONFIG frame
+    events: list[dict] = dataclasses.field(default_factory=list)  # each with ``t_s``: seconds from the first byte
+    settings_at_start: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)
+    settings_at_end: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)
+    damage: list[str] = dataclasses.field(default_factory=list)  # what the recording lost
+    true_q: np.ndarray | None = None  # (N, 4) on the sample rows: truth rotating body vectors into true_frame
+    true_frame: str = "ENU"
+    moving: np.ndarray | None = None  # (N,) bool on the sample rows: the samples an evaluation scores
+
+    @property
+    def sample_table(self) -> str:
+        """The table whose rows are the session's samples: ``imu``, or ``onboard`` for a flight that sent
+        its attitude but no IMU samples ("estimated" mode)."""
+        return "imu" if len(self.tables["imu"]["time_s"]) or ONBOARD not in self.tables else ONBOARD
+
+    @property
+    def time_s(self) -> np.ndarray:
+        """(N,) session time of the samples in seconds (docs/time.md); monotonic."""
+        return self.tables[self.sample_table]["time_s"]
+
+    def __len__(self) -> int:
+        return len(self.time_s)
+
+    @property
+    def warnings(self) -> list[str]:
+        """What every command says besides its result: what the recording lost, then the session's warnings."""
+        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") in ("warning", "config_conflict"))]
+
+    def quaternion(self, name: str) -> np.ndarray:
+        """(N, 4) w-first, body -> NED, on the sample rows: a host estimator's, or ``onboard`` (its rows
+        at the same session time; NaN on the others: device time repeats after a reboot)."""
+        if name != ONBOARD:
+            imu = self.tables["imu"]
+            return np.column_stack([imu[f"{name}_q{c}"] for c in "wxyz"])
+        board = self.tables[ONBOARD]
+        return aligned(self.time_s, board["time_s"], np.column_stack([board[f"q{c}"] for c in "wxyz"]))
+
+    @property
+    def estimated(self) -> tuple[str, ...]:
+        """The host estimators that ran: ``filters``, none for a session without IMU samples."""
+        return self.filters if self.sample_table == "imu" else ()
+
+    def has_onboard(self) -> bool:
+        return ONBOARD in self.tables and bool(np.isfinite(self.tables[ONBOARD]["qw"]).any())
+
+    def attitudes(self) -> dict[str, np.ndarray]:
+        """Every estimate on the sample rows: the host estimators, then the aircraft's own when it sent one."""
+        out = {name: self.quaternion(name) for name in self.estimated}
+        if self.has_onboard():
+            out[ONBOARD] = self.quaternion(ONBOARD)
+        return out
+
+    def evaluate(self) -> dict[str, dict[str, float]]:
+        """Inclination RMSE / max of every estimate against the truth (BROAD's metric), and heading RMSE /
+        max of those that use the magnetometer when the session has one (``evaluation``)."""
+        if self.true_q is None:
+            raise UserError("this session has no truth to evaluate against (true_qw ... true_qz)")
+        mask = self.moving if self.moving is not None else np.ones(len(self), dtype=bool)
+        try:
+            return {n: scores(q, self.true_q, mask, self.true_frame, self.magnetometer and uses_magnetometer(n))
+                    for n, q in self.attitudes().items()}
+        except ValueError as error:
+            raise UserError(str(error)) from None
+
+
+def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[str, np.ndarray]], filters,
+                  **rest) -> SessionData:
+    """The one way a ``SessionData`` is made: every table the catalogue names, with exactly its columns
+    in its order (NaN for a column the maker has no values for; an empty table for one it never
+    filled); ``rest``: the other fields. ValueError for a table the catalogue does not describe or
+    columns of different lengths (a maker's bug, not bad input)."""
+    unknown = sorted(set(tables) - set(catalogue.tables))
+    if unknown:
+        raise ValueError(f"tables {unknown} are not in the catalogue")
+    filled = {}
+    for info in catalogue:
+        columns = tables.get(info.name, {})
+        rows = len(columns["time_s"]) if "time_s" in columns else 0
+        nan = np.full(rows, np.nan)
+        filled[info.name] = {c: np.asarray(columns.get(c, nan), dtype=float) for c in info.column_names}
+        lengths = {len(v) for v in filled[info.name].values()}
+        if len(lengths) > 1:
+            raise ValueError(f"table {info.name}: columns of different lengths {sorted(lengths)}")
+    return SessionData(metadata=dict(metadata), tables=filled, catalogue=catalogue, filters=tuple(filters), **rest)
+
+
+def estimate_columns(name: str, q: np.ndarray, diagnostics: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """An estimator's run as its ``imu`` columns (``catalogue.estimator_columns``)."""
+    return {**{f"{name}_q{c}": q[:, i] for i, c in enumerate("wxyz")}, **{f"{name}_{d}": v for d, v in diagnostics.items()}}
+
+
+def aligned(times: np.ndarray, other_times: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``values`` (rows at ``other_times``, sorted) at the rows of ``times``; NaN where no row has that time."""
+    out = np.full((len(times), values.shape[1]), np.nan)
+    index = np.searchsorted(other_times, times)
+    index = np.clip(index, 0, max(len(other_times) - 1, 0))
+    hit = other_times[index] == times if len(other_times) else np.zeros(len(times), dtype=bool)
+    out[hit] = values[index[hit]]
+    return out
