@@ -313,10 +313,13 @@ class Pipeline:
     the position use (default ``estimation.aiding_estimator``); ``settings`` maps a name to
     setting overrides (the recorded settings); ``forced`` to overrides that win over everything,
     including settings changed later in the session (the what-if ``--set`` of replay and export).
+    ``vehicle_system``: on a MAVLink link, the system id the user picked as the vehicle (else the first
+    autopilot heard).
     """
 
     def __init__(self, filters=DEFAULT_FILTERS, settings=None, forced=None, assumed_sensor: SensorConfig | None = None,
-                 spec: Spec = SPEC, protocol: str = "gs", aiding: str | None = None, accept_config_changes: bool = False):
+                 spec: Spec = SPEC, protocol: str = "gs", aiding: str | None = None, vehicle_system: int | None = None,
+                 accept_config_changes: bool = False):
         if protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {protocol!r} (known: {', '.join(PROTOCOLS)})")
         self.protocol = protocol
@@ -325,7 +328,7 @@ class Pipeline:
         self.assumed_sensor = assumed_sensor or SensorConfig()
         self.clock = SessionClock()
         self.link = LinkStats()
-        self.front = GsFrontEnd(self, spec) if protocol == "gs" else MavlinkFrontEnd(self)
+        self.front = GsFrontEnd(self, spec) if protocol == "gs" else MavlinkFrontEnd(self, vehicle_system=vehicle_system)
         self.decoder = self.front.decoder  # ``decoder.stats``: the link's counters (firmware_protocol.DecoderStats)
         self.catalogue = self.front.catalogue(session_catalogue(self.bank.diagnostics(), spec))
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}

@@ -6,6 +6,7 @@ import dataclasses
 import math
 from collections.abc import Callable
 
+from groundstation.autopilot.vehicle import MAX_SYSTEM, MIN_SYSTEM
 from groundstation.errors import UserError
 from groundstation.estimation import ESTIMATORS, setting_names
 from groundstation.recording import Recording
@@ -79,6 +80,7 @@ class RecordedSetup:
     forced: dict | None
     protocol: str
     warnings: list[dict]  # events to start the session's events with
+    vehicle_system: int | None = None  # MAVLink: the system id the user picked as the vehicle
 
 
 def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedSetup:
@@ -98,8 +100,13 @@ def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedS
         warnings.append({"t_host_ns": 0, "kind": "warning", "message": "recorded settings this version's "
                          f"estimators do not have or cannot read, left out (their defaults apply): {', '.join(left_out)}"})
     aiding = recording.metadata.get("aiding_estimator")
+    vehicle_system = recording.metadata.get("vehicle_system")
+    if vehicle_system is not None and not (type(vehicle_system) is int and MIN_SYSTEM <= vehicle_system <= MAX_SYSTEM):
+        warnings.append({"t_host_ns": 0, "kind": "warning", "message": f"recorded vehicle_system {vehicle_system!r} is no "
+                         "MAVLink system id; the first autopilot heard is the vehicle"})
+        vehicle_system = None
     return RecordedSetup(tuple(filters), aiding if aiding in filters else None, recorded_settings(recording), forced,
-                         protocol, warnings)
+                         protocol, warnings, vehicle_system)
 
 
 def pipeline_for(recording: Recording, filters=None, forced=None, accept_config_changes: bool = False) -> Pipeline:
@@ -107,7 +114,7 @@ def pipeline_for(recording: Recording, filters=None, forced=None, accept_config_
     ``accept_config_changes``: a CONFIG that changes the scales without a device restart applies (else held)."""
     setup = recorded_setup(recording, filters, forced)
     pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol, aiding=setup.aiding,
-                        accept_config_changes=accept_config_changes)
+                        vehicle_system=setup.vehicle_system, accept_config_changes=accept_config_changes)
     pipeline.events += setup.warnings
     return pipeline
 
