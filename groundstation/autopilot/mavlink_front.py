@@ -12,13 +12,21 @@ axes (FRD). They go where the project's own frames go:
 - ``VehicleStatus`` / ``Battery`` / ``LinkHealth`` -> ``heartbeat`` / ``sys_status`` / ``radio_status``
   (the mode and arming are events when they change);
 - ``GenericMessage`` -> one table per message type, added to the catalogue when the first one
-  arrives (a message from another system than the vehicle: ``<type>_<system>_<component>``).
+  arrives (a message from another sender than the vehicle: ``<type>_<system>_<component>``).
+
+The vehicle (``autopilot/vehicle.py``): the system the user picked (``mavlink:...?system=N``) or the
+first autopilot heard, one (system, component); it alone feeds the estimators, the vehicle's tables,
+arm and mode events and the lost count (its sequence numbers: a spoofer's cannot inflate it), and it
+alone gets stream requests. Every other system id is an ``other_vehicle`` event, once. Tables of other
+senders stop at ``OTHER_TABLES_MAX`` tables or ``OTHER_COLUMNS_MAX`` columns (a warning once; their
+later messages counted in ``unplaced_messages``): 5,000 fake senders would otherwise make 5,000 tables,
+past what a workbook can hold. The vehicle's own are bounded by the dialect (301 message types, 7,628
+numeric columns), so a session stays within Excel's 16,384 columns.
 
 Time: the vehicle's timestamps (µs since boot) of IMU, attitude, magnetometer and barometer go through
 the session's ``SessionClock``, so an autopilot reboot is a ``device_reset`` as for the project's
 aircraft. GPS and generic messages take the current session time: their ``time_usec`` is often GPS or
-UNIX time, not time since boot. The vehicle is the first system whose HEARTBEAT says ArduPilot or
-PX4 (or, before any, the first to send an IMU sample or attitude).
+UNIX time, not time since boot.
 
 Uplink: ``StreamRequester``'s stream-rate requests only (``take_uplink``); when the IMU is still
 slower than host filtering needs ``SLOW_WARNING_S`` after the first request, a warning event
@@ -32,24 +40,30 @@ import math
 from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
-from groundstation.autopilot.streams import AUTOPILOTS, REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
+from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
+from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.catalogue import Catalogue, message_table
 from groundstation.session.table import Table
 
 SLOW_WARNING_S = 5.0  # the requester's retry interval: one retry's chance before the warning
+OTHER_TABLES_MAX = 256  # tables of senders other than the vehicle
+OTHER_COLUMNS_MAX = 4096  # and their columns: with the vehicle's 7,628 at most, well inside Excel's 16,384
 KEPT_TABLES = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the project's tables a MAVLink session fills
 _NAN = math.nan
 IMU_UNITS = {"acc_x": "g", "acc_y": "g", "acc_z": "g", "gyr_x": "rad/s", "gyr_y": "rad/s", "gyr_z": "rad/s"}
 
 
 class MavlinkFrontEnd:
-    def __init__(self, pipeline, rate_hz: float = REQUESTED_RATE_HZ):
+    def __init__(self, pipeline, rate_hz: float = REQUESTED_RATE_HZ, vehicle_system: int | None = None):
         self.pipeline = pipeline
         self.mavlink = MavlinkDecoder()
         self.decoder = self  # the pipeline's ``decoder``: ``stats`` in the project's counters
         self.stats = DecoderStats()
-        self.requester = StreamRequester(rate_hz)
-        self.vehicle: int | None = None  # MAVLink system id of the autopilot
+        self.vehicle = Vehicle(vehicle_system)
+        self.requester = StreamRequester(rate_hz, vehicle=self.vehicle)
+        self.other_tables: set[str] = set()  # tables made for senders other than the vehicle
+        self.other_columns = 0
+        self.unplaced_messages = 0  # of other senders, past the bound on their tables
         self._imu_source: str | None = None
         self._uplink = b""
         self._first_request_ns: int | None = None
@@ -74,6 +88,8 @@ class MavlinkFrontEnd:
         self.pipeline.link.on_chunk(t_host_ns, self.stats, len(records))
         for record in records:
             self._route[type(record)](t_host_ns, record)
+            if self.vehicle.newly_other(record):
+                self.pipeline.events.append(other_vehicle_event(t_host_ns, record, self.vehicle))
         uplink = self.requester.update(records, t_host_ns)
         if uplink:
             self._uplink += uplink
@@ -96,13 +112,13 @@ class MavlinkFrontEnd:
         s.bytes_in, s.frames, s.bytes_skipped = m.bytes_in, m.messages, m.bad_bytes
         s.crc_errors = m.bad_runs  # runs of bytes that were no valid message: CRC failures and junk
         s.frame_bytes = m.bytes_in - m.bad_bytes
-        s.frames_lost = sum(c.lost for c in self.mavlink.senders.values())
+        counts = self.mavlink.senders.get(self.vehicle.sender)
+        s.frames_lost = counts.lost if counts is not None else 0  # the vehicle's: other senders' are not its losses
 
     def _check_rate(self, t_host_ns: int) -> None:
-        monitor = self.requester.monitors.get(self.vehicle)
-        if monitor is None or self._first_request_ns is None:
+        if self._first_request_ns is None:
             return
-        note = slow_imu_note(monitor.rate_hz)
+        note = slow_imu_note(self.requester.monitor.rate_hz)
         if note is None:
             self._slow_warned = False
         elif not self._slow_warned and t_host_ns - self._first_request_ns >= SLOW_WARNING_S * 1e9:
@@ -111,20 +127,21 @@ class MavlinkFrontEnd:
 
     # -- records ----------------------------------------------------------------------------------
 
-    def _from_vehicle(self, record, may_choose: bool = False) -> bool:
-        """Whether ``record`` comes from the vehicle (an IMU sample or attitude chooses it if no HEARTBEAT did)."""
-        if self.vehicle is None and may_choose:
-            self.vehicle = record.system
-        return record.system == self.vehicle
+    def _from_vehicle(self, record) -> bool:
+        """Whether ``record`` comes from the vehicle (which it may choose: ``Vehicle.choose``)."""
+        self.vehicle.choose(record)
+        return self.vehicle.sent(record)
 
     def _place(self, t_host_ns: int, record) -> None:
         if record.time_us is not None:
             self.pipeline.place(t_host_ns, record.time_us)
 
     def _imu(self, t_host_ns: int, r: rec.ImuSample) -> None:
-        if not self._from_vehicle(r, may_choose=True) or self._imu_source not in (None, r.source):
-            label = f"{r.source} of system {r.system} (not the IMU the estimators use)"
-            self._table_row(f"{r.source}_{r.system}".lower(), label, list(IMU_UNITS), IMU_UNITS, (*r.acc_g, *r.gyr_rad_s))
+        vehicle = self._from_vehicle(r)
+        if not vehicle or self._imu_source not in (None, r.source):  # the vehicle's second IMU: <source>_<system>
+            label = f"{r.source} of system {r.system}, component {r.component} (not the IMU the estimators use)"
+            name = f"{r.source}_{r.system}" + ("" if vehicle else f"_{r.component}")
+            self._table_row(t_host_ns, name.lower(), label, list(IMU_UNITS), IMU_UNITS, (*r.acc_g, *r.gyr_rad_s), vehicle)
             return
         self._imu_source = r.source
         p = self.pipeline
@@ -132,7 +149,7 @@ class MavlinkFrontEnd:
         p.imu_stage(t_host_ns, p._time_s, p._device_us, r.acc_g, r.gyr_rad_s, r.temperature_c, 1.0 / self.requester.rate_hz)
 
     def _attitude(self, t_host_ns: int, r: rec.OnboardAttitude) -> None:
-        if self._from_vehicle(r, may_choose=True):
+        if self._from_vehicle(r):
             self._place(t_host_ns, r)
             self.pipeline.onboard_stage(r.q, _NAN, _NAN)
 
@@ -159,32 +176,68 @@ class MavlinkFrontEnd:
             self.pipeline.tables["gps"].append([self.pipeline._time_s, *list(values.values())[1:]])
 
     def _vehicle_status(self, t_host_ns: int, r: rec.VehicleStatus) -> None:
-        if self.vehicle is None and r.autopilot in AUTOPILOTS:
-            self.vehicle = r.system
-        if r.system != self.vehicle:
+        vehicle = self._from_vehicle(r)
+        self._record_row(t_host_ns, r)  # another sender's in a table of its own
+        if not vehicle:
             return
-        self._record_row(t_host_ns, r)
         self.pipeline.bank.armed = r.armed  # the rest calibrator refuses while armed
         if (r.mode, r.armed) != self._status:
             self._status = (r.mode, r.armed)
             self.pipeline.events.append({"t_host_ns": t_host_ns, "kind": "vehicle_status", "mode": r.mode, "armed": r.armed})
 
     def _record_row(self, t_host_ns: int, r) -> None:
-        self._table_row(*rec.table_fields(type(r)), tuple(float(getattr(r, a)) for a in rec.RECORD_TABLES[type(r)][2]))
+        """A mapped record's row: the vehicle's table, another sender's own (any radio's: ``radio_status``)."""
+        name, label, fields, units = rec.table_fields(type(r))
+        name, vehicle = (name, True) if isinstance(r, rec.LinkHealth) else self._table_of(r, name)
+        values = tuple(float(getattr(r, a)) for a in rec.RECORD_TABLES[type(r)][2])
+        self._table_row(t_host_ns, name, label, fields, units, values, vehicle)
 
     def _generic(self, t_host_ns: int, r: rec.GenericMessage) -> None:
-        name = r.msg_type if self.vehicle in (None, r.system) else f"{r.msg_type}_{r.system}_{r.component}"
-        self._table_row(name.lower(), f"MAVLink {r.msg_type} from system {r.system}", list(r.fields), r.units,
-                        tuple(r.fields.values()))
+        name, vehicle = self._table_of(r, r.msg_type)
+        self._table_row(t_host_ns, name, f"MAVLink {r.msg_type} from system {r.system}, component {r.component}",
+                        list(r.fields), r.units, tuple(r.fields.values()), vehicle)
 
-    def _table_row(self, name: str, label: str, fields: list, units: dict, values: tuple) -> None:
+    def _table_of(self, r, name: str) -> tuple[str, bool]:
+        """The table of ``r``'s message ``name`` and whether it is the vehicle's: the vehicle's own (also before
+        one is chosen, from the picked system if any), else ``<name>_<system>_<component>``."""
+        v = self.vehicle
+        vehicle = v.sent(r) or (v.sender is None and v.picked in (None, r.system))
+        return (name if vehicle else f"{name}_{r.system}_{r.component}").lower(), vehicle
+
+    def _table_row(self, t_host_ns: int, name: str, label: str, fields: list, units: dict, values: tuple, vehicle: bool = True) -> None:
         """A row of table ``name``, catalogued on its first row (copy on write: readers in other threads
-        keep a consistent catalogue and table dictionary)."""
+        keep a consistent catalogue and table dictionary); another sender's new table only within the bound."""
         p = self.pipeline
         table = p.tables.get(name)
         if table is None:
+            if not vehicle and not self._other_table_fits(t_host_ns, name, len(fields)):
+                self.unplaced_messages += 1
+                return
             info = message_table(name, label, fields, units)
             p.catalogue = Catalogue({**p.catalogue.tables, name: info})
             table = Table(info.column_names)
             p.tables = {**p.tables, name: table}
         table.append((p._time_s, *values))
+
+    def _other_table_fits(self, t_host_ns: int, name: str, columns: int) -> bool:
+        """Whether another sender's new table ``name`` of ``columns`` fits the bound (then it counts); a
+        warning the first time one does not."""
+        if len(self.other_tables) < OTHER_TABLES_MAX and self.other_columns + columns <= OTHER_COLUMNS_MAX:
+            self.other_tables.add(name)
+            self.other_columns += columns
+            return True
+        if not self.unplaced_messages:
+            self.pipeline._warn(t_host_ns, f"{len(self.other_tables)} tables ({self.other_columns} columns) of senders other "
+                                "than the vehicle: the most a session keeps; their further message types are counted, not kept")
+        return False
+
+
+def other_vehicle_event(t_host_ns: int, record, vehicle: Vehicle) -> dict:
+    """The event of the first message from another system id than the vehicle's."""
+    system, component = record.system, record.component
+    chosen = f"system {vehicle.sender[0]}" if vehicle.sender else f"the picked system {vehicle.picked}"
+    return {"t_host_ns": t_host_ns, "kind": "other_vehicle", "system": system, "component": component,
+            "message": f"MAVLink system {system} (component {component}) is also on this link (another vehicle, a "
+                       f"radio, a ground station?): listed, never used as the vehicle, which is {chosen} "
+                       f"(?system={system} on the mavlink: spec picks {system} instead)"}
+

@@ -17,8 +17,8 @@ from collections import deque
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4
 from groundstation.autopilot.records import ImuSample, VehicleStatus
+from groundstation.autopilot.vehicle import AUTOPILOTS, Vehicle
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
@@ -26,7 +26,6 @@ REQUESTED_RATE_HZ = 50.0  # what a session asks an autopilot for unless the user
 MAX_REQUEST_RATE_HZ = 400.0  # the fastest IMU loop ArduPilot and PX4 stream; REQUEST_DATA_STREAM takes whole Hz
 STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
                      mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
-AUTOPILOTS = (MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_PX4)
 STREAM_GROUPS = (mavlink.MAV_DATA_STREAM_RAW_SENSORS, mavlink.MAV_DATA_STREAM_EXTRA1)
 
 
@@ -58,43 +57,45 @@ def stream_requests(target_system: int, target_component: int, rate_hz: float, e
 
 
 class StreamRequester:
-    """Asks every autopilot that sends a heartbeat for the IMU and attitude at ``rate_hz``, and asks
-    again every ``retry_s`` while its IMU stays slower than ``MIN_FILTER_RATE_HZ`` (a request can be
-    lost on a radio link, and ArduPilot's SRx_ parameters may override it)."""
+    """Asks the vehicle (``vehicle.Vehicle``: picked by the user, else the first autopilot heard) for the
+    IMU and attitude at ``rate_hz``, and asks again every ``retry_s`` while its IMU stays slower than
+    ``MIN_FILTER_RATE_HZ`` (a request can be lost on a radio link, and ArduPilot's SRx_ parameters may
+    override it). No other sender is ever asked: another autopilot or a spoofer on the link gets nothing."""
 
-    def __init__(self, rate_hz: float = REQUESTED_RATE_HZ, retry_s: float = 5.0):
+    def __init__(self, rate_hz: float = REQUESTED_RATE_HZ, retry_s: float = 5.0, vehicle: Vehicle | None = None):
         self.rate_hz = rate_hz
         self.retry_ns = int(retry_s * 1e9)
-        self.monitors: dict[int, ImuRateMonitor] = {}
-        self._asked_ns: dict[tuple[int, int], int] = {}
+        self.vehicle = vehicle or Vehicle()
+        self.monitor = ImuRateMonitor()  # the vehicle's IMU
+        self._asked_ns: int | None = None  # when the vehicle was last asked
         self._encoder = gcs_encoder()
 
     def update(self, records, t_host_ns: int) -> bytes:
         """The request bytes to send now (often none), given the records just decoded."""
         out = b""
         for r in records:
+            self.vehicle.choose(r)
+            if not self.vehicle.sent(r):
+                continue
             if isinstance(r, ImuSample):
-                self.monitors.setdefault(r.system, ImuRateMonitor()).add(r.time_us)
+                self.monitor.add(r.time_us)
             elif isinstance(r, VehicleStatus) and r.autopilot in AUTOPILOTS:
-                target = (r.system, r.component)
-                asked = self._asked_ns.get(target)
-                slow = r.system not in self.monitors or not self.monitors[r.system].rate_hz >= MIN_FILTER_RATE_HZ
-                if asked is None or (slow and t_host_ns - asked >= self.retry_ns):
-                    self._asked_ns[target] = t_host_ns
-                    out += stream_requests(*target, self.rate_hz, self._encoder)
+                slow = not self.monitor.rate_hz >= MIN_FILTER_RATE_HZ
+                if self._asked_ns is None or (slow and t_host_ns - self._asked_ns >= self.retry_ns):
+                    self._asked_ns = t_host_ns
+                    out += stream_requests(*self.vehicle.sender, self.rate_hz, self._encoder)
         return out
 
     def request_now(self, rate_hz: float, t_host_ns: int) -> bytes:
-        """The user's request: every autopilot heard so far asked for ``rate_hz`` now, and later ones at
-        that rate (none heard yet: the first HEARTBEAT gets it)."""
+        """The user's request: the vehicle, if asked before, asked for ``rate_hz`` now, and at that rate
+        from now on (not yet: its first HEARTBEAT gets it)."""
         if not 0.0 < rate_hz <= MAX_REQUEST_RATE_HZ:
             raise ValueError(f"a stream rate must be above 0 and at most {MAX_REQUEST_RATE_HZ:g} Hz, not {rate_hz:g}")
         self.rate_hz = rate_hz
-        out = b""
-        for target in self._asked_ns:
-            self._asked_ns[target] = t_host_ns
-            out += stream_requests(*target, rate_hz, self._encoder)
-        return out
+        if self._asked_ns is None:
+            return b""
+        self._asked_ns = t_host_ns
+        return stream_requests(*self.vehicle.sender, rate_hz, self._encoder)
 
 
 class ImuRateMonitor:

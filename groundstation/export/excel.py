@@ -16,7 +16,7 @@ from groundstation.export.columns import select_rows
 from groundstation.export.excel_chart import write_chart_sheets
 from groundstation.export.excel_columns import attitude_block, chart_block, link_blocks, sensor_blocks
 from groundstation.export.excel_session import session_rows, write_session_sheet
-from groundstation.export.excel_stream import EXCEL_MAX_ROWS, as_os_error, discard, save, table_rows, write_table
+from groundstation.export.excel_stream import EXCEL_MAX_ROWS, as_os_error, check_width, discard, save, table_rows, write_table
 from groundstation.export.files import atomic_output
 from groundstation.session.product import SessionData
 
@@ -42,7 +42,8 @@ def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to
     estimators ran with (``--set``), shown on the Session sheet. ``max_rows``: rows per sheet, header
     included, before a continuation sheet (Excel's limit; lowered by tests). ``progress(done, total)``
     in rows; ``cancel`` is checked every few thousand rows and raises ExportCancelled.
-    UserError: the messages of ``atomic_output`` (file exists, folder missing or unwritable, disk full).
+    UserError: the messages of ``atomic_output`` (file exists, folder missing or unwritable, disk full); a sheet
+    wider than Excel's 16,384 columns.
     """
     rows = select_rows(data.time_s, t_from, t_to, rate_hz)
     window = (data.time_s[rows[0]], data.time_s[rows[-1]])
@@ -51,6 +52,8 @@ def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to
         "Sensors": sensor_blocks(data, rows, window, rate_hz),
         "Link": link_blocks(data, window),
     }
+    for title, blocks in tables.items():
+        check_width(title, blocks)  # before any file is made
     chart = chart_block(data, rows)
     total = sum(table_rows(blocks) for blocks in tables.values()) + len(chart[0].values)
     cancelled = cancel_check(cancel)

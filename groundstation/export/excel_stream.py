@@ -30,6 +30,8 @@ from openpyxl.utils import get_column_letter
 from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.writer.excel import ExcelWriter
 
+from groundstation.errors import UserError
+
 try:  # openpyxl writes its sheets through lxml when lxml is installed, and lxml reports I/O errors its own way
     from lxml.etree import SerialisationError
 
@@ -38,6 +40,7 @@ except ImportError:
     XML_WRITE_ERRORS = ()
 
 EXCEL_MAX_ROWS = 1_048_576
+EXCEL_MAX_COLUMNS = 16_384  # XFD; openpyxl writes past it (to ZZZ, then fails) a file Excel refuses to open
 CHUNK_ROWS = 2048  # rows converted to Python values at a time: bounds memory and the cancel delay
 SEPARATOR_WIDTH = 3  # the blank column between side-by-side blocks
 
@@ -111,6 +114,14 @@ def layout(blocks: list[Block]) -> list[Column | None]:
             out.append(None)
         out.extend(block)
     return out
+
+
+def check_width(title: str, blocks: list[Block]) -> None:
+    """UserError when the blocks side by side need more columns than a sheet holds."""
+    width = len(layout(blocks))
+    if width > EXCEL_MAX_COLUMNS:
+        raise UserError(f"the {title} sheet would need {width:,} columns ({len(blocks)} tables side by side); Excel "
+                        f"holds {EXCEL_MAX_COLUMNS:,}: export to CSV or Parquet instead")
 
 
 def table_rows(blocks: list[Block]) -> int:

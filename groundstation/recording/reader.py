@@ -12,6 +12,7 @@ huge foreign file is refused after reading only that much.
 from __future__ import annotations
 
 import functools
+import itertools
 import json
 import mmap
 import os
@@ -108,6 +109,7 @@ def open_recording(path) -> Recording:
     version, start = _read_preamble(path, buffer, damage)
     walk = _Walk(buffer)
     walk.run(start)
+    walk.drop_repeats()
     damage += walk.damage + _chunk_time_jumps(walk.chunk_t_host_ns)
     if not walk.chunk_offsets and not walk.others:
         raise RecordingError(f"{path}: nothing could be read: " + "; ".join(damage))
@@ -232,6 +234,41 @@ class _Walk:
                     continue
             position = self._skip_damage(position)
             searched_from, searched_until, intact = self._searched_from, self._searched_until, self._intact
+
+    def drop_repeats(self) -> None:
+        """Records that repeat earlier ones (same kind, host time and payload: a byte range written twice)
+        are damage, read once and said once. Intact chunks arrive in increasing host time, so only a
+        file whose chunk times step back is searched."""
+        buffer, view, first_repeat = self.buffer, self.view, []
+
+        def repeats(kind, t_host_ns, start, end, seen: dict) -> bool:
+            key = (kind, t_host_ns, end - start, buffer[end:end + CRC.size])
+            earlier = seen.setdefault(key, start)
+            if earlier != start and view[earlier:earlier + end - start] == view[start:end]:
+                first_repeat.append(start - HEADER_BYTES)
+                return True
+            return False
+
+        t = self.chunk_t_host_ns
+        if any(later <= earlier for earlier, later in itertools.pairwise(t)):
+            seen: dict = {}
+            dropped = [i for i, (t_ns, offset, length) in enumerate(zip(t, self.chunk_offsets, self.chunk_lengths))
+                       if repeats(Kind.CHUNK, t_ns, offset, offset + length, seen)]
+            # A repeated range is a run of indices: delete run by run, from the end (lists or arrays alike).
+            runs = [[i, i + 1] for i in dropped[:1]]
+            for i in dropped[1:]:
+                if i == runs[-1][1]:
+                    runs[-1][1] = i + 1
+                else:
+                    runs.append([i, i + 1])
+            for start, stop in reversed(runs):
+                for values in (self.chunk_t_host_ns, self.chunk_offsets, self.chunk_lengths):
+                    del values[start:stop]
+        seen = {}
+        self.others[:] = [record for record in self.others if not repeats(*record, seen)]
+        if first_repeat:
+            self.damage.append(f"{len(first_repeat)} records repeat earlier ones (same kind, time and bytes; from byte "
+                               f"{min(first_repeat)}): read once")
 
     def is_valid_at(self, position: int) -> bool:
         if len(self.buffer) - position < RECORD_OVERHEAD_BYTES:

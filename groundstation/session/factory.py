@@ -38,8 +38,11 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
             raise SourceError(f"{spec}: a .tlog is a flight log, not a link: open it whole (groundstation app FILE, "
                               "the app's File > Open, or replay, export and evaluate FILE)")
         return replay_session(source)
-    pipeline = Pipeline(live_estimators() if filters is None else filters, settings, protocol=getattr(source, "protocol", "gs"))  # MAVLink sources say so
-    return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata={"source_spec": spec})
+    vehicle_system = getattr(source, "vehicle_system", None)  # MAVLink: the vehicle the user picked
+    pipeline = Pipeline(live_estimators() if filters is None else filters, settings, protocol=getattr(source, "protocol", "gs"),
+                        vehicle_system=vehicle_system)  # MAVLink sources say so
+    metadata = {"source_spec": spec, **({"vehicle_system": vehicle_system} if vehicle_system is not None else {})}
+    return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata=metadata)
 
 
 def replay_session(source: ReplaySource) -> LiveSession:

@@ -8,6 +8,9 @@
 | ``mavlink:tcp:127.0.0.1:5760`` | a TCP connection (ArduPilot SITL's first serial port) |
 | ``mavlink:flight.tlog[?speed=X]`` | a ``.tlog`` replayed, packet by packet at its receive times (X: 0.25-64, or max) |
 
+On a live link ``?system=N`` (1-255) picks the vehicle: the autopilot with that MAVLink system id, whatever
+else is heard first (another vehicle, a spoofer); without it, the first autopilot heard is the vehicle.
+
 The transports are the generic ones (``serial_port``, ``udp``); ``MavlinkSource`` hands over their bytes
 unchanged, stamped on arrival (what a session records), and says ``protocol = "mavlink"`` so the
 session decodes them with ``groundstation.autopilot.decoder.MavlinkDecoder``.
@@ -33,9 +36,10 @@ class MavlinkSource:
 
     protocol = "mavlink"
 
-    def __init__(self, transport, description: str):
+    def __init__(self, transport, description: str, vehicle_system: int | None = None):
         self.transport = transport
         self.description = description
+        self.vehicle_system = vehicle_system  # the system id picked as the vehicle (``?system=N``); None: the first heard
         self.is_replay = transport.is_replay
         self.can_reopen = transport.can_reopen
         self.can_send = transport.can_send
@@ -63,8 +67,28 @@ def carries_mavlink(data: bytes) -> bool:
 
 def open_spec(spec: Spec) -> MavlinkSource:
     kind, _, address = spec.target.partition(":")
+    if spec.target.lower().endswith(".tlog"):
+        spec.check_options({"speed"})
+        speed = spec.option("speed", lambda text: None if text == "max" else float(text), None)
+        return MavlinkSource(TlogReplaySource(spec.target, speed), f"MAVLink replay of {Path(spec.target).name}")
+    system = spec.option("system", system_id, None)  # checked before a port or socket is opened
+    source = open_link(spec, kind, address)
+    source.vehicle_system = system
+    return source
+
+
+def system_id(text: str) -> int:
+    from groundstation.autopilot.vehicle import MAX_SYSTEM, MIN_SYSTEM
+
+    system = int(text)
+    if not MIN_SYSTEM <= system <= MAX_SYSTEM:
+        raise ValueError(f"a MAVLink system id is {MIN_SYSTEM} to {MAX_SYSTEM}")
+    return system
+
+
+def open_link(spec: Spec, kind: str, address: str) -> MavlinkSource:
     if kind in ("udpin", "udpout", "tcp"):
-        spec.check_options(())
+        spec.check_options({"system"})
         host, port = Spec(spec.text, "udp", address).host_port()
         if kind == "udpin":
             transport = UdpSource(host, port, admits=carries_mavlink)
@@ -79,13 +103,9 @@ def open_spec(spec: Spec) -> MavlinkSource:
         source = MavlinkSource(UdpSource("0.0.0.0", 0, remote=(host, port)), f"MAVLink UDP out {host}:{port}")
         source.write(gcs_heartbeat())  # the vehicle answers whoever spoke to it
         return source
-    if spec.target.lower().endswith(".tlog"):
-        spec.check_options({"speed"})
-        speed = spec.option("speed", lambda text: None if text == "max" else float(text), None)
-        return MavlinkSource(TlogReplaySource(spec.target, speed), f"MAVLink replay of {Path(spec.target).name}")
     if not spec.target:
         raise SourceError(f"{spec.text}: name a serial port, udpin:, udpout:, tcp: or a .tlog file after 'mavlink:'")
-    spec.check_options({"baud"})
+    spec.check_options({"baud", "system"})
     baud = spec.option("baud", int, SIK_BAUD)  # ?baud=, else the app's baud box or --baud, else a SiK radio's rate
     return MavlinkSource(SerialSource(spec.target, baud), f"MAVLink on {spec.target} @ {baud} baud")
 

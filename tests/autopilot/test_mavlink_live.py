@@ -66,7 +66,7 @@ def check_rates_requested(aircraft, requester, imu):
     assert aircraft.refused == []  # only stream requests went up: nothing that arms or moves it
     dt = np.diff([r.time_us for r in imu]) / 1e6
     assert np.median(dt[:3]) == pytest.approx(0.25)  # 4 Hz before the request
-    rate_hz = requester.monitors[1].rate_hz
+    rate_hz = requester.monitor.rate_hz
     assert rate_hz == pytest.approx(50.0, rel=0.02) and rate_hz >= MIN_FILTER_RATE_HZ
 
 

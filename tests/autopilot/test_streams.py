@@ -32,7 +32,7 @@ def test_requests_go_to_the_autopilot_only_and_repeat_while_the_imu_stays_slow()
     assert again
     fast = [imu(3_000_000 + i * 20_000) for i in range(60)]  # 50 Hz now
     assert requester.update([*fast, ARDUPILOT], 20_000_000_000) == b""
-    assert requester.monitors[1].rate_hz == 50.0 and not requester.monitors[1].too_slow
+    assert requester.monitor.rate_hz == 50.0 and not requester.monitor.too_slow
     decoder = MavlinkDecoder()
     decoder.feed(b"".join(m.get_msgbuf() for m in first) + again)
     assert decoder.senders[(255, 190)].lost == 0  # the GCS's sequence numbers keep counting
@@ -45,7 +45,7 @@ def test_slow_imu_note():
     assert "2.0 Hz" in note and f"{MIN_FILTER_RATE_HZ:.0f} Hz" in note
 
 
-def test_the_users_request_goes_to_every_autopilot_heard_and_sets_the_rate_for_later_ones():
+def test_the_users_request_goes_to_the_vehicle_and_sets_the_rate_for_later():
     import pytest
 
     requester = StreamRequester(rate_hz=50.0)

@@ -10,6 +10,7 @@ import textwrap
 import threading
 from pathlib import Path
 
+import numpy as np
 import pytest
 from openpyxl import load_workbook
 
@@ -185,3 +186,21 @@ def test_the_export_command_writes_a_workbook(sim_recording, tmp_path):
     again = gs("export", sim_recording, "--out", out)
     assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
     assert Path(out).stat().st_size > 0
+
+
+def test_more_columns_than_excel_holds_is_said_before_anything_is_written(sim_session, tmp_path):
+    """A session with 70 message tables of 250 fields (a MAVLink link full of senders, before tables were
+    bounded): its Sensors sheet would need 17,600 columns; Excel holds 16,384 (openpyxl raised
+    ``Invalid column index 18279`` mid-write)."""
+    import dataclasses
+
+    from groundstation.session.catalogue import Catalogue, message_table
+
+    fields = [f"payload_{i}" for i in range(250)]
+    infos = [message_table(f"wide_{k}", f"wide {k}", fields, {}) for k in range(70)]
+    rows = {"time_s": sim_session.time_s[:3], **{f: np.zeros(3) for f in fields}}
+    wide = dataclasses.replace(sim_session, catalogue=Catalogue({**sim_session.catalogue.tables, **{i.name: i for i in infos}}),
+                               tables={**sim_session.tables, **{i.name: rows for i in infos}})
+    with pytest.raises(UserError, match=r"Sensors.*17,\d{3} columns.*16,384.*CSV"):
+        write_workbook(wide, tmp_path / "wide.xlsx")
+    assert list(tmp_path.iterdir()) == []

