@@ -67,9 +67,57 @@ def write_all(folder: Path) -> dict[str, Path]:
     return {name: make(folder, name) for name, make in CRAFTED.items()}
 
 
+def false_markers(folder: Path, name: str, false_bytes: int = 2 * 2**20, claimed_bytes: int = 64 * 1024) -> Path:
+    """A recording with ``false_bytes`` of false record headers before its END record, each claiming a
+    ``claimed_bytes`` payload that is there (so checking each costs a CRC over it), none intact."""
+    from groundstation.recording import format as fmt
+
+    intact = _recording(folder, f"{name}-intact", {"source": "crafted"}).read_bytes()
+    end_record = len(fmt.encode_record(fmt.Kind.END, 0, b""))
+    header = fmt.RECORD_HEADER.pack(fmt.MARKER, fmt.Kind.CHUNK, claimed_bytes, 0)
+    path = folder / f"{name}.gsrec"
+    path.write_bytes(intact[:-end_record] + header * (false_bytes // len(header)) + intact[-end_record:])
+    return path
+
+
+def sparse_zeros(folder: Path, name: str, size_bytes: int = 2 * 2**30) -> Path:
+    """A file of ``size_bytes`` zeros that takes no disk (sparse): reading it whole would take that memory."""
+    path = folder / f"{name}.gsrec"
+    with path.open("wb") as handle:
+        handle.truncate(size_bytes)
+    return path
+
+
+def chunk_time_jump(folder: Path, name: str, jump_ns: int = 2**62) -> Path:
+    """A recording whose second half of chunks arrived ``jump_ns`` after the first (valid checksums)."""
+    stream = SimStream(Scenario(profile="hover", duration_s=2.0, seed=3))
+    chunks = [*stream.advance(stream.end_s), *stream.flush()]
+    path = folder / f"{name}.gsrec"
+    with RecordingWriter(path, {"source": "crafted"}) as writer:
+        for i, chunk in enumerate(chunks):
+            writer.write_chunk(int(chunk.t_s * 1e9) + (jump_ns if i >= len(chunks) // 2 else 0), chunk.data)
+    return path
+
+
+def link_recording(path: Path, megabytes: float, chunk_bytes: int = 64, seed: int = 1) -> Path:
+    """An intact recording of ``megabytes`` of link bytes in small chunks (a serial port's reads), one per ms."""
+    data = np.random.default_rng(seed).integers(0, 256, int(megabytes * 2**20), dtype=np.uint8).tobytes()
+    with RecordingWriter(path, {"source": "crafted"}) as writer:
+        for i, start in enumerate(range(0, len(data), chunk_bytes)):
+            writer.write_chunk(i * 1_000_000, data[start:start + chunk_bytes])
+    return path
+
+
+# Files that cost time or memory out of proportion if read naively; not in CRAFTED, since a replay
+# paces across a chunk time jump in real time.
+HUGE = {"false_markers": false_markers, "sparse_zeros": sparse_zeros, "chunk_time_jump": chunk_time_jump}
+
+
 if __name__ == "__main__":
     for name, path in write_all(Path(sys.argv[1])).items():
         print(name, path)
+    for name, make in HUGE.items():
+        print(name, make(Path(sys.argv[1]), name))
 
 
 def damaged_csv_gz(folder: Path, name: str = "damaged") -> Path:
