@@ -55,6 +55,29 @@ def series(time_us, columns: dict, source: str) -> Series | None:
     return Series(time_us[keep], {n: np.asarray(v, dtype=float)[order][keep] for n, v in columns.items()}, source)
 
 
+PLAUSIBLE_MARGIN_US = 60_000_000
+
+
+def implausible_times(time_us) -> np.ndarray:
+    """Rows whose timestamps lie far outside the stream's span: damaged bytes (one flipped bit in a
+    timestamp's top byte puts a row at 7.2e10 s). The span is that of the 1st to 99th percentile of the
+    times, which a few damaged rows cannot move; a time more than the span and a minute beyond it is
+    implausible (a logging pause of that length would be one too)."""
+    time_us = np.asarray(time_us, dtype=np.float64)
+    if len(time_us) == 0:
+        return np.zeros(0, dtype=bool)
+    lo, hi = np.percentile(time_us, [1.0, 99.0])
+    reach = (hi - lo) + PLAUSIBLE_MARGIN_US
+    return (time_us < lo - reach) | (time_us > hi + reach)
+
+
+def implausible_message(source: str, time_us: np.ndarray) -> str:
+    seconds = np.asarray(time_us, dtype=np.float64) / 1e6
+    rows = "1 row" if len(seconds) == 1 else f"{len(seconds)} rows"
+    return (f"{source}: {rows} at implausible times ({', '.join(f'{s:.3g} s' for s in seconds[:3])}"
+            f"{', ...' if len(seconds) > 3 else ''}; far beyond the log's span) dropped: damaged bytes")
+
+
 @dataclasses.dataclass
 class FlightLog:
     path: Path
@@ -69,3 +92,4 @@ class FlightLog:
     tables: dict[str, Series] = dataclasses.field(default_factory=dict)  # other messages, per type
     units: dict[str, dict[str, str]] = dataclasses.field(default_factory=dict)  # table -> column -> unit
     notes: list[str] = dataclasses.field(default_factory=list)
+    damage: list[str] = dataclasses.field(default_factory=list)  # what the reader dropped as damaged

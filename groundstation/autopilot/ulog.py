@@ -17,7 +17,9 @@ import io
 import numpy as np
 from pyulog import ULog
 
-from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
+from groundstation.autopilot.flightlog import (
+    GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, implausible_message, implausible_times, series,
+)
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -38,11 +40,15 @@ def read_ulog(path, progress=None) -> FlightLog:
             ulog = ULog(str(path), TOPICS)
     except Exception as error:  # pyulog raises ULogException and struct/index errors on damaged files
         raise UserError(f"{path}: cannot read this ULog file ({error})") from None
+    log = FlightLog(path, "ulog", ulog.msg_info_dict.get("sys_name", "PX4"))
     topics = {}
     for data in ulog.data_list:
         if data.multi_id == 0 and len(data.data["timestamp"]):
             topics[data.name] = data.data
-    log = FlightLog(path, "ulog", ulog.msg_info_dict.get("sys_name", "PX4"))
+            wild = implausible_times(data.data["timestamp"])
+            if wild.any():
+                log.damage.append(implausible_message(data.name, data.data["timestamp"][wild]))
+                topics[data.name] = {name: values[~wild] for name, values in data.data.items()}
     log.notes += [line.strip() for line in chatter.getvalue().splitlines() if line.strip()]
     if (sc := topics.get("sensor_combined")) is not None:
         values = [*(sc[f"gyro_rad[{i}]"] for i in range(3)), *(sc[f"accelerometer_m_s2[{i}]"] / STANDARD_GRAVITY_M_S2 for i in range(3))]

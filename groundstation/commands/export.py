@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from groundstation.commands.options import add_estimator_options, estimator_options
+from groundstation.commands.options import add_config_option, add_estimator_options, estimator_options
 from groundstation.commands.progress import StagedProgress
 
 
@@ -18,6 +18,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("file", metavar="FILE", help=formats.described())
     parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv, OUT.parquet or OUT.xlsx (by extension)")
     add_estimator_options(parser, None)
+    add_config_option(parser)
     parser.add_argument("--from", dest="t_from", type=float, metavar="S", help="first second to export")
     parser.add_argument("--to", dest="t_to", type=float, metavar="S", help="last second to export")
     parser.add_argument("--rate", type=float, metavar="HZ", help="decimate to about HZ samples per second")
@@ -30,7 +31,8 @@ def run(args: argparse.Namespace) -> int:
 
     filters, overrides = estimator_options(args)
     request = export_request(args.file, args.out, filters=filters, overrides=overrides, t_from=args.t_from,
-                             t_to=args.t_to, rate_hz=args.rate, overwrite=args.overwrite)
+                             t_to=args.t_to, rate_hz=args.rate, overwrite=args.overwrite,
+                             accept_config_changes=args.accept_config_changes)
     progress = StagedProgress()
     try:
         result = run_export(request, load_session, progress)

@@ -51,7 +51,9 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.done()
     columns = {name: pd.to_numeric(frame[name], errors="coerce").to_numpy(dtype=float) for name in frame.columns}
-    with atomic_recording(args.out, {"source": f"imported from {Path(args.file).name}"}) as writer:
+    # Where the trial's time starts, kept apart from the rows: a lost first block must not move the rest.
+    metadata = {"source": f"imported from {Path(args.file).name}", "time_origin_s": float(columns["time_s"][0])}
+    with atomic_recording(args.out, metadata) as writer:
         writer.write_samples(columns)
     print(f"wrote {args.out}: {len(frame)} samples, columns {', '.join(frame.columns)}")
     return 0

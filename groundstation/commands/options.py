@@ -19,6 +19,12 @@ def add_estimator_options(parser: argparse.ArgumentParser, default_filters: str 
     )
 
 
+def add_config_option(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--accept-config-changes", action="store_true",
+                        help="apply a recording's CONFIG that changes the sensor's full scales or mounting without a "
+                             "device restart (default: keep the scales in use, and say so)")
+
+
 def estimator_options(args: argparse.Namespace) -> tuple[list[str] | None, dict[str, dict[str, float]]]:
     """``(filters or None, overrides)``, checked before any long run; UserError says what is wrong."""
     from groundstation.estimation import ESTIMATORS, create, parse_overrides

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from groundstation.commands.options import add_estimator_options, estimator_options
+from groundstation.commands.options import add_config_option, add_estimator_options, estimator_options
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -15,6 +15,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--speed", type=float, default=None, metavar="X",
                         help="play it back at X times real time (0.25-64) with a live summary; default: the totals at once")
     add_estimator_options(parser, None)
+    add_config_option(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -32,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as error:
         raise UserError(str(error)) from None
     progress = ProgressBar(f"computing {Path(args.file).name}")
-    data = load_session(args.file, filters, overrides, progress)
+    data = load_session(args.file, filters, overrides, progress, args.accept_config_changes)
     progress.done()
     for warning in data.warnings:
         print(f"warning: {warning}")

@@ -33,6 +33,7 @@ class ExportRequest:
     t_to: float | None = None
     rate_hz: float | None = None
     overwrite: bool = False
+    accept_config_changes: bool = False  # a CONFIG changing the scales without a device restart applies
 
     @property
     def format(self) -> str:
@@ -46,9 +47,10 @@ class ExportResult:
 
 
 def export_request(source, out, *, filters=None, overrides=None, t_from=None, t_to=None, rate_hz=None,
-                   overwrite: bool = False) -> ExportRequest:
+                   overwrite: bool = False, accept_config_changes: bool = False) -> ExportRequest:
     """The request, once everything in it is known to be possible; UserError says what is not."""
-    request = ExportRequest(Path(source), Path(out), filters, dict(overrides or {}), t_from, t_to, rate_hz, overwrite)
+    request = ExportRequest(Path(source), Path(out), filters, dict(overrides or {}), t_from, t_to, rate_hz, overwrite,
+                            accept_config_changes)
     if request.format not in FORMATS:
         raise UserError(f"{request.out.name}: the name must end in {', '.join(FORMATS)}")
     check_row_options(t_from, t_to, rate_hz)
@@ -93,7 +95,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
             raise ExportCancelled("export cancelled; nothing was written")
         report("decoding", done, total)
 
-    data = load(request.source, request.filters, request.overrides, decoding)
+    data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes)
     decoding(1, 1)
     if request.format == ".xlsx":
         sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,

@@ -3,13 +3,15 @@ imported dataset trial's samples."""
 
 from __future__ import annotations
 
+import math
+
 from groundstation.errors import UserError
 from groundstation.recording import open_recording
 from groundstation.session.load import SessionData, computed, from_pipeline, from_trial, trial_from_samples
 from groundstation.session.replay import check_forced, recorded_filters, recorded_settings
 
 
-def load(path, filters=None, forced=None, progress=None) -> SessionData:
+def load(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
     recording = open_recording(path)
     if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
@@ -18,9 +20,16 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
         settings = {**recorded_settings(recording)}
         for name, values in (forced or {}).items():
             settings[name] = {**settings.get(name, {}), **values}
-        data = from_trial(trial, filters, settings, recording.metadata)
-        data.damage = recording.damage
+        origin_s = recording.metadata.get("time_origin_s")
+        damage = list(recording.damage)
+        if not (isinstance(origin_s, float) and math.isfinite(origin_s)):
+            origin_s = None  # recorded by an older import (or its metadata lost): the first row's time
+            if damage:
+                damage.append("the recording does not say where its time started: session time counts from the "
+                              "first intact row, later if rows were lost at the start")
+        data = from_trial(trial, filters, settings, recording.metadata, origin_s)
+        data.damage = damage
         return data
     if recording.chunk_count == 0:
         raise UserError(f"{path}: the recording holds no data")
-    return from_pipeline(recording, computed(recording, filters, forced, progress))
+    return from_pipeline(recording, computed(recording, filters, forced, progress, accept_config_changes))

@@ -41,10 +41,10 @@ from groundstation.session.estimators import EstimatorBank
 from groundstation.session.link import LinkStats
 from groundstation.session.pipeline import (
     ACC_FIELDS, DISCONTINUITY, GYR_FIELDS, HANDLER, LAMBDA_SCALE, MAG_FIELDS, Q_FIELDS, Q_SCALES, SETTINGS,
-    TEMPERATURE_SCALE, ConfigWait, SensorConfig, conversions, gap_row, impossible_config_message, in_body_axes,
+    TEMPERATURE_SCALE, ConfigGuard, ConfigWait, SensorConfig, conversions, gap_row, impossible_config_message, in_body_axes,
     period_s, sample_dt_s, schema_message, sensor_of, stage_key, unexpected_frame_event,
 )
-from groundstation.session.replay import RecordedSetup, SettingsSchedule, apply_event, recorded_setup
+from groundstation.session.replay import CONFIG_ANSWERS, RecordedSetup, SettingsSchedule, apply_event, recorded_setup
 from groundstation.session.table import Table
 
 # Shares of the whole job reported through ``progress``: reading and decoding, then the estimators.
@@ -87,8 +87,9 @@ class BatchSession:
 
 
 def batch_replay(recording: Recording, filters=None, forced=None,
-                 progress: Callable[[int, int], None] | None = None) -> BatchSession:
-    """``replay(recording, filters, forced)`` on the batch path (the project's own protocol only)."""
+                 progress: Callable[[int, int], None] | None = None, accept_config_changes: bool = False) -> BatchSession:
+    """``replay(recording, filters, forced, accept_config_changes=...)`` on the batch path (the project's own
+    protocol only)."""
     setup = recorded_setup(recording, filters, forced)
     if setup.protocol != "gs":
         raise ValueError(f"the batch path decodes the project's frames, not {setup.protocol!r}")
@@ -104,15 +105,15 @@ def batch_replay(recording: Recording, filters=None, forced=None,
 
     session = BatchSession(setup)
     decoded = decode_batch(*recording.stream(), progress=decoding)
-    _Builder(session, decoded, SettingsSchedule(recording).changes(), estimating).build()
+    _Builder(session, decoded, SettingsSchedule(recording).changes(), estimating, ConfigGuard(accept_config_changes)).build()
     if progress is not None:
         progress(total, total)
     return session
 
 
 class _Builder:
-    def __init__(self, session: BatchSession, decoded: BatchDecode, changes: list, progress):
-        self.s, self.d, self.changes, self.progress = session, decoded, changes, progress
+    def __init__(self, session: BatchSession, decoded: BatchDecode, changes: list, progress, guard: ConfigGuard):
+        self.s, self.d, self.changes, self.progress, self.guard = session, decoded, changes, progress, guard
         self.rows: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {name: [] for name in session.tables}  # keys, rows
 
     def build(self) -> None:
@@ -199,13 +200,30 @@ class _Builder:
         return dict(zip(columns.type.field_names, columns.raw[k].item()))
 
     def _config(self) -> None:
-        """CONFIG frames (few): events, the sensor configuration from each, and what it says about the schema."""
+        """CONFIG frames (few): events, the sensor configuration from each (``ConfigGuard``, told of the device
+        restarts and the recorded answers to a held CONFIG in the pipeline's order), and what it says about
+        the schema."""
         s, columns = self.s, self.d.frames["CONFIG"]
         self.sensor_keys: list[float] = []
         self.sensors: list[SensorConfig] = []
         fingerprints = columns.raw["schema_fingerprint"]
-        for k, position in enumerate(columns.order.tolist()):
-            key = stage_key(position, HANDLER)
+        steps = [(key, None) for key, (_, event) in zip(self.disc_keys.tolist(), self.discontinuities)
+                 if event["kind"] == "device_reset"]
+        steps += [(key, event) for key, (_, event) in zip(self.change_keys, self.changes) if event["kind"] in CONFIG_ANSWERS]
+        steps += [(stage_key(position, HANDLER), k) for k, position in enumerate(columns.order.tolist())]
+        for key, step in sorted(steps, key=lambda item: item[0]):
+            if step is None:
+                self.guard.device_reset()
+                continue
+            if isinstance(step, dict):
+                sensor, event = self.guard.resolve(step.get("t_host_ns", 0), step["kind"] == CONFIG_ANSWERS[0])
+                if event is not None:
+                    s.event(key, event)
+                if sensor is not None:
+                    self.sensor_keys.append(key)
+                    self.sensors.append(sensor)
+                continue
+            k = step
             values = self._values("CONFIG", k)
             s.config = values
             t_host_ns = int(columns.t_host_ns[k])
@@ -218,6 +236,11 @@ class _Builder:
                 sensor = sensor_of(values)
             except (KeyError, ValueError):
                 s.event(key, {"t_host_ns": t_host_ns, "kind": "warning", "message": impossible_config_message(values)})
+                continue
+            applies, event = self.guard.config(t_host_ns, sensor)
+            if event is not None:
+                s.event(key, event)
+            if not applies:
                 continue
             self.sensor_keys.append(key)
             self.sensors.append(sensor)
@@ -336,7 +359,8 @@ class _Builder:
             unbiased = gyr.copy()
             unbiased[measured_at:] = gyr[measured_at:] - np.array(bias)
             s.event(keys[measured_at], {"t_host_ns": int(t_host[measured_at]), "kind": "gyro_bias", "bias_rad_s": list(bias)})
-        breaks = sorted([(k, 0, i) for i, k in enumerate(self.change_keys)] + [(k, 1, i) for i, k in enumerate(self.disc_keys.tolist())])
+        settings = [(k, 0, i) for i, k in enumerate(self.change_keys) if self.changes[i][1]["kind"] == "settings"]
+        breaks = sorted(settings + [(k, 1, i) for i, k in enumerate(self.disc_keys.tolist())])
         outputs = {name: ([], []) for name in bank.filters}
         start = 0
         for key, kind, index in breaks + [(math.inf, 2, -1)]:

@@ -49,11 +49,16 @@ class LinkStats:
         if self._start_ns is None:
             self._start_ns = t_host_ns
         second = (t_host_ns - self._start_ns) // 1_000_000_000
-        while second > self._second:  # close every full second, empty ones included
+        if second > self._second:  # close the second, then the empty ones up to this chunk's
             now = tuple(getattr(stats, c) for c in _COUNTERS)
             self.per_second.append((self._second, *(a - b for a, b in zip(now, self._at_second_start))))
             self._at_second_start = now
-            self._second += 1
+            # The first and the last empty second stand for all of them (a plot draws zero between
+            # the two, the totals are the same): a jump in the clock, by years, adds two rows.
+            empty = range(self._second + 1, second)
+            for silent in sorted({empty[0], empty[-1]}) if empty else ():
+                self.per_second.append((silent, *(0,) * len(_COUNTERS)))
+            self._second = second
         self.last_chunk_ns = t_host_ns
         if new_frames:
             self.last_frame_ns = t_host_ns

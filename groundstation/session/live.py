@@ -215,6 +215,22 @@ class LiveSession:
             self.pipeline.change_settings(name, overrides, self._last_chunk_ns)
             self.recorder.write_event(self._last_chunk_ns, self.pipeline.events[-1])
 
+    def held_config(self) -> str | None:
+        """The ``config_conflict`` message of a CONFIG held for the user's answer; None when none is held."""
+        with self.lock:
+            if self.pipeline.config_guard.held is None:
+                return None
+            return next(e["message"] for e in reversed(self.pipeline.events) if e["kind"] == "config_conflict")
+
+    def resolve_config(self, accept: bool) -> None:
+        """The user's answer to a held CONFIG (``pipeline.config_guard.held``: it changes the scales without a
+        device restart): its scales from now on, or the ones in use; the answer is recorded as an event."""
+        with self.lock:
+            before = len(self.pipeline.events)
+            self.pipeline.resolve_config(accept, self._last_chunk_ns)
+            for event in self.pipeline.events[before:]:
+                self.recorder.write_event(self._last_chunk_ns, event)
+
     def send_command(self, command: str, param: int = 0, value: float = 0.0) -> int:
         """Send a COMMAND to the aircraft; returns its seq (the ACK carries it back). An autopilot on
         MAVLink gets none (a warning event says so; returns -1): this project's commands are not its own."""

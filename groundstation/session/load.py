@@ -28,21 +28,27 @@ from groundstation.session.replay import replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 
-def load_session(path, filters=None, forced=None, progress=None) -> SessionData:
+def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
     """Decode, import or read ``path`` by its format (``formats``) and run the estimators; UserError with a
     clear message on bad input. A file of no known format is tried as a recording, whose reader says
-    what the file looks like instead."""
+    what the file looks like instead. ``accept_config_changes``: a recording's CONFIG that changes the
+    scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``)."""
     file_format = formats.sniff(path) or formats.FORMATS["recording"]
-    return file_format.loader()(Path(path), filters, forced, progress)
+    if not accept_config_changes:
+        return file_format.loader()(Path(path), filters, forced, progress)
+    if file_format.name != "recording":
+        raise UserError(f"{path}: a {file_format.description} has no CONFIG frames whose changes could be accepted")
+    return file_format.loader()(Path(path), filters, forced, progress, accept_config_changes=True)
 
 
-def computed(recording: Recording, filters=None, forced=None, progress=None) -> Pipeline | BatchSession:
+def computed(recording: Recording, filters=None, forced=None, progress=None,
+             accept_config_changes: bool = False) -> Pipeline | BatchSession:
     """A recording's session computed whole: the project's frames on the batch path (the same tables as
     a replay, tests/session/test_batch.py); an autopilot's MAVLink through the incremental pipeline
     (its front-end turns messages into stage calls one by one; it has no batch form)."""
     if recording.metadata.get("protocol", "gs") == "gs":
-        return batch_replay(recording, filters, forced, progress)
-    return replay(recording, filters, forced, progress)
+        return batch_replay(recording, filters, forced, progress, accept_config_changes)
+    return replay(recording, filters, forced, progress, accept_config_changes)
 
 
 def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
@@ -52,13 +58,15 @@ def trial_from_samples(samples: dict[str, np.ndarray], path) -> Trial:
         raise UserError(str(error)) from None
 
 
-def from_trial(trial: Trial, filters, settings_used, metadata: dict) -> SessionData:
-    """A dataset trial, run exactly as ``evaluate_trial`` runs it (the same numbers)."""
+def from_trial(trial: Trial, filters, settings_used, metadata: dict, origin_s: float | None = None) -> SessionData:
+    """A dataset trial, run exactly as ``evaluate_trial`` runs it (the same numbers). Session time counts
+    from ``origin_s``, the trial's first time (default: its first row's; an imported recording says it,
+    so rows after a lost first block keep their own times)."""
     try:
         runs = run_on_trial(trial, filters, settings_used)
     except ValueError as error:
         raise UserError(str(error)) from None
-    time_s = trial.time_s - trial.time_s[0]
+    time_s = trial.time_s - (trial.time_s[0] if origin_s is None else origin_s)
     tables = session_catalogue({name: tuple(diag) for name, (_, diag) in runs.items()})
     catalogue = Catalogue({"imu": tables["imu"], ONBOARD: tables[ONBOARD]})  # a dataset has no onboard estimate: no rows
     imu = {"time_s": time_s, **{f"acc_{a}_g": trial.acc_m_s2[:, i] / STANDARD_GRAVITY_M_S2 for i, a in enumerate("xyz")},

@@ -17,10 +17,12 @@ and said once per type; no frame stops a session. Frames are read by field name.
 Until the first ``CONFIG`` frame the full scales are unknown, so ``IMU_RAW`` frames wait
 (``ConfigWait``, up to ``HOLD_FOR_CONFIG_US`` of session time); after that the assumed
 ``SensorConfig`` is used and a warning event is recorded. A later ``CONFIG`` takes effect from its
-position in the stream.
+position in the stream, unless it changes the full scales or the mounting without a device restart
+since the CONFIG in use (``ConfigGuard``): then a ``config_conflict`` event says what changed and the
+scales in use stay until the user accepts (``resolve_config``; files: ``accept_config_changes``).
 
 The rules here are the session's only copy: the batch path (``batch.py``) calls the same functions
-(``conversions``, ``in_body_axes``, ``sample_dt_s``, ``ConfigWait``, ``gap_row``, the aiding stage's
+(``conversions``, ``in_body_axes``, ``sample_dt_s``, ``ConfigWait``, ``ConfigGuard``, ``gap_row``, the aiding stage's
 ``Aiding``) on its columns and orders what it computed by ``stage_key``.
 
 Two protocol front-ends turn bytes into the stages' input: the project's own frames (``GsFrontEnd``,
@@ -236,6 +238,73 @@ def sensor_of(values: dict) -> SensorConfig:
     return sensor
 
 
+def config_changes(in_use: SensorConfig, new: SensorConfig) -> list[str]:
+    """What ``new`` changes of the full scales and the mounting ``in_use``, in words (the rate may change freely)."""
+    said = [("accelerometer full scale", "accel_fs_g", "±{} g"), ("gyro full scale", "gyro_fs_dps", "±{} °/s"),
+            ("mounting", "mounting", "{}")]
+    return [f"{what} {form.format(getattr(in_use, field))} → {form.format(getattr(new, field))}"
+            for what, field, form in said if getattr(in_use, field) != getattr(new, field)]
+
+
+class ConfigGuard:
+    """A sensor's full scales and mounting change only with a device restart (no command changes them), so
+    a CONFIG that changes them without one is not trusted by arrival (a forged or corrupted frame, another
+    sender: one such CONFIG rescaled a whole session by 4x, silently). ``config(t_host_ns, sensor)`` says
+    whether a usable CONFIG's sensor applies, and the ``config_conflict`` event when it changes them: it is
+    held (the data keeps the scales in use) unless ``accept_changes``; ``resolve`` is the user's answer to
+    a held one. The pipeline calls it per CONFIG, the batch path over its CONFIGs and restarts in order."""
+
+    def __init__(self, accept_changes: bool = False):
+        self.accept_changes = accept_changes
+        self.trusted: SensorConfig | None = None  # from the last CONFIG applied; None before the first
+        self.restarted = False  # a device_reset since that CONFIG
+        self.held: SensorConfig | None = None  # a conflicting CONFIG's sensor awaiting the user's answer
+        self._said: set[SensorConfig] = set()  # conflicts already reported since the last restart
+
+    def device_reset(self) -> None:
+        self.restarted = True
+
+    def config(self, t_host_ns: int, sensor: SensorConfig) -> tuple[bool, dict | None]:
+        """(whether ``sensor`` applies from here, the ``config_conflict`` event to record, if any)."""
+        if self.trusted is None or self.restarted:
+            self._trust(sensor)
+            return True, None
+        changes = config_changes(self.trusted, sensor)
+        if not changes:  # the scales and mounting in use (the device answering a request): a held one stays held
+            self.trusted = sensor
+            return True, None
+        if self.accept_changes:
+            self._trust(sensor)
+            return True, self._event(t_host_ns, changes, "accepted (--accept-config-changes)")
+        self.held = sensor
+        if sensor in self._said:
+            return False, None
+        self._said.add(sensor)
+        return False, self._event(t_host_ns, changes, f"kept ±{self.trusted.accel_fs_g} g, ±{self.trusted.gyro_fs_dps} °/s "
+                                  f"and mounting {self.trusted.mounting} until accepted")
+
+    def resolve(self, t_host_ns: int, accept: bool) -> tuple[SensorConfig | None, dict | None]:
+        """The user's answer to the held CONFIG: (the sensor to apply from here, or None; its event)."""
+        held, self.held = self.held, None
+        if held is None:
+            return None, None
+        if accept:
+            self._trust(held)
+        return (held if accept else None), {"t_host_ns": t_host_ns, "kind": "config_accepted" if accept else "config_kept",
+                                            "accel_fs_g": held.accel_fs_g, "gyro_fs_dps": held.gyro_fs_dps,
+                                            "mounting": held.mounting}
+
+    def _trust(self, sensor: SensorConfig) -> None:
+        self.trusted, self.restarted, self.held = sensor, False, None
+        self._said.clear()
+
+    @staticmethod
+    def _event(t_host_ns: int, changes: list[str], outcome: str) -> dict:
+        return {"t_host_ns": t_host_ns, "kind": "config_conflict", "changes": changes,
+                "message": f"CONFIG changes {', '.join(changes)} without a device restart (a forged or damaged frame, "
+                           f"another sender?): {outcome}"}
+
+
 class Pipeline:
     """Feed ``(t_host_ns, bytes)`` chunks; read ``tables`` (``imu``, ``onboard`` and one per frame, as
     ``catalogue`` describes them), ``events``, ``link``, ``config``.
@@ -249,7 +318,8 @@ class Pipeline:
     """
 
     def __init__(self, filters=DEFAULT_FILTERS, settings=None, forced=None, assumed_sensor: SensorConfig | None = None,
-                 spec: Spec = SPEC, protocol: str = "gs", aiding: str | None = None, vehicle_system: int | None = None):
+                 spec: Spec = SPEC, protocol: str = "gs", aiding: str | None = None, vehicle_system: int | None = None,
+                 accept_config_changes: bool = False):
         if protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {protocol!r} (known: {', '.join(PROTOCOLS)})")
         self.protocol = protocol
@@ -269,6 +339,7 @@ class Pipeline:
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
         self.unexpected_frames: dict[str, int] = {}  # frames of uplink types that came down, by type name
         self.t0_host_ns: int | None = None  # arrival of the first chunk: the origin of host times
+        self.config_guard = ConfigGuard(accept_config_changes)  # ``config_guard.held``: a CONFIG awaiting the user
         self._config_wait = ConfigWait(self.assumed_sensor)  # IMU samples (t_host_ns, frame, time_s, device_us) until a CONFIG
         self._last_us: int | None = None
         self._time_s = math.nan  # session time of the newest timestamped frame
@@ -349,9 +420,22 @@ class Pipeline:
         except (KeyError, ValueError):
             self._warn(t_host_ns, impossible_config_message(self.config))
             return
+        applies, event = self.config_guard.config(t_host_ns, sensor)
+        if event is not None:
+            self.events.append(event)
+        if not applies:
+            return
         self._use_sensor(sensor)
         for sample in self._config_wait.release():
             self._imu_sample(*sample)
+
+    def resolve_config(self, accept: bool, t_host_ns: int = 0) -> None:
+        """The user's answer to a held CONFIG (``config_guard.held``): its scales from here, or the ones in use."""
+        sensor, event = self.config_guard.resolve(t_host_ns, accept)
+        if event is not None:
+            self.events.append(event)
+        if sensor is not None:
+            self._use_sensor(sensor)
 
     def _unexpected(self, t_host_ns: int, frame: Frame) -> None:
         name = frame[0].name
@@ -446,6 +530,8 @@ class Pipeline:
     def _discontinuity(self, event: dict) -> None:
         """The device clock restarted or jumped: record it, start the estimators over, break every table."""
         self.events.append(event)
+        if event["kind"] == "device_reset":
+            self.config_guard.device_reset()
         self.bank.restart()
         self.aiding.restart()
         self._last_us = None

@@ -302,6 +302,15 @@ class RevealSession:
         self.source.advance()
         self._reveal()
 
+    @staticmethod
+    def held_config() -> None:
+        """Nothing: a file's CONFIGs were answered when it was computed (the answer recorded live, or
+        ``--accept-config-changes``)."""
+        return None
+
+    def resolve_config(self, accept: bool) -> None:
+        """Nothing is held in a file."""
+
     def file(self) -> tuple[Path, float]:
         """The file played and its length (s)."""
         return self.source.path, self.source.duration_s

@@ -68,7 +68,7 @@ class SessionData:
     @property
     def warnings(self) -> list[str]:
         """What every command says besides its result: what the recording lost, then the session's warnings."""
-        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") == "warning")]
+        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") in ("warning", "config_conflict"))]
 
     def quaternion(self, name: str) -> np.ndarray:
         """(N, 4) w-first, body -> NED, on the sample rows: a host estimator's, or ``onboard`` (its rows

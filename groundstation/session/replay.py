@@ -109,23 +109,30 @@ def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedS
                          protocol, warnings, vehicle_system)
 
 
-def pipeline_for(recording: Recording, filters=None, forced=None) -> Pipeline:
-    """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``."""
+def pipeline_for(recording: Recording, filters=None, forced=None, accept_config_changes: bool = False) -> Pipeline:
+    """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``;
+    ``accept_config_changes``: a CONFIG that changes the scales without a device restart applies (else held)."""
     setup = recorded_setup(recording, filters, forced)
     pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol, aiding=setup.aiding,
-                        vehicle_system=setup.vehicle_system)
+                        vehicle_system=setup.vehicle_system, accept_config_changes=accept_config_changes)
     pipeline.events += setup.warnings
     return pipeline
 
 
+CONFIG_ANSWERS = ("config_accepted", "config_kept")  # the user's answers to a held CONFIG (``ConfigGuard``)
+
+
 def apply_event(pipeline: Pipeline, event: dict) -> None:
-    """Re-apply a recorded settings change (other events are informational)."""
+    """Re-apply a recorded settings change or answer to a held CONFIG (other events are informational)."""
     if event.get("kind") == "settings" and event.get("name") in pipeline.estimators:
         pipeline.change_settings(event["name"], event.get("settings", {}), event.get("t_host_ns", 0))
+    elif event.get("kind") in CONFIG_ANSWERS:
+        pipeline.resolve_config(event["kind"] == CONFIG_ANSWERS[0], event.get("t_host_ns", 0))
 
 
 class SettingsSchedule:
-    """A recording's settings changes, handed out where they happened in the chunk stream.
+    """A recording's settings changes (and answers to a held CONFIG), handed out where they happened in the
+    chunk stream.
 
     A change recorded at ``t`` applies after every chunk that arrived at or before ``t`` (the live
     session stamps it with the last chunk it had fed), so a replay repeats the live session exactly.
@@ -139,6 +146,8 @@ class SettingsSchedule:
                 kept, _ = checked_settings(name, event.get("settings"))  # what is left out: left_out_settings
                 if kept:
                     changes.append((t, i, {**event, "settings": kept}))
+            elif event.get("kind") in CONFIG_ANSWERS:
+                changes.append((t, i, event))
         self._events = sorted(changes, key=lambda x: x[:2])
         self._next = 0
 
@@ -153,9 +162,10 @@ class SettingsSchedule:
             self._next += 1
 
 
-def replay(recording: Recording, filters=None, forced=None, progress: Callable[[int, int], None] | None = None) -> Pipeline:
+def replay(recording: Recording, filters=None, forced=None, progress: Callable[[int, int], None] | None = None,
+           accept_config_changes: bool = False) -> Pipeline:
     """Feed every chunk, re-applying settings changes where they happened; returns the pipeline."""
-    pipeline = pipeline_for(recording, filters, forced)
+    pipeline = pipeline_for(recording, filters, forced, accept_config_changes)
     schedule = SettingsSchedule(recording)
     total = recording.chunk_count
     for i, (t_host_ns, data) in enumerate(recording.chunks()):

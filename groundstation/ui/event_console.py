@@ -13,7 +13,7 @@ from firmware_protocol import SPEC
 from groundstation.session.view import ProductView, Session
 
 # Kinds a pilot must not miss, shown in red.
-ALARMS = frozenset({"warning", "disconnected", "device_reset", "clock_jump", "gap", "recording_failed"})
+ALARMS = frozenset({"warning", "config_conflict", "disconnected", "device_reset", "clock_jump", "gap", "recording_failed"})
 HIDDEN_FIELDS = frozenset({"kind", "t_host_ns", "wall_time", "session_time_s"})
 # Events that carry a frame's values (CONFIG, ACK) show its enum fields by member name ("unknown" included).
 ENUM_FIELDS = {kind: {f.name: f for f in SPEC.frame(kind.upper()).fields if f.enum} for kind in ("config", "ack")}

@@ -28,6 +28,7 @@ from groundstation.ui.event_console import EventConsole
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
+from groundstation.ui.config_banner import ConfigBanner
 from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
@@ -82,6 +83,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.banner.setTextInteractionFlags(QtCore.Qt.TextSelectableByMouse)
         self.banner.hide()
         self.recording_banner = RecordingBanner()
+        self.config_banner = ConfigBanner()
         self.replay_bar = ReplayBar()
         self.replay_bar.seekRequested.connect(self.seek)
         self.replay_bar.hide()
@@ -132,6 +134,7 @@ class MainWindow(QtWidgets.QMainWindow):
         layout.addWidget(self.bar)
         layout.addWidget(self.banner)
         layout.addWidget(self.recording_banner)
+        layout.addWidget(self.config_banner)
         layout.addWidget(self.loading_row)
         layout.addWidget(self.replay_bar)
         layout.addWidget(self.splitter, 1)
@@ -417,6 +420,7 @@ class MainWindow(QtWidgets.QMainWindow):
         if figures:
             self.link_panel.refresh(session)
             self.recording_banner.refresh(session)
+            self.config_banner.refresh(session)
         if session is None:
             return
         self.live_view.refresh()

@@ -67,3 +67,19 @@ def test_not_a_ulog_is_a_clear_error(tmp_path):
     path.write_bytes(b"PK\x03\x04 not a log")
     with pytest.raises(UserError, match="not a PX4 ULog"):
         read_log(path)
+
+
+def test_rows_at_implausible_times_are_dropped_and_said(tmp_path):
+    """One flipped bit in the top byte of a timestamp (2^56 µs: the row at 7.2e10 s) is damage: the row
+    is dropped, the log says so, and the session's damage list carries it."""
+    topics, _ = px4_flight(duration_s=4.0)
+    stamps = topics["sensor_combined"][1]["timestamp"]
+    stamps[300] = float(int(stamps[300]) ^ (1 << 56))
+    path = tmp_path / "damaged.ulg"
+    write_ulog(path, topics, {"sys_name": "PX4"})
+    log = read_log(path)
+    assert len(log.imu) == len(stamps) - 1 and log.imu.time_us.max() == int(stamps[-1])
+    said = [d for d in log.damage if "sensor_combined" in d]
+    assert len(said) == 1 and "1 row" in said[0] and "7.21e+10 s" in said[0], log.damage
+    data = load_log(path, ["hf"])
+    assert said[0] in data.damage and (data.time_s < 5.0).all()
