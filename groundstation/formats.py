@@ -60,7 +60,7 @@ def register(file_format: FileFormat) -> FileFormat:
 register(FileFormat("recording", (".gsrec",), "recording", "groundstation.loaders.recording:load",
                     magic=RECORDING_MAGIC, replayable=True))
 register(FileFormat("dataset", (".csv", ".csv.gz", ".gz"), "dataset CSV", "groundstation.loaders.dataset_csv:load"))
-register(FileFormat("tlog", (".tlog",), "MAVLink telemetry log", "groundstation.autopilot.session:load_log",
+register(FileFormat("tlog", (".tlog",), "MAVLink telemetry log", "groundstation.loaders.tlog:load",
                     read="groundstation.autopilot.tlog:read_tlog"))
 register(FileFormat("dataflash", (".bin",), "ArduPilot DataFlash log", "groundstation.autopilot.session:load_log",
                     magic=b"\xa3\x95", read="groundstation.autopilot.dataflash:read_dataflash"))

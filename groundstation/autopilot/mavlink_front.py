@@ -23,10 +23,11 @@ later messages counted in ``unplaced_messages``): 5,000 fake senders would other
 past what a workbook can hold. The vehicle's own are bounded by the dialect (301 message types, 7,628
 numeric columns), so a session stays within Excel's 16,384 columns.
 
-Time: the vehicle's timestamps (µs since boot) of IMU, attitude, magnetometer and barometer go through
-the session's ``SessionClock``, so an autopilot reboot is a ``device_reset`` as for the project's
-aircraft. GPS and generic messages take the current session time: their ``time_usec`` is often GPS or
-UNIX time, not time since boot.
+Time: host times count from the arrival of the first whole message (a ``.tlog`` keeps no bytes
+before it). The vehicle's timestamps (µs since boot) of IMU, attitude, magnetometer and barometer go
+through the session's ``SessionClock``, so an autopilot reboot is a ``device_reset`` as for the
+project's aircraft. GPS and generic messages take the current session time: their ``time_usec`` is
+often GPS or UNIX time, not time since boot.
 
 Uplink: ``StreamRequester``'s stream-rate requests only (``take_uplink``); when the IMU is still
 slower than host filtering needs ``SLOW_WARNING_S`` after the first request, a warning event
@@ -83,7 +84,12 @@ class MavlinkFrontEnd:
         return Catalogue(tables)
 
     def feed(self, t_host_ns: int, data: bytes) -> None:
+        before = self.mavlink.stats.messages
         records = self.mavlink.feed(data, t_host_ns)
+        if before == 0 and self.mavlink.stats.messages:
+            # Host times start at the first whole message, not the first bytes (the tail of a packet sent
+            # before the port opened): a .tlog keeps messages only, and opens to the same host times.
+            self.pipeline.t0_host_ns = t_host_ns
         self._count()
         self.pipeline.link.on_chunk(t_host_ns, self.stats, len(records))
         for record in records:

@@ -4,10 +4,20 @@ received, preceded by its receive time as an 8-byte big-endian count of µs sinc
 Reading walks that layout (packet length from its header: MAVLink 1 ``0xFE``, MAVLink 2 ``0xFD``, with
 signature) and lets pymavlink decode and check each packet; where the bytes do not fit (junk, a
 truncated end), it resynchronises on the next plausible timestamp followed by a packet start.
+
+A session opens a ``.tlog`` as the live link it was: its packets at their receive times through the
+pipeline's MAVLink front-end (``session_packets``, ``loaders.tlog``, ``sources.mavlink``). One rule
+first: a log whose autopilot clock advanced, over its later half, more than its receive clock by more than the session
+clock lets a frame arrive early (``SessionClock``'s ``JUMP_TOLERANCE_S`` plus ``DRIFT_TOLERANCE`` of the
+time elapsed) has *compressed* receive times (SITL autotests log 308 s of autopilot time in 12 s);
+no live link delivers that, so its packets are stamped on the autopilot's clock instead (each at the
+autopilot time reached so far; a reboot holds it, so the session still sees the reboot).
 """
 
 from __future__ import annotations
 
+import bisect
+import dataclasses
 import struct
 from collections import defaultdict
 from collections.abc import Iterable, Iterator
@@ -15,11 +25,15 @@ from pathlib import Path
 
 import numpy as np
 
+from firmware_protocol.decoder import BACK_TOLERANCE_US
+
 from groundstation.autopilot import records as rec
-from groundstation.autopilot.decoder import new_parser
+from groundstation.autopilot.decoder import MavlinkDecoder, new_parser
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, series
 from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
 from groundstation.errors import UserError
+from groundstation.autopilot.vehicle import Vehicle
+from groundstation.session.clock import DRIFT_TOLERANCE, JUMP_TOLERANCE_S
 
 STAMP = struct.Struct(">Q")
 MAGIC_V1, MAGIC_V2 = 0xFE, 0xFD
@@ -89,6 +103,64 @@ def messages(path, progress=None) -> Iterator[tuple[int, object]]:
             yield stamp_us, parser.decode(bytearray(packet))
         except Exception:  # pymavlink raises MAVError (CRC, unknown id) and struct.error (short payload)
             yield len(packet) + 8, None
+
+
+@dataclasses.dataclass
+class SessionPackets:
+    """A ``.tlog``'s packets as a session receives them: (receive time ns, packet) in file order."""
+
+    packets: list[tuple[int, bytes]]
+    bad_bytes: int  # bytes between the records, skipped
+    bad_runs: int
+    compressed: bool  # receive times replaced by the autopilot's clock (the module's rule)
+
+    def notes(self) -> list[str]:
+        out = [f"{self.bad_runs} damaged byte runs ({self.bad_bytes} bytes) skipped"] if self.bad_runs else []
+        if self.compressed:
+            out.append("receive times compressed (the autopilot clock runs faster): timed by the autopilot clock")
+        return out
+
+
+def session_packets(data: bytes) -> SessionPackets:
+    """The packets of a ``.tlog``'s bytes with the receive times a session feeds them at."""
+    stamped, bad_bytes, bad_runs = [], 0, 0
+    for stamp_us, packet in packets(data):
+        if packet is None:
+            bad_bytes, bad_runs = bad_bytes + stamp_us, bad_runs + 1
+        else:  # a packet that fails its check is the decoder's to count, as on a live link
+            stamped.append((stamp_us * 1000, bytes(packet)))
+    on_autopilot = _autopilot_clock(stamped)
+    compressed = on_autopilot is not None
+    if compressed:
+        stamped = list(zip(on_autopilot, (packet for _, packet in stamped)))
+    return SessionPackets(stamped, bad_bytes, bad_runs, compressed)
+
+
+def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
+    """Each packet's time on the vehicle's clock (ns from the first packet's receive time: the autopilot
+    time reached so far), if the log's receive times are compressed; else None. Judged over the log's
+    later half by receive time: a live link's backlog at the start (bytes queued before the session
+    read them) arrives "compressed" too, and is no reason to distrust the receive clock."""
+    decoder, vehicle = MavlinkDecoder(), Vehicle()  # the front-end's choice of the vehicle
+    reached_us, latest_us, times = 0, None, []
+    for t_ns, packet in stamped:
+        for r in decoder.feed(packet, t_ns):
+            vehicle.choose(r)
+            timed = isinstance(r, (rec.ImuSample, rec.OnboardAttitude, rec.MagReading, rec.BaroReading))
+            if timed and vehicle.sent(r) and r.time_us is not None:
+                if latest_us is not None and r.time_us > latest_us:
+                    reached_us += r.time_us - latest_us
+                if latest_us is None or r.time_us > latest_us or r.time_us < latest_us - BACK_TOLERANCE_US:
+                    latest_us = r.time_us  # forward, or back further than a late sensor: a reboot
+        times.append(reached_us)
+    if not stamped:
+        return None
+    half = bisect.bisect_left([t_ns for t_ns, _ in stamped], (stamped[0][0] + stamped[-1][0]) / 2)
+    receive_s = (stamped[-1][0] - stamped[half][0]) * 1e-9
+    autopilot_s = (times[-1] - times[half]) * 1e-6
+    if autopilot_s <= receive_s + JUMP_TOLERANCE_S + DRIFT_TOLERANCE * autopilot_s:
+        return None
+    return [stamped[0][0] + t_us * 1000 for t_us in times]
 
 
 def read_tlog(path, progress=None) -> FlightLog:

@@ -80,20 +80,25 @@ def from_trial(trial: Trial, filters, settings_used, metadata: dict, origin_s: f
 
 
 def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> SessionData:
-    """A decoded session's product: what the pipeline (or the batch path) computed, as it computed it."""
-    t0_ns = pipeline.t0_host_ns or 0
-    data = build_product(
-        recording.metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
-        pipeline.filters, protocol=recording.metadata.get("protocol", "gs"),
-        link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
-        events=[{**event, "t_s": (event["t_host_ns"] - t0_ns) / 1e9} for event in pipeline.events],
-        settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=list(recording.damage),
-        magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
-    )
+    """A recording's product: what the pipeline (or the batch path) computed, as it computed it."""
+    data = pipeline_product(recording.metadata, pipeline, list(recording.damage))
     if "true_qw" in recording.samples:
         device_us = data.tables[data.sample_table]["device_time_us"]
         attach_sensor_truth(data, recording.samples, device_us, pipeline)
     return data
+
+
+def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: list) -> SessionData:
+    """A decoded session's product (a recording's, a ``.tlog``'s): the pipeline's tables, link, events and settings."""
+    t0_ns = pipeline.t0_host_ns or 0
+    return build_product(
+        metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
+        pipeline.filters, protocol=metadata.get("protocol", "gs"),
+        link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
+        events=[{**event, "t_s": (event["t_host_ns"] - t0_ns) / 1e9} for event in pipeline.events],
+        settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=damage,
+        magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
+    )
 
 
 def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], device_us: np.ndarray, pipeline: Pipeline) -> None:

@@ -111,14 +111,15 @@ def open_link(spec: Spec, kind: str, address: str) -> MavlinkSource:
 
 
 class TlogReplaySource:
-    """A ``.tlog`` as a source: one chunk per packet, stamped with its recorded receive time (ns)."""
+    """A ``.tlog`` as a source: one chunk per packet, stamped with its receive time (ns) as a session
+    opening the file takes it (``autopilot.tlog.session_packets``: a compressed log on the autopilot's clock)."""
 
     is_replay = True
     can_reopen = False
     can_send = False
 
     def __init__(self, path, speed: float | None = None):
-        from groundstation.autopilot.tlog import packets
+        from groundstation.autopilot.tlog import session_packets
 
         path = Path(path)
         try:
@@ -127,7 +128,7 @@ class TlogReplaySource:
             raise SourceError(f"cannot open {path}: {error.strerror}") from None
         if speed is not None and not MIN_SPEED <= speed <= MAX_SPEED:
             raise SourceError(f"replay speed must be between {MIN_SPEED}x and {MAX_SPEED}x, not {speed}x")
-        self._packets = [(stamp_us * 1000, packet) for stamp_us, packet in packets(data) if packet is not None]
+        self._packets = session_packets(data).packets
         if not self._packets:
             raise SourceError(f"{path}: no MAVLink packets found; not a .tlog?")
         self.description = f"replay of {path.name}"

@@ -97,3 +97,35 @@ def test_sitl_tlog_uses_the_autopilot_clock_not_the_compressed_receive_time(tmp_
     assert log.imu.rate_hz == pytest.approx(10.0, rel=0.02)  # README: 10 Hz on time_boot_ms / time_usec
     assert log.onboard.rate_hz == pytest.approx(10.0, rel=0.02)
     assert any("damaged" in note for note in log.notes)  # ~2.2 KB of non-packet bytes at the start
+
+
+def test_a_sitl_tlog_opens_on_the_autopilot_clock_and_a_live_one_on_its_receive_times(tmp_path):
+    """The rule of ``autopilot.tlog``: compressed receive times (the autopilot clock runs ~25x faster) are
+    replaced by the autopilot's clock, so the session sees no clock jumps; a log at real time keeps its own."""
+    from groundstation.autopilot.tlog import session_packets
+    from groundstation.session.clock import DISCONTINUITIES
+    from groundstation.session.load import load_session
+
+    trimmed = tmp_path / "rover_start.tlog"
+    trimmed.write_bytes(flightlog("ardurover_boat_sitl_autotest.tlog").read_bytes()[:400_000])
+    data = load_session(trimmed, ("hf",))
+    # The log starts with the end of a boot before the autotest's reboot: that one reset, no clock jumps.
+    assert [e["kind"] for e in data.events if e["kind"] in DISCONTINUITIES] == ["device_reset"]
+    imu = data.tables["imu"]
+    last = slice(np.flatnonzero(np.isnan(imu["device_time_us"]))[-1] + 1, None)  # after the reset's gap row
+    device_s = (imu["device_time_us"][last] - imu["device_time_us"][last][0]) / 1e6
+    assert device_s[-1] > 20  # tens of seconds of autopilot time in ~1 s of receive time
+    np.testing.assert_allclose(imu["time_s"][last] - imu["time_s"][last][0], device_s, atol=1e-9)
+    host_s = imu["host_time_s"][last] - imu["host_time_s"][last][0]
+    np.testing.assert_allclose(host_s, device_s, atol=1e-6)  # receive time = autopilot time
+    assert "compressed" in data.metadata["notes"] and any("damaged" in d for d in data.damage)
+
+    # A log at real time, with a burst at the start (a backlog read at once): its receive times are kept.
+    ap, t0_us = Sender(), 1_700_000_000_000_000
+    packets = [(t0_us, ardupilot_heartbeat(ap))]
+    for i in range(200):  # 4 s at 50 Hz; the first second's samples all received at once
+        packets.append((t0_us + max(i * 20_000, 1_000_000), ap.raw_imu(3_000_000 + i * 20_000, 0, 0, -1000, 0, 0, 0, 1, 2, 3)))
+    path = tmp_path / "real_time.tlog"
+    write_tlog(path, packets)
+    stamped = session_packets(path.read_bytes())
+    assert not stamped.compressed and [t for t, _ in stamped.packets] == [t * 1000 for t, _ in packets]

@@ -1,0 +1,67 @@
+"""Live MAVLink = its .tlog (issue 20): a live session from the simulated aircraft on a real
+pseudo-terminal, recorded, saved with ``groundstation import REC --out x.tlog`` and opened again: the
+same tables, rows and values as the recording opened itself.
+
+Both go through the pipeline's MAVLink front-end; what differs is only what the .tlog cannot hold:
+its receive times are whole microseconds (the recording's nanoseconds, truncated), so the host-time
+column (``host_time_s``) may differ by up to 1 µs; every other value is equal bit for bit."""
+
+import dataclasses
+import os
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+from groundstation.recording import open_recording
+from groundstation.session.factory import open_session
+from groundstation.session.load import load_session
+from groundstation.sim.mavlink_aircraft import MavlinkAircraft
+from groundstation.sim.stream import Scenario
+from test_mavlink_session import run_for
+
+SCENARIO = dataclasses.replace(Scenario(), profile="flight", duration_s=60.0, seed=5)
+FILTERS = ("ahf", "hf")
+HOST_TIME_COLUMNS = {"host_time_s"}  # from the receive time: a .tlog keeps it in whole µs
+RECEIVE_TIME_TOLERANCE_S = 1e-6
+
+
+@pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
+def test_a_live_session_and_its_tlog_open_to_the_same_tables_and_rows(tmp_path):
+    from groundstation.sim.pty_bridge import PtyBridge
+
+    aircraft = MavlinkAircraft(SCENARIO)
+    bridge = PtyBridge(aircraft)
+    stop = threading.Event()
+    thread = threading.Thread(target=bridge.run, args=(stop.is_set,), daemon=True)
+    thread.start()
+    try:
+        session = open_session(f"mavlink:{bridge.path}?baud=57600", filters=FILTERS, recordings_dir=tmp_path)
+        run_for(session, 3.0)
+    finally:
+        stop.set()
+        thread.join()
+        bridge.close()
+    recording = session.recording_path
+    assert open_recording(recording).metadata["protocol"] == "mavlink"
+    tlog = tmp_path / "x.tlog"
+    done = subprocess.run([sys.executable, "-m", "groundstation", "import", str(recording), "--out", str(tlog)],
+                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+
+    live, logged = load_session(recording, filters=FILTERS), load_session(tlog, filters=FILTERS)
+    assert len(live.tables["imu"]["time_s"]) > 100 and len(live.tables["onboard"]["time_s"]) > 50
+    assert sorted(logged.tables) == sorted(live.tables)
+    assert logged.filters == live.filters
+    for name, table in live.tables.items():
+        assert logged.catalogue[name].column_names == live.catalogue[name].column_names, name
+        assert list(logged.tables[name]) == list(table), name
+        for column, values in table.items():
+            other = logged.tables[name][column]
+            assert other.shape == values.shape, f"{name}.{column}"
+            if column in HOST_TIME_COLUMNS:
+                np.testing.assert_allclose(other, values, rtol=0, atol=RECEIVE_TIME_TOLERANCE_S, err_msg=f"{name}.{column}")
+            else:
+                np.testing.assert_array_equal(other, values, err_msg=f"{name}.{column}")
