@@ -4,6 +4,8 @@ written byte by byte from the ULog format specification, and where the shared fl
 from __future__ import annotations
 
 import struct
+import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -160,3 +162,24 @@ class Flying:
         self._stop.set()
         self._thread.join()
         self.bridge.close()
+
+
+def pty_session(aircraft, seconds: float, **session_options):
+    """A live session of ``aircraft`` through a real pseudo-terminal (bridge-sim's), run for ``seconds``
+    and stopped; ``session_options`` go to ``open_session``."""
+    from groundstation.session.factory import open_session
+    from groundstation.sim.pty_bridge import PtyBridge
+
+    bridge = PtyBridge(aircraft)
+    stop = threading.Event()
+    thread = threading.Thread(target=bridge.run, args=(stop.is_set,), daemon=True)
+    thread.start()
+    try:
+        session = open_session(f"mavlink:{bridge.path}?baud=57600", **session_options)
+        with session:
+            time.sleep(seconds)
+    finally:
+        stop.set()
+        thread.join()
+        bridge.close()
+    return session
