@@ -12,10 +12,8 @@ against the incremental ``replay`` (the baseline), medians of R, in this process
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -25,6 +23,7 @@ from groundstation.session.batch import batch_replay  # noqa: E402
 from groundstation.session.replay import replay  # noqa: E402
 from groundstation.sim.firmware import FirmwareSettings  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
+from timing import median_seconds  # noqa: E402
 
 SENSORS = dict(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)
 
@@ -41,15 +40,6 @@ def make_recording(path: Path, duration_s: float) -> None:
             writer.write_chunk(int(chunk.t_s * 1e9), chunk.data)
 
 
-def median_s(job, repeats: int) -> float:
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        job()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--minutes", type=float, default=5.0)
@@ -61,8 +51,8 @@ def main() -> None:
         recording = open_recording(path)
         batch_replay(recording, ("ahf",))  # compile and warm up
         samples = len(replay(recording, ("ahf",)).imu)
-        batch = median_s(lambda: batch_replay(recording, ("ahf",)), args.repeats)
-        incremental = median_s(lambda: replay(recording, ("ahf",)), args.repeats)
+        batch = median_seconds(lambda: batch_replay(recording, ("ahf",)), args.repeats)
+        incremental = median_seconds(lambda: replay(recording, ("ahf",)), args.repeats)
     print(f"{args.minutes:g} min, {samples} IMU samples, mag 50 Hz, baro 25 Hz, GPS 5 Hz; ahf; medians of {args.repeats}")
     print(f"incremental replay (baseline)  {incremental:6.2f} s   {args.minutes * 60 / incremental:6.0f}x real time   1.00x")
     print(f"batch_replay                   {batch:6.2f} s   {args.minutes * 60 / batch:6.0f}x real time   "
