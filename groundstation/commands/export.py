@@ -16,7 +16,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from groundstation import formats
 
     parser.add_argument("file", metavar="FILE", help=formats.described())
-    parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv, OUT.parquet or OUT.xlsx (by extension)")
+    parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv, OUT.parquet, OUT.xlsx or OUT.mcap (by extension)")
     add_estimator_options(parser, None)
     add_config_option(parser)
     parser.add_argument("--from", dest="t_from", type=float, metavar="S", help="first second to export")

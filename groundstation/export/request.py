@@ -20,7 +20,7 @@ from pathlib import Path
 from groundstation.errors import UserError
 from groundstation.export.columns import check_row_options
 
-FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet"}  # suffix -> what the user calls it
+FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet", ".mcap": "MCAP"}  # suffix -> what the user calls it
 
 
 @dataclasses.dataclass(frozen=True)
@@ -54,6 +54,8 @@ def export_request(source, out, *, filters=None, overrides=None, t_from=None, t_
     if request.format not in FORMATS:
         raise UserError(f"{request.out.name}: the name must end in {', '.join(FORMATS)}")
     check_row_options(t_from, t_to, rate_hz)
+    if request.format == ".mcap" and rate_hz is not None:
+        raise UserError("--rate does not apply to MCAP: it keeps every row of every table at its own rate")
     if not request.source.is_file():
         raise UserError(f"{request.source}: no such file")
     if request.out.resolve() == request.source.resolve():
@@ -102,6 +104,12 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
                                 forced=request.overrides, overwrite=request.overwrite,
                                 progress=lambda done, total: report("writing", done, total), cancel=cancel)
         written = f"sheets {', '.join(sheets)}"
+    elif request.format == ".mcap":
+        from groundstation.export.mcap_file import write_mcap
+        report("writing", 0, 1)
+        messages = write_mcap(data, request.out, request.overwrite, request.t_from, request.t_to)
+        report("writing", 1, 1)
+        written = f"{messages} messages on {len(data.tables)} tables, /tf, /attitude/* and /events"
     else:
         columns = export_columns(data, select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz))
         (write_csv if request.format == ".csv" else write_parquet)(columns, request.out, request.overwrite)

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation.session.link import LATENCY_WINDOW, PER_SECOND_COLUMNS, clock_figures
-from groundstation.session.product import LinkSummary, SessionData
+from groundstation.session.product import LinkSummary, SessionData, event_time_s
 from groundstation.sources.replay import check_speed
 
 TOTALS = ("frames", "crc_errors", "frames_lost", "bytes_skipped")  # the decoder's counters a replay shows
@@ -147,7 +147,7 @@ class Revealed:
         self.imu, self.onboard = tables["imu"], tables["onboard"]
         self.link = RevealedLink(data.link, self.imu, [self.imu, self.onboard]) if data.link is not None else None
         notes = [*data.damage, *(data.metadata[k] for k in ("imu_warning", "notes") if data.metadata.get(k))]
-        timed = [{**{k: v for k, v in e.items() if k != "t_s"}, "session_time_s": float(e.get("session_time_s", e["t_s"]))}
+        timed = [{**{k: v for k, v in e.items() if k != "t_s"}, "session_time_s": event_time_s(e)}
                  for e in data.events]
         timed += [{"kind": "warning", "t_host_ns": 0, "session_time_s": 0.0, "message": note} for note in notes]
         self._events = sorted(timed, key=lambda e: e["session_time_s"])

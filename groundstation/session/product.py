@@ -107,6 +107,11 @@ class SessionData:
             raise UserError(str(error)) from None
 
 
+def event_time_s(event: dict) -> float:
+    """An event's session time: the clock's own when the event carries it, else seconds from the first byte."""
+    return float(event.get("session_time_s", event["t_s"]))
+
+
 def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[str, np.ndarray]], filters,
                   **rest) -> SessionData:
     """The one way a ``SessionData`` is made: every table the catalogue names, with exactly its columns

@@ -16,7 +16,7 @@ from groundstation.export import request as export
 from groundstation.export.excel import ExportCancelled
 
 # The share of the progress bar the decoding takes (the writing takes the rest): a workbook is slow to write.
-DECODE_SHARE = {".xlsx": 0.4, ".csv": 0.9, ".parquet": 0.9}
+DECODE_SHARE = {".xlsx": 0.4, ".csv": 0.9, ".parquet": 0.9, ".mcap": 0.5}
 # suffix -> (menu label, decoding's share of the progress bar)
 FORMATS = {suffix: (label, DECODE_SHARE[suffix]) for suffix, label in export.FORMATS.items()}
 

@@ -1,0 +1,51 @@
+"""A session to an MCAP file, which Foxglove, Lichtblick, PlotJuggler and Rerun open.
+
+The topics are ``foxglove_topics``' (the same the live bridge serves); the file is written by
+foxglove-sdk's writer (Foxglove's own, with the well-known schemas) to a temporary name and renamed when
+complete (``files.atomic_output``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from groundstation.export.files import atomic_output
+from groundstation.export.foxglove_topics import Topics, earliest_time_s, origin_ns
+from groundstation.session.product import SessionData, event_time_s
+
+
+def in_range(time_s: np.ndarray, t_from: float | None, t_to: float | None) -> np.ndarray:
+    """Indices of the rows in [t_from, t_to] (every row when neither is given)."""
+    keep = np.ones(len(time_s), dtype=bool)
+    if t_from is not None:
+        keep &= time_s >= t_from
+    if t_to is not None:
+        keep &= time_s <= t_to
+    return np.flatnonzero(keep)
+
+
+def write_mcap(data: SessionData, path, overwrite: bool = False, t_from: float | None = None,
+               t_to: float | None = None) -> int:
+    """Writes every table, every attitude and every event of ``data`` between ``t_from`` and ``t_to``
+    (session seconds) to ``path``; returns the number of messages."""
+    import foxglove
+
+    with atomic_output(path, overwrite) as temporary:
+        context = foxglove.Context()
+        writer = foxglove.open_mcap(temporary, allow_overwrite=True, context=context)
+        try:
+            writer.write_metadata("session", {str(k): str(v) for k, v in data.metadata.items()})
+            topics = Topics(context, data.catalogue, origin_ns(data.metadata, earliest_time_s(data.tables)))
+            count = 0
+            for name, columns in data.tables.items():
+                count += topics.table(name, columns, in_range(columns["time_s"], t_from, t_to))
+            rows = in_range(data.time_s, t_from, t_to)
+            estimates = {name: q[rows] for name, q in data.attitudes().items()}
+            topics.attitudes(data.time_s[rows], estimates)
+            count += len(rows) * (1 + len(estimates))
+            times = [event_time_s(e) for e in data.events]
+            count += topics.events(e for e, t in zip(data.events, times)
+                                   if (t_from is None or t >= t_from) and (t_to is None or t <= t_to))
+        finally:
+            writer.close()
+    return count

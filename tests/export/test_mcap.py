@@ -1,0 +1,130 @@
+"""MCAP export read back by an independent reader (``mcap`` with its protobuf decoder): every row and
+time stamp of every table equal to the session's, every attitude on /tf, every event on /events."""
+
+import json
+import math
+import subprocess
+import sys
+from collections import defaultdict
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
+
+from groundstation.export.foxglove_topics import origin_ns
+from groundstation.export.mcap_file import write_mcap
+from groundstation.export.request import export_request, run_export
+from groundstation.session.load import load_session
+from groundstation.session.product import event_time_s
+from tests.export.conftest import START_UTC
+
+
+def read_mcap(path):
+    """topic -> list of (log_time_ns, decoded message); JSON decoded by json, protobuf by its schema."""
+    out = defaultdict(list)
+    with open(path, "rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        for schema, channel, message in reader.iter_messages():
+            if channel.message_encoding == "json":
+                out[channel.topic].append((message.log_time, json.loads(message.data)))
+        stream.seek(0)
+        for schema, channel, message, proto in reader.iter_decoded_messages(
+                topics=[t for t in ("/tf", "/events")]):
+            out[channel.topic].append((message.log_time, proto))
+    return out
+
+
+def test_every_row_and_time_stamp_read_back(sim_session, tmp_path):
+    path = tmp_path / "flight.mcap"
+    write_mcap(sim_session, path)
+    topics = read_mcap(path)
+    origin = origin_ns({"start_utc": START_UTC})
+    assert origin == 1714564800 * 10**9  # 2024-05-01T12:00:00Z, by hand
+    checked = 0
+    for name, columns in sim_session.tables.items():
+        messages = topics.get(f"/{name}", [])
+        assert len(messages) == len(columns["time_s"]), name
+        for column, values in columns.items():
+            read = np.array([np.nan if m[column] is None else m[column] for _, m in messages], dtype=float)
+            np.testing.assert_array_equal(read, values, err_msg=f"{name}.{column}")  # bit for bit, NaN as NaN
+        times = np.array([t for t, _ in messages], dtype=np.int64)
+        untimed = np.isnan(columns["time_s"])  # a CONFIG before the first sample: at the session's start
+        expected = origin + np.rint(np.where(untimed, 0.0, columns["time_s"]) * 1e9).astype(np.int64)
+        np.testing.assert_array_equal(times, expected, err_msg=name)
+        checked += len(messages)
+    assert checked > 2000 and len(sim_session.tables["imu"]["time_s"]) > 1000
+
+
+def test_attitudes_as_frame_transforms(sim_session, tmp_path):
+    path = tmp_path / "flight.mcap"
+    write_mcap(sim_session, path)
+    topics = read_mcap(path)
+    transforms = topics["/tf"]
+    attitudes = sim_session.attitudes()
+    assert {"ahf", "hf", "onboard"} <= set(attitudes)
+    by_frame = defaultdict(list)
+    for log_time, message in transforms:
+        for transform in message.transforms:
+            assert transform.parent_frame_id == "ned"
+            stamp = transform.timestamp.seconds * 10**9 + transform.timestamp.nanos
+            assert stamp == log_time
+            r = transform.rotation
+            by_frame[transform.child_frame_id].append((log_time, (r.w, r.x, r.y, r.z)))
+    origin = origin_ns(sim_session.metadata)
+    for name, q in attitudes.items():
+        finite = np.isfinite(q).all(axis=1)
+        got = by_frame[name]
+        assert len(got) == finite.sum(), name
+        np.testing.assert_array_equal(np.array([v for _, v in got]), q[finite])
+        np.testing.assert_array_equal([t for t, _ in got], origin + np.rint(sim_session.time_s[finite] * 1e9))
+    pitch = np.array([m["pitch_deg"] for _, m in topics["/attitude/ahf"]])
+    q = attitudes["ahf"]
+    expected = np.degrees(np.arcsin(np.clip(2 * (q[:, 0] * q[:, 2] - q[:, 3] * q[:, 1]), -1, 1)))  # ZYX pitch
+    np.testing.assert_allclose(pitch, expected[np.isfinite(q).all(axis=1)], atol=1e-9)
+
+
+def test_events_as_foxglove_logs(sim_session, tmp_path):
+    path = tmp_path / "flight.mcap"
+    write_mcap(sim_session, path)
+    logs = read_mcap(path)["/events"]
+    assert len(logs) == len(sim_session.events) > 0
+    origin = origin_ns(sim_session.metadata)
+    for (log_time, log), event in zip(logs, sim_session.events):
+        assert log.name == event["kind"]
+        assert log_time == origin + round(event_time_s(event) * 1e9)
+    settings = [log for _, log in logs if log.name == "settings"]
+    assert settings and "hf" in settings[0].message
+
+
+def test_time_range_and_rate(sim_recording, tmp_path):
+    out = tmp_path / "part.mcap"
+    result = run_export(export_request(sim_recording, out, t_from=5.0, t_to=8.0), load_session)
+    assert out.exists() and "messages" in result.message
+    imu = [m for _, m in read_mcap(out)["/imu"]]
+    assert imu and all(5.0 <= m["time_s"] <= 8.0 for m in imu)
+    from groundstation.errors import UserError
+    with pytest.raises(UserError, match="--rate does not apply to MCAP"):
+        export_request(sim_recording, tmp_path / "x.mcap", rate_hz=10)
+
+
+def test_cli_exports_a_flight_log_and_refuses_cleanly(tmp_path):
+    from tests.export.conftest import DATASETS
+    log = DATASETS / "flightlogs" / "px4_fmuv5_quad_hop.ulg"
+    if not log.exists():
+        pytest.skip("flight logs not found")
+    out = tmp_path / "hop.mcap"
+    done = subprocess.run([sys.executable, "-m", "groundstation", "export", str(log), "--out", str(out)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    topics = read_mcap(out)
+    session = load_session(log)
+    onboard = session.tables["onboard"]["time_s"]
+    assert len(topics["/onboard"]) == len(onboard) > 0
+    times = np.array([t for t, _ in topics["/onboard"]])
+    assert times.min() >= 0  # no start time in a .ulg's header here: the epoch, moved past the earliest row
+    np.testing.assert_allclose(np.diff(times) / 1e9, np.diff(onboard), atol=1e-9)
+    again = subprocess.run([sys.executable, "-m", "groundstation", "export", str(log), "--out", str(out)],
+                           capture_output=True, text=True, timeout=300)
+    assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
+    assert len(again.stderr.strip().splitlines()) == 1
