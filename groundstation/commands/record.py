@@ -32,11 +32,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="serial baud rate unless the spec gives ?baud= (default: 115200, or 57600 for mavlink:PORT)")
     parser.add_argument("--recordings", type=Path, default=None, metavar="DIR",
                         help="record into DIR (default: $GROUNDSTATION_RECORDINGS or the platform's recordings folder)")
+    parser.add_argument("--foxglove", metavar="[HOST:]PORT", default=None,
+                        help="serve the live session to Foxglove (or any Foxglove WebSocket client) on PORT, "
+                             "listening on 127.0.0.1 unless HOST is given (0.0.0.0: every interface)")
     add_estimator_options(parser, ",".join(live_estimators()))
 
 
 def run(args: argparse.Namespace) -> int:
     from groundstation.commands.summary import follow, totals_line
+    from groundstation.export.foxglove_live import FoxgloveBridge, parse_address
     from groundstation.recording import default_recordings_dir
     from groundstation.session.factory import open_session
     from groundstation.sources import parse_spec
@@ -47,9 +51,18 @@ def run(args: argparse.Namespace) -> int:
     if parse_spec(args.port).scheme == "recording":
         raise UserError(f"{args.port} is a recording already: 'groundstation replay {args.port}' plays it")
     folder = writable_folder(args.recordings or default_recordings_dir())
-    session = open_session(args.port, filters=filters, settings=overrides, recordings_dir=folder,
-                           **({"baud": args.baud} if args.baud else {}))
+    bridge = FoxgloveBridge(*parse_address(args.foxglove)) if args.foxglove is not None else None
+    try:
+        session = open_session(args.port, filters=filters, settings=overrides, recordings_dir=folder,
+                               **({"baud": args.baud} if args.baud else {}))
+    except BaseException:
+        if bridge is not None:
+            bridge.close()
+        raise
     print(f"recording {session.source.description} to {session.recording_path}", flush=True)
+    if bridge is not None:
+        bridge.serve(session)
+        print(f"serving Foxglove on {bridge.address} (Foxglove: Open connection, Foxglove WebSocket)", flush=True)
     stopping: list[int] = []
     previous = {signum: signal.signal(signum, lambda signum, _: stopping.append(signum))
                 for signum in (signal.SIGINT, signal.SIGTERM)}
@@ -60,6 +73,8 @@ def run(args: argparse.Namespace) -> int:
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+        if bridge is not None:
+            bridge.close()
     ended_ns = time.monotonic_ns()
     print(totals_line(session))
     for path in session.recorder.paths:

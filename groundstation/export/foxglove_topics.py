@@ -25,7 +25,6 @@ import numpy as np
 
 from groundstation import quaternion
 from groundstation.session.catalogue import Catalogue
-from groundstation.session.product import event_time_s
 
 NED_FRAME = "ned"  # the parent frame of every attitude: the quaternions are body -> NED (w-first)
 # Event kinds a pilot must not miss are warnings; failures are errors; everything else is information.
@@ -75,6 +74,16 @@ def row_payloads(columns: dict[str, np.ndarray], rows: slice | np.ndarray = slic
         yield json.dumps({n: (v if math.isfinite(v) else None) for n, v in zip(names, row)}).encode()
 
 
+def estimates_in(table: str, columns) -> dict[str, tuple[str, str, str, str]]:
+    """The attitude estimates a table carries: ``<name>_qw`` .. ``_qz`` (each host estimator in ``imu``),
+    or ``qw`` .. ``qz`` (the aircraft's own in ``onboard``, named after its table)."""
+    names = {c[:-3] for c in columns if c.endswith("_qw")}
+    found = {n: tuple(f"{n}_q{c}" for c in "wxyz") for n in sorted(names)}
+    if "qw" in columns:
+        found[table] = ("qw", "qx", "qy", "qz")
+    return {n: q for n, q in found.items() if all(c in columns for c in q)}
+
+
 class Topics:
     """The session's channels in a foxglove ``Context``: an MCAP writer or a WebSocket server opened on
     the same context receives what is logged here."""
@@ -87,63 +96,80 @@ class Topics:
         self._context = context
         self.catalogue = catalogue
         self.origin = origin
-        self._tables: dict[str, object] = {}
-        self._angles: dict[str, object] = {}
+        self._channels: dict[str, object] = {}
         self._tf = FrameTransformsChannel("/tf", context=context)
         self._log = LogChannel("/events", context=context)
 
-    def table(self, name: str, columns: dict[str, np.ndarray], rows: slice | np.ndarray = slice(None)) -> int:
-        """Logs the rows of a table on ``/<name>``; returns how many."""
-        if name not in self._tables:
-            self._tables[name] = self._foxglove.Channel(f"/{name}", schema=json_schema(self.catalogue, name),
-                                                        context=self._context)
-        channel = self._tables[name]
-        times = log_time_ns(self.origin, np.asarray(columns["time_s"], dtype=float)[rows]).tolist()
+    def _channel(self, topic: str, schema: dict):
+        if topic not in self._channels:
+            self._channels[topic] = self._foxglove.Channel(topic, schema=schema, context=self._context)
+        return self._channels[topic]
+
+    def advertise(self, tables) -> None:
+        """Opens the channels of these tables now (a live client subscribes before their first rows)."""
+        for name in tables:
+            self._channel(f"/{name}", json_schema(self.catalogue, name))
+
+    def rows(self, name: str, columns: dict[str, np.ndarray], rows: slice | np.ndarray = slice(None)) -> int:
+        """Logs rows of a table on ``/<name>``, and the attitudes they carry on ``/tf`` and
+        ``/attitude/<estimate>``; returns the number of messages."""
+        channel = self._channel(f"/{name}", json_schema(self.catalogue, name))
+        time_s = np.asarray(columns["time_s"], dtype=float)[rows]
+        times = log_time_ns(self.origin, time_s)
         count = 0
-        for log_time, payload in zip(times, row_payloads(columns, rows)):
+        for log_time, payload in zip(times.tolist(), row_payloads(columns, rows)):
             channel.log(payload, log_time=log_time)
             count += 1
-        return count
+        estimates = {n: np.column_stack([np.asarray(columns[c], dtype=float)[rows] for c in q])
+                     for n, q in estimates_in(name, columns).items()}
+        return count + self._attitudes(time_s, times, estimates)
 
-    def attitudes(self, time_s: np.ndarray, estimates: dict[str, np.ndarray]) -> None:
-        """Each estimate (name -> (N, 4) w-first body -> NED) on ``/tf`` and ``/attitude/<name>``; rows
-        where an estimate is NaN (not yet converged, another stream's row) carry no transform for it."""
-        from foxglove.messages import FrameTransform, FrameTransforms, Quaternion, Timestamp
-
-        times = log_time_ns(self.origin, time_s)
-        for name, q in estimates.items():
-            if name not in self._angles:
-                self._angles[name] = self._foxglove.Channel(f"/attitude/{name}", schema=_ANGLES_SCHEMA,
-                                                            context=self._context)
-            yaw, pitch, roll = quaternion.euler_deg(q)
-            angles = {"time_s": time_s, "pitch_deg": pitch, "roll_deg": roll, "yaw_deg": yaw}
-            finite = np.flatnonzero(np.isfinite(q).all(axis=1))
-            for log_time, payload in zip(times[finite].tolist(), row_payloads(angles, finite)):
-                self._angles[name].log(payload, log_time=log_time)
-        finite_rows = {name: np.isfinite(q).all(axis=1) for name, q in estimates.items()}
-        for i, log_time in enumerate(times.tolist()):
-            stamp = Timestamp(sec=log_time // 1_000_000_000, nsec=log_time % 1_000_000_000)
-            transforms = [FrameTransform(timestamp=stamp, parent_frame_id=NED_FRAME, child_frame_id=name,
-                                         rotation=Quaternion(w=float(q[i, 0]), x=float(q[i, 1]), y=float(q[i, 2]),
-                                                             z=float(q[i, 3])))
-                          for name, q in estimates.items() if finite_rows[name][i]]
-            if transforms:
-                self._tf.log(FrameTransforms(transforms=transforms), log_time=log_time)
-
-    def events(self, events: Iterable[dict]) -> int:
-        """Each event as a Foxglove ``Log`` on ``/events``: its message (or its fields) as text."""
-        from foxglove.messages import Log, LogLevel, Timestamp
+    def _attitudes(self, time_s: np.ndarray, times: np.ndarray, estimates: dict[str, np.ndarray]) -> int:
+        """Each estimate (name -> (N, 4) w-first body -> NED) on ``/tf`` and ``/attitude/<name>``; a row
+        where an estimate is NaN (not converged yet, a gap row) carries no transform for it."""
+        from foxglove.messages import FrameTransform, FrameTransforms, Quaternion
 
         count = 0
-        for event in events:
-            log_time = int(log_time_ns(self.origin, np.array([event_time_s(event)]))[0])
+        finite = {name: np.isfinite(q).all(axis=1) for name, q in estimates.items()}
+        for name, q in estimates.items():
+            yaw, pitch, roll = quaternion.euler_deg(q)
+            angles = {"time_s": time_s, "pitch_deg": pitch, "roll_deg": roll, "yaw_deg": yaw}
+            rows = np.flatnonzero(finite[name])
+            channel = self._channel(f"/attitude/{name}", _ANGLES_SCHEMA)
+            for log_time, payload in zip(times[rows].tolist(), row_payloads(angles, rows)):
+                channel.log(payload, log_time=log_time)
+                count += 1
+        for i, log_time in enumerate(times.tolist()):
+            transforms = [FrameTransform(timestamp=_stamp(log_time), parent_frame_id=NED_FRAME, child_frame_id=name,
+                                         rotation=Quaternion(w=float(q[i, 0]), x=float(q[i, 1]), y=float(q[i, 2]),
+                                                             z=float(q[i, 3])))
+                          for name, q in estimates.items() if finite[name][i]]
+            if transforms:
+                self._tf.log(FrameTransforms(transforms=transforms), log_time=log_time)
+                count += 1
+        return count
+
+    def events(self, events: Iterable[dict], times_s: Iterable[float]) -> int:
+        """Each event as a Foxglove ``Log`` on ``/events`` at its session time: its message (or its
+        fields) as text, its kind as the name, a level from the kind."""
+        from foxglove.messages import Log, LogLevel
+
+        count = 0
+        for event, time_s in zip(events, times_s):
+            log_time = int(log_time_ns(self.origin, np.array([time_s]))[0])
             kind = str(event.get("kind", ""))
             level = (LogLevel.Error if kind in _ERROR_KINDS else LogLevel.Warning if kind in _WARNING_KINDS
                      else LogLevel.Info)
-            self._log.log(Log(timestamp=Timestamp(sec=log_time // 1_000_000_000, nsec=log_time % 1_000_000_000),
-                              level=level, message=event_text(event), name=kind), log_time=log_time)
+            self._log.log(Log(timestamp=_stamp(log_time), level=level, message=event_text(event), name=kind),
+                          log_time=log_time)
             count += 1
         return count
+
+
+def _stamp(log_time_ns: int):
+    from foxglove.messages import Timestamp
+
+    return Timestamp(sec=log_time_ns // 1_000_000_000, nsec=log_time_ns % 1_000_000_000)
 
 
 _ANGLES_SCHEMA = {"type": "object", "title": "attitude", "properties": {

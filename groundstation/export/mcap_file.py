@@ -38,14 +38,10 @@ def write_mcap(data: SessionData, path, overwrite: bool = False, t_from: float |
             topics = Topics(context, data.catalogue, origin_ns(data.metadata, earliest_time_s(data.tables)))
             count = 0
             for name, columns in data.tables.items():
-                count += topics.table(name, columns, in_range(columns["time_s"], t_from, t_to))
-            rows = in_range(data.time_s, t_from, t_to)
-            estimates = {name: q[rows] for name, q in data.attitudes().items()}
-            topics.attitudes(data.time_s[rows], estimates)
-            count += len(rows) * (1 + len(estimates))
-            times = [event_time_s(e) for e in data.events]
-            count += topics.events(e for e, t in zip(data.events, times)
-                                   if (t_from is None or t >= t_from) and (t_to is None or t <= t_to))
+                count += topics.rows(name, columns, in_range(columns["time_s"], t_from, t_to))
+            times = np.array([event_time_s(e) for e in data.events])
+            chosen = in_range(times, t_from, t_to)
+            count += topics.events([data.events[i] for i in chosen], times[chosen])
         finally:
             writer.close()
     return count

@@ -44,6 +44,17 @@ class ProductView(Protocol):
     def settings(self) -> dict[str, dict[str, float]]: ...
 
 
+def event_session_time_s(view: ProductView, event: dict) -> float:
+    """Seconds into the session: the clock's own when the event carries it, else the host time since
+    the session's first chunk (to a few ms the session time of the samples that came with it)."""
+    if "session_time_s" in event:
+        return float(event["session_time_s"])
+    t0_ns = view.t0_host_ns
+    if t0_ns is None or not event.get("t_host_ns"):
+        return 0.0
+    return max((event["t_host_ns"] - t0_ns) / 1e9, 0.0)
+
+
 class Session(Protocol):
     """What the window holds. ``seekable``: a file's playback (``seek`` moves its clock; live: never);
     ``setup``: the estimators and forced settings a file was computed with (live: ``(None, None)``)."""

@@ -10,24 +10,13 @@ import math
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from firmware_protocol import SPEC
-from groundstation.session.view import ProductView, Session
+from groundstation.session.view import Session, event_session_time_s
 
 # Kinds a pilot must not miss, shown in red.
 ALARMS = frozenset({"warning", "config_conflict", "disconnected", "device_reset", "clock_jump", "gap", "recording_failed"})
 HIDDEN_FIELDS = frozenset({"kind", "t_host_ns", "wall_time", "session_time_s"})
 # Events that carry a frame's values (CONFIG, ACK) show its enum fields by member name ("unknown" included).
 ENUM_FIELDS = {kind: {f.name: f for f in SPEC.frame(kind.upper()).fields if f.enum} for kind in ("config", "ack")}
-
-
-def event_time_s(view: ProductView, event: dict) -> float:
-    """Seconds into the session: the clock's own when the event carries it, else the host time since
-    the session's first chunk (to a few ms the session time of the samples that came with it)."""
-    if "session_time_s" in event:
-        return float(event["session_time_s"])
-    t0_ns = view.t0_host_ns
-    if t0_ns is None or not event.get("t_host_ns"):
-        return 0.0
-    return max((event["t_host_ns"] - t0_ns) / 1e9, 0.0)
 
 
 def describe(event: dict) -> str:
@@ -73,7 +62,7 @@ class EventConsole(QtWidgets.QWidget):
         for event in new:
             row = self.table.rowCount()
             self.table.insertRow(row)
-            t_s = event_time_s(view, event)
+            t_s = event_session_time_s(view, event)
             cells = (QtWidgets.QTableWidgetItem(f"{t_s:9.2f}"), QtWidgets.QTableWidgetItem(event.get("kind", "?")),
                      QtWidgets.QTableWidgetItem(describe(event)))
             cells[0].setData(QtCore.Qt.UserRole, t_s)

@@ -2,7 +2,7 @@
 
 import pytest
 
-from groundstation.ui.event_console import event_time_s
+from groundstation.session.view import event_session_time_s
 
 
 def test_events_are_listed_with_their_times_and_a_click_moves_the_view(window, qtbot):
@@ -18,7 +18,7 @@ def test_events_are_listed_with_their_times_and_a_click_moves_the_view(window, q
     ack = events[ack_row]
     imu = session.view.imu
     host_s = imu.column("host_time_s")
-    assert host_s.min() - 0.05 <= event_time_s(session.view, ack) <= host_s.max() + 0.05
+    assert host_s.min() - 0.05 <= event_session_time_s(session.view, ack) <= host_s.max() + 0.05
     assert console.times() == sorted(console.times())
     qtbot.waitUntil(lambda: window.live_view.series["imu"].end_s > 8.0, timeout=15000)
     t_s = console.times()[ack_row]
@@ -37,4 +37,4 @@ def test_an_event_late_in_the_session_is_placed_at_its_time_not_at_the_start(win
     session.send_command("request_config")
     command = next(e for e in reversed(session.view.events) if e["kind"] == "command")
     host_s = session.view.imu.column("host_time_s")[-1]
-    assert event_time_s(session.view, command) == pytest.approx(host_s, abs=0.3)
+    assert event_session_time_s(session.view, command) == pytest.approx(host_s, abs=0.3)

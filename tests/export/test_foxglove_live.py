@@ -1,0 +1,123 @@
+"""The live Foxglove bridge, as a Foxglove client sees it: a WebSocket client speaking the Foxglove
+protocol (``foxglove.sdk.v1``, written here from the protocol's description, not the SDK's) subscribes
+to every channel, and 10 s of a live 100 Hz session arrive with nothing lost against the session's own
+tables."""
+
+import asyncio
+import json
+import struct
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+import websockets
+
+from groundstation.errors import UserError
+from groundstation.export.foxglove_live import FoxgloveBridge, parse_address
+from groundstation.session.factory import open_session
+
+MESSAGE_DATA = 0x01  # server -> client binary opcode: u32 subscription id, u64 log time, payload
+
+
+class Client:
+    """Subscribes to every channel the server advertises and keeps every message, on its own thread."""
+
+    def __init__(self, port: int):
+        self.port = port
+        self.channels: dict[int, dict] = {}
+        self.messages: dict[str, list[tuple[int, bytes]]] = {}
+        self.ready = threading.Event()
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=lambda: asyncio.run(self._run()), daemon=True)
+        self.thread.start()
+
+    async def _run(self) -> None:
+        async with websockets.connect(f"ws://127.0.0.1:{self.port}", subprotocols=["foxglove.sdk.v1"],
+                                      max_size=None) as socket:
+            subscriptions: dict[int, str] = {}
+            while not self.stop.is_set():
+                try:
+                    frame = await asyncio.wait_for(socket.recv(), 0.2)
+                except asyncio.TimeoutError:
+                    continue
+                except websockets.ConnectionClosed:  # the bridge closed: everything sent has arrived
+                    return
+                if isinstance(frame, str):
+                    message = json.loads(frame)
+                    if message["op"] == "advertise":
+                        new = []
+                        for channel in message["channels"]:
+                            self.channels[channel["id"]] = channel
+                            subscriptions[channel["id"]] = channel["topic"]
+                            new.append({"id": channel["id"], "channelId": channel["id"]})
+                        await socket.send(json.dumps({"op": "subscribe", "subscriptions": new}))
+                        self.ready.set()
+                    continue
+                if frame[0] == MESSAGE_DATA:
+                    subscription, log_time = struct.unpack_from("<IQ", frame, 1)
+                    self.messages.setdefault(subscriptions[subscription], []).append((log_time, frame[13:]))
+
+
+def test_ten_seconds_of_a_live_session_arrive_whole(tmp_path):
+    session = open_session("sim:?scenario=hover&seed=3", filters=("ahf", "hf"), record=False)
+    bridge = FoxgloveBridge("127.0.0.1", 0).serve(session)
+    client = Client(bridge.port)
+    try:
+        assert client.ready.wait(10), "no channels advertised"
+        time.sleep(0.5)  # the subscriptions reach the server
+        with session:
+            time.sleep(10.0)
+        bridge.close()
+        time.sleep(1.0)  # the last batch reaches the client
+    finally:
+        client.stop.set()
+        client.thread.join(5)
+    imu = session.view.tables["imu"]
+    rows = imu.array()
+    assert len(rows) > 900  # 10 s at 100 Hz
+    got = [json.loads(payload) for _, payload in client.messages["/imu"]]
+    assert len(got) == len(rows)
+    for i, column in enumerate(imu.columns):
+        read = np.array([np.nan if m[column] is None else m[column] for m in got], dtype=float)
+        np.testing.assert_array_equal(read, rows[:, i], err_msg=column)
+    times = np.array([t for t, _ in client.messages["/imu"]], dtype=np.int64)
+    np.testing.assert_allclose(np.diff(times) / 1e9, np.diff(rows[:, 0]), atol=2e-9)  # log time follows session time
+    assert abs(times[0] / 1e9 - time.time()) < 60  # wall-clock time of day
+    onboard = session.view.tables["onboard"]
+    assert len(client.messages["/onboard"]) == len(onboard) > 900
+    frames = {c["topic"]: c for c in client.channels.values()}
+    assert frames["/tf"]["schemaName"] == "foxglove.FrameTransforms"
+    assert len(client.messages["/tf"]) >= len(rows) - 5  # one per sample (those with a converged estimate)
+    assert {"/attitude/ahf", "/attitude/hf", "/attitude/onboard", "/events"} <= set(frames)
+
+
+def test_addresses():
+    assert parse_address("8765") == ("127.0.0.1", 8765)
+    assert parse_address("0.0.0.0:9000") == ("0.0.0.0", 9000)
+    for bad in ("x", "70000", "host:", "-1"):
+        with pytest.raises(UserError, match=r"\[HOST:\]PORT"):
+            parse_address(bad)
+
+
+def test_record_serves_foxglove_and_says_where(tmp_path):
+    process = subprocess.Popen([sys.executable, "-m", "groundstation", "record", "--port", "sim:?seed=1",
+                                "--duration", "4", "--recordings", str(tmp_path), "--foxglove", "127.0.0.1:0"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    out, err = process.communicate(timeout=120)
+    assert process.returncode == 0, err
+    assert "serving Foxglove on ws://127.0.0.1:" in out
+
+
+def test_a_taken_port_is_said_in_one_line(tmp_path):
+    first = FoxgloveBridge("127.0.0.1", 0)
+    try:
+        done = subprocess.run([sys.executable, "-m", "groundstation", "record", "--port", "sim:?seed=1", "--duration",
+                               "1", "--recordings", str(tmp_path), "--foxglove", f"127.0.0.1:{first.port}"],
+                              capture_output=True, text=True, timeout=120)
+    finally:
+        first.close()
+    assert done.returncode == 2 and "cannot serve Foxglove" in done.stderr and "Traceback" not in done.stderr
+    assert not list(tmp_path.iterdir())  # refused before anything was opened or recorded
