@@ -49,14 +49,17 @@ class FoxgloveBridge:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="groundstation-foxglove", daemon=True)
 
-    def serve(self, session: Session) -> FoxgloveBridge:
+    def serve(self, session: Session, history: bool = True) -> FoxgloveBridge:
+        """Serves ``session``; ``history``: also the rows it has already (False: from now on, as when a
+        switch is turned on during a flight, whose past no client connected now would receive)."""
         view = session.view
         self.session = session
         # Session time 0 on the wall clock: set from the first chunk's arrival once there is one.
         self._topics = Topics(self._context, view.catalogue, time.time_ns())
         self._topics.advertise(view.tables)
-        self._sent_rows: dict[str, int] = {}
-        self._sent_events = 0
+        with session.lock:
+            self._sent_rows = {} if history else {name: len(table) for name, table in view.tables.items()}
+            self._sent_events = 0 if history else len(view.events)
         self._origin_set = False
         self._thread.start()
         return self

@@ -26,6 +26,7 @@ from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.event_console import EventConsole
 from groundstation.ui.export_dialog import ExportDialog
+from groundstation.ui.foxglove_switch import FoxgloveSwitch
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
 from groundstation.ui.config_banner import ConfigBanner
@@ -150,6 +151,9 @@ class MainWindow(QtWidgets.QMainWindow):
         record_button = QtWidgets.QToolButton()
         record_button.setDefaultAction(self.record_action)
         self.statusBar().addPermanentWidget(record_button)
+        self.foxglove_label = QtWidgets.QLabel("")
+        self.statusBar().addPermanentWidget(self.foxglove_label)
+        self.foxglove = FoxgloveSwitch(settings, self.foxglove_label.setText, self.show_error, self)
         self._build_menus()
         self._sync_record_action()
         self.resize(1280, 800)
@@ -315,6 +319,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.link_panel.refresh(session)
         self.bar.set_connected(True)
         self._sync_record_action()
+        self.foxglove.follow(session)
 
     def disconnect(self) -> None:
         self.cancel_loading()
@@ -332,6 +337,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _stop_session(self) -> None:
         session, self.session = self.session, None
+        self.foxglove.follow(None)
         session.stop()
         self.last_file = session.file()
         if not session.source.is_replay:  # a replay's settings are the recording's, not the user's
@@ -354,6 +360,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._fill_recent_menu()
         self._action(file, "&Export…", "Ctrl+E", self.export)
         file.addAction(self.record_action)
+        file.addAction(self.foxglove.action)
         file.addSeparator()
         self._action(file, "&Quit", "Ctrl+Q", self.close)
         view = self.menuBar().addMenu("&View")

@@ -3,63 +3,17 @@ protocol (``foxglove.sdk.v1``, written here from the protocol's description, not
 to every channel, and 10 s of a live 100 Hz session arrive with nothing lost against the session's own
 tables."""
 
-import asyncio
 import json
-import struct
 import subprocess
 import sys
-import threading
 import time
 
 import numpy as np
 import pytest
-import websockets
-
 from groundstation.errors import UserError
 from groundstation.export.foxglove_live import FoxgloveBridge, parse_address
 from groundstation.session.factory import open_session
-
-MESSAGE_DATA = 0x01  # server -> client binary opcode: u32 subscription id, u64 log time, payload
-
-
-class Client:
-    """Subscribes to every channel the server advertises and keeps every message, on its own thread."""
-
-    def __init__(self, port: int):
-        self.port = port
-        self.channels: dict[int, dict] = {}
-        self.messages: dict[str, list[tuple[int, bytes]]] = {}
-        self.ready = threading.Event()
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=lambda: asyncio.run(self._run()), daemon=True)
-        self.thread.start()
-
-    async def _run(self) -> None:
-        async with websockets.connect(f"ws://127.0.0.1:{self.port}", subprotocols=["foxglove.sdk.v1"],
-                                      max_size=None) as socket:
-            subscriptions: dict[int, str] = {}
-            while not self.stop.is_set():
-                try:
-                    frame = await asyncio.wait_for(socket.recv(), 0.2)
-                except asyncio.TimeoutError:
-                    continue
-                except websockets.ConnectionClosed:  # the bridge closed: everything sent has arrived
-                    return
-                if isinstance(frame, str):
-                    message = json.loads(frame)
-                    if message["op"] == "advertise":
-                        new = []
-                        for channel in message["channels"]:
-                            self.channels[channel["id"]] = channel
-                            subscriptions[channel["id"]] = channel["topic"]
-                            new.append({"id": channel["id"], "channelId": channel["id"]})
-                        await socket.send(json.dumps({"op": "subscribe", "subscriptions": new}))
-                        self.ready.set()
-                    continue
-                if frame[0] == MESSAGE_DATA:
-                    subscription, log_time = struct.unpack_from("<IQ", frame, 1)
-                    self.messages.setdefault(subscriptions[subscription], []).append((log_time, frame[13:]))
-
+from tests.foxglove_client import Client
 
 def test_ten_seconds_of_a_live_session_arrive_whole(tmp_path):
     session = open_session("sim:?scenario=hover&seed=3", filters=("ahf", "hf"), record=False)
@@ -70,8 +24,12 @@ def test_ten_seconds_of_a_live_session_arrive_whole(tmp_path):
         time.sleep(0.5)  # the subscriptions reach the server
         with session:
             time.sleep(10.0)
+        bridge.pump()
+        expected = len(session.view.tables["imu"])
+        deadline = time.monotonic() + 60  # a loaded machine: the client thread may lag behind the server
+        while len(client.messages.get("/imu", [])) < expected and time.monotonic() < deadline:
+            time.sleep(0.1)
         bridge.close()
-        time.sleep(1.0)  # the last batch reaches the client
     finally:
         client.stop.set()
         client.thread.join(5)

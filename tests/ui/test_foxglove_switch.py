@@ -1,0 +1,47 @@
+"""File > Serve live session to Foxglove: a client receives the window's live session while it is on;
+off, the server is gone; a port already taken is said in the banner and the switch goes back off."""
+
+import json
+import socket
+
+from tests.foxglove_client import Client
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def test_the_switch_serves_the_live_session(window, qtbot):
+    port = free_port()
+    window.settings.setValue("foxglove_port", port)
+    window.start_demo()
+    window.foxglove.action.trigger()
+    assert window.foxglove.action.isChecked()
+    assert window.foxglove_label.text() == f"Foxglove: ws://127.0.0.1:{port}"
+    client = Client(port)
+    try:
+        assert client.ready.wait(10)
+        qtbot.waitUntil(lambda: len(client.messages.get("/imu", [])) > 100, timeout=15000)
+        rows = [json.loads(p) for _, p in client.messages["/imu"]]
+        times = [r["time_s"] for r in rows]
+        assert times == sorted(times) and len(set(times)) == len(times)  # in order, none twice
+    finally:
+        window.foxglove.action.trigger()
+        client.stop.set()
+        client.thread.join(5)
+    assert not window.foxglove.action.isChecked() and window.foxglove.bridge is None
+    with socket.socket() as again:  # the port is free again
+        again.bind(("127.0.0.1", port))
+
+
+def test_a_taken_port_is_said(window, qtbot):
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        window.settings.setValue("foxglove_port", taken.getsockname()[1])
+        window.start_demo()
+        window.foxglove.action.trigger()
+    assert not window.foxglove.action.isChecked()
+    assert window.banner.isVisible() and "cannot serve Foxglove" in window.banner.text()
