@@ -27,6 +27,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
         "groundstation.export", "groundstation.loaders", "groundstation.session.factory", "groundstation.session.load",
         "groundstation.session.live", "groundstation.session.batch", "groundstation.session.replay",
         "groundstation.session.pipeline", "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session",
+        "groundstation.logbook",
     )),
     ("playback and the product", (
         "groundstation.session.playback", "groundstation.session.product", "groundstation.session.view",

@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from groundstation.commands.options import add_config_option, add_estimator_options, estimator_options
 from groundstation.errors import UserError
@@ -28,12 +29,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     from groundstation import formats
     from groundstation.estimation import runnable
 
-    parser.add_argument("file", metavar="FILE", help=f"a file with truth or an onboard estimate: {formats.described()}")
+    parser.add_argument("file", metavar="FILE", help=f"a file with truth or an onboard estimate: {formats.described()}; "
+                                                     "or a FOLDER of them (every one under it, with --out)")
     # By default the estimators whose needs a file meets (the GPS-aided filters are left out: the datasets
     # have no GPS, and without it they are slow tilt filters at ~100x the others' cost). --filters ukf,sssrukf scores them.
     add_estimator_options(parser, ",".join(runnable(formats.FILE_AIDING)))
     add_config_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--out", type=Path, metavar="OUT",
+                        help="for a FOLDER: the Parquet dataset to write (OUT/logs.parquet, a row per log and "
+                             "estimator; OUT/tables/<table>/log_id=<id>/, each log's tables)")
+    parser.add_argument("--workers", type=int, metavar="N", help="for a FOLDER: processes at once (default: one per core)")
+    parser.add_argument("--dask", metavar="SCHEDULER",
+                        help="for a FOLDER: run the logs as tasks on this Dask scheduler (tcp://HOST:8786) instead")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,6 +50,10 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.session.load import load_session
 
     names, overrides = estimator_options(args)
+    if Path(args.file).is_dir():
+        return evaluate_folder_command(args, names, overrides)
+    if args.out is not None or args.dask is not None or args.workers is not None:
+        raise UserError("--out, --workers and --dask are for a folder of logs; one file prints its figures")
     bar = ProgressBar("computing")  # shown after a second: a long recording or log
     try:
         data = load_session(args.file, names, overrides, bar, args.accept_config_changes)
@@ -74,4 +86,30 @@ def print_agreement(results: dict, warning: str | None, as_json: bool) -> int:
     print(f"{'estimator':<10} {'pitch RMS (deg)':>16} {'pitch max (deg)':>16} {'roll RMS (deg)':>15} {'roll max (deg)':>15}")
     for name, f in results.items():
         print(f"{name:<10} {f['pitch_rms_deg']:>16.3f} {f['pitch_max_deg']:>16.3f} {f['roll_rms_deg']:>15.3f} {f['roll_max_deg']:>15.3f}")
+    return 0
+
+
+def evaluate_folder_command(args: argparse.Namespace, names, overrides) -> int:
+    """Every log under the folder into one Parquet dataset, a progress line per log; a log that cannot be
+    read is said and has its error in its row, the batch goes on."""
+    from groundstation.logbook.folder import evaluate_folder
+
+    if args.out is None:
+        raise UserError(f"{args.file} is a folder: say where its dataset goes with --out OUT")
+    if overrides:
+        raise UserError("--set applies to one file; a folder runs every estimator with its own settings")
+    if args.workers is not None and args.workers < 1:
+        raise UserError(f"--workers must be at least 1, not {args.workers}")
+
+    def progress(done: int, total: int, path: Path, rows: list[dict], seconds: float) -> None:
+        error = rows[0].get("error")
+        estimators = [row["estimator"] for row in rows if row["estimator"]]
+        said = (f"error: {error}" if error else f"{len(estimators)} estimators against the {rows[0]['reference']}"
+                if rows[0]["reference"] else f"{len(estimators)} estimators, nothing to compare them with")
+        print(f"[{done}/{total}] {rows[0]['path']}: {said} ({seconds:.1f} s)", flush=True)
+
+    rows = evaluate_folder(args.file, args.out, names, args.workers, args.dask, progress)
+    logs = {row["log_id"] for row in rows}
+    failed = {row["log_id"] for row in rows if row["error"]}
+    print(f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} unreadable) and tables/")
     return 0

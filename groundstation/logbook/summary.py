@@ -1,0 +1,124 @@
+"""One log's rows of the folder dataset, and its tables beside them: what each worker does.
+
+``summarise`` runs in a worker process (or a Dask worker): it opens the log, writes its tables under
+``OUT/tables/<table>/log_id=<id>/`` and returns the log's rows (plain Python values, cheap to send back).
+A log that cannot be read gives one row with its ``error``: it never stops the batch.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from groundstation.errors import UserError
+
+# The columns of logs.parquet, in order: first the log's, then one estimator's figures.
+LOG_COLUMNS = {
+    "log_id": "string", "path": "string", "format": "string", "vehicle": "string", "firmware": "string",
+    "duration_s": "double", "samples": "int64", "imu_rate_hz": "double", "link_loss_pct": "double",
+    "warnings": "string", "error": "string",
+    "estimator": "string", "reference": "string",  # reference: "truth", "onboard" or null (nothing to compare with)
+    "incl_rmse_deg": "double", "incl_max_deg": "double", "heading_rmse_deg": "double", "heading_max_deg": "double",
+    "pitch_rms_deg": "double", "pitch_max_deg": "double", "roll_rms_deg": "double", "roll_max_deg": "double",
+}
+_FIRMWARE = re.compile(r"\b(Ardu\w+|PX4\w*|Rover|Blimp)\s+V?\d+\.\d+(\.\d+)?[\w.-]*")
+
+
+def log_id(path: Path, root: Path) -> str:
+    """A stable id of a log: the first 12 hex digits of the SHA-1 of its path under the folder."""
+    return hashlib.sha1(path.relative_to(root).as_posix().encode()).hexdigest()[:12]
+
+
+def vehicle_and_firmware(data) -> tuple[str | None, str | None]:
+    """What flew and on which firmware: the log's own words where it says so (metadata), else the first
+    autopilot message that names a firmware version ("ArduCopter V4.3.6 (...)")."""
+    vehicle = data.metadata.get("vehicle") or data.metadata.get("autopilot")
+    firmware = data.metadata.get("firmware")
+    if firmware is None:
+        for event in data.events:
+            found = _FIRMWARE.search(str(event.get("message", "")))
+            if found:
+                firmware = found.group(0)
+                break
+    return (str(vehicle) if vehicle else None), (str(firmware) if firmware else None)
+
+
+def link_loss_pct(data) -> float:
+    """Frames lost as a share of frames sent (NaN without a link: a dataset, a DataFlash or ULog file)."""
+    if data.link is None:
+        return math.nan
+    lost, received = data.link.counters.get("frames_lost", 0), data.link.counters.get("frames", 0)
+    return 100.0 * lost / (lost + received) if lost + received else math.nan
+
+
+def log_fields(path: Path, root: Path) -> dict:
+    from groundstation import formats
+
+    file_format = formats.sniff(path)
+    fields = {c: None for c in LOG_COLUMNS}
+    fields.update(log_id=log_id(path, root), path=path.relative_to(root).as_posix(),
+                  format=file_format.name if file_format else None)
+    return fields
+
+
+def summarise(path, root, out, filters=None) -> list[dict]:
+    """The rows of ``path`` (a row per estimator; one row with ``error`` when it cannot be read), its
+    tables written under ``out/tables``."""
+    from groundstation.autopilot.agreement import onboard_agreement
+    from groundstation.session.load import load_session
+
+    path, root, out = Path(path), Path(root), Path(out)
+    fields = log_fields(path, root)
+    try:
+        data = load_session(path, filters)
+    except UserError as error:
+        return [{**fields, "error": str(error)}]
+    except Exception as error:  # a defect in a reader must cost this log only, and say what it was
+        return [{**fields, "error": f"internal error while reading ({type(error).__name__}: {error})"}]
+    vehicle, firmware = vehicle_and_firmware(data)
+    time_s = data.time_s
+    fields.update(vehicle=vehicle, firmware=firmware, samples=len(data),
+                  duration_s=float(time_s[-1] - time_s[0]) if len(time_s) > 1 else 0.0,
+                  imu_rate_hz=imu_rate_hz(data), link_loss_pct=link_loss_pct(data),
+                  warnings="\n".join(data.warnings) or None)
+    write_tables(data, out / "tables", fields["log_id"])
+    rows = []
+    if data.true_q is not None:
+        for name, scores in data.evaluate().items():
+            rows.append({**fields, "estimator": name, "reference": "truth", **scores})
+    elif data.has_onboard() and data.estimated:
+        for name, figures in onboard_agreement(data).items():
+            rows.append({**fields, "estimator": name, "reference": "onboard",
+                         **{k: v for k, v in figures.items() if k in LOG_COLUMNS}})
+    else:
+        rows.extend({**fields, "estimator": name} for name in data.estimated)
+    return rows or [fields]
+
+
+def imu_rate_hz(data) -> float:
+    times = data.tables["imu"]["time_s"]
+    steps = np.diff(times[np.isfinite(times)])
+    steps = steps[steps > 0]
+    return float(1.0 / np.median(steps)) if len(steps) else math.nan
+
+
+def write_tables(data, folder: Path, identifier: str) -> None:
+    """Each table with rows as ``folder/<table>/log_id=<identifier>/part-0.parquet`` (its columns as in
+    every export: names with units)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from groundstation.export.files import atomic_output
+
+    for name, columns in data.tables.items():
+        if not len(columns["time_s"]):
+            continue
+        target = folder / name / f"log_id={identifier}"
+        target.mkdir(parents=True, exist_ok=True)
+        table = pa.table({c: pa.array(np.asarray(v, dtype=float)) for c, v in columns.items()})
+        with atomic_output(target / "part-0.parquet", overwrite=True) as temporary:
+            pq.write_table(table, temporary)
