@@ -125,3 +125,24 @@ def test_wrong_inputs_are_said_in_one_line(folder, tmp_path, capsys):
         assert main(["evaluate", *map(str, args)]) == 2
         err = capsys.readouterr().err
         assert said in err and len(err.strip().splitlines()) == 1, (args, err)
+
+
+def test_a_killed_worker_costs_no_log(folder, local, tmp_path):
+    """The memory killer takes a worker mid-batch: the pool is made anew and every log still has its rows."""
+    import multiprocessing
+    import os
+    import signal
+
+    killed = []
+
+    def progress(done, total, path, rows, seconds):
+        if not killed:
+            for child in multiprocessing.active_children():
+                os.kill(child.pid, signal.SIGKILL)
+                killed.append(child.pid)
+
+    rows = evaluate_folder(folder, tmp_path / "again", FILTERS, workers=2, progress=progress)
+    assert killed
+    out, expected, _ = local
+    pd.testing.assert_frame_equal(pd.read_parquet(out / "logs.parquet"), pd.read_parquet(tmp_path / "again" / "logs.parquet"))
+    assert len(rows) == len(expected)
