@@ -52,6 +52,7 @@ SCALED_IMU_TYPES = ("SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3")
 PRESSURE_TYPES = ("SCALED_PRESSURE", "SCALED_PRESSURE2", "SCALED_PRESSURE3")
 UINT16_UNKNOWN = 65535
 # MAV_PARAM_TYPE -> struct format of an integer PX4 copies byte for byte into PARAM_VALUE's float
+MAVLINK1_HEADER, MAVLINK2_HEADER = 6, 10  # bytes before the payload (magic 0xFE, 0xFD)
 PX4_INTEGER_FORMATS = {1: "<B", 2: "<b", 3: "<H", 4: "<h", 5: "<I", 6: "<i"}
 
 
@@ -129,7 +130,9 @@ class MessageMapper:
         return [generic(msg, sender, t_host_ns), StatusText(*sender, t_host_ns, msg.severity, msg.text, msg.id, msg.chunk_seq)]
 
     def _param_value(self, msg, sender, t_host_ns):
-        value = param_value(bytes(msg.get_payload()), msg.param_value, msg.param_type, self.autopilot.get(sender[0]))
+        buffer = bytes(msg.get_msgbuf())
+        payload = buffer[MAVLINK2_HEADER if buffer[:1] == b"\xfd" else MAVLINK1_HEADER :]
+        value = param_value(payload, msg.param_value, msg.param_type, self.autopilot.get(sender[0]))
         return [generic(msg, sender, t_host_ns), ParamValue(*sender, t_host_ns, msg.param_id, value)]
 
     def _sys_status(self, msg, sender, t_host_ns):
