@@ -45,7 +45,7 @@ from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.messages import StatusTexts, message_event, parameter_change
-from groundstation.autopilot.modes import STATUS_KIND
+from groundstation.autopilot.modes import status_event
 from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.catalogue import Catalogue, message_table
@@ -196,7 +196,7 @@ class MavlinkFrontEnd:
         self.pipeline.bank.armed = r.armed  # the rest calibrator refuses while armed
         if (r.mode, r.armed) != self._status:
             self._status = (r.mode, r.armed)
-            self.pipeline.events.append({**self._times(t_host_ns), "kind": STATUS_KIND, "mode": r.mode, "armed": r.armed})
+            self.pipeline.events.append(status_event(r.mode, r.armed, **self._times(t_host_ns)))
 
     def _text(self, t_host_ns: int, r: rec.StatusText) -> None:
         """The vehicle's texts (another sender's, such as a test driver's chatter, stay out of the events)."""

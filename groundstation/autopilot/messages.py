@@ -20,13 +20,14 @@ value in a float: ArduPilot converts integers to it, PX4 copies an integer's byt
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-
+from groundstation.autopilot.modes import PX4_ARMED_STATES, ardupilot_mode, px4_nav_state_mode, status_event
 from groundstation.autopilot.records import StatusText
 
 MESSAGE_KIND, PARAMETER_KIND = "message", "parameter"
 SEVERITIES = ("EMERGENCY", "ALERT", "CRITICAL", "ERROR", "WARNING", "NOTICE", "INFO", "DEBUG")  # MAV_SEVERITY, syslog
 ALARM_SEVERITIES = frozenset(SEVERITIES[:4])  # what the event console shows in red
+ERROR, INFO = 3, 6  # MAV_SEVERITY
+DATAFLASH_SAID = ("MSG", "ERR", "EV", "MODE", "ARM", "PARM")  # the DataFlash messages ``dataflash_said`` reads
 STATUSTEXT_CHARS = 50
 # ArduPilot's libraries/AP_Logger/AP_Logger.h: LogEvent (DataFlash EV.Id) and LogErrorSubsystem (ERR.Subsys)
 EV_ARMED, EV_DISARMED = 10, 11
@@ -101,6 +102,65 @@ class StatusTexts:
         return out
 
 
-def log_texts(texts: Iterable[tuple[int, str, int | None, str]]) -> list[tuple[int, dict]]:
-    """(time µs, ``message`` event without its times) of a log's (time µs, text, severity, source)."""
-    return [(t_us, message_event(text, severity, source)) for t_us, text, severity, source in texts]
+Said = tuple[list[tuple[int, dict]], dict[str, float]]  # (time µs, event without times) in time order, parameters
+
+
+def dataflash_said(records, vehicle_type: int) -> Said:
+    """The events and parameters of a DataFlash log's ``DATAFLASH_SAID`` records (DFReader messages, in
+    log order); ``vehicle_type``: the MAV_TYPE DFReader read from the firmware's message. Arming is
+    known from EV ARMED/DISARMED and ARM; a log whose first word on it is a disarm began armed."""
+    arming = [_armed(r) for r in records if _armed(r) is not None]
+    armed = (not arming[0]) if arming else None
+    mode, events, parameters = None, [], {}
+
+    def status(t_us: int, new_mode: str | None, new_armed: bool | None) -> None:
+        nonlocal mode, armed
+        if new_mode is not None and (new_mode, new_armed) != (mode, armed):
+            events.append((t_us, status_event(new_mode, new_armed)))
+        mode, armed = new_mode, new_armed
+
+    for r in records:
+        kind, t_us = r.get_type(), int(r.TimeUS)
+        if kind == "PARM":
+            change = parameter_change(parameters, r.Name, float(r.Value))
+            events += [(t_us, change)] if change is not None else []
+        elif kind == "MSG":
+            events.append((t_us, message_event(r.Message, None, "MSG")))
+        elif kind == "ERR":
+            what = ERROR_SUBSYSTEMS.get(r.Subsys, f"subsystem {r.Subsys}")
+            text = f"{what}: resolved" if r.ECode == 0 else f"{what}: error {r.ECode}"
+            events.append((t_us, message_event(text, INFO if r.ECode == 0 else ERROR, "ERR")))
+        elif kind == "EV":
+            events.append((t_us, message_event(LOG_EVENTS.get(r.Id, f"event {r.Id}"), None, "EV")))
+        if kind == "MODE":
+            status(t_us, ardupilot_mode(vehicle_type, getattr(r, "ModeNum", r.Mode)), armed)
+        elif _armed(r) is not None:
+            status(t_us, mode, _armed(r))
+    return sorted(events, key=lambda pair: pair[0]), parameters
+
+
+def _armed(record) -> bool | None:
+    kind = record.get_type()
+    if kind == "ARM":
+        return bool(record.ArmState)
+    if kind == "EV" and record.Id in (EV_ARMED, EV_DISARMED):
+        return record.Id == EV_ARMED
+    return None
+
+
+def ulog_said(ulog, vehicle_status: dict | None) -> Said:
+    """The events and parameters of a ULog (pyulog's ``ULog``): its logged messages, its initial parameters
+    and their changes, and ``vehicle_status``'s (first instance's columns) navigation and arming states."""
+    events = [(int(m.timestamp), message_event(m.message, m.log_level - ord("0"), "ULog")) for m in ulog.logged_messages]
+    parameters = {name: float(value) for name, value in ulog.initial_parameters.items()}
+    for t_us, name, value in ulog.changed_parameters:
+        change = parameter_change(parameters, name, float(value))
+        events += [(int(t_us), change)] if change is not None else []
+    if vehicle_status is not None:
+        last = None
+        for t_us, nav_state, arming_state in zip(vehicle_status["timestamp"], vehicle_status["nav_state"], vehicle_status["arming_state"]):
+            state = (px4_nav_state_mode(nav_state), int(arming_state) in PX4_ARMED_STATES)
+            if state != last:
+                events.append((int(t_us), status_event(*state)))
+                last = state
+    return sorted(events, key=lambda pair: pair[0]), parameters

@@ -70,9 +70,10 @@ def px4_nav_state_mode(nav_state: int) -> str:
     return px4_name if name == "UNKNOWN" else name
 
 
-def status_event(t_s: float, mode: str, armed: bool | None) -> dict:
-    """A mode or arming change at session time ``t_s`` (a log's; the live front-end adds its host time)."""
-    return {"t_s": t_s, "session_time_s": t_s, "kind": STATUS_KIND, "mode": mode, "armed": armed}
+def status_event(mode: str, armed: bool | None, **times) -> dict:
+    """A mode or arming change; ``times``: the link's ``t_host_ns`` and ``session_time_s``, or none (a log's
+    reader: the session places its events)."""
+    return {**times, "kind": STATUS_KIND, "mode": mode, "armed": armed}
 
 
 @dataclasses.dataclass(frozen=True)
