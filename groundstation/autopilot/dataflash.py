@@ -19,8 +19,8 @@ import numpy as np
 from pymavlink import DFReader
 
 from groundstation import quaternion
-from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
+from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2

@@ -18,10 +18,10 @@ import io
 import numpy as np
 from pyulog import ULog
 
-from groundstation.autopilot.messages import ulog_said
 from groundstation.autopilot.flightlog import (
     GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, implausible_message, implausible_times, series,
 )
+from groundstation.autopilot.messages import ulog_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
