@@ -5,7 +5,8 @@ Messages and units used (ArduPilot's LogStructure): ``IMU`` (instance ``I`` 0: `
 degrees, ZYX, body -> NED: the onboard estimate), ``MAG`` (instance 0, ``MagX..Z`` mGauss), ``BARO``
 (instance 0, ``Press`` Pa, ``Temp`` °C), ``GPS`` (instance 0: ``Lat``/``Lng`` degrees, ``Alt`` m,
 ``Spd`` m/s, ``GCrs`` degrees, ``VZ`` m/s down, ``Status`` fix type, ``NSats``). A log whose logging
-bitmask left out ``IMU`` still opens, with the onboard attitude only.
+bitmask left out ``IMU`` still opens, with the onboard attitude only. ``MSG``, ``ERR``, ``EV``, ``MODE``,
+``ARM`` and ``PARM``: what the autopilot said and how it was set (``messages.dataflash_said``).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from pymavlink import DFReader
 
 from groundstation import quaternion
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
+from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -38,19 +40,22 @@ def read_dataflash(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
-    rows = defaultdict(list)
+    rows, said = defaultdict(list), []
     chatter = io.StringIO()  # DFReader prints "bad header" lines for damaged bytes: counted, not shown
     try:
         with contextlib.redirect_stdout(chatter):
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
-            while (msg := reader.recv_match(type=list(FIELDS))) is not None:
-                if getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
+            while (msg := reader.recv_match(type=[*FIELDS, *DATAFLASH_SAID])) is not None:
+                if msg.get_type() in DATAFLASH_SAID:
+                    said.append(msg)
+                elif getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
                     rows[msg.get_type()].append([getattr(msg, f) for f in FIELDS[msg.get_type()]])
                 if progress is not None and len(rows["ATT"]) % 1024 == 0:
                     progress(reader.percent, 100)
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
+    log.events, log.parameters = dataflash_said(said, reader.mav_type)
     damaged = chatter.getvalue().count("bad header")
     if damaged:
         log.notes.append(f"{damaged} damaged bytes skipped")
