@@ -39,8 +39,9 @@ EVENTS = {
 
 
 def samples(n, seed, events, waiting):
-    """Flight-like samples with the events at their indices, the first ``waiting`` without gravity, and a
-    magnetometer reading on every third sample (NaN rows between, and one zero reading)."""
+    """Flight-like samples with the events at their indices, the first ``waiting`` without gravity, a
+    magnetometer reading on every third sample (NaN rows between, and one zero reading) and a GPS fix
+    (NED velocity, heading) on every tenth (one without heading, one without velocity)."""
     gyr, acc, dt = flight_like_samples(n, seed)
     acc[:waiting] = 0.0
     for k, kind in events:
@@ -54,11 +55,19 @@ def samples(n, seed, events, waiting):
     mag = np.full((n, 3), np.nan)
     mag[::3] = np.random.default_rng(seed).normal(0.0, 30.0, (len(mag[::3]), 3)) + [20.0, 0.0, 40.0]
     mag[n // 2] = 0.0
-    return gyr, acc, dt, mag
+    rng = np.random.default_rng(seed + 1)
+    gps = np.full((n, 4), np.nan)
+    gps[::10] = np.column_stack([np.cumsum(rng.normal(0.0, 0.3, (len(gps[::10]), 3)), axis=0), rng.uniform(-np.pi, np.pi, len(gps[::10]))])
+    gps[n // 3, 3] = np.nan
+    gps[n // 3 + 10, :3] = np.nan
+    return gyr, acc, dt, mag, gps
 
 
-def stepped(est, gyr, acc, dt, mag):
-    rows = [est.step(g, a, d, None if math.isnan(m[0]) else m) for g, a, d, m in zip(gyr.tolist(), acc.tolist(), dt.tolist(), mag.tolist())]
+def stepped(est, gyr, acc, dt, mag, gps):
+    rows = [
+        est.step(g, a, d, None if math.isnan(m[0]) else m, None if np.isnan(f).all() else base.GpsFix(*f))
+        for g, a, d, m, f in zip(gyr.tolist(), acc.tolist(), dt.tolist(), mag.tolist(), gps.tolist())
+    ]
     return np.array([q for q, _ in rows]), np.array([d for _, d in rows])
 
 
@@ -88,16 +97,16 @@ GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
 def test_run_equals_step_and_the_interpreted_source(name, seed, events, waiting, gate, start):
     """Compiled run = compiled step = the kernel's Python source interpreted (dtype=np.float64), bit for
     bit (the compiled code is what the source says, a stale cache included)."""
-    gyr, acc, dt, mag = samples(300, seed, events, waiting)
+    gyr, acc, dt, mag, gps = samples(300, seed, events, waiting)
     cls = ESTIMATORS[name]
     batch, stepper, interpreted = (cls(create(name, gate).settings, dtype=t) for t in (None, None, np.float64))
     for est in (batch, stepper, interpreted):
         est.reset(start)
-    q, diag = batch.run(gyr, acc, dt, mag=mag)
-    q_step, table_step = stepped(stepper, gyr, acc, dt, mag)
+    q, diag = batch.run(gyr, acc, dt, mag=mag, gps=gps)
+    q_step, table_step = stepped(stepper, gyr, acc, dt, mag, gps)
     fields = cls.Diagnostics._fields
     assert_same(q, diag, q_step, table_step, fields)
-    q_py, diag_py = interpreted.run(gyr, acc, dt, mag=mag)
+    q_py, diag_py = interpreted.run(gyr, acc, dt, mag=mag, gps=gps)
     assert_same(q_py, diag_py, q_step, table_step, fields)
     assert np.all(np.isfinite(q)) and np.allclose(np.linalg.norm(q, axis=1), 1.0)
     assert all(np.all(np.isfinite(diag[f])) for f in fields)
@@ -105,20 +114,20 @@ def test_run_equals_step_and_the_interpreted_source(name, seed, events, waiting,
 
 @pytest.mark.parametrize("name", COMPILED)
 def test_run_continues_from_the_current_state(name):
-    gyr, acc, dt, mag = samples(600, 3, [(100, "gap"), (200, "acc nan")], 2)
+    gyr, acc, dt, mag, gps = samples(600, 3, [(100, "gap"), (200, "acc nan")], 2)
     whole, parts = create(name), create(name)
-    q, diag = whole.run(gyr, acc, dt, mag=mag)
-    q1, d1 = parts.run(gyr[:250], acc[:250], dt[:250], mag=mag[:250])
-    parts.step(gyr[250], acc[250], dt[250])  # sample 250 has no reading (mag on every third sample)
-    q2, d2 = parts.run(gyr[251:], acc[251:], dt[251:], mag=mag[251:])
-    np.testing.assert_array_equal(q[:250], q1)
-    np.testing.assert_array_equal(q[251:], q2)
-    np.testing.assert_array_equal(diag["status"][251:], d2["status"])
+    q, diag = whole.run(gyr, acc, dt, mag=mag, gps=gps)
+    q1, d1 = parts.run(gyr[:251], acc[:251], dt[:251], mag=mag[:251], gps=gps[:251])
+    parts.step(gyr[251], acc[251], dt[251])  # sample 251 has no reading (mag on every third, GPS every tenth)
+    q2, d2 = parts.run(gyr[252:], acc[252:], dt[252:], mag=mag[252:], gps=gps[252:])
+    np.testing.assert_array_equal(q[:251], q1)
+    np.testing.assert_array_equal(q[252:], q2)
+    np.testing.assert_array_equal(diag["status"][252:], d2["status"])
 
 
 @pytest.mark.parametrize("name", COMPILED)
 def test_run_accepts_read_only_and_strided_arrays_and_checks_lengths(name):
-    gyr, acc, dt, mag = samples(200, 4, [], 0)
+    gyr, acc, dt, mag, _ = samples(200, 4, [], 0)
     data = np.hstack([gyr, acc])
     data.flags.writeable = False
     q, _ = create(name).run(data[:, :3], data[:, 3:], 0.01, mag=mag)
