@@ -190,6 +190,22 @@ def screen(gx, gy, gz, ax, ay, az, dt_s, waiting, acc_dev, dt_run_s, acc_min2, a
     return status, acc_ok, acc_dev, dt_s, dt_run_s
 
 
+@njit(cache=True)
+def screen_rows(gyr, acc, dt, guard_state, params, status_out, dt_out):
+    """``screen`` over ``run``'s rows (an estimator whose filter runs in a batch of its own, vqf): each
+    row's status and the interval it integrates; ``guard_state`` (waiting, acc_dev, dt_run_s) is carried
+    through as ``step`` carries it, ``params`` (acc_min2, acc_dev_max, acc_window_s, max_gap_s)."""
+    waiting, acc_dev, dt_run_s = guard_state[0] != 0.0, guard_state[1], guard_state[2]
+    for k in range(dt.shape[0]):
+        status, _, acc_dev, dt_out[k], dt_run_s = screen(
+            gyr[k, 0], gyr[k, 1], gyr[k, 2], acc[k, 0], acc[k, 1], acc[k, 2], dt[k], waiting, acc_dev, dt_run_s, params[0], params[1], params[2], params[3]
+        )
+        if status & INITIALISED:
+            waiting = False
+        status_out[k] = status
+    guard_state[0], guard_state[1], guard_state[2] = 1.0 if waiting else 0.0, acc_dev, dt_run_s
+
+
 @register_jitable
 def gravity_attitude(ax, ay, az, yaw_rad):
     """Quaternion (tuple) with the given yaw whose pitch and roll put gravity where the accelerometer says."""
@@ -280,6 +296,10 @@ class Estimator:
         status, acc_ok, self._acc_dev, dt_s, self._dt_run_s = screen(
             gx, gy, gz, ax, ay, az, dt_s, self._waiting, self._acc_dev, self._dt_run_s, self._acc_min2, self._acc_dev_max, self._acc_window_s, self._max_gap_s
         )
+        return self._screened(status, acc_ok, dt_s, gx, gy, gz, ax, ay, az)
+
+    def _screened(self, status, acc_ok, dt_s, gx, gy, gz, ax, ay, az):
+        """The rest of ``step`` once ``screen`` has judged the sample (and updated the guard's state)."""
         if status & INITIALISED:
             self._waiting = False
             self._set_attitude(self._attitude_from_acc(ax, ay, az, 0.0))
@@ -350,6 +370,7 @@ RUN_SIGNATURE = types.void(_VECTOR, _VECTOR, _ROWS, _ROWS, _VECTOR, _ROWS, _ROWS
 # A GPS-aided kernel (``gps_aided``) takes the fix's four numbers after the magnetometer's, its run loop
 # the (N, 4) rows after the magnetometer's
 GPS_KERNEL_SIGNATURE = types.int64(_VECTOR, _VECTOR, *[_F8] * 14)
+SCREEN_ROWS_SIGNATURE = types.void(_ROWS, _ROWS, _VECTOR, _VECTOR, _VECTOR, types.int64[::1], _VECTOR)  # screen_rows
 GPS_RUN_SIGNATURE = types.void(_VECTOR, _VECTOR, _ROWS, _ROWS, _VECTOR, _ROWS, _ROWS, _ROWS, types.int64[::1], _ROWS)
 
 
