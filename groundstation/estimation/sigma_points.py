@@ -110,18 +110,18 @@ def points(x, s, z):
 
 
 @register_jitable
-def _spread(rows, wm):
-    """Weighted mean (m,) and deviations (m, L) of rows (m, L)."""
-    m, count = rows.shape
+def _spread(values, wm, by_rows):
+    """Weighted mean (m,) and deviations (m, L) of rows (m, L), or of points (L, m) unless ``by_rows``."""
+    count, m = (values.shape[1], values.shape[0]) if by_rows else (values.shape[0], values.shape[1])
     mean = np.empty(m)
     d = np.empty((m, count))
     for i in range(m):
         acc = 0.0
         for point in range(count):
-            acc += wm[point] * rows[i, point]
+            acc += wm[point] * (values[i, point] if by_rows else values[point, i])
         mean[i] = acc
         for point in range(count):
-            d[i, point] = rows[i, point] - acc
+            d[i, point] = (values[i, point] if by_rows else values[point, i]) - acc
     return mean, d
 
 
@@ -175,14 +175,14 @@ def _compound(d, wc, sqrt_wc, sqrt_noise):
 @register_jitable
 def time_update(chi_f, wm, wc, q_diag):
     """Dense: propagated points ``f(χ)`` (L, n) and the process noise's diagonal -> ``(x⁻, P⁻)``."""
-    x, d = _spread(chi_f.T.copy(), wm)
+    x, d = _spread(chi_f, wm, False)
     return x, _weighted_outer(d, wc, d, q_diag, True)
 
 
 @register_jitable
 def sqrt_time_update(chi_f, wm, wc, sqrt_wc, sqrt_q):
     """Square root: propagated points and √Q's diagonal -> ``(ok, x⁻, S⁻)`` by QR and one cholupdate."""
-    x, d = _spread(chi_f.T.copy(), wm)
+    x, d = _spread(chi_f, wm, False)
     ok, s = _compound(d, wc, sqrt_wc, sqrt_q)
     return ok, x, s
 
@@ -198,7 +198,7 @@ def _output_spread(x, chi, y_sigma, y, wm):
         if not rows[i].max() - rows[i].min() < math.pi:
             for point in range(count):
                 rows[i, point] = r0 + wrap_pi(rows[i, point] - r0)
-    y_hat, dy = _spread(rows, wm)
+    y_hat, dy = _spread(rows, wm, True)
     n = x.shape[0]
     dx = np.empty((n, count))
     for i in range(n):

@@ -237,10 +237,10 @@ def _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
     z = p[_Z : _Z + _N * count].reshape((_N, count))
     flags = 0
     state[_INNOVATION] = 0.0
-    cov = state[_COV : _COV + _N * _N].reshape((_N, _N)).copy()
+    cov = state[_COV : _COV + _N * _N].reshape((_N, _N))
     ok, factor = (True, cov) if square_root else sl.cholesky(cov)
     if not ok:
-        return False, cov[0], cov, flags
+        return False, state[0:4], cov, flags
     chi = sp.points(state[0:4], factor, z)
     for k in range(count):
         chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3] = integrate_rate((chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3]), gx, gy, gz, dt_s)  # eq. 2
@@ -281,9 +281,9 @@ def _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
         sqrt_r = np.empty(m)
         for i in range(m):
             sqrt_r[i] = math.sqrt(var[i])
-        ok, x, cov, innovation = sp.sqrt_measurement_update(x, cov, chi, y_sigma, y[:m].copy(), sqrt_r, wm, wc, sqrt_wc)
+        ok, x, cov, innovation = sp.sqrt_measurement_update(x, cov, chi, y_sigma, y[:m], sqrt_r, wm, wc, sqrt_wc)
     else:
-        ok, x, cov, innovation = sp.measurement_update(x, cov, chi, y_sigma, y[:m].copy(), var[:m].copy(), wm, wc)
+        ok, x, cov, innovation = sp.measurement_update(x, cov, chi, y_sigma, y[:m], var[:m], wm, wc)
     if ok:
         state[_INNOVATION] = math.sqrt(_dot(innovation))
     return ok, x, cov, flags
