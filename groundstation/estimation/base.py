@@ -64,9 +64,11 @@ Robust stepping (every estimator, decided here once):
 
 Status flags are bits of ``diag.status`` (plain ints, cheap per sample).
 
-Compiled estimators (``CompiledEstimator``: ahf, hf, ecf, cf1, kf, ekf, hfm, ecfm): each one's per-sample
-arithmetic is written once, as a ``kernel(state, params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz) ->
-status`` on scalars and two small float arrays, that starts with this module's ``guard``. numba compiles
+Compiled estimators (``CompiledEstimator``: ahf, hf, ecf, cf1, kf, ekf, hfm, ecfm, ukf, sssrukf): each one's
+per-sample arithmetic is written once, as a ``kernel(state, params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+-> status`` on scalars and two small float arrays (a GPS-aided one, ``gps_aided``, takes the fix's
+``vel_n, vel_e, vel_d, heading`` after the magnetometer's, NaN for none), that starts with this module's
+``guard``. numba compiles
 it; ``step`` calls it once per sample, ``run`` calls it in a compiled loop (the estimator's
 ``run_kernel``), so the two agree sample for sample by construction (2-6 µs a step, millions of samples a second
 in ``run``; bench/bench_kernels.out.md). ``state`` holds q, the waiting flag, the gate's deviation, the

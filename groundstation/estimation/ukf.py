@@ -35,6 +35,12 @@ GPS velocity 0.05 m/s and heading 0.5° (``sim.extra_sensors.AuxSettings``). The
 differenced over the fix interval Δt_fix, gives the compensated tilt an error of √2 σ_v / (Δt_fix g)
 rad which is reused on every sample until the next fix: its variance is charged Δt_fix / dt times
 per sample, so one fix interval carries what one fix is worth.
+
+Compiled (base.py's ``CompiledEstimator``, ``gps_aided``): one kernel for both, ``p[_SQUARE_ROOT]`` choosing
+the dense steps (P, two Choleskys a sample) or the square-root ones (S by QR and rank-1 updates, never
+re-factorised), each with its own sigma set, so their run-time ratio is the algorithms' (seed 001: 42 %;
+measured in bench/bench_estimator_costs.out.md). A failed factorisation or downdate (``ok`` False, a
+kernel cannot catch ``LinAlgError``) restarts the covariance (``COVARIANCE_RESET``).
 """
 
 from __future__ import annotations
