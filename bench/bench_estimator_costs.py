@@ -88,16 +88,17 @@ def costs(samples: int, rounds: int) -> dict[str, float]:
 
 
 def worker_compile() -> dict:
-    t0 = time.perf_counter()
+    """Process time (CPU s) of the imports and of each estimator's first creation and run."""
+    t0 = time.process_time()
     from groundstation.estimation import ESTIMATORS, create
 
-    imports = time.perf_counter() - t0
+    imports = time.process_time() - t0
     gyr, acc, dt, mag, gps = inputs(20)
     first = {}
     for name in ESTIMATORS:
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         create(name).run(gyr, acc, dt, mag=mag, gps=gps)
-        first[name] = time.perf_counter() - t0
+        first[name] = time.process_time() - t0
     return {"imports_s": imports, "first_use_s": first}
 
 
@@ -123,11 +124,21 @@ def jitter_trial(path) -> tuple[str, dict]:
     return path.name.split("_")[0], row
 
 
+def print_compile_times(fresh, cached) -> None:
+    print("\n## numba compile time, CPU s (a fresh process: every estimator created and run once, in this order)\n")
+    print("| | imports | " + " | ".join(fresh["first_use_s"]) + " | all |")
+    print("|---|---:|" + "---:|" * (len(fresh["first_use_s"]) + 1))
+    for label, r in (("first start on a machine (empty cache)", fresh), ("every later start (cache loaded)", cached)):
+        first = r["first_use_s"]
+        print(f"| {label} | {r['imports_s']:.2f} | " + " | ".join(f"{v:.2f}" for v in first.values()) + f" | {sum(first.values()):.2f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--samples", type=int, default=30_000)
     parser.add_argument("--no-broad", action="store_true")
+    parser.add_argument("--compile-only", action="store_true", help="section 2 alone")
     parser.add_argument("--worker-compile", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker_compile:
@@ -135,6 +146,9 @@ def main() -> None:
         return
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, load average {os.getloadavg()[0]:.1f} at the start\n")
     fresh, cached = compile_times()
+    if args.compile_only:
+        print_compile_times(fresh, cached)
+        return
     med = costs(args.samples, args.rounds)
     fusion = med["imufusion (C, per sample)"]
     print(f"## run: CPU µs per sample (medians of {args.rounds} interleaved rounds, {args.samples:,} samples, 100 Hz ± {JITTER:.1%})\n")
@@ -143,12 +157,7 @@ def main() -> None:
     for name, us in med.items():
         print(f"| {name} | {us:.2f} | {us / fusion:.1f} |")
     print(f"\nSSSRUKF / UKF run time: {med['sssrukf'] / med['ukf']:.0%} (seed 001: 42 %, 6.84 s vs 16.30 s)")
-    print("\n## numba compile time (a fresh process: every estimator created and run once), s\n")
-    print("| | imports | " + " | ".join(fresh["first_use_s"]) + " | all |")
-    print("|---|---:|" + "---:|" * (len(fresh["first_use_s"]) + 1))
-    for label, r in (("first start on a machine (empty cache)", fresh), ("every later start (cache loaded)", cached)):
-        first = r["first_use_s"]
-        print(f"| {label} | {r['imports_s']:.2f} | " + " | ".join(f"{v:.2f}" for v in first.values()) + f" | {sum(first.values()):.2f} |")
+    print_compile_times(fresh, cached)
     if args.no_broad:
         return
     sys.path.insert(0, str(Path(__file__).parent))
