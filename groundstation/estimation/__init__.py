@@ -54,9 +54,8 @@ def label(name: str) -> str:
 
 def live_estimators() -> tuple[str, ...]:
     """The estimators every live session runs (and so its recording's replays), so showing one is a
-    legend click or a check box, not a restart: the IMU filters, those with the magnetometer (a few µs
-    per sample each) and the GPS-aided unscented filters (a few hundred µs per sample each, in the
-    reader thread). Hidden curves cost the UI nothing per frame."""
+    legend click or a check box, not a restart: the IMU filters, those with the magnetometer and the
+    GPS-aided unscented filters (a few µs per sample each, compiled; bench/bench_estimator_costs.out.md). Hidden curves cost the UI nothing per frame."""
     return tuple(name for name, cls in ESTIMATORS.items() if cls.live)
 
 

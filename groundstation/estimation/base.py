@@ -64,9 +64,11 @@ Robust stepping (every estimator, decided here once):
 
 Status flags are bits of ``diag.status`` (plain ints, cheap per sample).
 
-Compiled estimators (``CompiledEstimator``: ahf, hf, ecf, cf1, kf, ekf, hfm, ecfm): each one's per-sample
-arithmetic is written once, as a ``kernel(state, params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz) ->
-status`` on scalars and two small float arrays, that starts with this module's ``guard``. numba compiles
+Compiled estimators (``CompiledEstimator``: ahf, hf, ecf, cf1, kf, ekf, hfm, ecfm, ukf, sssrukf): each one's
+per-sample arithmetic is written once, as a ``kernel(state, params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+-> status`` on scalars and two small float arrays (a GPS-aided one, ``gps_aided``, takes the fix's
+``vel_n, vel_e, vel_d, heading`` after the magnetometer's, NaN for none), that starts with this module's
+``guard``. numba compiles
 it; ``step`` calls it once per sample, ``run`` calls it in a compiled loop (the estimator's
 ``run_kernel``), so the two agree sample for sample by construction (2-6 µs a step, millions of samples a second
 in ``run``; bench/bench_kernels.out.md). ``state`` holds q, the waiting flag, the gate's deviation, the
@@ -190,6 +192,22 @@ def screen(gx, gy, gz, ax, ay, az, dt_s, waiting, acc_dev, dt_run_s, acc_min2, a
     return status, acc_ok, acc_dev, dt_s, dt_run_s
 
 
+@njit(cache=True)
+def screen_rows(gyr, acc, dt, guard_state, params, status_out, dt_out):
+    """``screen`` over ``run``'s rows (an estimator whose filter runs in a batch of its own, vqf): each
+    row's status and the interval it integrates; ``guard_state`` (waiting, acc_dev, dt_run_s) is carried
+    through as ``step`` carries it, ``params`` (acc_min2, acc_dev_max, acc_window_s, max_gap_s)."""
+    waiting, acc_dev, dt_run_s = guard_state[0] != 0.0, guard_state[1], guard_state[2]
+    for k in range(dt.shape[0]):
+        status, _, acc_dev, dt_out[k], dt_run_s = screen(
+            gyr[k, 0], gyr[k, 1], gyr[k, 2], acc[k, 0], acc[k, 1], acc[k, 2], dt[k], waiting, acc_dev, dt_run_s, params[0], params[1], params[2], params[3]
+        )
+        if status & INITIALISED:
+            waiting = False
+        status_out[k] = status
+    guard_state[0], guard_state[1], guard_state[2] = 1.0 if waiting else 0.0, acc_dev, dt_run_s
+
+
 @register_jitable
 def gravity_attitude(ax, ay, az, yaw_rad):
     """Quaternion (tuple) with the given yaw whose pitch and roll put gravity where the accelerometer says."""
@@ -280,6 +298,10 @@ class Estimator:
         status, acc_ok, self._acc_dev, dt_s, self._dt_run_s = screen(
             gx, gy, gz, ax, ay, az, dt_s, self._waiting, self._acc_dev, self._dt_run_s, self._acc_min2, self._acc_dev_max, self._acc_window_s, self._max_gap_s
         )
+        return self._screened(status, acc_ok, dt_s, gx, gy, gz, ax, ay, az)
+
+    def _screened(self, status, acc_ok, dt_s, gx, gy, gz, ax, ay, az):
+        """The rest of ``step`` once ``screen`` has judged the sample (and updated the guard's state)."""
         if status & INITIALISED:
             self._waiting = False
             self._set_attitude(self._attitude_from_acc(ax, ay, az, 0.0))
@@ -347,6 +369,11 @@ P_OWN = 5  # the estimator's own parameters
 _F8, _VECTOR, _ROWS = types.float64, types.float64[::1], types.float64[:, ::1]
 KERNEL_SIGNATURE = types.int64(_VECTOR, _VECTOR, *[_F8] * 10)  # state, params, gyr, acc, dt_s, mag
 RUN_SIGNATURE = types.void(_VECTOR, _VECTOR, _ROWS, _ROWS, _VECTOR, _ROWS, _ROWS, types.int64[::1], _ROWS)  # (state, params, gyr, acc, dt, mag, outputs)
+# A GPS-aided kernel (``gps_aided``) takes the fix's four numbers after the magnetometer's, its run loop
+# the (N, 4) rows after the magnetometer's
+GPS_KERNEL_SIGNATURE = types.int64(_VECTOR, _VECTOR, *[_F8] * 14)
+SCREEN_ROWS_SIGNATURE = types.void(_ROWS, _ROWS, _VECTOR, _VECTOR, _VECTOR, types.int64[::1], _VECTOR)  # screen_rows
+GPS_RUN_SIGNATURE = types.void(_VECTOR, _VECTOR, _ROWS, _ROWS, _VECTOR, _ROWS, _ROWS, _ROWS, types.int64[::1], _ROWS)
 
 
 @register_jitable
@@ -389,6 +416,14 @@ def sample(gyr, acc, dt, mag, k):
 
 
 @register_jitable
+def sample_fix(gps, k):
+    """Row k of ``run``'s GPS rows as a GPS-aided kernel's last four inputs; ``gps`` (0, 4) for none."""
+    if gps.shape[0] == 0:
+        return math.nan, math.nan, math.nan, math.nan
+    return gps[k, 0], gps[k, 1], gps[k, 2], gps[k, 3]
+
+
+@register_jitable
 def record(state, k, status, status_out, q_out, diag_out):
     """Row k of ``run``'s outputs from the kernel's status and state: what ``step`` returns."""
     status_out[k] = status
@@ -427,6 +462,7 @@ def _compiled(dispatcher, signature):
 
 _new_tuple = tuple.__new__
 _NO_FIELD = (math.nan, math.nan, math.nan)
+_NO_FIX = (math.nan, math.nan, math.nan, math.nan)
 
 
 class CompiledEstimator(Estimator):
@@ -445,12 +481,14 @@ class CompiledEstimator(Estimator):
 
     kernel: ClassVar
     run_kernel: ClassVar
+    gps_aided: ClassVar[bool] = False  # the kernel takes the GPS fix too (GPS_KERNEL_SIGNATURE)
 
     def __init__(self, settings=None, dtype=None):
         self._dtype = np.dtype(np.float64 if dtype is None else dtype)
         self._cast = None if dtype is None else self._dtype.type
         kernel = type(self).kernel
-        self._kernel = _compiled(kernel, KERNEL_SIGNATURE) if dtype is None else kernel.py_func
+        signature = GPS_KERNEL_SIGNATURE if self.gps_aided else KERNEL_SIGNATURE
+        self._kernel = _compiled(kernel, signature) if dtype is None else kernel.py_func
         self._diag_end = STATE_DIAG + len(self.Diagnostics._fields) - 1
         super().__init__(settings)
 
@@ -488,7 +526,11 @@ class CompiledEstimator(Estimator):
         if self._cast is not None:
             c = self._cast
             gx, gy, gz, ax, ay, az, dt_s = c(gx), c(gy), c(gz), c(ax), c(ay), c(az), c(dt_s)
-        status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+        if self.gps_aided:
+            fix = _NO_FIX if gps is None else gps
+            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, fix[0], fix[1], fix[2], fix[3])
+        else:
+            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
         v = self._values()
         return (v[0], v[1], v[2], v[3]), _new_tuple(self.Diagnostics, (status, *v[STATE_DIAG : self._diag_end]))
 
@@ -496,15 +538,17 @@ class CompiledEstimator(Estimator):
         gyr, acc, dt = batch_inputs(gyr_rad_s, acc_g, dt_s)
         n = len(dt)
         mags = np.empty((0, 3)) if mag is None else _rows(mag, n, 3, "mag")
-        if gps is not None:
-            _rows(gps, n, 4, "gps")  # checked like every estimator's; these do not use it
+        fixes = np.empty((0, 4)) if gps is None else _rows(gps, n, 4, "gps")  # checked even where unused
         q, status, table = np.empty((n, 4)), np.empty(n, dtype=np.int64), np.empty((n, self._diag_end - STATE_DIAG))
+        aiding = (mags, fixes) if self.gps_aided else (mags,)
         if self._cast is None:
-            _compiled(type(self).run_kernel, RUN_SIGNATURE)(self._state, self._params, gyr, acc, dt, mags, q, status, table)
+            signature = GPS_RUN_SIGNATURE if self.gps_aided else RUN_SIGNATURE
+            _compiled(type(self).run_kernel, signature)(self._state, self._params, gyr, acc, dt, *aiding, q, status, table)
         else:  # the same loop, interpreted (run_kernel.py_func would call the compiled kernel)
             gyr, acc, dt, mags = (a.astype(self._dtype) for a in (gyr, acc, dt, mags))
             for k in range(n):
-                record(self._state, k, self._kernel(self._state, self._params, *sample(gyr, acc, dt, mags, k)), status, q, table)
+                fix = sample_fix(fixes, k) if self.gps_aided else ()
+                record(self._state, k, self._kernel(self._state, self._params, *sample(gyr, acc, dt, mags, k), *fix), status, q, table)
         return q, {"status": status} | {name: table[:, i] for i, name in enumerate(self.Diagnostics._fields[1:])}
 
 

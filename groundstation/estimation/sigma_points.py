@@ -27,22 +27,23 @@ Steps (van der Merwe and Wan's square-root UKF with additive noise, which seed 0
 Measurements here are angles (rad): sigma-point outputs are unwrapped around the centre point's and
 the innovation wrapped into [-π, π).
 
-Both kinds of step run on plain Python floats (``small_linalg``): on n = 4 numpy's per-call overhead
-(``qr`` ~20-50 µs) hid the operation counts. ``*_lists`` take points as a list of L points (sequences
-of n floats), angle outputs as m rows of L and matrices as lists of rows; the functions of the same
-name without the suffix wrap them for numpy arrays (points and outputs as (n, L) and (m, L) columns).
-Both sets are treated alike: ``χ = x + S z`` skips the zero entries of each set's z.
+The steps are ``register_jitable`` (``small_linalg``): compiled into the ukf kernel (ukf.py), plain
+Python on numpy arrays elsewhere; on n = 4 LAPACK's per-call cost (``qr`` ~20-50 µs) would hide the
+operation counts. Points are rows ``chi`` (L, n), outputs rows (m, L), noises their diagonals (the
+filters' Q and R are diagonal). A failed factorisation is ``ok`` False (a kernel cannot catch
+``LinAlgError``). Both sets are treated alike: ``χ = x + S z`` skips the zero entries of each set's z.
 """
 
 from __future__ import annotations
 
 import math
-from operator import mul
 from typing import NamedTuple
 
 import numpy as np
+from numba.extending import register_jitable
 
 from groundstation.estimation import small_linalg as sl
+from groundstation.estimation.tilt import wrap_pi
 
 
 class SigmaSet(NamedTuple):
@@ -50,8 +51,6 @@ class SigmaSet(NamedTuple):
     wm: np.ndarray  # (L,) mean weights, sum 1
     wc: np.ndarray  # (L,) covariance weights; wc[1:] >= 0
     sqrt_wc: np.ndarray  # (L - 1,) √wc[1:], precomputed for the square-root steps
-    nonzeros: tuple  # per point, the (row, value) pairs of its nonzero z entries
-    floats: tuple  # (wm, wc, sqrt_wc) as lists of Python floats
 
 
 def _scaled(z, w0, wi, alpha, beta) -> SigmaSet:
@@ -62,9 +61,7 @@ def _scaled(z, w0, wi, alpha, beta) -> SigmaSet:
     wc[0] += 1.0 - alpha**2 + beta
     if wi <= 0.0:
         raise ValueError("sigma-point weights of the outer points must be positive")
-    z = alpha * z
-    nonzeros = tuple(tuple((j, v) for j, v in enumerate(col) if v != 0.0) for col in z.T.tolist())
-    return SigmaSet(z, wm, wc, np.sqrt(wc[1:]), nonzeros, (wm.tolist(), wc.tolist(), np.sqrt(wc[1:]).tolist()))
+    return SigmaSet(np.ascontiguousarray(alpha * z), wm, wc, np.sqrt(wc[1:]))
 
 
 def symmetric(n: int, alpha: float = 1.0, beta: float = 2.0, kappa: float = 0.0) -> SigmaSet:
@@ -92,135 +89,171 @@ def spherical_simplex(n: int, w0: float = 0.0, alpha: float = 1.0, beta: float =
     return _scaled(z, w0, w1, alpha, beta)  # steps 3 and 6
 
 
-
-def _wrap(angle_rad):
-    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
+_NO_NOISE = np.empty(0)
 
 
-def points_lists(x, s, sigma: SigmaSet):
-    """Sigma points ``x + S z`` (L tuples of n) around ``x`` with covariance factor ``s`` (rows).
-    Component by component, over S's rows: fewer, longer loops than point by point (half the time
-    for n = 4), the same sums in the same order."""
-    rows = []
-    for x_k, s_k in zip(x, s):
-        row = []
-        for nonzeros in sigma.nonzeros:
-            p = x_k
-            for j, v in nonzeros:
-                p = p + v * s_k[j]
-            row.append(p)
-        rows.append(row)
-    return list(zip(*rows))
+@register_jitable
+def points(x, s, z):
+    """Sigma points ``x + S z`` (L, n) around ``x`` with covariance factor ``s``; each sum over the set's
+    nonzero z entries in row order."""
+    n, count = z.shape
+    chi = np.empty((count, n))
+    for k in range(n):
+        for point in range(count):
+            p = x[k]
+            for j in range(n):
+                v = z[j, point]
+                if v != 0.0:
+                    p = p + v * s[k, j]
+            chi[point, k] = p
+    return chi
 
 
-def _spread(rows, wm):
-    """Weighted mean and deviation rows of component rows (n rows of L values)."""
-    mean = [sum(map(mul, wm, r)) for r in rows]
-    return mean, [[v - m for v in r] for r, m in zip(rows, mean)]
+@register_jitable
+def _spread(values, wm, by_rows):
+    """Weighted mean (m,) and deviations (m, L) of rows (m, L), or of points (L, m) unless ``by_rows``."""
+    count, m = (values.shape[1], values.shape[0]) if by_rows else (values.shape[0], values.shape[1])
+    mean = np.empty(m)
+    d = np.empty((m, count))
+    for i in range(m):
+        acc = 0.0
+        for point in range(count):
+            acc += wm[point] * (values[i, point] if by_rows else values[point, i])
+        mean[i] = acc
+        for point in range(count):
+            d[i, point] = (values[i, point] if by_rows else values[point, i]) - acc
+    return mean, d
 
 
-def _weighted(rows, w):
-    return [list(map(mul, w, r)) for r in rows]
+@register_jitable
+def _weighted_outer(a, w, b, noise, symmetric):
+    """``Σᵢ wᵢ aᵢ bᵢᵀ`` (+ diag(noise) when it has entries) of rows a (r, L) and b (c, L), each term as
+    ``a (w b)``; ``symmetric`` (b is a): the upper triangle, mirrored."""
+    r, c, count = a.shape[0], b.shape[0], a.shape[1]
+    out = np.empty((r, c))
+    for i in range(r):
+        for j in range(i if symmetric else 0, c):
+            acc = 0.0
+            for point in range(count):
+                acc += a[i, point] * (w[point] * b[j, point])
+            out[i, j] = acc
+            if symmetric:
+                out[j, i] = acc
+    for i in range(noise.shape[0]):
+        out[i, i] = out[i, i] + noise[i]
+    return out
 
 
-def _outer(a, b, symmetric=False):
-    """``Σᵢ aᵢ bᵢᵀ`` of component rows (each L values); symmetric: the lower triangle, mirrored."""
-    if not symmetric:
-        return [[sum(map(mul, ra, rb)) for rb in b] for ra in a]
-    lower = [[sum(map(mul, ra, rb)) for rb in b[: i + 1]] for i, ra in enumerate(a)]
-    for i in range(len(lower) - 1):
-        lower[i] += [lower[j][i] for j in range(i + 1, len(lower))]
-    return lower
+@register_jitable
+def _minus_product(p, k, b):
+    """``P - K Bᵀ`` for a symmetric ``K Bᵀ`` (the dense update's ``K Pxyᵀ``): its lower triangle, mirrored."""
+    n, m = k.shape
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            acc = 0.0
+            for c in range(m):
+                acc += k[i, c] * b[j, c]
+            out[i, j] = p[i, j] - acc
+            out[j, i] = p[j, i] - acc
+    return out
 
 
-def _add(a, b):
-    return [[p + q for p, q in zip(ra, rb)] for ra, rb in zip(a, b)]
+@register_jitable
+def _compound(d, wc, sqrt_wc, sqrt_noise):
+    """``(ok, factor)`` of ``Σ wc dᵢ dᵢᵀ + diag(sqrt_noise)²`` from deviation rows (m, L): QR of
+    ``[√wc d₁.., √N]`` (``tria``), then a rank-1 ``cholupdate`` with d₀ of weight wc₀ (seed 001 §2.2)."""
+    m, count = d.shape
+    a = np.zeros((m, count - 1 + m))
+    for i in range(m):
+        for point in range(1, count):
+            a[i, point - 1] = sqrt_wc[point - 1] * d[i, point]
+        a[i, count - 1 + i] = sqrt_noise[i]
+    return sl.cholupdate(sl.tria(a), d[:, 0].copy(), wc[0])
 
 
-def _compound(d, sigma: SigmaSet, sqrt_noise):
-    """Factor of ``Σ wc dᵢ dᵢᵀ + N`` from deviation rows and ``√N``: QR of [√wc d₁.., √N], cholupdate d₀."""
-    _, wc, sqrt_wc = sigma.floats
-    rows = [list(map(mul, sqrt_wc, r[1:])) + list(n_row) for r, n_row in zip(d, sqrt_noise)]
-    return sl.cholupdate(sl.tria(rows), [r[0] for r in d], wc[0])
+@register_jitable
+def time_update(chi_f, wm, wc, q_diag):
+    """Dense: propagated points ``f(χ)`` (L, n) and the process noise's diagonal -> ``(x⁻, P⁻)``."""
+    x, d = _spread(chi_f, wm, False)
+    return x, _weighted_outer(d, wc, d, q_diag, True)
 
 
-def time_update_lists(chi_f, sigma: SigmaSet, q):
-    """Dense: propagated points ``f(χ)`` (L lists) and process noise ``Q`` -> ``(x⁻, P⁻)``."""
-    x, d = _spread(list(zip(*chi_f)), sigma.floats[0])
-    return x, _add(_outer(_weighted(d, sigma.floats[1]), d, True), q)
+@register_jitable
+def sqrt_time_update(chi_f, wm, wc, sqrt_wc, sqrt_q):
+    """Square root: propagated points and √Q's diagonal -> ``(ok, x⁻, S⁻)`` by QR and one cholupdate."""
+    x, d = _spread(chi_f, wm, False)
+    ok, s = _compound(d, wc, sqrt_wc, sqrt_q)
+    return ok, x, s
 
 
-def sqrt_time_update_lists(chi_f, sigma: SigmaSet, sqrt_q):
-    """Square root: propagated points and a factor of Q -> ``(x⁻, S⁻)`` by QR and one cholupdate."""
-    x, d = _spread(list(zip(*chi_f)), sigma.floats[0])
-    return x, _compound(d, sigma, sqrt_q)
+@register_jitable
+def _output_spread(x, chi, y_sigma, y, wm):
+    """``(dy, dx, innovation)`` of angle outputs ``h(χ)`` (m, L), each row unwrapped around its centre
+    point's when it spans π or more, and the innovation wrapped into [-π, π)."""
+    m, count = y_sigma.shape
+    rows = y_sigma.copy()
+    for i in range(m):
+        r0 = rows[i, 0]
+        if not rows[i].max() - rows[i].min() < math.pi:
+            for point in range(count):
+                rows[i, point] = r0 + wrap_pi(rows[i, point] - r0)
+    y_hat, dy = _spread(rows, wm, True)
+    n = x.shape[0]
+    dx = np.empty((n, count))
+    for i in range(n):
+        for point in range(count):
+            dx[i, point] = chi[point, i] - x[i]
+    innovation = np.empty(m)
+    for i in range(m):
+        innovation[i] = wrap_pi(y[i] - y_hat[i])
+    return dy, dx, innovation
 
 
-def _output_spread(x, chi, y_sigma, y, sigma):
-    """``(dy, dx, innovation)`` as rows, of angle output rows ``h(χ)`` unwrapped around the centre's."""
-    pi, tau = math.pi, 2.0 * math.pi
-    rows = [r if max(r) - min(r) < pi else [r0 + ((v - r0 + pi) % tau - pi) for v in r] for r in y_sigma for r0 in r[:1]]
-    y_hat, dy = _spread(rows, sigma.floats[0])
-    dx = [[v - c for v in r] for r, c in zip(zip(*chi), x)]
-    return dy, dx, [_wrap(a - b) for a, b in zip(y, y_hat)]
+@register_jitable
+def _corrected(x, k, innovation):
+    """``x + K ν``."""
+    out = np.empty(x.shape[0])
+    for i in range(x.shape[0]):
+        acc = 0.0
+        for c in range(innovation.shape[0]):
+            acc += k[i, c] * innovation[c]
+        out[i] = x[i] + acc
+    return out
 
 
-def measurement_update_lists(x, p, chi, y_sigma, y, r, sigma: SigmaSet):
-    """Dense: prior ``(x, P)``, its points ``χ``, their angle outputs ``h(χ)`` (m rows of L), the
-    measured angles ``y`` and noise ``R`` -> ``(x, P, innovation)``."""
-    dy, dx, innovation = _output_spread(x, chi, y_sigma, y, sigma)
-    w_dy = _weighted(dy, sigma.floats[1])
-    p_yy = _add(_outer(w_dy, dy, True), r)
-    p_xy = _outer(dx, w_dy)
-    k = sl.solve_right(sl.cholesky(p_yy), p_xy)  # Pxy Pyy⁻¹
-    p = [[a - c for a, c in zip(pr, kr)] for pr, kr in zip(p, _outer(k, p_xy, True))]  # P - K Pyy Kᵀ = P - K Pxyᵀ
-    return [a + sum(map(mul, kr, innovation)) for a, kr in zip(x, k)], p, innovation
+@register_jitable
+def measurement_update(x, p, chi, y_sigma, y, r_diag, wm, wc):
+    """Dense: prior ``(x, P)``, its points ``χ`` (L, n), their angle outputs ``h(χ)`` (m, L), the
+    measured angles ``y`` and the noise's diagonal -> ``(ok, x, P, innovation)``."""
+    dy, dx, innovation = _output_spread(x, chi, y_sigma, y, wm)
+    p_yy = _weighted_outer(dy, wc, dy, r_diag, True)
+    p_xy = _weighted_outer(dx, wc, dy, _NO_NOISE, False)
+    ok, low = sl.cholesky(p_yy)
+    if not ok:
+        return False, x, p, innovation
+    k = sl.solve_right(low, p_xy)  # Pxy Pyy⁻¹
+    return True, _corrected(x, k, innovation), _minus_product(p, k, p_xy), innovation  # P - K Pyy Kᵀ = P - K Pxyᵀ
 
 
-def sqrt_measurement_update_lists(x, s, chi, y_sigma, y, sqrt_r, sigma: SigmaSet):
-    """Square root: as ``measurement_update_lists`` with factors ``S`` and ``√R`` -> ``(x, S, innovation)``."""
-    dy, dx, innovation = _output_spread(x, chi, y_sigma, y, sigma)
-    s_y = _compound(dy, sigma, sqrt_r)
-    k = sl.solve_right(s_y, _outer(dx, _weighted(dy, sigma.floats[1])))  # Pxy (Sy Syᵀ)⁻¹
-    for column in zip(*s_y):
-        s = sl.cholupdate(s, [sum(map(mul, kr, column)) for kr in k], -1.0)  # columns of K Sy
-    return [a + sum(map(mul, kr, innovation)) for a, kr in zip(x, k)], s, innovation
-
-
-# numpy-array forms (points as (n, L) columns, y_sigma (m, L)), as the tests and notebooks use them.
-
-
-def _cols(a):
-    return np.asarray(a, dtype=float).T.tolist()
-
-
-def _rows(a):
-    return np.asarray(a, dtype=float).tolist()
-
-
-def points(x, s, sigma: SigmaSet) -> np.ndarray:
-    """Sigma points (n, L) around ``x`` with covariance factor ``s``."""
-    return np.array(points_lists(_rows(x), _rows(s), sigma)).T
-
-
-def cholupdate(s, v, weight: float = 1.0) -> np.ndarray:
-    """``small_linalg.cholupdate`` on arrays."""
-    return np.array(sl.cholupdate(_rows(s), _rows(v), weight))
-
-
-def time_update(chi_f, sigma: SigmaSet, q):
-    return tuple(map(np.array, time_update_lists(_cols(chi_f), sigma, _rows(q))))
-
-
-def sqrt_time_update(chi_f, sigma: SigmaSet, sqrt_q):
-    return tuple(map(np.array, sqrt_time_update_lists(_cols(chi_f), sigma, _rows(sqrt_q))))
-
-
-def measurement_update(x, p, chi, y_sigma, y, r, sigma: SigmaSet):
-    args = _rows(x), _rows(p), _cols(chi), _rows(y_sigma), _rows(y), _rows(r)
-    return tuple(map(np.array, measurement_update_lists(*args, sigma)))
-
-
-def sqrt_measurement_update(x, s, chi, y_sigma, y, sqrt_r, sigma: SigmaSet):
-    args = _rows(x), _rows(s), _cols(chi), _rows(y_sigma), _rows(y), _rows(sqrt_r)
-    return tuple(map(np.array, sqrt_measurement_update_lists(*args, sigma)))
+@register_jitable
+def sqrt_measurement_update(x, s, chi, y_sigma, y, sqrt_r, wm, wc, sqrt_wc):
+    """Square root: as ``measurement_update`` with the factor ``S`` and √R's diagonal -> ``(ok, x, S,
+    innovation)``: ``Sy`` by QR and cholupdate, ``K = Pxy (Sy Syᵀ)⁻¹``, ``S`` downdated by each column of ``K Sy``."""
+    dy, dx, innovation = _output_spread(x, chi, y_sigma, y, wm)
+    ok, s_y = _compound(dy, wc, sqrt_wc, sqrt_r)
+    if not ok:
+        return False, x, s, innovation
+    k = sl.solve_right(s_y, _weighted_outer(dx, wc, dy, _NO_NOISE, False))
+    n, m = k.shape
+    u = np.empty(n)
+    for j in range(m):
+        for i in range(n):
+            acc = 0.0
+            for c in range(m):
+                acc += k[i, c] * s_y[c, j]
+            u[i] = acc
+        ok, s = sl.cholupdate(s, u, -1.0)
+        if not ok:
+            return False, x, s, innovation
+    return True, _corrected(x, k, innovation), s, innovation

@@ -35,6 +35,12 @@ GPS velocity 0.05 m/s and heading 0.5° (``sim.extra_sensors.AuxSettings``). The
 differenced over the fix interval Δt_fix, gives the compensated tilt an error of √2 σ_v / (Δt_fix g)
 rad which is reused on every sample until the next fix: its variance is charged Δt_fix / dt times
 per sample, so one fix interval carries what one fix is worth.
+
+Compiled (base.py's ``CompiledEstimator``, ``gps_aided``): one kernel for both, ``p[_SQUARE_ROOT]`` choosing
+the dense steps (P, two Choleskys a sample) or the square-root ones (S by QR and rank-1 updates, never
+re-factorised), each with its own sigma set, so their run-time ratio is the algorithms' (seed 001: 42 %;
+measured in bench/bench_estimator_costs.out.md). A failed factorisation or downdate (``ok`` False, a
+kernel cannot catch ``LinAlgError``) restarts the covariance (``COVARIANCE_RESET``).
 """
 
 from __future__ import annotations
@@ -44,10 +50,15 @@ import math
 from typing import ClassVar, NamedTuple
 
 import numpy as np
+from numba import njit
+from numba.extending import register_jitable
 
+from groundstation import quaternion
 from groundstation.estimation import sigma_points as sp
 from groundstation.estimation import small_linalg as sl
-from groundstation.estimation.base import CommonSettings, Estimator, integrate_rate
+from groundstation.estimation.base import (
+    INITIALISED, NO_UPDATE, P_ACC_MIN2, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, sample_fix,
+)
 from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 from groundstation.units import STANDARD_GRAVITY_M_S2 as G
 
@@ -100,185 +111,288 @@ class GpsUkfDiagnostics(NamedTuple):
     p_trace: float  # trace of the quaternion covariance
 
 
-def euler_angles(q, yaw: bool = True) -> tuple[float, ...]:
-    """ZYX Euler angles (pitch, roll, yaw) of a quaternion (w, x, y, z) of any norm, plain floats;
-    (pitch, roll) only without ``yaw`` (a tilt-only update needs no third atan2 per sigma point)."""
-    w, x, y, z = q
+# Parameters after the guard's (base.P_OWN): the step kind, the set's size L, the noises, the timeouts,
+# then the set's weights and points (room for the symmetric set's 9).
+(_SQUARE_ROOT, _COUNT, _GYRO_NOISE, _ACC_VAR, _VEL_VAR2, _UNCOMPENSATED_VAR, _HEADING_VAR, _GPS_TIMEOUT, _INIT_VAR, _INIT_RADIAL_VAR,
+ _LOST_INNOVATION, _LOST_TIME) = range(P_OWN, P_OWN + 12)
+_L_MAX = 2 * _N + 1
+_WM = P_OWN + 12
+_WC = _WM + _L_MAX
+_SQRT_WC = _WC + _L_MAX
+_Z = _SQRT_WC + _L_MAX
+_PARAMS = _Z + _N * _L_MAX
+# State after q and the guard's: the diagnostics after status, then P (ukf) or its factor S (sssrukf),
+# the start flag, whether yaw is known, the time since the last GPS velocity and the interval between
+# the last two, that velocity (NED), the same in the body at its fix, v̇_b (NaN: none), the time lost.
+_ACC_PITCH, _ACC_ROLL, _A_MAN, _INNOVATION, _TRACE = range(STATE_DIAG, STATE_DIAG + 5)
+_COV = STATE_DIAG + 5
+_STARTING, _YAW_KNOWN, _SINCE_FIX, _FIX_INTERVAL = range(_COV + _N * _N, _COV + _N * _N + 4)
+_V_NED = _FIX_INTERVAL + 1
+_V_BODY = _V_NED + 3
+_DV_BODY = _V_BODY + 3
+_LOST = _DV_BODY + 3
+
+
+@register_jitable
+def euler_angles(w, x, y, z, with_yaw):
+    """ZYX Euler angles (pitch, roll, yaw) of a quaternion of any norm; yaw 0 without ``with_yaw`` (a
+    tilt-only update needs no third atan2 per sigma point)."""
     n2 = w * w + x * x + y * y + z * z
     sin_pitch = 2.0 * (w * y - x * z) / n2
     sin_pitch = -1.0 if sin_pitch < -1.0 else 1.0 if sin_pitch > 1.0 else sin_pitch
-    pitch_roll = math.asin(sin_pitch), math.atan2(2.0 * (w * x + y * z), w * w - x * x - y * y + z * z)
-    return pitch_roll + (math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z),) if yaw else pitch_roll
+    yaw = math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z) if with_yaw else 0.0
+    return math.asin(sin_pitch), math.atan2(2.0 * (w * x + y * z), w * w - x * x - y * y + z * z), yaw
 
 
-def euler_of(chi: np.ndarray) -> np.ndarray:
-    """ZYX Euler angles (3, L) rows (pitch, roll, yaw) of quaternion columns (4, L), any norm."""
-    return np.array([euler_angles(c) for c in np.asarray(chi, dtype=float).T.tolist()]).reshape(-1, 3).T
-
-
-def ned_to_body(q, v):
-    """``R(q)ᵀ v`` for a unit quaternion tuple and a 3-tuple (plain floats)."""
-    w, x, y, z = q
-    vn, ve, vd = v
+@register_jitable
+def ned_to_body(w, x, y, z, vn, ve, vd):
+    """``R(q)ᵀ v`` for a unit quaternion and a NED vector."""
     return (
-        (1 - 2 * (y * y + z * z)) * vn + 2 * (x * y + w * z) * ve + 2 * (x * z - w * y) * vd,
-        2 * (x * y - w * z) * vn + (1 - 2 * (x * x + z * z)) * ve + 2 * (y * z + w * x) * vd,
-        2 * (x * z + w * y) * vn + 2 * (y * z - w * x) * ve + (1 - 2 * (x * x + y * y)) * vd,
+        (1.0 - 2.0 * (y * y + z * z)) * vn + 2.0 * (x * y + w * z) * ve + 2.0 * (x * z - w * y) * vd,
+        2.0 * (x * y - w * z) * vn + (1.0 - 2.0 * (x * x + z * z)) * ve + 2.0 * (y * z + w * x) * vd,
+        2.0 * (x * z + w * y) * vn + 2.0 * (y * z - w * x) * ve + (1.0 - 2.0 * (x * x + y * y)) * vd,
     )
 
 
-class _GpsUkf(Estimator):
+@register_jitable
+def _dot(a):
+    acc = 0.0
+    for v in a:
+        acc += v * v
+    return acc
+
+
+@register_jitable
+def _initial_cov(state, p, q):
+    """State's covariance (ukf) or its factor (sssrukf) about the unit quaternion ``q``: the initial
+    attitude noise on the three rotation directions, a small radial variance along q (module docstring)."""
+    cov = np.empty((_N, _N))
+    for i in range(_N):
+        for j in range(_N):
+            qq = q[i] * q[j]
+            cov[i, j] = p[_INIT_VAR] * ((1.0 if i == j else 0.0) - qq) + p[_INIT_RADIAL_VAR] * qq
+    if p[_SQUARE_ROOT] != 0.0:
+        cov = sl.cholesky(cov)[1]
+    state[_COV : _COV + _N * _N] = cov.reshape(_N * _N)
+
+
+@register_jitable
+def _trace(state, p):
+    """tr P, from P or from S (the sum of S's squares)."""
+    total = 0.0
+    for i in range(_N):
+        if p[_SQUARE_ROOT] != 0.0:
+            total += _dot(state[_COV + _N * i : _COV + _N * i + _N])
+        else:
+            total += state[_COV + (_N + 1) * i]
+    return total
+
+
+@register_jitable
+def _take_fix(state, p, vn, ve, vd):
+    """Book a new GPS velocity: the body-frame derivative v̇_b between consecutive fixes (eq. 5)."""
+    if not (math.isfinite(vn) and math.isfinite(ve) and math.isfinite(vd)):
+        return
+    v_body = ned_to_body(state[0], state[1], state[2], state[3], vn, ve, vd)
+    since = state[_SINCE_FIX]
+    if not math.isnan(state[_V_BODY]) and since <= p[_GPS_TIMEOUT]:
+        for i in range(3):
+            state[_DV_BODY + i] = (v_body[i] - state[_V_BODY + i]) / since
+        state[_FIX_INTERVAL] = since
+    else:
+        state[_DV_BODY] = math.nan
+    state[_V_NED], state[_V_NED + 1], state[_V_NED + 2] = vn, ve, vd
+    state[_V_BODY], state[_V_BODY + 1], state[_V_BODY + 2] = v_body
+    state[_SINCE_FIX] = 0.0
+
+
+@register_jitable
+def _tilt_measurement(state, p, q_pred, gx, gy, gz, ax, ay, az, dt_s):
+    """``(usable, pitch, roll, σ²_pitch, σ²_roll, compensated)`` of the accelerometer, the manoeuvre
+    acceleration of eq. 5 removed while a GPS velocity is fresh."""
+    if not math.isnan(state[_DV_BODY]) and state[_SINCE_FIX] <= p[_GPS_TIMEOUT]:
+        vx, vy, vz = ned_to_body(q_pred[0], q_pred[1], q_pred[2], q_pred[3], state[_V_NED], state[_V_NED + 1], state[_V_NED + 2])
+        dx, dy, dz = state[_DV_BODY], state[_DV_BODY + 1], state[_DV_BODY + 2]
+        mx, my, mz = dx + gy * vz - gz * vy, dy + gz * vx - gx * vz, dz + gx * vy - gy * vx  # eq. 5
+        ax, ay, az = ax - mx / G, ay - my / G, az - mz / G
+        state[_A_MAN] = math.sqrt(mx * mx + my * my + mz * mz)
+        var = p[_ACC_VAR] + p[_VEL_VAR2] / (state[_FIX_INTERVAL] * dt_s * G * G)
+        compensated = True
+    else:
+        state[_A_MAN] = 0.0
+        var = p[_UNCOMPENSATED_VAR]
+        compensated = False
+    n2 = ax * ax + ay * ay + az * az
+    if not (p[P_ACC_MIN2] <= n2 and n2 < math.inf):
+        return False, 0.0, 0.0, 0.0, 0.0, compensated
+    pitch, roll = acc_pitch_roll(ax, ay, az)
+    state[_ACC_PITCH], state[_ACC_ROLL] = pitch, roll
+    cos_pitch = abs(math.cos(pitch))
+    if cos_pitch < _COS_PITCH_MIN:
+        cos_pitch = _COS_PITCH_MIN
+    return True, pitch, roll, var, var / (cos_pitch * cos_pitch), compensated
+
+
+@register_jitable
+def _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
+    """One predict + update (seed 001 §2.2): ``(ok, x, cov, measurement flags)``; not ok when a
+    factorisation failed."""
+    square_root = p[_SQUARE_ROOT] != 0.0
+    count = int(p[_COUNT])
+    wm, wc, sqrt_wc = p[_WM : _WM + count], p[_WC : _WC + count], p[_SQRT_WC : _SQRT_WC + count - 1]
+    z = p[_Z : _Z + _N * count].reshape((_N, count))
+    flags = 0
+    state[_INNOVATION] = 0.0
+    cov = state[_COV : _COV + _N * _N].reshape((_N, _N))
+    ok, factor = (True, cov) if square_root else sl.cholesky(cov)
+    if not ok:
+        return False, state[0:4], cov, flags
+    chi = sp.points(state[0:4], factor, z)
+    for k in range(count):
+        chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3] = integrate_rate((chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3]), gx, gy, gz, dt_s)  # eq. 2
+    q_noise = 0.5 * p[_GYRO_NOISE] * dt_s
+    if square_root:
+        ok, x, cov = sp.sqrt_time_update(chi, wm, wc, sqrt_wc, np.full(_N, q_noise))
+        if not ok:
+            return False, x, cov, flags
+    else:
+        x, cov = sp.time_update(chi, wm, wc, np.full(_N, q_noise * q_noise))
+    q_pred = x / math.sqrt(_dot(x))
+    y, var, rows = np.empty(3), np.empty(3), np.empty(3, np.int64)
+    m = 0
+    if acc_ok:
+        usable, pitch, roll, var_pitch, var_roll, compensated = _tilt_measurement(state, p, q_pred, gx, gy, gz, ax, ay, az, dt_s)
+        if usable:
+            y[0], y[1], var[0], var[1], rows[0], rows[1] = pitch, roll, var_pitch, var_roll, 0, 1
+            m = 2
+            if compensated:
+                flags |= GPS_COMPENSATED
+    if state[_YAW_KNOWN] != 0.0 and math.isfinite(heading_rad):
+        y[m], var[m], rows[m] = heading_rad, p[_HEADING_VAR], 2
+        m += 1
+        flags |= HEADING_USED
+    if m == 0:
+        return True, x, cov, flags
+    ok, factor = (True, cov) if square_root else sl.cholesky(cov)
+    if not ok:
+        return False, x, cov, flags
+    chi = sp.points(x, factor, z)
+    with_yaw = rows[m - 1] == 2
+    y_sigma = np.empty((m, count))
+    for k in range(count):
+        angles = euler_angles(chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3], with_yaw)
+        for i in range(m):
+            y_sigma[i, k] = angles[rows[i]]
+    if square_root:
+        sqrt_r = np.empty(m)
+        for i in range(m):
+            sqrt_r[i] = math.sqrt(var[i])
+        ok, x, cov, innovation = sp.sqrt_measurement_update(x, cov, chi, y_sigma, y[:m], sqrt_r, wm, wc, sqrt_wc)
+    else:
+        ok, x, cov, innovation = sp.measurement_update(x, cov, chi, y_sigma, y[:m], var[:m], wm, wc)
+    if ok:
+        state[_INNOVATION] = math.sqrt(_dot(innovation))
+    return ok, x, cov, flags
+
+
+@register_jitable
+def _with_yaw(x, heading_rad):
+    """``x`` turned about NED z so that its yaw is ``heading_rad``."""
+    half = 0.5 * wrap_pi(heading_rad - euler_angles(x[0], x[1], x[2], x[3], True)[2])
+    c, s = math.cos(half), math.sin(half)
+    w, qx, qy, qz = x[0], x[1], x[2], x[3]
+    return np.array([c * w - s * qz, c * qx - s * qy, c * qy + s * qx, c * qz + s * w])
+
+
+@njit(cache=True)
+def ukf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, vn, ve, vd, heading_rad):
+    """One sample of ukf or sssrukf (``p[_SQUARE_ROOT]``): base.py's compiled kernels, with the GPS fix."""
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    # A start takes the initial covariance about the attitude from gravity. After a gap (REINITIALISED)
+    # the covariance is kept: the tilt from gravity is what a tilt measurement would have said, and a
+    # restarted covariance let the next noisy GPS-compensated measurements swing a still estimate by
+    # 1.7° (test_intervals.py).
+    if status & (INITIALISED | REINITIALISED) and state[_STARTING] != 0.0:
+        _initial_cov(state, p, state[0:4].copy())
+        state[_STARTING] = 0.0
+    if not status & NO_UPDATE:
+        status = _update(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status, vn, ve, vd, heading_rad)
+    state[_TRACE] = _trace(state, p)
+    return status
+
+
+@register_jitable
+def _update(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status, vn, ve, vd, heading_rad):
+    state[_SINCE_FIX] += dt_s
+    _take_fix(state, p, vn, ve, vd)
+    ok, x, cov, flags = _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad)
+    if ok:
+        state[_COV : _COV + _N * _N] = cov.reshape(_N * _N)
+    else:
+        x = np.array(integrate_rate((state[0], state[1], state[2], state[3]), gx, gy, gz, dt_s))
+        _initial_cov(state, p, x)
+        status |= COVARIANCE_RESET
+    status |= flags
+    state[_LOST] = state[_LOST] + dt_s if state[_INNOVATION] > p[_LOST_INNOVATION] else 0.0
+    if state[_LOST] >= p[_LOST_TIME]:
+        # Lost: the covariance no longer describes the error (settings): start it again
+        _initial_cov(state, p, x / math.sqrt(_dot(x)))
+        status |= COVARIANCE_RESET
+        state[_LOST] = 0.0
+    if state[_YAW_KNOWN] == 0.0 and math.isfinite(heading_rad):
+        # The first heading sets yaw outright (module docstring)
+        x = _with_yaw(x, heading_rad)
+        state[_YAW_KNOWN] = 1.0
+        status |= HEADING_USED
+    norm = math.sqrt(_dot(x))
+    for i in range(_N):
+        state[i] = x[i] / norm
+    return status
+
+
+@njit(cache=True)
+def ukf_run(state, p, gyr, acc, dt, mag, gps, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, ukf_kernel(state, p, *sample(gyr, acc, dt, mag, k), *sample_fix(gps, k)), status_out, q_out, diag_out)
+
+
+class _GpsUkf(CompiledEstimator):
     """What both filters share; subclasses pick the sigma-point set and dense or square-root steps."""
 
     needs = frozenset({"gps"})  # without GPS velocity they are slow tilt filters at ~100x the others' cost
 
     Diagnostics = GpsUkfDiagnostics
+    kernel = staticmethod(ukf_kernel)
+    run_kernel = staticmethod(ukf_run)
+    gps_aided = True
     _square_root: ClassVar[bool]
 
-    def __init__(self, settings=None):
-        super().__init__(settings)
-        self._sigma = self._sigma_set(self.settings)
-
-    def _reset_state(self):
-        self._cov = self._initial_cov((1.0, 0.0, 0.0, 0.0))  # P (ukf) or its lower Cholesky factor S (sssrukf)
-        self._starting = True  # the next _set_attitude is a start, not a re-initialisation after a gap
-        self._yaw_known = False
-        self._since_fix_s = math.inf  # time since the last GPS velocity
-        self._fix_interval_s = math.inf  # between the last two
-        self._v_ned = None  # last GPS velocity, m/s
-        self._v_body_at_fix = None  # the same rotated into the body at its fix
-        self._dv_body = None  # v̇_b, m/s²
-        self._acc_pr = (0.0, 0.0)
-        self._a_man = 0.0
-        self._innovation = 0.0
-        self._lost_s = 0.0
-
-    def _set_attitude(self, q):
-        # A start takes the initial covariance about q. After a gap (base.REINITIALISED) the covariance is
-        # kept: the tilt from gravity is what a tilt measurement would have said, and a restarted covariance
-        # let the next noisy GPS-compensated measurements swing a still estimate by 1.7° (test_intervals.py).
-        self._q = q
-        if self._starting:
-            self._cov = self._initial_cov(q)
-            self._starting = False
-
-    def _initial_cov(self, q):
-        qv = np.array(q)
-        std = 0.5 * self.settings.initial_attitude_noise_rad  # a rotation θ moves q by θ/2
-        p = std * std * (np.eye(_N) - np.outer(qv, qv)) + (1e-3 * std) ** 2 * np.outer(qv, qv)
-        return (np.linalg.cholesky(p) if self._square_root else p).tolist()
-
-    def _diagnostics(self, status):
-        cov = self._cov
-        trace = sum(sl.dot(r, r) for r in cov) if self._square_root else sum(cov[i][i] for i in range(_N))
-        return GpsUkfDiagnostics(status, *self._acc_pr, self._a_man, self._innovation, trace)
-
-    def _take_fix(self):
-        """Book a new GPS velocity: the body-frame derivative v̇_b between consecutive fixes (eq. 5)."""
-        fix = self._gps
-        if fix is None:
-            return
-        v_ned = (fix.vel_n_m_s, fix.vel_e_m_s, fix.vel_d_m_s)
-        if not all(math.isfinite(c) for c in v_ned):
-            return
-        v_body = ned_to_body(self._q, v_ned)
-        if self._v_body_at_fix is not None and self._since_fix_s <= self.settings.gps_timeout_s:
-            h = self._since_fix_s
-            self._dv_body = tuple((a - b) / h for a, b in zip(v_body, self._v_body_at_fix))
-            self._fix_interval_s = h
-        else:
-            self._dv_body = None
-        self._v_ned, self._v_body_at_fix, self._since_fix_s = v_ned, v_body, 0.0
-
-    def _tilt_measurement(self, q_pred, gx, gy, gz, ax, ay, az, dt_s):
-        """(pitch, roll, σ²_pitch, σ²_roll, compensated) of the accelerometer, or None if unusable."""
+    def _parameters(self):
         s = self.settings
-        if self._dv_body is not None and self._since_fix_s <= s.gps_timeout_s:
-            vx, vy, vz = ned_to_body(q_pred, self._v_ned)
-            dx, dy, dz = self._dv_body
-            a_man = (dx + gy * vz - gz * vy, dy + gz * vx - gx * vz, dz + gx * vy - gy * vx)  # eq. 5
-            ax, ay, az = ax - a_man[0] / G, ay - a_man[1] / G, az - a_man[2] / G
-            self._a_man = math.sqrt(a_man[0] ** 2 + a_man[1] ** 2 + a_man[2] ** 2)
-            var = s.acc_noise_g**2 + 2.0 * s.gps_velocity_noise_m_s**2 / (self._fix_interval_s * dt_s * G * G)
-            compensated = True
-        else:
-            self._a_man = 0.0
-            var = s.uncompensated_tilt_noise_rad**2
-            compensated = False
-        if not self._acc_min2 <= ax * ax + ay * ay + az * az < math.inf:
-            return None
-        pitch, roll = acc_pitch_roll(ax, ay, az)
-        self._acc_pr = (pitch, roll)
-        cos_pitch = max(abs(math.cos(pitch)), _COS_PITCH_MIN)
-        return pitch, roll, var, var / (cos_pitch * cos_pitch), compensated
+        sigma = self._sigma_set(s)
+        count = sigma.z.shape[1]
+        std = 0.5 * s.initial_attitude_noise_rad  # a rotation θ moves q by θ/2
+        room = _L_MAX - count
+        return [
+            float(self._square_root), float(count), s.gyro_noise_rad_s, s.acc_noise_g**2, 2.0 * s.gps_velocity_noise_m_s**2,
+            s.uncompensated_tilt_noise_rad**2, s.heading_noise_rad**2, s.gps_timeout_s, std * std, (1e-3 * std) ** 2,
+            s.lost_innovation_rad, s.lost_time_s,
+            *sigma.wm.tolist(), *[0.0] * room, *sigma.wc.tolist(), *[0.0] * room, *sigma.sqrt_wc.tolist(), *[0.0] * (room + 1),
+            *sigma.z.reshape(-1).tolist(), *[0.0] * (_N * room),
+        ]  # fmt: skip
 
-    def _set_yaw(self, x, heading_rad):
-        """Turn the state about NED z so that its yaw is ``heading_rad``."""
-        half = 0.5 * wrap_pi(heading_rad - euler_angles(x)[2])
-        c, s = math.cos(half), math.sin(half)
-        w, qx, qy, qz = x
-        return [c * w - s * qz, c * qx - s * qy, c * qy + s * qx, c * qz + s * w]
+    def _initial_state(self):
+        # the diagnostics, a covariance filled in by reset, starting, yaw unknown, no fix, not lost
+        return [0.0, 0.0, 0.0, 0.0, 0.0, *[0.0] * (_N * _N), 1.0, 0.0, math.inf, math.inf, *[math.nan] * 9, 0.0]
 
-    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
-        self._since_fix_s += dt_s
-        self._take_fix()
-        try:
-            x, cov = self._filter(gx, gy, gz, ax, ay, az, acc_ok, dt_s)
-        except np.linalg.LinAlgError:
-            x = list(integrate_rate(self._q, gx, gy, gz, dt_s))
-            cov, status = self._initial_cov(tuple(x)), status | COVARIANCE_RESET
-        status |= self._status
-        self._lost_s = self._lost_s + dt_s if self._innovation > self.settings.lost_innovation_rad else 0.0
-        if self._lost_s >= self.settings.lost_time_s:
-            norm = math.sqrt(sl.dot(x, x))
-            cov, status, self._lost_s = self._initial_cov(tuple(c / norm for c in x)), status | COVARIANCE_RESET, 0.0
-        if self._gps is not None and math.isfinite(self._gps.heading_rad) and not self._yaw_known:
-            x = self._set_yaw(x, self._gps.heading_rad)
-            self._yaw_known = True
-            status |= HEADING_USED
-        norm = math.sqrt(sl.dot(x, x))
-        self._q, self._cov = tuple(c / norm for c in x), cov
-        return self._q, self._diagnostics(status)
-
-    def _filter(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
-        """One predict + update; ``self._status`` gets this sample's measurement flags."""
-        s, sigma, sr = self.settings, self._sigma, self._square_root
-        self._status = 0
-        self._innovation = 0.0
-        factor = self._cov if sr else sl.cholesky(self._cov)
-        chi = [integrate_rate(p, gx, gy, gz, dt_s) for p in sp.points_lists(self._q, factor, sigma)]  # eq. 2
-        q_noise = 0.5 * s.gyro_noise_rad_s * dt_s
-        if sr:
-            x, cov = sp.sqrt_time_update_lists(chi, sigma, sl.diag([q_noise] * _N))
-        else:
-            x, cov = sp.time_update_lists(chi, sigma, sl.diag([q_noise * q_noise] * _N))
-        norm = math.sqrt(sl.dot(x, x))
-        q_pred = tuple(c / norm for c in x)
-        rows, y, var = [], [], []
-        tilt = self._tilt_measurement(q_pred, gx, gy, gz, ax, ay, az, dt_s) if acc_ok else None
-        if tilt is not None:
-            rows += [0, 1]
-            y += tilt[:2]
-            var += tilt[2:4]
-            self._status |= GPS_COMPENSATED if tilt[4] else 0
-        fix = self._gps
-        if fix is not None and self._yaw_known and math.isfinite(fix.heading_rad):
-            rows.append(2)
-            y.append(fix.heading_rad)
-            var.append(s.heading_noise_rad**2)
-            self._status |= HEADING_USED
-        if not rows:
-            return x, cov
-        factor = cov if sr else sl.cholesky(cov)
-        chi = sp.points_lists(x, factor, sigma)
-        angles = list(zip(*[euler_angles(p, 2 in rows) for p in chi]))  # pitch, roll (, yaw) rows
-        y_sigma = [angles[i] for i in rows]
-        if sr:
-            x, cov, innovation = sp.sqrt_measurement_update_lists(x, cov, chi, y_sigma, y, sl.diag([math.sqrt(v) for v in var]), sigma)
-        else:
-            x, cov, innovation = sp.measurement_update_lists(x, cov, chi, y_sigma, y, sl.diag(var), sigma)
-        self._innovation = math.sqrt(sl.dot(innovation, innovation))
-        return x, cov
+    def reset(self, q0=None) -> None:
+        super().reset(q0)
+        # the kernel reads the sigma set as arrays, also where it runs interpreted
+        self._params = np.asarray(self._params, dtype=self._dtype)
+        q = (1.0, 0.0, 0.0, 0.0) if q0 is None else quaternion.normalise(q0).tolist()
+        _initial_cov(self._state, self._params, np.array(q, dtype=self._dtype))
+        self._state[_STARTING] = float(q0 is None)  # a given q0 is the start
+        self._state[_TRACE] = _trace(self._state, self._params)
 
 
 class Ukf(_GpsUkf):

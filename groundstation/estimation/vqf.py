@@ -18,10 +18,16 @@ care how the sensor is held, so the body FRD axes go in as they are. Out:
 Diagnostics are VQF's own: rest detected, the gyro bias estimate (rad/s, body axes) and its standard
 deviation, magnetic disturbance detected.
 
-``run`` uses ``updateBatch`` (the loop in compiled code) when every sample is finite, has the same
-sample period (within 1e-6 relative) and a usable accelerometer (and the windowed accelerometer gate
-is off, its default here: VQF's low-pass already rides through disturbances), and the magnetometer is on every
-sample or on none; otherwise it steps. Either way ``run`` gives what stepping gives (to rounding in the frame change).
+Sample period. VQF's coefficients are made for one period, the first integrated sample's interval;
+``step`` gives every later sample to it whatever its interval (``dt_s`` decides only the guard's
+holding, re-initialising and skipping, base.py). So jitter in the sample times (0.2 % on the
+recordings) is not integrated: its cost on BROAD is in bench/bench_estimator_costs.out.md.
+
+``run`` gives what stepping gives, bit for bit: the guard (``base.screen_rows``, compiled) judges every
+row first; each stretch of rows that step would hand to VQF whole (gyro and accelerometer updated) goes
+to ``updateBatch`` (the loop in compiled code), with (0, 0, 0) on the rows without a magnetometer
+reading (VQF skips a zero reading, as step skips a missing one), and the rows between (held,
+re-initialised, accelerometer skipped, waiting) take step's own code.
 """
 
 from __future__ import annotations
@@ -34,14 +40,15 @@ import numpy as np
 import vqf as vqf_package
 
 from groundstation import quaternion
-from groundstation.estimation.base import INITIALISED, CommonSettings, Estimator
+from groundstation.estimation.base import (
+    ACC_SKIPPED, INITIALISED, NO_UPDATE, SCREEN_ROWS_SIGNATURE, CommonSettings, Estimator, _compiled, _rows, batch_inputs, screen_rows,
+)
 from groundstation.estimation.tilt import quaternion_product
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 _H = math.sqrt(0.5)
 _ENU_TO_NED = (0.0, _H, _H, 0.0)
 _UP_TO_DOWN = (0.0, 1.0, 0.0, 0.0)  # half turn about x: the 6D frame's z up becomes down
-_PERIOD_RTOL = 1e-6
 
 
 @dataclasses.dataclass(frozen=True)
@@ -60,7 +67,7 @@ class VqfDiagnostics(NamedTuple):
     bias_y_rad_s: float
     bias_z_rad_s: float
     bias_std_rad_s: float  # its uncertainty
-    mag_disturbed: float  # 1.0 when the magnetometer is judged disturbed (no reading: 0)
+    mag_disturbed: float  # 1.0 when the magnetometer is judged disturbed (VQF's flag, 1.0 before any reading)
 
 
 class Vqf(Estimator):
@@ -126,48 +133,53 @@ class Vqf(Estimator):
         return self._q, VqfDiagnostics(status, *self._diag)
 
     def run(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
-        """``updateBatch`` when the data allow it (module docstring), else the stepping of ``Estimator.run``."""
-        gyr = np.ascontiguousarray(gyr_rad_s, dtype=float).reshape(-1, 3)
-        acc = np.ascontiguousarray(acc_g, dtype=float).reshape(-1, 3)
-        dt = np.broadcast_to(np.asarray(dt_s, dtype=float), (len(gyr),))
-        mags = None if mag is None else np.ascontiguousarray(mag, dtype=float).reshape(-1, 3)
-        n2 = np.einsum("ij,ij->i", acc, acc) if len(acc) == len(gyr) else None
-        batchable = (
-            len(gyr) > 0
-            and n2 is not None
-            and np.all(np.isfinite(gyr))
-            and not self._acc_gated
-            and np.all((n2 >= self._acc_min2) & (n2 < math.inf))
-            and np.all(np.abs(dt - dt[0]) <= _PERIOD_RTOL * dt[0])
-            and 0.0 < dt[0] <= self._max_gap_s
-            and (mags is None or np.all(np.isfinite(mags)) or (self._mag_seen is False and np.all(np.isnan(mags))))
-            and (self._filter is None or abs(self._filter.coeffs["gyrTs"] - dt[0]) <= _PERIOD_RTOL * dt[0])
-        )
-        if not batchable:
-            return super().run(gyr_rad_s, acc_g, dt_s, mag, gps)
-        if mags is not None and not np.all(np.isfinite(mags)):
-            mags = None  # all NaN: no magnetometer at all
-        status = np.zeros(len(gyr), dtype=np.int64)
-        if self._waiting:
-            status[0] = INITIALISED
+        """``updateBatch`` over each stretch of rows that ``step`` would give to VQF whole (module docstring),
+        ``step``'s own code on the others: what stepping gives, bit for bit."""
+        gyr, acc, dt = batch_inputs(gyr_rad_s, acc_g, dt_s)
+        n = len(dt)
+        mags = np.full((n, 3), np.nan) if mag is None else _rows(mag, n, 3, "mag")
+        if gps is not None:
+            _rows(gps, n, 4, "gps")  # checked like every estimator's; VQF does not use it
+        guard = np.array([float(self._waiting), self._acc_dev, self._dt_run_s])
+        params = np.array([self._acc_min2, self._acc_dev_max, self._acc_window_s, self._max_gap_s])
+        status, dt_used = np.empty(n, dtype=np.int64), np.empty(n)
+        _compiled(screen_rows, SCREEN_ROWS_SIGNATURE)(gyr, acc, dt, guard, params, status, dt_used)
+        reading = np.isfinite(mags).all(axis=1)  # step's test for a reading
+        # A row goes to the batch when step would update VQF with its gyro and accelerometer; the others
+        # (held, re-initialised, accelerometer skipped, waiting) take step's code one at a time.
+        whole = (status & (NO_UPDATE | ACC_SKIPPED)) == 0
+        q, table = np.empty((n, 4)), np.empty((n, len(VqfDiagnostics._fields) - 1))
+        edges = np.flatnonzero(np.diff(whole.astype(np.int8))) + 1
+        for a, b in zip(np.r_[0, edges].tolist() if n else [], np.r_[edges, n].tolist()):
+            if whole[a]:
+                q[a:b], table[a:b] = self._batch(gyr[a:b], acc[a:b], mags[a:b], reading[a:b], status[a], dt_used[a])
+            else:
+                for k in range(a, b):
+                    self._mag = tuple(mags[k].tolist()) if reading[k] else None
+                    q[k], diag = self._screened(int(status[k]), not status[k] & ACC_SKIPPED, float(dt_used[k]), *gyr[k].tolist(), *acc[k].tolist())
+                    table[k] = diag[1:]
+        self._waiting, self._acc_dev, self._dt_run_s = bool(guard[0]), float(guard[1]), float(guard[2])
+        return q, {"status": status} | {name: table[:, i] for i, name in enumerate(VqfDiagnostics._fields[1:])}
+
+    def _batch(self, gyr, acc, mags, reading, first_status, first_dt_s):
+        """A stretch of rows VQF takes whole: ``updateBatch``; rows without a reading get (0, 0, 0), which
+        VQF skips as ``step`` skips the reading (its updateMag returns on a zero vector)."""
+        if first_status & INITIALISED:
             self._waiting = False
+            self._set_attitude(self._attitude_from_acc(*acc[0].tolist(), 0.0))
         if self._filter is None:
-            self._make_filter(dt[0])
-        out = self._filter.updateBatch(gyr, acc * STANDARD_GRAVITY_M_S2, mags)
-        if mags is not None:
+            self._make_filter(first_dt_s)
+        seen = np.logical_or.accumulate(reading) | self._mag_seen  # per row: a reading has arrived
+        with_mag = bool(seen[-1])
+        out = self._filter.updateBatch(gyr, acc * STANDARD_GRAVITY_M_S2, np.where(reading[:, None], mags, 0.0) if with_mag else None)
+        q6 = tuple(out["quat6D"].T)
+        q = np.column_stack(quaternion_product(_UP_TO_DOWN, q6))
+        if with_mag:
+            q[seen] = np.column_stack(quaternion_product(_ENU_TO_NED, tuple(out["quat9D"].T)))[seen]
             self._mag_seen = True
-        q_vqf = out["quat9D"] if self._mag_seen else out["quat6D"]
-        q = quaternion.multiply(np.array(self._frame()), q_vqf)
-        dist = out["magDistDetected"].astype(float) if "magDistDetected" in out else np.zeros(len(gyr))
-        diag = {
-            "status": status,
-            "rest": out["restDetected"].astype(float),
-            "bias_x_rad_s": out["bias"][:, 0],
-            "bias_y_rad_s": out["bias"][:, 1],
-            "bias_z_rad_s": out["bias"][:, 2],
-            "bias_std_rad_s": out["biasSigma"].astype(float),
-            "mag_disturbed": dist,
-        }
+        # without a reading VQF's flag stays as it was (set at its start), as step reads it every sample
+        dist = out["magDistDetected"] if with_mag else np.full(len(gyr), self._filter.getMagDistDetected())
+        table = np.column_stack([out["restDetected"], out["bias"], out["biasSigma"], dist]).astype(float)
         self._q = tuple(q[-1].tolist())
-        self._diag = tuple(float(diag[name][-1]) for name in VqfDiagnostics._fields[1:])
-        return q, diag
+        self._diag = tuple(table[-1].tolist())
+        return q, table

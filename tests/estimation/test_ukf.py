@@ -10,7 +10,7 @@ from groundstation import quaternion as quat
 from groundstation.estimation import base, create
 from groundstation.estimation import sigma_points as sp
 from groundstation.estimation import small_linalg as sl
-from groundstation.estimation.ukf import GPS_COMPENSATED, HEADING_USED, euler_of
+from groundstation.estimation.ukf import GPS_COMPENSATED, HEADING_USED, euler_angles
 from groundstation.sim.offline import simulate
 from groundstation.sim.profiles import Moves, Profile
 
@@ -25,6 +25,11 @@ def car():
 @pytest.fixture(scope="module")
 def car_estimates(car):
     return {name: create(name).run(car.gyr_rad_s, car.acc_g, car.dt_s, gps=car.gps) for name in ("ukf", "sssrukf")}
+
+
+def euler_of(chi):
+    """(pitch, roll, yaw) rows (3, L) of sigma points (L, 4)."""
+    return np.array([euler_angles(*c, True) for c in chi.tolist()]).T
 
 
 def errors_deg(q, truth_q):
@@ -52,13 +57,14 @@ def test_cholupdate_and_downdate_match_the_dense_product():
     a = rng.normal(size=(4, 6))
     s = np.linalg.cholesky(a @ a.T)
     v = rng.normal(size=4)
-    up = sp.cholupdate(s, v, 0.7)
+    ok, up = sl.cholupdate(s, v, 0.7)
+    assert ok
     np.testing.assert_allclose(up @ up.T, a @ a.T + 0.7 * np.outer(v, v), atol=1e-12)
     np.testing.assert_allclose(np.triu(up, 1), 0.0)
-    down = sp.cholupdate(up, v, -0.7)
+    ok, down = sl.cholupdate(up, v, -0.7)
+    assert ok
     np.testing.assert_allclose(down @ down.T, a @ a.T, atol=1e-10)
-    with pytest.raises(np.linalg.LinAlgError):
-        sp.cholupdate(s, 100.0 * v, -1.0)
+    assert not sl.cholupdate(s, 100.0 * v, -1.0)[0]  # would leave it indefinite
 
 
 @pytest.mark.parametrize("name", list(SETS))
@@ -69,18 +75,20 @@ def test_square_root_steps_equal_the_dense_steps_on_the_same_sigma_points(name):
     a = rng.normal(0.0, 0.05, (4, 4))
     p = a @ a.T + 1e-6 * np.eye(4)
     s = np.linalg.cholesky(p)
-    chi_f = np.array(base.integrate_rate(sp.points(x, s, sigma), 0.3, -0.2, 0.5, 0.01))
-    q = 1e-6 * np.eye(4)
-    x_d, p_d = sp.time_update(chi_f, sigma, q)
-    x_s, s_s = sp.sqrt_time_update(chi_f, sigma, np.sqrt(q))
+    chi_f = np.array(base.integrate_rate(sp.points(x, s, sigma.z).T, 0.3, -0.2, 0.5, 0.01)).T
+    q = np.full(4, 1e-6)
+    x_d, p_d = sp.time_update(chi_f, sigma.wm, sigma.wc, q)
+    ok, x_s, s_s = sp.sqrt_time_update(chi_f, sigma.wm, sigma.wc, sigma.sqrt_wc, np.sqrt(q))
+    assert ok
     np.testing.assert_allclose(x_s, x_d, atol=1e-14)
     np.testing.assert_allclose(s_s @ s_s.T, p_d, atol=1e-12)
     # Measurement: pitch, roll, yaw of the same points, a nonlinear h.
-    chi = sp.points(x_d, s_s, sigma)
+    chi = sp.points(x_d, s_s, sigma.z)
     y = np.array([0.21, -0.28, 0.43])
-    r = np.diag([1e-3, 2e-3, 1e-4])
-    x1, p1, nu1 = sp.measurement_update(x_d, p_d, chi, euler_of(chi), y, r, sigma)
-    x2, s2, nu2 = sp.sqrt_measurement_update(x_d, s_s, chi, euler_of(chi), y, np.sqrt(r), sigma)
+    r = np.array([1e-3, 2e-3, 1e-4])
+    ok1, x1, p1, nu1 = sp.measurement_update(x_d, p_d, chi, euler_of(chi), y, r, sigma.wm, sigma.wc)
+    ok2, x2, s2, nu2 = sp.sqrt_measurement_update(x_d, s_s, chi, euler_of(chi), y, np.sqrt(r), sigma.wm, sigma.wc, sigma.sqrt_wc)
+    assert ok1 and ok2
     np.testing.assert_allclose(x2, x1, atol=1e-12)
     np.testing.assert_allclose(nu2, nu1, atol=1e-14)
     np.testing.assert_allclose(s2 @ s2.T, p1, atol=1e-12)
@@ -165,19 +173,18 @@ def test_small_linalg_against_numpy_on_random_matrices(shape):
     rng = np.random.default_rng(sum(shape))
     for _ in range(20):
         a = rng.normal(size=shape) * rng.uniform(1e-3, 1e2)
-        low = np.array(sl.tria(a.tolist()))
+        low = sl.tria(a.copy())
         r = np.linalg.qr(a.T, mode="r")
         np.testing.assert_allclose(low, (r * np.where(np.diagonal(r) < 0.0, -1.0, 1.0)[:, None]).T, rtol=1e-10, atol=1e-12 * np.abs(a).max())
         assert np.all(np.diagonal(low) > 0.0)
         p = a @ a.T
-        np.testing.assert_allclose(sl.cholesky(p.tolist()), np.linalg.cholesky(p), rtol=1e-9, atol=1e-12 * np.abs(p).max())
+        np.testing.assert_allclose(sl.cholesky(p)[1], np.linalg.cholesky(p), rtol=1e-9, atol=1e-12 * np.abs(p).max())
         b = rng.normal(size=(5, shape[0]))
-        np.testing.assert_allclose(sl.solve_right(low.tolist(), b.tolist()), np.linalg.solve(p, b.T).T, rtol=1e-8, atol=1e-12)
+        np.testing.assert_allclose(sl.solve_right(low, b), np.linalg.solve(p, b.T).T, rtol=1e-8, atol=1e-12)
         v = rng.normal(size=shape[0])
-        up = np.array(sl.cholupdate(low.tolist(), v.tolist(), 0.3))
+        up = sl.cholupdate(low, v, 0.3)[1]
         np.testing.assert_allclose(up, np.linalg.cholesky(p + 0.3 * np.outer(v, v)), rtol=1e-9, atol=1e-12 * np.abs(p).max())
-    with pytest.raises(np.linalg.LinAlgError):
-        sl.cholesky([[1.0, 2.0], [2.0, 1.0]])
+    assert not sl.cholesky(np.array([[1.0, 2.0], [2.0, 1.0]]))[0]  # indefinite
 
 
 @pytest.mark.parametrize("name", ["ukf", "sssrukf"])

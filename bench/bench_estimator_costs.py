@@ -1,0 +1,180 @@
+"""Every estimator's cost per sample in ``run``, beside imufusion and VQF's C++ batch, in one run.
+
+    PYTHONPATH=. python bench/bench_estimator_costs.py [--rounds R] [--samples N] [--no-broad]
+
+1. CPU µs per sample of each estimator's ``run`` (the batch path: opening a recording) on flight-like
+   samples at 100 Hz whose times jitter by 0.2 % (as the recordings'), a magnetometer reading on every
+   fourth sample and a GPS fix (NED velocity, heading) on every tenth, so every estimator gets the
+   aiding it uses; beside imufusion's C ``update_no_magnetometer`` + ``get_quaternion`` called from
+   Python per sample (it has no batch call) and ``vqf.VQF.updateBatch`` with the period fixed (C++).
+   Medians of R rounds, the estimators and baselines interleaved round by round so that the machine's
+   load falls on all alike; process time, not wall time (the machine is shared). The SSSRUKF/UKF ratio
+   of the same medians, against seed 001's 42 % (6.84 s vs 16.30 s).
+2. numba's compile time: a fresh process creates every estimator and runs one batch, with an empty
+   cache directory (the first start on a machine: compile, write) and again with that directory (every
+   later start: load); imports apart.
+3. The sample-time jitter VQF does not integrate (vqf.py: its coefficients are for one period): on the
+   BROAD trials (../shared/datasets/broad), VQF's inclination and heading RMSE (moving samples,
+   estimation/evaluation.py; heading with one offset per trial removed) with the gyro as recorded, and
+   with each sample's rate scaled by 1 + ε, ε ~ N(0, σ): exactly the angle a filter integrating the
+   fixed period instead of a sample interval jittering by σ gets wrong.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+JITTER = 0.002  # relative sample-interval jitter of the recordings
+
+
+def inputs(n: int, seed: int = 1):
+    rng = np.random.default_rng(seed)
+    gyr = rng.normal(0.0, 0.3, (n, 3))
+    acc = np.array([0.0, 0.0, -1.0]) + rng.normal(0.0, 0.1, (n, 3))
+    dt = 0.01 * (1.0 + rng.normal(0.0, JITTER, n))
+    mag = np.full((n, 3), np.nan)
+    mag[::4] = np.array([20.0, 0.0, 40.0]) + rng.normal(0.0, 1.0, (len(mag[::4]), 3))
+    gps = np.full((n, 4), np.nan)
+    gps[::10] = np.column_stack([np.cumsum(rng.normal(0.0, 0.1, (len(gps[::10]), 3)), axis=0), rng.uniform(-np.pi, np.pi, len(gps[::10]))])
+    return gyr, acc, dt, mag, gps
+
+
+def cpu_us_per_sample(function, n: int) -> float:
+    t0 = time.process_time()
+    function()
+    return (time.process_time() - t0) / n * 1e6
+
+
+def costs(samples: int, rounds: int) -> dict[str, float]:
+    import imufusion
+    from vqf import VQF
+
+    from groundstation.estimation import ESTIMATORS, create
+    from groundstation.units import STANDARD_GRAVITY_M_S2
+
+    gyr, acc, dt, mag, gps = inputs(samples)
+    for name in ESTIMATORS:  # compiled (or loaded) before timing
+        create(name).run(gyr[:20], acc[:20], dt[:20], mag=mag[:20], gps=gps[:20])
+    fusion_args = [(g, -a) for g, a in zip(np.degrees(gyr), acc)]  # °/s, g, z up
+    g_c, a_c = np.ascontiguousarray(gyr), np.ascontiguousarray(-acc * STANDARD_GRAVITY_M_S2)
+
+    def fusion():
+        ahrs = imufusion.Ahrs()
+        ahrs.set_sample_period(0.01)
+        for g, a in fusion_args:
+            ahrs.update_no_magnetometer(g, a)
+            ahrs.get_quaternion()
+
+    times = {name: [] for name in ["imufusion (C, per sample)", "vqf updateBatch (C++)", *ESTIMATORS]}
+    for _ in range(rounds):
+        times["imufusion (C, per sample)"].append(cpu_us_per_sample(fusion, samples))
+        times["vqf updateBatch (C++)"].append(cpu_us_per_sample(lambda: VQF(0.01).updateBatch(g_c, a_c), samples))
+        for name in ESTIMATORS:
+            est = create(name)
+            times[name].append(cpu_us_per_sample(lambda: est.run(gyr, acc, dt, mag=mag, gps=gps), samples))
+    return {name: statistics.median(v) for name, v in times.items()}
+
+
+def worker_compile() -> dict:
+    """Process time (CPU s) of the imports and of each estimator's first creation and run."""
+    t0 = time.process_time()
+    from groundstation.estimation import ESTIMATORS, create
+
+    imports = time.process_time() - t0
+    gyr, acc, dt, mag, gps = inputs(20)
+    first = {}
+    for name in ESTIMATORS:
+        t0 = time.process_time()
+        create(name).run(gyr, acc, dt, mag=mag, gps=gps)
+        first[name] = time.process_time() - t0
+    return {"imports_s": imports, "first_use_s": first}
+
+
+def compile_times() -> tuple[dict, dict]:
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=cache)
+        cmd = [sys.executable, __file__, "--worker-compile"]
+        fresh, cached = (json.loads(subprocess.run(cmd, env=env, capture_output=True, text=True, check=True).stdout) for _ in range(2))
+    return fresh, cached
+
+
+def jitter_trial(path) -> tuple[str, dict]:
+    from groundstation.datasets import read_csv
+    from groundstation.estimation.evaluation import evaluate_trial, resampled
+
+    trial = read_csv(path)
+    row = {}
+    for rate, t in (("native", trial), ("100 Hz", resampled(trial, 100.0))):
+        for sigma in (0.0, JITTER, 10 * JITTER):
+            scale = 1.0 + np.random.default_rng(0).normal(0.0, sigma, (len(t.time_s), 1))
+            jittered = dataclasses.replace(t, gyr_rad_s=t.gyr_rad_s * scale)
+            row[f"{rate} σ={sigma:g}"] = evaluate_trial(jittered, ["vqf"])["vqf"]
+    return path.name.split("_")[0], row
+
+
+def print_compile_times(fresh, cached) -> None:
+    print("\n## numba compile time, CPU s (a fresh process: every estimator created and run once, in this order)\n")
+    print("| | imports | " + " | ".join(fresh["first_use_s"]) + " | all |")
+    print("|---|---:|" + "---:|" * (len(fresh["first_use_s"]) + 1))
+    for label, r in (("first start on a machine (empty cache)", fresh), ("every later start (cache loaded)", cached)):
+        first = r["first_use_s"]
+        print(f"| {label} | {r['imports_s']:.2f} | " + " | ".join(f"{v:.2f}" for v in first.values()) + f" | {sum(first.values()):.2f} |")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--samples", type=int, default=30_000)
+    parser.add_argument("--no-broad", action="store_true")
+    parser.add_argument("--compile-only", action="store_true", help="section 2 alone")
+    parser.add_argument("--worker-compile", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.worker_compile:
+        print(json.dumps(worker_compile()))
+        return
+    print(f"python {sys.version.split()[0]}, numpy {np.__version__}, load average {os.getloadavg()[0]:.1f} at the start\n")
+    fresh, cached = compile_times()
+    if args.compile_only:
+        print_compile_times(fresh, cached)
+        return
+    med = costs(args.samples, args.rounds)
+    fusion = med["imufusion (C, per sample)"]
+    print(f"## run: CPU µs per sample (medians of {args.rounds} interleaved rounds, {args.samples:,} samples, 100 Hz ± {JITTER:.1%})\n")
+    print("| estimator | µs/sample | × imufusion |")
+    print("|---|---:|---:|")
+    for name, us in med.items():
+        print(f"| {name} | {us:.2f} | {us / fusion:.1f} |")
+    print(f"\nSSSRUKF / UKF run time: {med['sssrukf'] / med['ukf']:.0%} (seed 001: 42 %, 6.84 s vs 16.30 s)")
+    print_compile_times(fresh, cached)
+    if args.no_broad:
+        return
+    sys.path.insert(0, str(Path(__file__).parent))
+    from broad import per_trial
+
+    rows = per_trial(jitter_trial)
+    if not rows:
+        return
+    columns = list(next(iter(rows.values())))
+    print("\n## VQF on BROAD with the gyro scaled by 1 + ε, ε ~ N(0, σ) (the sample-interval jitter a fixed period does not integrate)\n")
+    print("| trial | " + " | ".join(f"{c} incl / heading RMSE °" for c in columns) + " |")
+    print("|---|" + "---:|" * len(columns))
+    for trial, row in rows.items():
+        print(f"| {trial} | " + " | ".join(f"{row[c]['incl_rmse_deg']:.3f} / {row[c]['heading_rmse_deg']:.3f}" for c in columns) + " |")
+    mean = {c: (np.mean([r[c]["incl_rmse_deg"] for r in rows.values()]), np.mean([r[c]["heading_rmse_deg"] for r in rows.values()])) for c in columns}
+    print("| mean | " + " | ".join(f"{m[0]:.4f} / {m[1]:.4f}" for m in mean.values()) + " |")
+
+
+if __name__ == "__main__":
+    main()
