@@ -69,6 +69,7 @@ _UNIT_FACTORS = {
     "rad/s": ("gyro", math.degrees(1.0)), "deg/s": ("gyro", 1.0), "°/s": ("gyro", 1.0),
     "g": ("accel", STANDARD_GRAVITY_M_S2), "m/s2": ("accel", 1.0), "m/s²": ("accel", 1.0), "m/s/s": ("accel", 1.0),
 }  # fmt: skip
+_VIBE_TABLE = re.compile(r"^vibe(?:_(\d+))?$")  # ArduPilot's VIBE, a table per IMU instance (autopilot/dataflash.py)
 _AXIS_COLUMN = re.compile(r"^(?P<stem>.*?)(?P<axis>[xyzXYZ])(?P<unit>_[a-z0-9_]+)?$")
 
 
@@ -144,6 +145,37 @@ class VibrationSummary:
             "peaks": [dataclasses.asdict(p) for p in self.peaks], "levels": self.levels, "level_cutoff_hz": LEVEL_CUTOFF_HZ,
             "clipping": self.clipping, "motor": self.motor, "notch": self.notch, "warnings": self.warnings,
         }  # fmt: skip
+
+
+    def lines(self) -> list[str]:
+        """The summary as text lines: what ``groundstation vibration`` prints and the window's Vibration tab shows."""
+        out = [f"vibration from {self.start_s:.2f} s to {self.end_s:.2f} s"]
+        for sp in self.spectra.values():
+            out.append(f"{sp.sensor}: '{sp.table}' at {sp.rate_hz:.1f} Hz, {sp.segments} segments of {sp.nperseg} samples "
+                       f"({sp.frequency_hz[1]:.2f} Hz bins)")
+        if self.peaks:
+            out.append(f"peaks:  {'sensor':<6} {'axis':<4} {'frequency (Hz)':>14} {'amplitude':>16}  label")
+            out += [f"        {p.sensor:<6} {p.axis:<4} {p.frequency_hz:>14.2f} {p.amplitude:>10.3f} {p.unit:<5}  {p.label}"
+                    for p in self.peaks]
+        else:
+            out.append(f"peaks: none above {LEVEL_CUTOFF_HZ:g} Hz")
+        for sensor, axes in self.levels.items():
+            out.append(f"level {sensor} (RMS above {LEVEL_CUTOFF_HZ:g} Hz): "
+                       + "  ".join(f"{a} {v:.3f}" for a, v in axes.items()) + f" {UNITS[sensor]}")
+        c = self.clipping
+        if c and c["source"] == "VIBE":
+            for imu, e in c["imus"].items():
+                out.append(f"VIBE IMU {imu}: max " + " ".join(f"{a.upper()} {e[f'max_vibe_{a}_m_s2']:.1f}" for a in AXES)
+                           + f" m/s², {e['clips']} clips: {e['verdict']} (ArduPilot: fine below {VIBE_FINE_M_S2:g}, "
+                           f"a problem above {VIBE_BAD_M_S2:g} m/s²)")
+        elif c:
+            out.append(f"{c['source']}: " + ", ".join(f"{k} {v:g}" for k, v in c.items() if k != "source"))
+        if "rotor_hz" in self.motor:
+            out.append(f"motors: {self.motor['rotor_hz']:.1f} Hz rotor frequency ({self.motor['rotor_source']} rpm)")
+        if "throttle" in self.motor:
+            out.append(f"motors: throttle {self.motor['throttle']:.3f} above idle ({self.motor['throttle_source']})")
+        out.append(self.notch["text"] if self.notch else "notch: no peak to suggest one for")
+        return out + [f"warning: {w}" for w in self.warnings]
 
 
 class VibrationError(ValueError):
@@ -378,21 +410,20 @@ def _harmonics(peaks: list[Peak], rotor_hz: float, rate_hz: dict[str, float]) ->
 
 
 def clipping(session, start_s: float, end_s: float) -> dict | None:
-    """The log's own vibration and clip counters over the range: ArduPilot's ``VIBE`` (per IMU instance:
-    the largest VibeX/Y/Z in m/s² and the clips added, ``Clip`` or ``Clip0..2``), PX4's
+    """The log's own vibration and clip counters over the range: ArduPilot's ``VIBE`` (per IMU instance,
+    tables ``vibe``, ``vibe_1`` ...: the largest VibeX/Y/Z in m/s² and the clips added, ``Clip`` or ``Clip0..2``), PX4's
     ``vehicle_imu_status`` (accelerometer clips added, vibration metrics)."""
-    vibe = _rows(session, "vibe", start_s, end_s)
-    if vibe is not None:
-        instance = _column(vibe, "IMU")
-        instance = np.zeros(len(vibe["time_s"])) if instance is None else instance
+    instances = sorted((int(m[1] or 0), name) for name in session.tables if (m := _VIBE_TABLE.match(name)))
+    if instances:
         out = {"source": "VIBE", "guidance_m_s2": {"fine_below": VIBE_FINE_M_S2, "bad_above": VIBE_BAD_M_S2}, "imus": {}}
-        for imu in np.unique(instance[np.isfinite(instance)]).astype(int):
-            rows = instance == imu
-            entry = {f"max_vibe_{a}_m_s2": float(np.nanmax(_column(vibe, f"Vibe{a.upper()}")[rows])) for a in AXES}
+        for imu, name in instances:
+            vibe = _rows(session, name, start_s, end_s)
+            if vibe is None:
+                continue
+            entry = {f"max_vibe_{a}_m_s2": float(np.nanmax(_column(vibe, f"Vibe{a.upper()}"))) for a in AXES}
             clips = [c for c in (_column(vibe, "Clip"), *(_column(vibe, f"Clip{j}") for j in range(3))) if c is not None]
-            entry["clips"] = int(sum(np.nanmax(c[rows]) - np.nanmin(c[rows]) for c in clips))  # counters since boot
-            worst = max(entry[f"max_vibe_{a}_m_s2"] for a in AXES)
-            entry["verdict"] = vibe_verdict(worst)
+            entry["clips"] = int(sum(np.nanmax(c) - np.nanmin(c) for c in clips))  # counters since boot: what the range added
+            entry["verdict"] = vibe_verdict(max(entry[f"max_vibe_{a}_m_s2"] for a in AXES))
             out["imus"][str(imu)] = entry
         return out
     status = _rows(session, "vehicle_imu_status", start_s, end_s)
