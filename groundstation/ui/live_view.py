@@ -20,6 +20,7 @@ from groundstation.ui.channels import ChannelsView
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities
+from groundstation.ui.vibration_view import VibrationView
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
@@ -112,6 +113,7 @@ class LiveView(QtWidgets.QWidget):
         self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
         self.position = self._add_tab(PositionView(), "Position")
         self.channels = self._add_tab(ChannelsView(), "Channels")
+        self.vibration = self._add_tab(VibrationView(), "Vibration")
         self.tabs.currentChanged.connect(self._tab_changed)  # once every tab is there
         self._show_aiding_tabs()
         layout = QtWidgets.QVBoxLayout(self)
@@ -156,6 +158,7 @@ class LiveView(QtWidgets.QWidget):
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
         self.channels.set_session(session)
+        self.vibration.set_session(session)
         self._show_aiding_tabs()
 
     def hidden_labels(self) -> frozenset[str]:
