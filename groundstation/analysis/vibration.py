@@ -29,8 +29,9 @@ gyro (°/s); the log's own VIBE and clip counters are reported beside them where
 
 Motor peaks. A peak is labelled ``motor k×`` when it lies at ``k`` times the rotor frequency: the ESC
 telemetry's mean RPM / 60 where the log has it (ArduPilot ``ESC``, PX4 ``esc_status``), otherwise the
-strongest peak that has a harmonic among the others (a rotor's blade-pass harmonics). Harmonics above
-Nyquist are found where they alias to.
+strongest peak above ``MIN_ROTOR_HZ`` whose second harmonic is among the others on the same sensor
+(an unbalanced rotor shakes at 1×, a two-blade propeller's blade pass at 2×; two unrelated tones
+rarely stand in that ratio). Harmonics above Nyquist are found where they alias to.
 
 Notch. A suggestion in the autopilot's own parameters: ArduPilot's harmonic notch
 (``INS_HNTCH_ENABLE/FREQ/BW/REF/MODE/HMNCS``: centre at the hover frequency, bandwidth half of it,
@@ -57,7 +58,10 @@ MIN_SEGMENT = 32  # fewer samples than this in every stretch: no spectrum
 PEAK_OVER_MEDIAN = 10.0  # a peak's density over the spectrum's median above the cut-off (10 dB)
 PEAKS_PER_AXIS = 4
 LOBE_BINS = 3  # a peak's power is summed over ±3 bins: the Hann main lobe (±2) and a rotor's wander
-HARMONIC_TOLERANCE = 0.04  # a harmonic within 4 % (or 1.5 bins) of k × the rotor frequency
+HARMONIC_TOLERANCE = 0.02  # a harmonic within 2 % (or one bin) of k × the rotor frequency
+# Slower than this is the flight, a hand, a car, not a rotor (20 Hz: 1,200 rpm, below any multirotor's
+# hover), and a notch there would cut into the attitude controller's band: no rotor, no notch below it.
+MIN_ROTOR_HZ = 20.0
 MAX_HARMONIC = 4
 SPECTROGRAM_COLUMNS = 400  # at most this many time columns: neighbours averaged beyond
 GAP_FACTOR = 1.5  # a step longer than 1.5 sample periods is a gap
@@ -174,7 +178,7 @@ class VibrationSummary:
             out.append(f"motors: {self.motor['rotor_hz']:.1f} Hz rotor frequency ({self.motor['rotor_source']} rpm)")
         if "throttle" in self.motor:
             out.append(f"motors: throttle {self.motor['throttle']:.3f} above idle ({self.motor['throttle_source']})")
-        out.append(self.notch["text"] if self.notch else "notch: no peak to suggest one for")
+        out.append(self.notch["text"] if self.notch else f"notch: no peak above {MIN_ROTOR_HZ:g} Hz to suggest one for")
         return out + [f"warning: {w}" for w in self.warnings]
 
 
@@ -367,39 +371,41 @@ def find_peaks(sp: Spectrum) -> list[Peak]:
     return sorted(peaks, key=lambda q: -q.amplitude)
 
 
-def label_motor_peaks(peaks: list[Peak], rate_hz: dict[str, float], rotor_hz: float | None) -> tuple[list[Peak], float | None]:
+def label_motor_peaks(peaks: list[Peak], spectra: dict[str, Spectrum], rotor_hz: float | None) -> tuple[list[Peak], float | None]:
     """Label the peaks at k × the rotor frequency (``rotor_hz`` from ESC telemetry, else the strongest peak
-    with a harmonic among the others); ``rate_hz`` per sensor, to find harmonics where they alias.
-    Returns the labelled peaks and the rotor frequency used (None: no motor family found)."""
+    above ``MIN_ROTOR_HZ`` with its second harmonic on the same sensor); ``spectra`` per sensor, for the rate (to
+    find harmonics where they alias) and the bin width. Returns the labelled peaks and the rotor
+    frequency used (None: no motor family found)."""
     source = "ESC rpm"
     if rotor_hz is None:
         source = ""
-        for candidate in peaks:  # strongest first
-            family = _harmonics(peaks, candidate.frequency_hz, rate_hz)
-            if any(k > 1 for k in family.values()):
+        for candidate in (p for p in peaks if p.frequency_hz >= MIN_ROTOR_HZ):  # strongest first
+            family = _harmonics(peaks, candidate.frequency_hz, spectra)
+            if any(k == 2 and peaks[i].sensor == candidate.sensor for i, k in family.items()):
                 rotor_hz = candidate.frequency_hz
                 break
     if rotor_hz is None:
         return peaks, None
-    family = _harmonics(peaks, rotor_hz, rate_hz)
+    family = _harmonics(peaks, rotor_hz, spectra)
     labelled = []
     for i, p in enumerate(peaks):
         if i in family:
             k = family[i]
-            aliased = k * rotor_hz > rate_hz[p.sensor] / 2.0
+            aliased = k * rotor_hz > spectra[p.sensor].rate_hz / 2.0
             extra = ", ".join(x for x in (source, "aliased" if aliased else "") if x)
             p = dataclasses.replace(p, label=f"motor {k}×" + (f" ({extra})" if extra else ""))
         labelled.append(p)
     return labelled, rotor_hz
 
 
-def _harmonics(peaks: list[Peak], rotor_hz: float, rate_hz: dict[str, float]) -> dict[int, int]:
+def _harmonics(peaks: list[Peak], rotor_hz: float, spectra: dict[str, Spectrum]) -> dict[int, int]:
     """peak index -> harmonic number k for the peaks within tolerance of k × ``rotor_hz`` (or its alias)."""
     out = {}
     for i, p in enumerate(peaks):
-        resolution = rate_hz[p.sensor] / 2.0 / 64.0  # about 1.5 bins of a one-second segment
+        sp = spectra[p.sensor]
+        resolution = float(sp.frequency_hz[1])  # one bin
         for k in range(1, MAX_HARMONIC + 1):
-            expected = alias_hz(k * rotor_hz, rate_hz[p.sensor])
+            expected = alias_hz(k * rotor_hz, sp.rate_hz)
             if abs(p.frequency_hz - expected) <= max(HARMONIC_TOLERANCE * k * rotor_hz, resolution):
                 out[i] = k
                 break
@@ -478,16 +484,17 @@ def motor_state(session, start_s: float, end_s: float) -> dict:
 
 
 def notch_suggestion(peaks: list[Peak], rotor_hz: float | None, motor: dict) -> dict:
-    """The notch for the rotor fundamental (else the strongest gyro peak, else the strongest peak), in
-    ArduPilot's and PX4's parameters; {} without a peak. Bandwidth half the centre (ArduPilot's advice for
+    """The notch for the rotor fundamental (else the strongest gyro peak above ``MIN_ROTOR_HZ``, else the
+    strongest peak there), in ArduPilot's and PX4's parameters; {} without one. Bandwidth half the centre (ArduPilot's advice for
     INS_HNTCH_BW); harmonics ``HMNCS`` a bitmask of the motor harmonics found (bit k-1 for k×)."""
     if rotor_hz is not None:
         centre = rotor_hz
     else:
-        gyro = [p for p in peaks if p.sensor == "gyro"]
-        if not (gyro or peaks):
+        fast = [p for p in peaks if p.frequency_hz >= MIN_ROTOR_HZ]
+        gyro = [p for p in fast if p.sensor == "gyro"]
+        if not (gyro or fast):
             return {}
-        centre = (gyro or peaks)[0].frequency_hz
+        centre = (gyro or fast)[0].frequency_hz
     centre = round(centre, 1)
     bandwidth = round(centre / 2.0, 1)
     harmonics = {int(p.label.split()[1].rstrip("×")) for p in peaks if p.label.startswith("motor ")} or {1}
@@ -544,7 +551,7 @@ def vibration_summary(session, start_s: float | None = None, end_s: float | None
     motor = motor_state(session, start_s, end_s)
     peaks = [p for sp in spectra.values() for p in find_peaks(sp)]
     peaks.sort(key=lambda p: (SENSORS.index(p.sensor), -p.amplitude))
-    peaks, rotor_hz = label_motor_peaks(peaks, rates, motor.get("rotor_hz"))
+    peaks, rotor_hz = label_motor_peaks(peaks, spectra, motor.get("rotor_hz"))
     levels = {}
     for sensor, sp in spectra.items():
         band = sp.frequency_hz >= LEVEL_CUTOFF_HZ
