@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation import formats, mounting, quaternion
+from groundstation.autopilot.session import attach_simstate_truth
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create, runnable
@@ -89,9 +90,10 @@ def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> Se
 
 
 def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: list) -> SessionData:
-    """A decoded session's product (a recording's, a ``.tlog``'s): the pipeline's tables, link, events and settings."""
+    """A decoded session's product (a recording's, a ``.tlog``'s): the pipeline's tables, link, events and
+    settings; an autopilot simulator's SIMSTATE as its truth (``attach_simstate_truth``)."""
     t0_ns = pipeline.t0_host_ns or 0
-    return build_product(
+    data = build_product(
         metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
         pipeline.filters, protocol=metadata.get("protocol", "gs"),
         link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
@@ -99,6 +101,9 @@ def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: 
         settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=damage,
         magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
     )
+    if data.protocol == "mavlink":
+        attach_simstate_truth(data)
+    return data
 
 
 def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], device_us: np.ndarray, pipeline: Pipeline) -> None:
