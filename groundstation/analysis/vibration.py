@@ -73,7 +73,8 @@ _UNIT_FACTORS = {
     "rad/s": ("gyro", math.degrees(1.0)), "deg/s": ("gyro", 1.0), "°/s": ("gyro", 1.0),
     "g": ("accel", STANDARD_GRAVITY_M_S2), "m/s2": ("accel", 1.0), "m/s²": ("accel", 1.0), "m/s/s": ("accel", 1.0),
 }  # fmt: skip
-_VIBE_TABLE = re.compile(r"^vibe(?:_(\d+))?$")  # ArduPilot's VIBE, a table per IMU instance (autopilot/dataflash.py)
+_VIBE_TABLE = re.compile(r"^vibe(?:_(\d+))?$")  # ArduPilot's VIBE, a table per IMU instance (autopilot/logtables.py)
+_ESC_TABLE = re.compile(r"^esc(?:_status)?(?:_\d+)?$")  # ArduPilot's ESC (per instance), PX4's esc_status
 _AXIS_COLUMN = re.compile(r"^(?P<stem>.*?)(?P<axis>[xyzXYZ])(?P<unit>_[a-z0-9_]+)?$")
 
 
@@ -453,19 +454,18 @@ def vibe_verdict(level_m_s2: float) -> str:
 
 
 def motor_state(session, start_s: float, end_s: float) -> dict:
-    """The motors over the range, where logged: ``rotor_hz`` (mean ESC RPM / 60: ArduPilot ``ESC``, PX4
-    ``esc_status``) and ``throttle`` (0..1, mean over the active outputs while above idle: ArduPilot
+    """The motors over the range, where logged: ``rotor_hz`` (mean ESC RPM / 60 over every ESC: ArduPilot
+    ``ESC`` tables ``esc_0`` ..., PX4 ``esc_status``) and ``throttle`` (0..1, mean over the active outputs while above idle: ArduPilot
     ``RCOU`` PWM 1000-2000 µs, PX4 ``actuator_outputs``)."""
     out: dict = {}
-    for table in ("esc", "esc_status"):
-        rows = _rows(session, table, start_s, end_s)
-        if rows is not None:
-            rpm = np.concatenate([np.asarray(v, dtype=float) for name, v in rows.items() if "rpm" in name.lower()] or [np.array([])])
-            rpm = rpm[np.isfinite(rpm) & (rpm > 0)]
-            if len(rpm):
-                out.update(rotor_hz=float(rpm.mean() / 60.0), rotor_source=table)
-                break
-    for table, pattern in (("rcou", re.compile(r"^C\d+(_|$)")), ("actuator_outputs", re.compile(r"^output\W?\d+"))):
+    esc = [name for name in session.tables if _ESC_TABLE.match(name)]
+    rpm = [np.asarray(v, dtype=float) for name in esc if (rows := _rows(session, name, start_s, end_s)) is not None
+           for column, v in rows.items() if "rpm" in column.lower()]
+    rpm = np.concatenate(rpm) if rpm else np.zeros(0)
+    rpm = rpm[np.isfinite(rpm) & (rpm > 0)]
+    if len(rpm):
+        out.update(rotor_hz=float(rpm.mean() / 60.0), rotor_source=", ".join(esc))
+    for table, pattern in (("rcou", re.compile(r"^C\d+(_|$)")), ("actuator_outputs", re.compile(r"^output[_\[]?\d+"))):
         rows = _rows(session, table, start_s, end_s)
         if rows is None:
             continue

@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import contextlib
 import io
+import itertools
 from collections import defaultdict
 
 import numpy as np
 from pymavlink import DFReader
 
 from groundstation import quaternion
+from groundstation.autopilot.logtables import DataflashTables
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
@@ -32,10 +34,6 @@ FIELDS = {
     "GPS": ("TimeUS", "Lat", "Lng", "Alt", "Spd", "GCrs", "VZ", "Status", "NSats"),
 }
 MGAUSS_TO_UT = 0.1
-# Kept whole as tables of their own (analysis/vibration.py reads them): the vibration and clip counters
-# (``VIBE``), the motor outputs (``RCOU``, PWM µs) and ESC telemetry (``ESC``: ``RPM``); a table per
-# instance (``VIBE``, ``VIBE_1`` ...) as the instances share their timestamps. -> instance field.
-TABLES = {"VIBE": "IMU", "RCOU": None, "ESC": "Instance"}
 
 
 def read_dataflash(path, progress=None) -> FlightLog:
@@ -43,22 +41,23 @@ def read_dataflash(path, progress=None) -> FlightLog:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
     rows = defaultdict(list)
-    tables: dict[str, list] = defaultdict(list)
-    units: dict[str, dict[str, str]] = {}
+    every = DataflashTables()  # every message type as a table (``logtables``)
     chatter = io.StringIO()  # DFReader prints "bad header" lines for damaged bytes: counted, not shown
     try:
         with contextlib.redirect_stdout(chatter):
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
-            while (msg := reader.recv_match(type=[*FIELDS, *TABLES])) is not None:
-                if msg.get_type() in TABLES:
-                    _table_row(msg, tables, units)
-                elif getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
+            for count in itertools.count():
+                if (msg := reader.recv_msg()) is None:
+                    break
+                every.add(msg)
+                if msg.get_type() in FIELDS and getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
                     rows[msg.get_type()].append([getattr(msg, f) for f in FIELDS[msg.get_type()]])
-                if progress is not None and len(rows["ATT"]) % 1024 == 0:
+                if progress is not None and count % 4096 == 0:
                     progress(reader.percent, 100)
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
+    log.tables, log.units = every.tables()
     damaged = chatter.getvalue().count("bad header")
     if damaged:
         log.notes.append(f"{damaged} damaged bytes skipped")
@@ -84,21 +83,4 @@ def read_dataflash(path, progress=None) -> FlightLog:
         course = np.radians(gps[:, 5])
         columns = [gps[:, 1], gps[:, 2], gps[:, 3], gps[:, 4] * np.cos(course), gps[:, 4] * np.sin(course), gps[:, 6], gps[:, 7], gps[:, 8]]
         log.gps = series(gps[:, 0], dict(zip(GPS_COLUMNS, columns)), "GPS[0]")
-    for name, values in tables.items():
-        fields = list(units[name])
-        table = np.array(values, dtype=float)
-        log.tables[name] = series(table[:, 0], dict(zip(fields, table[:, 1:].T)), name)
-        log.units[name] = units[name]
     return log
-
-
-def _table_row(msg, tables: dict, units: dict) -> None:
-    """One ``TABLES`` message as a row (TimeUS first) of its instance's table, its fields' units noted once."""
-    kind = msg.get_type()
-    instance = int(getattr(msg, TABLES[kind], 0) or 0) if TABLES[kind] else 0
-    name = kind if instance == 0 else f"{kind}_{instance}"
-    if name not in units:
-        names, unit_list = msg.get_fieldnames(), getattr(msg.fmt, "units", None) or []
-        given = dict(zip(names, unit_list))
-        units[name] = {f: given.get(f, "") for f in names if f not in ("TimeUS", TABLES[kind])}
-    tables[name].append([msg.TimeUS, *(getattr(msg, f) for f in units[name])])
