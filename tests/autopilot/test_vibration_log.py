@@ -51,6 +51,18 @@ def test_vibe_levels_and_clips_per_imu_equal_dfreaders(logged, session, start_s,
         assert entry["verdict"] == ("fine" if worst < 30 else "may cause problems" if worst < 60 else "too high")
 
 
+def test_the_spectra_come_from_the_full_rate_imu_batches():
+    reader = DFReader.DFReader_binary(str(LOG), zero_time_base=False)
+    rates = {}
+    while (m := reader.recv_match(type=["ISBH"])) is not None:
+        rates.setdefault((m.type, m.instance), m.smp_rate)  # type 0 accel, 1 gyro
+    summary = vibration_summary(load_log(LOG, ["ahf"]), 20.0, 60.0)
+    assert summary.spectra["gyro"].table == "gyro_fast_0" and summary.spectra["accel"].table == "accel_fast_0"
+    assert summary.spectra["gyro"].rate_hz == pytest.approx(rates[(1, 0)], rel=1e-3)
+    assert summary.spectra["accel"].rate_hz == pytest.approx(rates[(0, 0)], rel=1e-3)
+    assert summary.motor["throttle_source"] == "rcou" and summary.notch["ardupilot"]["INS_HNTCH_MODE"] == 1  # throttle-tracking
+
+
 def test_the_motor_outputs_are_a_table_of_the_session(logged, session):
     _, rcou, t0 = logged
     table = session.tables["rcou"]
