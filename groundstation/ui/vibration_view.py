@@ -20,10 +20,9 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.analysis.vibration import AXES, SENSORS, VibrationError, VibrationSummary, vibration_summary
 from groundstation.session.view import Session
-from groundstation.ui.plots import PALETTE
 
-AXIS_COLOURS = dict(zip(AXES, tuple(PALETTE.values())))
-PEAK_BRUSH = "#d62728"
+AXIS_COLOURS = {"x": "#d62728", "y": "#2ca02c", "z": "#1f77b4"}  # red, green, blue: the axes as a 3D view draws them
+PEAK_BRUSH = "#222222"
 
 
 class VibrationView(QtWidgets.QWidget):
@@ -134,7 +133,7 @@ class VibrationView(QtWidgets.QWidget):
                                                                  for p in peaks])
         self.spectrum_plot.addItem(self.peak_marks)
         for p in peaks:
-            text = pg.TextItem(f"{p.frequency_hz:.1f} Hz {p.axis}" + (f" {p.label}" if p.label else ""), color="#8b0000", anchor=(0.5, 1.2))
+            text = pg.TextItem(f"{p.frequency_hz:.1f} Hz {p.axis}" + (f" {p.label}" if p.label else ""), color="#222222", anchor=(0.5, 1.2))
             text.setPos(p.frequency_hz, float(np.interp(p.frequency_hz, sp.frequency_hz, sp.amplitude[p.axis])))
             self.spectrum_plot.addItem(text)
             self.peak_texts.append(text)
