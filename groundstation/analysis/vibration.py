@@ -48,8 +48,10 @@ import re
 
 import numpy as np
 
+from groundstation.analysis.spectrum import WINDOWS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
+hann = WINDOWS["hann"]  # the periodic Hann window, scipy's ``get_window("hann", n)``
 LEVEL_CUTOFF_HZ = 5.0  # ArduPilot's VIBE high-pass: below it is flight, above it vibration
 VIBE_FINE_M_S2 = 30.0  # ArduPilot's guidance on VIBE: below, normally fine
 VIBE_BAD_M_S2 = 60.0  # above, nearly always a problem
@@ -188,11 +190,6 @@ class VibrationError(ValueError):
 
 
 # ---------------------------------------------------------------------------------------------- spectra
-
-
-def hann(n: int) -> np.ndarray:
-    """The periodic Hann window (scipy's ``get_window("hann", n)``)."""
-    return 0.5 - 0.5 * np.cos(2.0 * np.pi * np.arange(n) / n)
 
 
 def segment_length(rate_hz: float, longest: int) -> int:
