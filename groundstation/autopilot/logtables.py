@@ -128,7 +128,7 @@ def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]
     tables, units = {}, {}
     for data in data_list:
         columns = {_flat(name): np.asarray(values, dtype=float) for name, values in data.data.items()
-                   if name != "timestamp" and np.issubdtype(np.asarray(values).dtype, np.number)}
+                   if name != "timestamp" and np.asarray(values).dtype.kind in "biuf"}
         if not len(data.data["timestamp"]) or not columns:
             continue
         name = table_name(data.name, data.multi_id or None)

@@ -3,9 +3,13 @@ the onboard estimate (and a simulator's truth) interpolated onto the IMU rows, t
 the rows they arrived at, so export and evaluate treat it like any session.
 
 - ``dt`` comes from the autopilot's timestamps (never a log's receive time).
-- Magnetometer readings reach the estimators on the first IMU row at or after them (as in the live
-  pipeline), and GPS velocity when it has all three NED components (GPS_RAW_INT has no vertical
-  speed, so a tlog's GPS does not aid); single-antenna GPS gives no heading.
+- Magnetometer, barometer and GPS readings go through the live session's aiding stage
+  (``session/aiding.py``), merged with the IMU samples by the autopilot's time: each reaches the
+  estimators with the first IMU sample at or after it, GPS velocity when it has all three NED
+  components (single-antenna GPS gives no heading); then the compass heading (``mag_raw``) and the
+  fused position (``position``) on the aiding estimator's attitude, as live.
+- Every other message type or topic is a table (``logtables``), the full-rate IMU too; ``imu="fast"``
+  runs the estimators on that one (``fast_imu``).
 - The onboard attitude and truth are interpolated (normalised linear, shortest way) between the
   two samples around each IMU row, and NaN where those two are more than ``MAX_GAP_S`` apart or the
   row lies outside them.
@@ -24,13 +28,13 @@ from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLU
 from groundstation.autopilot.logtables import FAST, fast_name
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
-from groundstation.units import STANDARD_GRAVITY_M_S2
 from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.evaluation import sample_periods_s
 from groundstation.session import aiding
 from groundstation.session.catalogue import POSITION, TRUTH, Catalogue, message_table, session_catalogue
 from groundstation.session.pipeline import DEFAULT_FILTERS
 from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns
+from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAX_GAP_S = 1.0
 BURST_GAP = 1.5  # of a full-rate stream's median period: a longer gap ends a burst

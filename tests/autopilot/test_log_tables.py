@@ -227,6 +227,20 @@ def test_fast_without_a_full_rate_imu_is_a_clear_error(tmp_path):
         load_session(shared(SITL_TLOG), imu="fast")
 
 
+def test_the_commands_take_imu_fast(sine_bin, tmp_path, capsys):
+    from groundstation.cli import main
+
+    assert main(["export", str(sine_bin), "--out", str(tmp_path / "fast.csv"), "--filters", "ahf", "--imu", "fast"]) == 0
+    rows = np.genfromtxt(tmp_path / "fast.csv", delimiter=",", names=True)
+    assert len(rows) == len(load_session(sine_bin, ["ahf"], imu="fast").tables["imu"]["time_s"])
+    capsys.readouterr()
+    assert main(["evaluate", str(shared(SITL_TLOG)), "--imu", "fast"]) == 2
+    assert main(["export", str(shared(SITL_TLOG)), "--out", str(tmp_path / "refused.csv"), "--imu", "fast"]) == 2
+    said = capsys.readouterr().err
+    assert said.count("no full-rate IMU stream") == 2 and "Traceback" not in said
+    assert not (tmp_path / "refused.csv").exists()
+
+
 # -- full rate: PX4's fifo topics ---------------------------------------------------------------------
 
 FIFO_FIELDS = [("uint64_t", "timestamp"), ("uint64_t", "timestamp_sample"), ("uint32_t", "device_id"), ("float", "dt"),
