@@ -66,7 +66,7 @@ HARMONIC_TOLERANCE = 0.02  # a harmonic within 2 % (or one bin) of k × the roto
 MIN_ROTOR_HZ = 20.0
 MAX_HARMONIC = 4
 SPECTROGRAM_COLUMNS = 400  # at most this many time columns: neighbours averaged beyond
-GAP_FACTOR = 1.5  # a step longer than 1.5 sample periods is a gap
+GAP_FACTOR = 2.5  # a step longer than 2.5 sample periods is a gap (a SITL log's steps jitter by half a period)
 SENSORS = ("gyro", "accel")
 UNITS = {"gyro": "deg/s", "accel": "m/s²"}
 AXES = "xyz"
@@ -137,7 +137,7 @@ class VibrationSummary:
     end_s: float
     spectra: dict[str, Spectrum]
     peaks: list[Peak]
-    levels: dict[str, dict[str, float]]  # sensor -> axis -> RMS above LEVEL_CUTOFF_HZ in UNITS[sensor]
+    levels: dict[str, dict[str, float | None]]  # sensor -> axis -> RMS above LEVEL_CUTOFF_HZ in UNITS[sensor]; None: sampled too slowly
     clipping: dict | None  # the log's own counters (ArduPilot VIBE, PX4 vehicle_imu_status), None without
     motor: dict  # what the motors did: rotor_hz (from ESC rpm), throttle (0..1), their sources
     notch: dict  # {"frequency_hz", "bandwidth_hz", "ardupilot": {param: value}, "px4": {...}, "text"} or {}
@@ -167,8 +167,10 @@ class VibrationSummary:
         else:
             out.append(f"peaks: none above {LEVEL_CUTOFF_HZ:g} Hz")
         for sensor, axes in self.levels.items():
-            out.append(f"level {sensor} (RMS above {LEVEL_CUTOFF_HZ:g} Hz): "
-                       + "  ".join(f"{a} {v:.3f}" for a, v in axes.items()) + f" {UNITS[sensor]}")
+            values = "  ".join(f"{a} {v:.3f}" for a, v in axes.items() if v is not None) + f" {UNITS[sensor]}"
+            if None in axes.values():
+                values = f"none (sampled at {self.spectra[sensor].rate_hz:.1f} Hz: nothing above {LEVEL_CUTOFF_HZ:g} Hz)"
+            out.append(f"level {sensor} (RMS above {LEVEL_CUTOFF_HZ:g} Hz): {values}")
         c = self.clipping
         if c and c["source"] == "VIBE":
             for imu, e in c["imus"].items():
@@ -553,7 +555,8 @@ def vibration_summary(session, start_s: float | None = None, end_s: float | None
     for sensor, sp in spectra.items():
         band = sp.frequency_hz >= LEVEL_CUTOFF_HZ
         df = sp.frequency_hz[1]
-        levels[sensor] = {a: float(math.sqrt(np.sum(sp.psd[a][band]) * df)) for a in AXES}
+        fast_enough = sp.rate_hz / 2.0 > LEVEL_CUTOFF_HZ
+        levels[sensor] = {a: float(math.sqrt(np.sum(sp.psd[a][band]) * df)) if fast_enough else None for a in AXES}
     source = ", ".join(dict.fromkeys(sp.table for sp in spectra.values()))
     return VibrationSummary(source, max(rates.values()), start_s, end_s, spectra, peaks, levels,
                             clipping(session, start_s, end_s), motor, notch_suggestion(peaks, rotor_hz, motor), warnings)

@@ -66,3 +66,32 @@ def test_aliases_fold_into_the_first_nyquist_zone():
     assert vib.alias_hz(60.0, 100.0) == pytest.approx(40.0)
     assert vib.alias_hz(130.0, 100.0) == pytest.approx(30.0)
     assert vib.alias_hz(20.0, 100.0) == pytest.approx(20.0)
+
+
+def _session(t, gyr_rad_s, acc_g):
+    """The least a session offers the vibration view: its tables and the catalogue describing them."""
+    from types import SimpleNamespace
+
+    from groundstation.session.catalogue import Catalogue, session_catalogue
+
+    columns = {"time_s": t, **{f"gyr_{a}_rad_s": gyr_rad_s[:, i] for i, a in enumerate("xyz")},
+               **{f"acc_{a}_g": acc_g[:, i] for i, a in enumerate("xyz")}}
+    return SimpleNamespace(tables={"imu": columns}, catalogue=Catalogue({"imu": session_catalogue({})["imu"]}))
+
+
+def test_a_log_too_slow_for_the_band_has_no_level_rather_than_zero():
+    t = np.arange(400) / 4.0  # 4 Hz: Nyquist below the 5 Hz cut-off
+    rng = np.random.default_rng(9)
+    summary = vib.vibration_summary(_session(t, rng.normal(0, 0.1, (400, 3)), 1 + rng.normal(0, 0.01, (400, 3))))
+    assert summary.levels["gyro"] == {"x": None, "y": None, "z": None}
+    assert "level gyro (RMS above 5 Hz): none (sampled at 4.0 Hz" in "\n".join(summary.lines())
+    assert summary.notch == {} and summary.peaks == []
+
+
+def test_jittered_sample_times_are_one_stretch_but_a_real_gap_cuts():
+    rng = np.random.default_rng(10)
+    steps = 0.005 * (1 + rng.uniform(-0.5, 0.5, 999))  # a SITL log's 200 Hz, ±50 % jitter
+    t = np.concatenate([[0.0], np.cumsum(steps)])
+    assert vib.stretches(t) == [slice(0, 1000)]
+    t[500:] += 0.02  # four periods missing
+    assert vib.stretches(t) == [slice(0, 500), slice(500, 1000)]
