@@ -26,6 +26,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "record": ("groundstation.commands.record", "record a live source headless (--port SPEC), printing link health"),
     "import": ("groundstation.commands.import_csv", "turn a dataset CSV (raw IMU layout, plain or .gz) into a recording"),
     "export": ("groundstation.commands.export", "export a recording or dataset CSV to CSV or Parquet"),
+    "vibration": ("groundstation.commands.vibration", "vibration spectra, peaks, levels, clipping and a notch suggestion of a session"),
     "experiments": ("groundstation.commands.experiments", "the seed papers' experiments on the simulator: tables and PNG figures"),
 }
 

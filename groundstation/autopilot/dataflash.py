@@ -13,12 +13,14 @@ from __future__ import annotations
 
 import contextlib
 import io
+import itertools
 from collections import defaultdict
 
 import numpy as np
 from pymavlink import DFReader
 
 from groundstation import quaternion
+from groundstation.autopilot.logtables import DataflashTables
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
 from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.errors import UserError
@@ -41,21 +43,26 @@ def read_dataflash(path, progress=None) -> FlightLog:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
     rows, said = defaultdict(list), []
+    every = DataflashTables()  # every message type as a table (``logtables``)
     chatter = io.StringIO()  # DFReader prints "bad header" lines for damaged bytes: counted, not shown
     try:
         with contextlib.redirect_stdout(chatter):
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
-            while (msg := reader.recv_match(type=[*FIELDS, *DATAFLASH_SAID])) is not None:
+            for count in itertools.count():
+                if (msg := reader.recv_msg()) is None:
+                    break
+                every.add(msg)
                 if msg.get_type() in DATAFLASH_SAID:
                     said.append(msg)
-                elif getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
+                elif msg.get_type() in FIELDS and getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
                     rows[msg.get_type()].append([getattr(msg, f) for f in FIELDS[msg.get_type()]])
-                if progress is not None and len(rows["ATT"]) % 1024 == 0:
+                if progress is not None and count % 4096 == 0:
                     progress(reader.percent, 100)
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
     log.events, log.parameters = dataflash_said(said, reader.mav_type)
+    log.tables, log.units = every.tables()
     damaged = chatter.getvalue().count("bad header")
     if damaged:
         log.notes.append(f"{damaged} damaged bytes skipped")

@@ -3,9 +3,13 @@ the onboard estimate (and a simulator's truth) interpolated onto the IMU rows, t
 the rows they arrived at, so export and evaluate treat it like any session.
 
 - ``dt`` comes from the autopilot's timestamps (never a log's receive time).
-- Magnetometer readings reach the estimators on the first IMU row at or after them (as in the live
-  pipeline), and GPS velocity when it has all three NED components (GPS_RAW_INT has no vertical
-  speed, so a tlog's GPS does not aid); single-antenna GPS gives no heading.
+- Magnetometer, barometer and GPS readings go through the live session's aiding stage
+  (``session/aiding.py``), merged with the IMU samples by the autopilot's time: each reaches the
+  estimators with the first IMU sample at or after it, GPS velocity when it has all three NED
+  components (single-antenna GPS gives no heading); then the compass heading (``mag_raw``) and the
+  fused position (``position``) on the aiding estimator's attitude, as live.
+- Every other message type or topic is a table (``logtables``), the full-rate IMU too; ``imu="fast"``
+  runs the estimators on that one (``fast_imu``).
 - The onboard attitude and truth are interpolated (normalised linear, shortest way) between the
   two samples around each IMU row, and NaN where those two are more than ``MAX_GAP_S`` apart or the
   row lies outside them.
@@ -14,25 +18,32 @@ the rows they arrived at, so export and evaluate treat it like any session.
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 import numpy as np
 
-from groundstation import formats
+from groundstation import formats, quaternion
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series
+from groundstation.autopilot.logtables import FAST, fast_name
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
-from groundstation.estimation import create
+from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.evaluation import sample_periods_s
-from groundstation.session.catalogue import Catalogue, message_table, session_catalogue
+from groundstation.session import aiding
+from groundstation.session.catalogue import POSITION, TRUTH, Catalogue, message_table, session_catalogue
 from groundstation.session.pipeline import DEFAULT_FILTERS
 from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns
+from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAX_GAP_S = 1.0
+BURST_GAP = 1.5  # of a full-rate stream's median period: a longer gap ends a burst
+IMU_STREAMS = ("regular", "fast")  # what the estimators run on: the log's IMU, or its full-rate one (``fast_imu``)
+FAST_IMU_FORMATS = ("dataflash", "ulog")  # the formats that can hold a full-rate IMU (``logtables``)
 READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
 PROGRESS_STEPS = 1000
 # The log's slower sensors in the tables a live session fills with the same readings (the spec's
-# MAG_RAW, BARO and GPS tables: one description, live and logged; a log has no compass heading column):
+# MAG_RAW, BARO and GPS tables: one description, live and logged; the compass heading from the aiding stage):
 # stream -> (table, {column: (the stream's column, factor)}).
 READINGS = {
     "mag": ("mag_raw", {c: (c, 1.0) for c in MAG_COLUMNS}),
@@ -42,12 +53,13 @@ READINGS = {
 AUTOPILOT_PROTOCOL = "mavlink"  # what the window treats a flight log's aircraft as speaking: no commands of ours
 
 
-def load_log(path, filters=None, forced=None, progress=None) -> SessionData:
+def load_log(path, filters=None, forced=None, progress=None, imu: str = IMU_STREAMS[0]) -> SessionData:
     """Read a ``.tlog``, ``.bin`` or ``.ulg`` and run ``filters`` (default: the pipeline's) with ``forced``
-    settings; ``progress(done, total)`` through the reading, then after each estimator."""
+    settings on its ``imu`` stream (``IMU_STREAMS``); ``progress(done, total)`` through the reading, then
+    after each estimator."""
     share = None if progress is None else lambda fraction: progress(round(PROGRESS_STEPS * fraction), PROGRESS_STEPS)
     reading = None if share is None else lambda done, total: share(READ_SHARE * min(done / max(total, 1), 1.0))
-    return log_session(read_log(path, reading), filters or DEFAULT_FILTERS, forced or {}, share)
+    return log_session(read_log(path, reading), filters or DEFAULT_FILTERS, forced or {}, share, imu)
 
 
 def read_log(path, progress=None) -> FlightLog:
@@ -65,20 +77,24 @@ def read_log(path, progress=None) -> FlightLog:
     return log
 
 
-def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionData:
-    """``share(fraction)``: told after each estimator's run, from ``READ_SHARE`` to 1."""
+def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IMU_STREAMS[0]) -> SessionData:
+    """``share(fraction)``: told after each estimator's run, from ``READ_SHARE`` to 1. The magnetometer,
+    barometer and GPS go through the live session's aiding stage (``session.aiding``) in time order with
+    the IMU samples: the readings handed to the estimators, then the compass heading and the position on
+    the aiding estimator's attitude."""
+    if imu == "fast":
+        log = dataclasses.replace(log, imu=fast_imu(log))
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
         tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0])}
         return build_product(describe(log), log_catalogue(log, {}), tables, (), protocol=AUTOPILOT_PROTOCOL,
                              true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage),
-                             events=log_events(log, t_us[0]), parameters=dict(log.parameters))
+                             magnetometer=log.mag is not None, events=log_events(log, t_us[0]),
+                             parameters=dict(log.parameters))
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
-    mag = on_rows(t_us, log.mag, MAG_COLUMNS)
-    velocity = on_rows(t_us, log.gps, GPS_COLUMNS[3:6])
-    velocity[~np.isfinite(velocity).all(axis=1)] = np.nan
-    gps = np.column_stack([velocity, np.full(len(t_us), np.nan)])  # no heading from one antenna
+    readings = _Readings(log, t_us)
+    mag, gps = aiding.handed_to_samples(readings.stream, len(t_us), readings.mag_body, readings.gps_values)
     dt_s = sample_periods_s(t_us / 1e6)
     names, runs = list(dict.fromkeys(filters)), {}
     try:
@@ -89,15 +105,23 @@ def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionDat
     except ValueError as error:
         raise UserError(str(error)) from None
     settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
-    imu = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
+    imu_table = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
     for name, (q, diagnostics) in runs.items():
-        imu.update(estimate_columns(name, q, diagnostics))
-    tables = {"imu": imu, **reading_tables(log, t_us[0])}
+        imu_table.update(estimate_columns(name, q, diagnostics))
+    tables = {"imu": imu_table, **reading_tables(log, t_us[0])}
+    aiding_name = aiding_estimator(tuple(runs))
+    heading, at, rows = aiding.heading_and_position(readings.stream, readings.mag_body, readings.pressure_pa,
+                                                    readings.gps_values, runs[aiding_name][0] if aiding_name else None,
+                                                    acc, dt_s)  # fmt: skip
+    if log.mag is not None:
+        tables["mag_raw"]["heading_deg"] = np.asarray(heading)
+    if at:
+        tables["position"] = {"time_s": tables["imu"]["time_s"][at], **dict(zip(POSITION.column_names[1:], np.array(rows).T))}
     if log.onboard is not None:
         tables[ONBOARD] = onboard_columns(t_us, t_us[0], interpolated(t_us, log.onboard))
     catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()})
     return build_product(describe(log), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
-                         true_q=interpolated(t_us, log.truth), true_frame="NED",
+                         true_q=interpolated(t_us, log.truth), true_frame="NED", magnetometer=mag is not None,
                          settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
                          events=log_events(log, t_us[0]), parameters=dict(log.parameters))
 
@@ -108,6 +132,69 @@ def log_events(log: FlightLog, t0_us: int) -> list[dict]:
     return [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
 
 
+class _Readings:
+    """The log's magnetometer (body axes, µT), barometer (Pa) and GPS (the GPS frame's values, as the
+    live front-end hands them: only a fix with all three velocity components aids) merged with the IMU
+    samples by the autopilot's time; a reading at a sample's time comes before it (it reaches that sample)."""
+
+    def __init__(self, log: FlightLog, t_us: np.ndarray):
+        empty = np.zeros(0)
+        self.mag_body = [] if log.mag is None else log.mag.stack(MAG_COLUMNS).tolist()
+        self.pressure_pa = [] if log.baro is None else (log.baro.columns["pressure_hpa"] * 100.0).tolist()
+        gps_t, self.gps_values = empty, []
+        if log.gps is not None:
+            aids = np.isfinite(log.gps.stack(GPS_COLUMNS[3:6])).all(axis=1)
+            gps_t = log.gps.time_us[aids]
+            self.gps_values = [{"lat": lat, "lon": lon, "alt": alt, "vel_n": vn, "vel_e": ve, "vel_d": vd,
+                                "heading": math.nan, "fix_type": fix}  # one antenna: no heading
+                               for lat, lon, alt, vn, ve, vd, fix in log.gps.stack(GPS_COLUMNS[:7])[aids].tolist()]
+        self.stream = aiding.merged([(empty if log.mag is None else log.mag.time_us, aiding.MAG),
+                                     (empty if log.baro is None else log.baro.time_us, aiding.BARO),
+                                     (gps_t, aiding.GPS), (t_us, aiding.SAMPLE)])
+
+
+def fast_imu(log: FlightLog) -> Series:
+    """The estimators' IMU stream at full rate (``--imu fast``): the first IMU's full-rate gyro samples
+    (``logtables``), each with the accelerometer interpolated at its time from the full-rate accel where
+    a burst of it spans the sample, else from the logged IMU; between gyro bursts (ArduPilot's batch
+    sampler logs bursts) the logged IMU's own samples. UserError when the log has no full-rate gyro."""
+    gyro, accel = log.tables.get(fast_name("gyro", 0)), log.tables.get(fast_name("accel", 0))
+    if gyro is None:
+        raise UserError(f"{log.path}: no full-rate IMU in this log (ArduPilot's ISBH/ISBD batch sampler, PX4's "
+                        "sensor_gyro_fifo): open it with the regular IMU stream")
+    fast_us = np.asarray(gyro.time_us, dtype=float)
+    regular_us = np.zeros(0) if log.imu is None else np.asarray(log.imu.time_us, dtype=float)
+    between = ~_inside_bursts(regular_us, fast_us)
+    t_us = np.concatenate([fast_us, regular_us[between]])
+    gyr = np.concatenate([gyro.stack(FAST["gyro"][1]), log.imu.stack(IMU_COLUMNS[:3])[between] if log.imu else np.zeros((0, 3))])
+    acc = np.full((len(t_us), 3), np.nan)
+    if log.imu is not None:
+        acc = np.column_stack([np.interp(t_us, regular_us, log.imu.columns[c]) for c in IMU_COLUMNS[3:]])
+    if accel is not None:
+        accel_us = np.asarray(accel.time_us, dtype=float)
+        covered = _inside_bursts(t_us, accel_us)
+        acc[covered] = np.column_stack([np.interp(t_us[covered], accel_us, accel.columns[c]) / STANDARD_GRAVITY_M_S2
+                                        for c in FAST["accel"][1]])
+    order = np.argsort(t_us, kind="stable")
+    keep = np.isfinite(acc[order]).all(axis=1)
+    t_us, gyr, acc = t_us[order][keep], gyr[order][keep], acc[order][keep]
+    return Series(t_us, dict(zip(IMU_COLUMNS, np.column_stack([gyr, acc]).T)), f"{gyro.source} (full rate)")
+
+
+def _inside_bursts(t_us: np.ndarray, burst_us: np.ndarray) -> np.ndarray:
+    """Which of ``t_us`` lie within a burst of ``burst_us``: between two neighbouring samples of it no
+    more than ``BURST_GAP`` of its median period apart."""
+    if len(burst_us) < 2:
+        return np.zeros(len(t_us), dtype=bool)
+    gaps = np.diff(burst_us)
+    after = np.searchsorted(burst_us, t_us, side="left")
+    inside = (after > 0) & (after < len(burst_us))
+    ok = np.zeros(len(t_us), dtype=bool)
+    ok[inside] = gaps[after[inside] - 1] <= BURST_GAP * np.median(gaps)
+    exact = (after < len(burst_us)) & (burst_us[np.minimum(after, len(burst_us) - 1)] == t_us)
+    return ok | exact
+
+
 def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np.ndarray]:
     """The ``onboard`` table of rows at ``t_us`` (λ and flags: a log has none)."""
     return {"time_s": (t_us - t0_us) / 1e6, "device_time_us": t_us.astype(float),
@@ -115,32 +202,55 @@ def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np
 
 
 def reading_tables(log: FlightLog, t0_us: int) -> dict[str, dict[str, np.ndarray]]:
-    """The slower sensors and every other logged message type (a tlog's VFR_HUD, SYS_STATUS, ...: "plot
-    any channel"), each a table on its own rows in session time."""
+    """The slower sensors, the truth, and every other table of the log (each DataFlash message type or ULog
+    topic, a tlog's VFR_HUD, SYS_STATUS, ...: "plot any channel"), each on its own rows in session time."""
     out = {}
     for key, (name, columns) in READINGS.items():
         stream: Series | None = getattr(log, key)
         if stream is not None:
             out[name] = {"time_s": (stream.time_us - t0_us) / 1e6,
                          **{c: stream.columns[source] * factor for c, (source, factor) in columns.items()}}
+    if log.truth is not None:
+        out[TRUTH.name] = {"time_s": (log.truth.time_us - t0_us) / 1e6, **log.truth.columns}
     for info, stream in _message_tables(log):
         out[info.name] = {"time_s": (stream.time_us - t0_us) / 1e6, **dict(zip(info.column_names[1:], stream.columns.values()))}
     return out
 
 
 def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]]) -> Catalogue:
-    """The log's tables: ``imu`` with the estimators' columns, ``onboard`` and the slower sensors as the
-    live session describes them; one per other message type, columns named ``<field>_<unit>`` from the
-    log's units."""
+    """The log's tables: ``imu`` with the estimators' columns (no host arrival time: a log has none),
+    ``onboard``, the slower sensors and the position as the live session describes them, the truth; one
+    per other message type or topic, columns named ``<field>_<unit>`` from the log's units."""
     tables = session_catalogue(diagnostics)
+    imu = dataclasses.replace(tables["imu"], columns=tuple(c for c in tables["imu"].columns if c.name != "host_time_s"))
     readings = [name for key, (name, _) in READINGS.items() if getattr(log, key) is not None]
-    return Catalogue({name: tables[name] for name in ("imu", ONBOARD, *readings)} | {i.name: i for i, _ in _message_tables(log)})
+    aided = ["position"] if diagnostics and (log.baro is not None or log.gps is not None) else []
+    truth = {TRUTH.name: TRUTH} if log.truth is not None else {}
+    return Catalogue({"imu": imu} | {name: tables[name] for name in (ONBOARD, *readings, *aided)} | truth
+                     | {i.name: i for i, _ in _message_tables(log)})
 
 
 def _message_tables(log: FlightLog) -> list[tuple]:
     """(``TableInfo``, ``Series``) of every other message type the log holds."""
-    return [(message_table(name, f"{name} ({log.format})", list(stream.columns), log.units.get(name, {})), stream)
+    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {})), stream)
             for name, stream in log.tables.items()]
+
+
+def attach_simstate_truth(data: SessionData) -> None:
+    """A SITL tlog's ``SIMSTATE`` (the simulator's attitude: ``roll``, ``pitch``, ``yaw`` in rad, ZYX body -> NED)
+    as the session's truth: the ``truth`` table on its own rows, and ``true_q`` on the sample rows
+    (interpolated as a log's truth is). Nothing without SIMSTATE."""
+    sim = data.tables.get("simstate")
+    if sim is None or not all(f"{a}_rad" in sim for a in ("roll", "pitch", "yaw")):
+        return
+    rows = np.isfinite(sim["time_s"]) & np.isfinite(sim["yaw_rad"])  # gap rows after a reboot have no time
+    if not rows.any():
+        return
+    q = quaternion.from_euler_zyx(sim["yaw_rad"][rows], sim["pitch_rad"][rows], sim["roll_rad"][rows])
+    data.catalogue = Catalogue({**data.catalogue.tables, TRUTH.name: TRUTH})
+    data.tables[TRUTH.name] = {"time_s": sim["time_s"][rows], **dict(zip(Q_COLUMNS, q.T))}
+    truth = Series(np.rint(sim["time_s"][rows] * 1e6), dict(zip(Q_COLUMNS, q.T)), "SIMSTATE")
+    data.true_q, data.true_frame = interpolated(data.time_s * 1e6, truth), "NED"
 
 
 def describe(log: FlightLog) -> dict:
@@ -158,18 +268,6 @@ def describe(log: FlightLog) -> dict:
     if log.notes:
         meta["notes"] = "; ".join(log.notes)
     return meta
-
-
-def on_rows(t_rows_us: np.ndarray, stream: Series | None, columns) -> np.ndarray:
-    """(N, k) with each reading on the first row at or after it (the later one where two share a row),
-    NaN on the other rows; all NaN when the log lacks the stream."""
-    out = np.full((len(t_rows_us), len(columns)), np.nan)
-    if stream is None:
-        return out
-    at = np.searchsorted(t_rows_us, stream.time_us)
-    inside = at < len(t_rows_us)
-    out[at[inside]] = stream.stack(columns)[inside]
-    return out
 
 
 def interpolated(t_rows_us: np.ndarray, stream: Series | None) -> np.ndarray | None:

@@ -21,14 +21,13 @@ from pyulog import ULog
 from groundstation.autopilot.flightlog import (
     GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, implausible_message, implausible_times, series,
 )
+from groundstation.autopilot.logtables import ulog_tables
 from groundstation.autopilot.messages import ulog_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAGIC = FORMATS["ulog"].magic
-TOPICS = ["sensor_combined", "vehicle_attitude", "vehicle_attitude_groundtruth", "vehicle_magnetometer", "vehicle_air_data",
-          "sensor_baro", "vehicle_gps_position", "vehicle_status"]  # fmt: skip
 GAUSS_TO_UT = 100.0
 
 
@@ -39,18 +38,20 @@ def read_ulog(path, progress=None) -> FlightLog:
     chatter = io.StringIO()  # pyulog prints what it finds damaged: kept as a note
     try:
         with contextlib.redirect_stdout(chatter):
-            ulog = ULog(str(path), TOPICS)
+            ulog = ULog(str(path))  # every topic: each is a table (``logtables``)
     except Exception as error:  # pyulog raises ULogException and struct/index errors on damaged files
         raise UserError(f"{path}: cannot read this ULog file ({error})") from None
     log = FlightLog(path, "ulog", ulog.msg_info_dict.get("sys_name", "PX4"))
     topics = {}
     for data in ulog.data_list:
-        if data.multi_id == 0 and len(data.data["timestamp"]):
-            topics[data.name] = data.data
+        if len(data.data["timestamp"]):
             wild = implausible_times(data.data["timestamp"])
             if wild.any():
                 log.damage.append(implausible_message(data.name, data.data["timestamp"][wild]))
-                topics[data.name] = {name: values[~wild] for name, values in data.data.items()}
+                data.data = {name: values[~wild] for name, values in data.data.items()}
+            if data.multi_id == 0:
+                topics[data.name] = data.data
+    log.tables, log.units = ulog_tables(ulog.data_list)
     log.notes += [line.strip() for line in chatter.getvalue().splitlines() if line.strip()]
     if (sc := topics.get("sensor_combined")) is not None:
         values = [*(sc[f"gyro_rad[{i}]"] for i in range(3)), *(sc[f"accelerometer_m_s2[{i}]"] / STANDARD_GRAVITY_M_S2 for i in range(3))]

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 
+from groundstation.commands.options import add_imu_option
 from groundstation.errors import UserError
 
 
@@ -22,6 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "a pyserial URL, a recording (docs/sources.md)")
     parser.add_argument("--baud", type=int, default=None, metavar="N",
                         help="serial baud rate unless the spec gives ?baud= (default: 115200, or 57600 for mavlink:PORT)")
+    add_imu_option(parser)  # the window's File > "Full-rate IMU" starts checked with --imu fast
 
 
 def run(args: argparse.Namespace) -> int:
@@ -34,4 +36,4 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.session.factory import Sessions
     from groundstation.ui.app import run as run_app  # Qt is imported only here
 
-    return run_app(args.port, args.baud, args.recording, Sessions())
+    return run_app(args.port, args.baud, args.recording, Sessions(imu=args.imu))

@@ -19,7 +19,7 @@ import json
 import sys
 from pathlib import Path
 
-from groundstation.commands.options import add_config_option, add_estimator_options, estimator_options
+from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
 from groundstation.errors import UserError
 
 AGREEMENT_TITLE = "agreement with the onboard estimate (difference, not error: the onboard estimate is not truth)"
@@ -35,6 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     # have no GPS, and without it they are slow tilt filters at ~100x the others' cost). --filters ukf,sssrukf scores them.
     add_estimator_options(parser, ",".join(runnable(formats.FILE_AIDING)))
     add_config_option(parser)
+    add_imu_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--out", type=Path, metavar="OUT",
                         help="for a FOLDER: the Parquet dataset to write (OUT/logs.parquet, a row per log and "
@@ -56,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         raise UserError("--out, --workers and --dask are for a folder of logs; one file prints its figures")
     bar = ProgressBar("computing")  # shown after a second: a long recording or log
     try:
-        data = load_session(args.file, names, overrides, bar, args.accept_config_changes)
+        data = load_session(args.file, names, overrides, bar, args.accept_config_changes, imu=args.imu)
     finally:
         bar.done()
     for warning in data.warnings:  # beside the JSON, not in it

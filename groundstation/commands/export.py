@@ -6,9 +6,10 @@ Everything given is checked before the decoding starts (``groundstation.export.r
 from __future__ import annotations
 
 import argparse
+import functools
 from pathlib import Path
 
-from groundstation.commands.options import add_config_option, add_estimator_options, estimator_options
+from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
 from groundstation.commands.progress import StagedProgress
 
 
@@ -19,6 +20,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv, OUT.parquet, OUT.xlsx or OUT.mcap (by extension)")
     add_estimator_options(parser, None)
     add_config_option(parser)
+    add_imu_option(parser)
     parser.add_argument("--from", dest="t_from", type=float, metavar="S", help="first second to export")
     parser.add_argument("--to", dest="t_to", type=float, metavar="S", help="last second to export")
     parser.add_argument("--rate", type=float, metavar="HZ", help="decimate to about HZ samples per second")
@@ -35,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
                              accept_config_changes=args.accept_config_changes)
     progress = StagedProgress()
     try:
-        result = run_export(request, load_session, progress)
+        result = run_export(request, functools.partial(load_session, imu=args.imu), progress)
     finally:
         progress.done()
     for warning in result.warnings:

@@ -1,4 +1,4 @@
-"""Options shared by the commands that run estimators: ``--filters`` and the what-if ``--set``."""
+"""Options shared by the commands that run estimators: ``--filters``, the what-if ``--set``, ``--imu``."""
 
 from __future__ import annotations
 
@@ -23,6 +23,14 @@ def add_config_option(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--accept-config-changes", action="store_true",
                         help="apply a recording's CONFIG that changes the sensor's full scales or mounting without a "
                              "device restart (default: keep the scales in use, and say so)")
+
+
+def add_imu_option(parser: argparse.ArgumentParser) -> None:
+    from groundstation.autopilot.session import IMU_STREAMS
+
+    parser.add_argument("--imu", choices=IMU_STREAMS, default=IMU_STREAMS[0],
+                        help="the IMU stream a flight log's estimators run on: its logged IMU (default), or 'fast': the "
+                             "full-rate one of ArduPilot's batch sampler (ISBH/ISBD) or PX4's sensor_gyro_fifo")
 
 
 def estimator_options(args: argparse.Namespace) -> tuple[list[str] | None, dict[str, dict[str, float]]]:

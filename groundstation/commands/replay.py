@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from groundstation.commands.options import add_config_option, add_estimator_options, estimator_options
+from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -16,6 +16,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="play it back at X times real time (0.25-64) with a live summary; default: the totals at once")
     add_estimator_options(parser, None)
     add_config_option(parser)
+    add_imu_option(parser)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -33,7 +34,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as error:
         raise UserError(str(error)) from None
     progress = ProgressBar(f"computing {Path(args.file).name}")
-    data = load_session(args.file, filters, overrides, progress, args.accept_config_changes)
+    data = load_session(args.file, filters, overrides, progress, args.accept_config_changes, imu=args.imu)
     progress.done()
     for warning in data.warnings:
         print(f"warning: {warning}")

@@ -6,13 +6,17 @@ barometer or GPS reading arrives, every IMU sample also steps the dual-channel p
 the aiding estimator's attitude (``EstimatorBank.aiding``): NED metres from the first GPS fix, height
 from the first barometer reading (docs/conventions.md).
 
-The pipeline calls it per frame; the batch path drives the same object over its columns in the
-pipeline's order (``batch._Readings``), so the hand-over, the heading and the position are one code.
+The pipeline calls it per frame; the batch path (``batch._Readings``) and a flight log
+(``autopilot/session.py``) drive the same object over their columns merged in the pipeline's order
+(``merged``, ``handed_to_samples``, ``heading_and_position``), so the hand-over, the heading and the
+position are one code.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
 
 from firmware_protocol import SPEC
 from groundstation import geodesy
@@ -84,3 +88,71 @@ def gps_fix(values: dict) -> GpsFix:
     heading_deg = values["heading"]
     heading = math.radians(heading_deg) if 0.0 <= heading_deg <= 360.0 else math.nan
     return GpsFix(values["vel_n"], values["vel_e"], values["vel_d"], wrap_pi(heading))
+
+
+# What a merged stream of a session's aiding events holds, in the pipeline's order (``merged``).
+RESTART, MAG, BARO, GPS, SAMPLE = range(5)
+
+
+def merged(parts) -> list[tuple[int, int]]:
+    """``(kind, index)`` of every event of ``parts`` (``(keys, kind)`` each, keys sorted within a part) in
+    the order of their keys; events sharing a key keep the order of ``parts``, then their own."""
+    parts = list(parts)
+    keys = np.concatenate([np.asarray(k, dtype=float) for k, _ in parts])
+    kinds = np.concatenate([np.full(len(k), kind) for k, kind in parts])
+    index = np.concatenate([np.arange(len(k)) for k, _ in parts])
+    order = np.argsort(keys, kind="stable")
+    return list(zip(kinds[order].tolist(), index[order].tolist()))
+
+
+def handed_to_samples(stream, samples: int, mag_body: list, gps_values: list) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """What each of ``samples`` IMU samples hands the estimators (``take_for_estimators``) over a merged
+    ``stream``: the magnetometer reading (body axes, µT) and GPS fix, NaN rows for none; None when no
+    sample has one."""
+    if not len(mag_body) and not len(gps_values):
+        return None, None
+    aiding = Aiding()
+    mag, gps = np.full((samples, 3), math.nan), np.full((samples, 4), math.nan)
+    with_mag, with_gps = False, False
+    for kind, i in stream:
+        if kind == SAMPLE:
+            body, fix = aiding.take_for_estimators()
+            if body is not None:
+                mag[i], with_mag = body, True
+            if fix is not None:
+                gps[i], with_gps = fix, True
+        elif kind == MAG:
+            aiding.magnetometer(mag_body[i], None)
+        elif kind == GPS:
+            aiding.gps(gps_values[i])
+        elif kind == RESTART:
+            aiding.restart()
+    return (mag if with_mag else None), (gps if with_gps else None)
+
+
+def heading_and_position(stream, mag_body: list, pressure_pa: list, gps_values: list, aiding_q, acc_g, dt_s):
+    """The compass heading of every magnetometer reading and the position rows, over a merged ``stream``,
+    with the aiding estimator's attitude ``aiding_q`` at each sample (None: no estimator ran, so no
+    heading and no position). Returns (headings in degrees, the samples with a position row, the rows)."""
+    aiding = Aiding()
+    qs = None if aiding_q is None else np.asarray(aiding_q).tolist()
+    accs, dts = np.asarray(acc_g).tolist(), np.asarray(dt_s).tolist()
+    heading = [math.nan] * len(mag_body)
+    at, rows = [], []
+    q = None
+    for kind, i in stream:
+        if kind == SAMPLE:
+            if qs is not None:
+                q = qs[i]
+                if aiding.position_on:
+                    at.append(i)
+                    rows.append(aiding.position_step(accs[i], q, dts[i]))
+        elif kind == MAG:
+            heading[i] = aiding.magnetometer(mag_body[i], q)
+        elif kind == BARO:
+            aiding.barometer(pressure_pa[i])
+        elif kind == GPS:
+            aiding.gps(gps_values[i])
+        elif kind == RESTART:
+            aiding.restart()  # the attitude stays: EstimatorBank.restart keeps each estimator's last one
+    return heading, at, rows

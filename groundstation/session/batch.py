@@ -34,7 +34,7 @@ from firmware_protocol import SPEC
 from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_batch
 from firmware_protocol.decoder import DecoderStats
 from groundstation.recording import Recording
-from groundstation.session.aiding import Aiding
+from groundstation.session import aiding
 from groundstation.session.catalogue import session_catalogue
 from groundstation.session.clock import SessionClock
 from groundstation.session.estimators import EstimatorBank
@@ -420,13 +420,11 @@ class _Builder:
 class _Readings:
     """The aiding stage of the pipeline (``session.aiding.Aiding``, the same object and methods) driven
     over the session's columns in the pipeline's order: magnetometer, barometer and GPS readings, IMU
-    samples and device restarts merged by their ``stage_key``.
+    samples and device restarts merged by their ``stage_key`` (``aiding.merged``).
 
     Twice, since the estimators run in between: first for what each sample hands the estimators
     (``for_estimators``), then, with the aiding estimator's attitudes, for the compass heading and the
     position (``stage``)."""
-
-    RESTART, MAG, BARO, GPS, SAMPLE = range(5)
 
     def __init__(self, builder: _Builder, sample_keys: np.ndarray):
         self.b = builder
@@ -438,38 +436,15 @@ class _Readings:
         self.gps_values = [dict(zip(names, row)) for row in zip(*(self.gps.scaled(f).tolist() for f in names))]
         self.sample_keys = sample_keys
         self.n = len(sample_keys)
-        parts = [(sample_keys, self.SAMPLE), (builder.disc_keys, self.RESTART), (builder.key(self.mag.order), self.MAG),
-                 (builder.key(self.baro.order), self.BARO), (builder.key(self.gps.order), self.GPS)]
-        keys = np.concatenate([k for k, _ in parts])
-        kinds = np.concatenate([np.full(len(k), kind) for k, kind in parts])
-        index = np.concatenate([np.arange(len(k)) for k, _ in parts])
-        order = np.argsort(keys, kind="stable")  # released samples share a key: they keep their order
-        self.stream = list(zip(kinds[order].tolist(), index[order].tolist()))
+        self.stream = aiding.merged([(sample_keys, aiding.SAMPLE), (builder.disc_keys, aiding.RESTART),
+                                     (builder.key(self.mag.order), aiding.MAG), (builder.key(self.baro.order), aiding.BARO),
+                                     (builder.key(self.gps.order), aiding.GPS)])  # fmt: skip
         self.any = len(self.mag) + len(self.baro) + len(self.gps) > 0
 
     def for_estimators(self) -> tuple[np.ndarray | None, np.ndarray | None]:
         """The magnetometer reading (body axes, µT) and GPS fix each sample hands the estimators (NaN rows
         for none; None when no sample has one)."""
-        if not len(self.mag) and not len(self.gps):
-            return None, None
-        aiding = Aiding()
-        mag, gps = np.full((self.n, 3), math.nan), np.full((self.n, 4), math.nan)
-        with_mag, with_gps = False, False
-        SAMPLE, MAG, GPS, RESTART = self.SAMPLE, self.MAG, self.GPS, self.RESTART
-        for kind, i in self.stream:
-            if kind == SAMPLE:
-                body, fix = aiding.take_for_estimators()
-                if body is not None:
-                    mag[i], with_mag = body, True
-                if fix is not None:
-                    gps[i], with_gps = fix, True
-            elif kind == MAG:
-                aiding.magnetometer(self.mag_body[i], None)
-            elif kind == GPS:
-                aiding.gps(self.gps_values[i])
-            elif kind == RESTART:
-                aiding.restart()
-        return (mag if with_mag else None), (gps if with_gps else None)
+        return aiding.handed_to_samples(self.stream, self.n, self.mag_body, self.gps_values)
 
     def stage(self, acc: np.ndarray, dt: np.ndarray, aiding_q: np.ndarray, time_s: np.ndarray) -> None:
         """The magnetometer table with the compass heading, and the position table, from the aiding
@@ -477,28 +452,9 @@ class _Readings:
         b = self.b
         if not self.any:
             return
-        aiding = Aiding()
         driven = bool(b.s.filters)  # the aiding estimator's attitude drives heading and position
-        qs, accs, dts = aiding_q.tolist(), acc.tolist(), dt.tolist()
-        heading = [math.nan] * len(self.mag)
-        at, rows = [], []
-        q = None
-        SAMPLE, MAG, BARO, GPS, RESTART = self.SAMPLE, self.MAG, self.BARO, self.GPS, self.RESTART
-        for kind, i in self.stream:
-            if kind == SAMPLE:
-                if driven:
-                    q = qs[i]
-                    if aiding.position_on:
-                        at.append(i)
-                        rows.append(aiding.position_step(accs[i], q, dts[i]))
-            elif kind == MAG:
-                heading[i] = aiding.magnetometer(self.mag_body[i], q)
-            elif kind == BARO:
-                aiding.barometer(self.pressure_pa[i])
-            elif kind == GPS:
-                aiding.gps(self.gps_values[i])
-            elif kind == RESTART:
-                aiding.restart()  # the attitude stays: EstimatorBank.restart keeps each estimator's last one
+        heading, at, rows = aiding.heading_and_position(self.stream, self.mag_body, self.pressure_pa, self.gps_values,
+                                                        aiding_q if driven else None, acc, dt)
         if len(self.mag):
             shown = [self.mag.scaled(f) for f in MAG_FIELDS]
             b.add("mag_raw", b.key(self.mag.order), np.column_stack([b.time_s[self.mag.order], *shown, heading]))

@@ -9,8 +9,8 @@ replaces it (see docs/conventions.md).
 
 A few tables are computed rather than decoded, and are described here too: ``imu`` (``IMU_RAW`` in
 body axes and physical units, plus every estimator's quaternion and diagnostics), ``onboard``
-(``ATTITUDE``: the aircraft's own estimate), ``position`` (seed 004's fused position) and the
-compass heading column of ``mag_raw``.
+(``ATTITUDE``: the aircraft's own estimate), ``position`` (seed 004's fused position), ``truth`` (a
+simulator's attitude, in a flight log that has one) and the compass heading column of ``mag_raw``.
 """
 
 from __future__ import annotations
@@ -109,7 +109,7 @@ def message_table(name: str, label: str, fields, units: dict[str, str]) -> Table
 
     def column(field: str) -> Column:
         unit = units.get(field) or ""
-        slug = _UNIT_SLUG.sub("_", unit.replace("%", "pct")).strip("_")
+        slug = _UNIT_SLUG.sub("_", unit.replace("%", "pct").replace("µ", "u").replace("μ", "u")).strip("_")
         return Column(f"{field}_{slug}" if slug else field, unit or "1", field, 3)
 
     return TableInfo(name.lower(), label, (TIME, *map(column, fields)))
@@ -140,6 +140,9 @@ POSITION = TableInfo("position", "fused position (seed 004), NED metres from the
     ("pos_n_m", "m", "fused north", 3), ("pos_e_m", "m", "fused east", 3), ("pos_d_m", "m", "fused down", 3),
     ("vel_n_m_s", "m/s", "fused velocity N", 2), ("vel_e_m_s", "m/s", "fused velocity E", 2),
     ("vel_d_m_s", "m/s", "fused velocity D", 2),
+)))  # fmt: skip
+TRUTH = TableInfo("truth", "the true attitude (a simulator's), body -> NED", (TIME, *_columns(
+    ("qw", "1", "true qw", 5), ("qx", "1", "true qx", 5), ("qy", "1", "true qy", 5), ("qz", "1", "true qz", 5),
 )))  # fmt: skip
 HEADING = Column("heading_deg", "deg", "compass heading", 2, "tilt-compensated, from the aiding estimator's pitch and roll")
 

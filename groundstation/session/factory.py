@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from groundstation import formats
+from groundstation.autopilot.session import FAST_IMU_FORMATS, IMU_STREAMS
 from groundstation.estimation import live_estimators
 from groundstation.session.load import Loading, estimators_for, load_session
 from groundstation.session.live import LiveSession
@@ -59,6 +61,12 @@ class Sessions:
 
     demo_spec = DEMO_SPEC
     open = staticmethod(open_session)
-    load = Loading
+    def __init__(self, imu: str = IMU_STREAMS[0]):
+        self.imu = imu  # the IMU stream a flight log's estimators run on (File > "Full-rate IMU", ``--imu``)
+
+    def load(self, path, filters=None, forced=None) -> Loading:
+        """``path`` computed in a worker; a flight log that can hold a full-rate IMU on the stream ``imu`` names."""
+        fast_possible = getattr(formats.sniff(path), "name", None) in FAST_IMU_FORMATS
+        return Loading(path, filters, forced, self.imu if fast_possible else IMU_STREAMS[0])
     estimators_for = staticmethod(estimators_for)
     load_session = staticmethod(load_session)

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation import formats, mounting, quaternion
+from groundstation.autopilot.session import FAST_IMU_FORMATS, IMU_STREAMS, attach_simstate_truth
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create, runnable
@@ -28,12 +29,19 @@ from groundstation.session.replay import replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 
-def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
+def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False,
+                 imu: str = IMU_STREAMS[0]) -> SessionData:
     """Decode, import or read ``path`` by its format (``formats``) and run the estimators; UserError with a
     clear message on bad input. A file of no known format is tried as a recording, whose reader says
     what the file looks like instead. ``accept_config_changes``: a recording's CONFIG that changes the
-    scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``)."""
+    scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``).
+    ``imu``: the stream the estimators run on (``IMU_STREAMS``): "fast", a flight log's full-rate IMU."""
     file_format = formats.sniff(path) or formats.FORMATS["recording"]
+    if imu != IMU_STREAMS[0]:
+        if file_format.name not in FAST_IMU_FORMATS:
+            raise UserError(f"{path}: --imu {imu}: a {file_format.description} has no full-rate IMU stream (only "
+                            f"{formats.described([formats.FORMATS[name] for name in FAST_IMU_FORMATS])} have one)")
+        return file_format.loader()(Path(path), filters, forced, progress, imu=imu)
     if not accept_config_changes:
         return file_format.loader()(Path(path), filters, forced, progress)
     if file_format.name != "recording":
@@ -89,9 +97,10 @@ def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> Se
 
 
 def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: list) -> SessionData:
-    """A decoded session's product (a recording's, a ``.tlog``'s): the pipeline's tables, link, events and settings."""
+    """A decoded session's product (a recording's, a ``.tlog``'s): the pipeline's tables, link, events and
+    settings; an autopilot simulator's SIMSTATE as its truth (``attach_simstate_truth``)."""
     t0_ns = pipeline.t0_host_ns or 0
-    return build_product(
+    data = build_product(
         metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
         pipeline.filters, protocol=metadata.get("protocol", "gs"),
         link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
@@ -99,6 +108,9 @@ def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: 
         settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=damage,
         parameters=dict(pipeline.parameters), magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
     )
+    if data.protocol == "mavlink":
+        attach_simstate_truth(data)
+    return data
 
 
 def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], device_us: np.ndarray, pipeline: Pipeline) -> None:
@@ -143,9 +155,10 @@ class Loading:
     ``done``; then ``data`` is the computed session, or ``error`` says, for the user, why there is none.
     ``cancel`` stops it at its next progress report (its result is dropped in any case)."""
 
-    def __init__(self, path, filters=None, forced=None):
+    def __init__(self, path, filters=None, forced=None, imu: str = IMU_STREAMS[0]):
         self.path = Path(path)
         self.setup = (filters, forced)
+        self.imu = imu
         self.fraction = 0.0
         self.done = False
         self.data: SessionData | None = None
@@ -161,7 +174,7 @@ class Loading:
 
     def _run(self) -> None:
         try:
-            self.data = load_session(self.path, *self.setup, progress=self._progress)
+            self.data = load_session(self.path, *self.setup, progress=self._progress, imu=self.imu)
             self.fraction = 1.0
         except _Cancelled:
             self.error = "cancelled"

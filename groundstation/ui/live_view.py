@@ -20,7 +20,8 @@ from groundstation.ui.channels import ChannelsView
 from groundstation.ui.mode_bands import ModeBands
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
-from groundstation.ui.series import Series, imu_quantities, onboard_quantities
+from groundstation.ui.series import Series, imu_quantities, onboard_quantities, truth_quantities
+from groundstation.ui.vibration_view import VibrationView
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
@@ -28,6 +29,7 @@ DEFAULT_WINDOW = "30 s"
 # colour of the palette, the one the estimator names (``Estimator.colour``); the estimators only a replay
 # of an older recording has (CF1, KF, EKF) share one. The aircraft's own estimate is wine.
 ONBOARD_COLOUR = PALETTE["wine"]
+TRUTH_COLOUR = "#000000"  # dashed black, as the figures draw truth
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
@@ -39,7 +41,8 @@ def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | Non
     """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others."""
     host = tuple(Curve("imu", f"{n}_{angle}_deg", estimation.label(n), colour(n), wraps_at) for n in filters)
     onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", ONBOARD_COLOUR, wraps_at, reference=True)
-    return host[:1] + (onboard,) + host[1:]
+    truth = Curve("truth", f"truth_{angle}_deg", "truth", TRUTH_COLOUR, wraps_at, reference=True)  # a SITL log's
+    return host[:1] + (onboard,) + host[1:] + (truth,)
 
 
 def colour(name: str) -> str:
@@ -114,6 +117,7 @@ class LiveView(QtWidgets.QWidget):
         self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
         self.position = self._add_tab(PositionView(), "Position")
         self.channels = self._add_tab(ChannelsView(), "Channels")
+        self.vibration = self._add_tab(VibrationView(), "Vibration")
         self.tabs.currentChanged.connect(self._tab_changed)  # once every tab is there
         self._show_aiding_tabs()
         layout = QtWidgets.QVBoxLayout(self)
@@ -158,6 +162,7 @@ class LiveView(QtWidgets.QWidget):
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
         self.channels.set_session(session)
+        self.vibration.set_session(session)
         self._show_aiding_tabs()
 
     def hidden_labels(self) -> frozenset[str]:
@@ -231,6 +236,8 @@ class LiveView(QtWidgets.QWidget):
             self._view = view
             self.series = {"imu": Series(view.imu, imu_quantities(view.filters)),
                            "onboard": Series(view.onboard, onboard_quantities), **aiding_series(view.tables)}
+            if view.tables.get("truth") is not None:  # a simulator's log: its truth, dashed
+                self.series["truth"] = Series(view.tables["truth"], truth_quantities)
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}
         if grew - {"imu", "onboard"}:
             self._show_aiding_tabs()

@@ -366,6 +366,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu = file.addMenu("Recent recordings")
         self._fill_recent_menu()
         self._action(file, "&Export…", "Ctrl+E", self.export)
+        self.fast_imu_action = file.addAction("Full-rate IMU for flight logs (ISBD, sensor_gyro_fifo)")
+        self.fast_imu_action.setCheckable(True)
+        self.fast_imu_action.setChecked(self.sessions.imu == "fast")
+        self.fast_imu_action.toggled.connect(self.use_fast_imu)
         file.addAction(self.record_action)
         file.addAction(self.foxglove.action)
         file.addSeparator()
@@ -378,6 +382,12 @@ class MainWindow(QtWidgets.QMainWindow):
         self._action(view, "To the end (live: follow the newest data)", "End", lambda: self.to_end(True))
         help_menu = self.menuBar().addMenu("&Help")
         self._action(help_menu, "&Keyboard shortcuts", "F1", self.show_shortcuts)
+
+    def use_fast_imu(self, fast: bool) -> None:
+        """Run a flight log's estimators on its full-rate IMU (or its logged one): the open file again."""
+        self.sessions.imu = "fast" if fast else "regular"
+        if self.session is not None and self.session.seekable:  # a file played, not a live link
+            self.open_recording(self.session.file()[0])
 
     def _action(self, menu: QtWidgets.QMenu, text: str, key: str, slot) -> QtGui.QAction:
         action = menu.addAction(text)

@@ -183,6 +183,11 @@ def imu_quantities(filters: tuple[str, ...]) -> Derive:
     return derive
 
 
+def truth_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """A simulator's true attitude (the ``truth`` table of a SITL log) in degrees."""
+    return attitude_deg("truth", rows[:, [columns.index(f"q{c}") for c in "wxyz"]])
+
+
 def onboard_quantities(rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
     """The aircraft's own estimate (ATTITUDE frames) in degrees, and its λ."""
     col = {name: rows[:, i] for i, name in enumerate(columns)}

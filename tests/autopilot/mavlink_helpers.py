@@ -50,7 +50,7 @@ def ardupilot_heartbeat(sender: Sender) -> bytes:
 
 # -- ULog (https://docs.px4.io/main/en/dev_log/ulog_file_format.html) ------------------------------
 
-ULOG_TYPES = {"uint64_t": "Q", "float": "f", "uint8_t": "B", "int32_t": "i"}
+ULOG_TYPES = {"uint64_t": "Q", "float": "f", "uint8_t": "B", "int32_t": "i", "int16_t": "h", "uint32_t": "I"}
 
 
 def _message(kind: bytes, payload: bytes) -> bytes:
@@ -118,24 +118,26 @@ def dataflash_record(msg_id: int, payload: bytes) -> bytes:
     return b"\xa3\x95" + bytes([msg_id]) + payload
 
 
-def packing(fmt: str) -> str:
-    """A DataFlash format as a struct format: its text fields ``n``, ``N``, ``Z`` are 4, 16 and 64 bytes."""
-    return "<" + fmt.replace("n", "4s").replace("N", "16s").replace("Z", "64s")
+DATAFLASH_STRUCT = {"n": "4s", "N": "16s", "Z": "64s", "a": "32h"}  # DataFlash format characters that are not struct's
+
+
+def dataflash_struct(fmt: str) -> str:
+    return "<" + "".join(DATAFLASH_STRUCT.get(c, c) for c in fmt)
 
 
 def dataflash_fmt(msg_id: int, name: str, fmt: str, labels: str) -> bytes:
-    length = 3 + struct.calcsize(packing(fmt))
+    length = 3 + struct.calcsize(dataflash_struct(fmt))
     return dataflash_record(128, struct.pack("<BB4s16s64s", msg_id, length, name.encode(), fmt.encode(), labels.encode()))
 
 
 def write_dataflash(path, messages: dict[str, tuple[str, str, list[tuple]]]) -> None:
     """``messages``: name -> (DataFlash format of the fields, labels, rows); rows of all types are written
-    in order of their first field (TimeUS)."""
+    in order of their first field (TimeUS); an ``a`` field (int16[32]) takes 32 values of the row."""
     out = bytearray(dataflash_fmt(128, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns"))
     rows = []
     for msg_id, (name, (fmt, labels, values)) in enumerate(messages.items(), start=130):
         out += dataflash_fmt(msg_id, name, fmt, labels)
-        rows += [(row[0], msg_id, struct.pack(packing(fmt), *row)) for row in values]
+        rows += [(row[0], msg_id, struct.pack(dataflash_struct(fmt), *row)) for row in values]
     for _, msg_id, payload in sorted(rows, key=lambda r: r[:2]):
         out += dataflash_record(msg_id, payload)
     Path(path).write_bytes(bytes(out))

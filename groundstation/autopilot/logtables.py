@@ -1,0 +1,168 @@
+"""Every table of a flight log, and its full-rate IMU.
+
+Every DataFlash message type and every ULog topic that carries numbers becomes a table (``FlightLog.tables``:
+one ``Series`` per type and instance, on the autopilot's clock), so the Channels tab can plot any of
+them. Names: the type or topic in lower case, with ``_<instance>`` for a multi-instance DataFlash
+type (the field its FMTU marks ``#``: ``IMU`` instance 1 -> ``imu_1``) and for a ULog topic's
+``multi_id`` above 0 (``sensor_accel_1``); a name the session's own tables use (``imu``, ``gps``...)
+gets ``_log`` appended. Columns: every numeric field but the time (``TimeUS``, ``timestamp``),
+DataFlash values as pymavlink's ``DFReader`` gives them (its format scaling applied: ``c`` /100,
+``L`` 1e-7) with the unit FMTU gives; ULog array elements as ``name_<i>``.
+
+The full-rate IMU (``FAST``: tables ``gyro_fast_<imu>`` with ``gyr_{x,y,z}_rad_s`` and ``accel_fast_<imu>``
+with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time):
+
+- ArduPilot's batch sampler: an ``ISBH`` header (batch ``N``, sensor ``type`` 0 accel / 1 gyro, IMU
+  ``instance``, multiplier ``mul``, ``smp_cnt`` samples, ``SampleUS`` the first sample's time,
+  ``smp_rate`` Hz) then ``ISBD`` records (``N``, ``seqno``, 32 int16 each of ``x``, ``y``, ``z``): sample
+  ``k = 32 seqno + j`` is ``value / mul`` (rad/s, m/s²) at ``SampleUS + k / smp_rate``. A batch is one
+  sensor's contiguous burst (1024 samples at ~2 kHz by default); gyro and accel bursts alternate.
+- PX4's ``sensor_gyro_fifo`` / ``sensor_accel_fifo``: ``samples`` values ``x[i] * scale`` spaced ``dt`` µs,
+  the newest (``i = samples - 1``) at ``timestamp_sample``; one table per ``multi_id``.
+"""
+
+from __future__ import annotations
+
+import operator
+import re
+from collections import defaultdict
+
+import numpy as np
+
+from groundstation.autopilot.flightlog import Series
+
+# kind -> (table name before ``_<imu>``, fields, their unit): the table's columns are ``<field>_<unit>``
+FAST = {"gyro": ("gyro_fast", ("gyr_x", "gyr_y", "gyr_z"), "rad/s"), "accel": ("accel_fast", ("acc_x", "acc_y", "acc_z"), "m/s2")}
+ISB_TYPES = {0: "accel", 1: "gyro"}  # ISBH ``type`` (ArduPilot's IMU_SENSOR_TYPE_ACCEL, _GYRO)
+FIFO_TOPICS = {"sensor_gyro_fifo": "gyro", "sensor_accel_fifo": "accel"}
+ISBD_SAMPLES = 32  # int16 values per axis in one ISBD record
+RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the session's own tables
+DATAFLASH_SKIPPED = ("FMT", "FMTU", "UNIT", "MULT")  # the log's description of itself, not data
+NUMERIC = set("bBhHiIfdgcCeELMqQ")  # DataFlash format characters of numbers (not strings nor ``a`` arrays)
+
+
+def fast_name(kind: str, instance: int) -> str:
+    """The table of one IMU's full-rate gyro or accel: ``gyro_fast_0``, ``accel_fast_1``."""
+    return f"{FAST[kind][0]}_{instance}"
+
+
+def table_name(name: str, instance=None) -> str:
+    name = name.lower() if instance is None else f"{name.lower()}_{instance}"
+    return f"{name}_log" if name in RESERVED else name
+
+
+class DataflashTables:
+    """Collects every message ``DFReader`` returns (``add``), then ``tables()``: the log's tables and units."""
+
+    def __init__(self):
+        self.rows = defaultdict(list)  # (type, instance) -> [[TimeUS, values...]]
+        self.layouts: dict[str, _Layout] = {}  # type -> which of its fields are kept, and how
+        self.isbh: dict[int, tuple] = {}  # batch N -> (kind, instance, mul, count, first sample µs, rate Hz)
+        self.isbd = defaultdict(list)  # (kind, instance) -> [((mul, count, first µs, rate), seqno, x, y, z)]
+
+    def add(self, msg) -> None:
+        msg_type = msg.get_type()
+        if msg_type in DATAFLASH_SKIPPED:
+            return
+        if msg_type == "ISBH":
+            self.isbh[msg.N] = (ISB_TYPES.get(msg.type), msg.instance, msg.mul, msg.smp_cnt, msg.SampleUS, msg.smp_rate)
+        elif msg_type == "ISBD":
+            self._burst(msg)
+        layout = self.layouts.get(msg_type)
+        if layout is None:
+            layout = self.layouts[msg_type] = _Layout(msg.fmt)
+        if layout.take is not None:
+            elements = msg._elements  # the raw values: read whole, scaled per column in ``tables`` (getattr per field is 10x slower)
+            self.rows[(msg_type, layout.instance(elements))].append(layout.take(elements))
+    def _burst(self, msg) -> None:
+        header = self.isbh.get(msg.N)
+        if header is None or header[0] is None or not header[2]:
+            return  # its header was lost (damaged bytes, a cut log start): no scale, no time
+        self.isbd[header[:2]].append((header[2:], msg.seqno, *msg._elements[-3:]))  # x, y, z: the last three fields
+
+    def tables(self) -> tuple[dict[str, Series], dict[str, dict[str, str]]]:
+        tables, units = {}, {}
+        for (msg_type, instance), rows in self.rows.items():
+            layout = self.layouts[msg_type]
+            values = np.array(rows, dtype=float).reshape(len(rows), -1) * layout.scale / layout.divisor
+            name = table_name(msg_type, instance)
+            source = msg_type if instance is None else f"{msg_type}[{instance}]"
+            tables[name] = in_order(values[:, 0], dict(zip(layout.names, values[:, 1:].T)), source)
+            units[name] = layout.units
+        for (kind, instance), records in self.isbd.items():
+            times, values = _isbd_samples(records)
+            tables[fast_name(kind, instance)] = in_order(times, dict(zip(FAST[kind][1], values.T)), "ISBH/ISBD")
+            units[fast_name(kind, instance)] = dict.fromkeys(FAST[kind][1], FAST[kind][2])
+        return tables, units
+
+
+def _isbd_samples(records) -> tuple[np.ndarray, np.ndarray]:
+    """One sensor's ISBD records as samples: times (µs) and (n, 3) values in SI units."""
+    mul, count, first_us, rate_hz = (np.array([r[0][i] for r in records], dtype=float)[:, None] for i in range(4))
+    k = np.array([r[1] for r in records], dtype=float)[:, None] * ISBD_SAMPLES + np.arange(ISBD_SAMPLES)[None, :]
+    xyz = np.stack([np.array([r[2 + a] for r in records], dtype=float) for a in range(3)], axis=-1)  # (records, 32, 3)
+    keep = k < count
+    return (first_us + k * 1e6 / rate_hz)[keep], (xyz / mul[:, :, None])[keep]
+
+
+class _Layout:
+    """One DataFlash type's kept fields: ``TimeUS`` then its numbers, their units, and the format's
+    multipliers (``c`` 0.01, ``L`` 1e-7) applied to the raw values as DFReader applies them."""
+
+    def __init__(self, fmt):
+        kept = [i for i, (c, f) in enumerate(zip(fmt.columns, fmt.format)) if f in NUMERIC and c != "TimeUS"]
+        self.names = [fmt.columns[i] for i in kept]
+        self.units = {c: fmt.get_unit(c) for c in self.names}
+        has_time = "TimeUS" in fmt.colhash and bool(kept)
+        self.take = operator.itemgetter(fmt.colhash["TimeUS"], *kept) if has_time else None  # a type without time: no table
+        mults = [None, *(fmt.msg_mults[i] for i in kept)]
+        # DFReader divides by 1/m for m < 1 (more exact than multiplying by m) and multiplies otherwise: so do we
+        self.scale = np.array([m if m is not None and m >= 1.0 else 1.0 for m in mults])
+        self.divisor = np.array([1.0 / m if m is not None and 0.0 < m < 1.0 else 1.0 for m in mults])
+        at = fmt.colhash.get(fmt.instance_field) if fmt.instance_field is not None else None
+        self.instance = (lambda elements: None) if at is None else operator.itemgetter(at)
+
+
+def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]]:
+    """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked) as a table, and the fifo topics' full-rate tables."""
+    tables, units = {}, {}
+    for data in data_list:
+        columns = {_flat(name): np.asarray(values, dtype=float) for name, values in data.data.items()
+                   if name != "timestamp" and np.asarray(values).dtype.kind in "biuf"}
+        if not len(data.data["timestamp"]) or not columns:
+            continue
+        name = table_name(data.name, data.multi_id or None)
+        tables[name] = in_order(data.data["timestamp"], columns, data.name)
+        units[name] = {}
+        if data.name in FIFO_TOPICS:
+            kind = FIFO_TOPICS[data.name]
+            tables[fast_name(kind, data.multi_id)] = fifo_series(data.data, kind)
+            units[fast_name(kind, data.multi_id)] = dict.fromkeys(FAST[kind][1], FAST[kind][2])
+    return tables, units
+
+
+def fifo_series(data: dict, kind: str) -> Series:
+    """A ``sensor_*_fifo`` topic's samples: ``samples`` per message, ``dt`` µs apart, the newest at ``timestamp_sample``."""
+    count = np.asarray(data["samples"], dtype=int)
+    slots = np.arange(max(int(count.max(initial=0)), 1))
+    valid = slots[None, :] < count[:, None]
+    newest = np.asarray(data["timestamp_sample"], dtype=float)[:, None]
+    times = newest - (count[:, None] - 1 - slots[None, :]) * np.asarray(data["dt"], dtype=float)[:, None]
+    scale = np.asarray(data["scale"], dtype=float)[:, None]
+    axes = [np.column_stack([data[f"{a}[{i}]"] for i in slots]) * scale for a in "xyz"]
+    return in_order(times[valid], {c: v[valid] for c, v in zip(FAST[kind][1], axes)}, f"{kind} fifo")
+
+
+def in_order(time_us, columns: dict, source: str) -> Series:
+    """A table's rows sorted by time (stable: rows sharing a time, a burst of parameters, keep theirs)."""
+    time_us = np.asarray(time_us)
+    order = np.argsort(time_us, kind="stable")
+    return Series(time_us[order], {n: np.asarray(v, dtype=float)[order] for n, v in columns.items()}, source)
+
+
+_INDEX = re.compile(r"\[(\d+)\]")
+
+
+def _flat(field: str) -> str:
+    """A ULog field as a column name: ``gyro_rad[0]`` -> ``gyro_rad_0``."""
+    return _INDEX.sub(r"_\1", field)
