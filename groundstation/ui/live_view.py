@@ -37,12 +37,13 @@ SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sens
 AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
 
 
-def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None) -> tuple[Curve, ...]:
-    """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others."""
+def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None, truth: bool = False) -> tuple[Curve, ...]:
+    """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others, then
+    the truth when the session has one (a SITL log's)."""
     host = tuple(Curve("imu", f"{n}_{angle}_deg", estimation.label(n), colour(n), wraps_at) for n in filters)
     onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", ONBOARD_COLOUR, wraps_at, reference=True)
-    truth = Curve("truth", f"truth_{angle}_deg", "truth", TRUTH_COLOUR, wraps_at, reference=True)  # a SITL log's
-    return host[:1] + (onboard,) + host[1:] + (truth,)
+    true = (Curve("truth", f"truth_{angle}_deg", "truth", TRUTH_COLOUR, wraps_at, reference=True),) if truth else ()
+    return host[:1] + (onboard,) + host[1:] + true
 
 
 def colour(name: str) -> str:
@@ -51,15 +52,16 @@ def colour(name: str) -> str:
     return PALETTE.get(cls.colour, "#444444") if cls else "#444444"
 
 
-def attitude_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
-    return Plot("pitch", "°", estimator_curves(filters, "pitch")), Plot("roll", "°", estimator_curves(filters, "roll"))
+def attitude_plots(filters: tuple[str, ...], truth: bool = False) -> tuple[Plot, ...]:
+    return (Plot("pitch", "°", estimator_curves(filters, "pitch", truth=truth)),
+            Plot("roll", "°", estimator_curves(filters, "roll", truth=truth)))
 
 
-def heading_plots(filters: tuple[str, ...]) -> tuple[Plot, ...]:
+def heading_plots(filters: tuple[str, ...], truth: bool = False) -> tuple[Plot, ...]:
     """Compass and GPS heading against the estimators' yaw, all 0..360°."""
     sensors = (Curve("mag", "compass_heading_deg", "compass", HEADING_COLORS["compass"], 360.0),
                Curve("gps", "gps_heading_deg", "GPS", HEADING_COLORS["GPS"], 360.0))
-    return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0)),)
+    return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0, truth)),)
 
 
 def sensor_plots(aiding: frozenset[str] = frozenset()) -> tuple[Plot, ...]:
@@ -110,11 +112,11 @@ class LiveView(QtWidgets.QWidget):
         self.tabs = QtWidgets.QTabWidget()
         self._hidden = hidden  # remembered also for labels the current session lacks
         self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
-        self._filters = ("ahf",)
+        self._curves_of = (("ahf",), False)  # the estimators, and whether a truth is plotted
         self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
         self._sensor_aiding: frozenset[str] = frozenset()
         self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
-        self.heading = self._add_tab(StackedPlots(heading_plots(self._filters), hidden), "Heading")
+        self.heading = self._add_tab(StackedPlots(heading_plots(*self._curves_of), hidden), "Heading")
         self.position = self._add_tab(PositionView(), "Position")
         self.channels = self._add_tab(ChannelsView(), "Channels")
         self.vibration = self._add_tab(VibrationView(), "Vibration")
@@ -151,14 +153,15 @@ class LiveView(QtWidgets.QWidget):
         self._view = None
         self._browsing = None
         self.series = {}
-        filters = session.view.filters if session is not None else self._filters
-        if filters != self._filters:
+        filters = session.view.filters if session is not None else self._curves_of[0]
+        shown = (filters, session is not None and "truth" in session.view.catalogue)  # the curves the plots need
+        if shown != self._curves_of:
             self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
-            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(filters), self._hidden))
-            self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(filters), self._hidden))
+            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*shown), self._hidden))
+            self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*shown), self._hidden))
             self.tabs.setCurrentIndex(current)
-            self._filters = filters
+            self._curves_of = shown
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
         self.channels.set_session(session)
