@@ -129,6 +129,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.splitter.addWidget(scroll)
         self.splitter.setStretchFactor(0, 1)
         central = QtWidgets.QWidget()
+        # A click anywhere that takes no focus itself (a tab, a panel, the background) takes it from a
+        # text field, so that Space, the arrows, Home and End are the window's again (issue 24, defect 2).
+        central.setFocusPolicy(QtCore.Qt.ClickFocus)
         layout = QtWidgets.QVBoxLayout(central)
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
@@ -314,6 +317,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.event_console.set_session(session)
         self.link_panel.refresh(session)
         self.bar.set_connected(True)
+        self.centralWidget().setFocus()  # out of the source box: the keys control the view
         self._sync_record_action()
 
     def disconnect(self) -> None:

