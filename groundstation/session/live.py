@@ -82,6 +82,7 @@ class LiveSession:
         self._last_chunk_ns = 0
         self._uplink_seq = 0
         self._config_wanted = False
+        self._reopened_as: str | None = None  # the port reopened, its data not yet back: the "reconnected" to note
         self.recorder = Recorder(
             recordings_dir if recordings_dir is not None else default_recordings_dir(),
             lambda: {  # each file's header has the settings in force when it starts
@@ -170,6 +171,9 @@ class LiveSession:
 
     def _take(self, t_host_ns: int, data: bytes) -> None:
         with self.lock:
+            if self._reopened_as is not None:  # "reconnected" when the data is back, not when the port reopened
+                self._note_locked({"kind": "reconnected", "source": self._reopened_as, "t_host_ns": t_host_ns})
+                self._reopened_as = None
             self.recorder.write_chunk(t_host_ns, data)
             if self._schedule is not None:
                 self._schedule.apply_before(self.pipeline, t_host_ns)
@@ -202,7 +206,7 @@ class LiveSession:
             except SourceError:
                 continue
             self.connected = True
-            self._note({"kind": "reconnected", "source": self.source.description})  # perhaps under a new name
+            self._reopened_as = self.source.description  # perhaps a new name; noted with the first chunk (``_take``)
             self._request_config()
             return True
         return False
@@ -265,7 +269,7 @@ class LiveSession:
     def _note_locked(self, event: dict) -> None:
         event = {"t_host_ns": self._last_chunk_ns, **event, "wall_time": time.time()}
         self.pipeline.events.append(event)
-        self.recorder.write_event(self._last_chunk_ns, event)
+        self.recorder.write_event(event["t_host_ns"], event)
 
     def _recorder_event(self, event: dict) -> None:
         """``recording_failed``/``recording_resumed``; the recorder is only called under ``lock``."""

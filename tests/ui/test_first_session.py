@@ -82,3 +82,40 @@ def test_the_keys_work_after_typing_a_source_and_clicking_around(window, qtbot):
     QtWidgets.QApplication.activePopupWidget() and qtbot.keyClick(QtWidgets.QApplication.activePopupWidget(), QtCore.Qt.Key_Escape)
     press(qtbot, window, QtCore.Qt.Key_Space)
     assert window.live_view.paused and window.live_view.window_box.currentText() == "30 s"
+
+
+@posix
+def test_reconnected_carries_the_time_the_data_came_back(window, qtbot, tmp_path):
+    """The bridge's port vanishes for 2 s every 3 s (an unplugged adapter); the Events tab's
+    "reconnected" line stands where the data resumed, not where the port was lost."""
+    from groundstation.ui.event_console import event_time_s
+
+    link = tmp_path / "radio"
+    process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "hover",
+                                "--dropout-every", "3", "--dropout-s", "2", "--link", str(link)],
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        process.stdout.readline()
+        type_in_source_box(qtbot, window, str(link))
+        for _ in range(3):  # the port may vanish between looking and pressing Return: a person presses it again
+            qtbot.waitUntil(link.exists, timeout=10000)
+            qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
+            if window.session is not None:
+                break
+        click_tab(qtbot, window.controls, window.controls.indexOf(window.event_console))
+        assert window.session is not None, window.banner.text()
+        view = window.session.view
+        kinds = lambda: [e["kind"] for e in list(view.events)]  # noqa: E731
+        qtbot.waitUntil(lambda: "reconnected" in kinds(), timeout=30000)
+        qtbot.waitUntil(lambda: window.event_console.table.rowCount() >= len(view.events), timeout=5000)
+    finally:
+        process.terminate()
+        process.wait(timeout=10)
+    events = list(view.events)
+    lost = next(e for e in events if e["kind"] == "disconnected")
+    back = next(e for e in events if e["kind"] == "reconnected")
+    gap_s = event_time_s(view, back) - event_time_s(view, lost)
+    assert 1.0 < gap_s < 4.0  # the port was gone 2 s; reopening is tried every 0.5 s
+    rows = [window.event_console.table.item(r, 1).text() for r in range(window.event_console.table.rowCount())]
+    assert "reconnected" in rows and window.event_console.times()[rows.index("reconnected")] == pytest.approx(
+        event_time_s(view, back))
