@@ -21,6 +21,7 @@ from groundstation.recording import default_recordings_dir
 from groundstation.session.playback import RevealSession
 from groundstation.session.view import Session
 from groundstation.sources import whole_file
+from groundstation.sources.sniff import as_mavlink
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import EstimatorPanel
@@ -69,6 +70,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.loading = None  # a file being computed (``sessions.load``)
         self._recomputing = False  # the loading is a what-if of the session shown: it keeps the position
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
+        self.typed_source: str | None = None  # the source string of the live session shown (Connect)
         self.bar = ConnectionBar()
         self.bar.set_recent(self.recent_sources())
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
@@ -167,7 +169,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._start(lambda: self.sessions.open(self.sessions.demo_spec, settings=self._stored_estimator_settings(),
                                                recordings_dir=self.recordings_dir).start(), note)
 
-    def connect_serial(self, port: str, baud: int = 0) -> None:
+    def connect_serial(self, port: str, baud: int = 0, note: str = "") -> None:
         """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the
         banner), at ``baud`` if it is a serial port (0: the source's default); a file typed there (a
         recording, ``mavlink:FILE.tlog``, a flight log) is opened whole."""
@@ -179,7 +181,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("baud", baud)
         rate = {"baud": baud} if baud else {}
         self._start(lambda: self.sessions.open(port, settings=self._stored_estimator_settings(),
-                                               recordings_dir=self.recordings_dir, **rate).start())
+                                               recordings_dir=self.recordings_dir, **rate).start(), note)
+        self.typed_source = port if self.session is not None else None
         if self.session is not None:
             recent = [port, *(s for s in self.recent_sources() if s != port)][:RECENT_SOURCES]
             self.settings.setValue("recent_sources", recent)
@@ -322,6 +325,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def disconnect(self) -> None:
         self.cancel_loading()
+        self.typed_source = None
         self.attitude_panel.clear()  # no attitude of a stopped session stands
         if self.session is not None:
             description = self.session.source.description
@@ -437,8 +441,19 @@ class MainWindow(QtWidgets.QMainWindow):
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
             self._sync_record_action()
+            self._follow_mavlink(session)
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")
+
+    def _follow_mavlink(self, session: Session) -> None:
+        """An autopilot's MAVLink heard on a source opened for the project's bridge (QGroundControl's habit:
+        udp://0.0.0.0:14550): the same port opened as ``mavlink:``, or the banner says how (issue 24, defect 4)."""
+        if session.heard_protocol != "mavlink" or self.typed_source is None:
+            return
+        typed, self.typed_source = self.typed_source, None  # once
+        spec = as_mavlink(typed, getattr(session.source, "baud", None))  # a port: udp, tcp or serial
+        self.bar.port_box.setEditText(spec)
+        self.connect_serial(spec, self.bar.baud, note=f"MAVLink heard on {typed}: opened as {spec}")
 
     @staticmethod
     def _recording_text(session: Session) -> str:
