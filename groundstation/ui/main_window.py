@@ -23,6 +23,7 @@ from groundstation.session.view import Session
 from groundstation.sources import whole_file
 from groundstation.sources.sniff import as_mavlink
 from groundstation.ui.attitude_indicator import AttitudePanel
+from groundstation.ui.carried_over import carried_over_note
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.event_console import EventConsole
@@ -100,6 +101,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.loading_row.hide()
         self.live_view = LiveView(self._stored_hidden_curves())
         self.live_view.channels.restore_layout(settings.value("channel_panes"))
+        self.live_view.window_box.setCurrentText(str(settings.value("time_window", self.live_view.window_box.currentText())))
         self.link_panel = LinkPanel()
         self.attitude_panel = AttitudePanel()
         self.estimator_panel = EstimatorPanel()
@@ -296,7 +298,8 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.show_error(None)
         self._adopt(session)
-        self.source_label.setText(f"{session.source.description}{'  —  ' + note if note else ''}")
+        notes = [note, "" if session.source.is_replay else carried_over_note(self._stored_estimator_settings())]
+        self.source_label.setText("  —  ".join([session.source.description, *filter(None, notes)]))
 
     def export(self) -> ExportDialog | None:
         """The export dialog on the current session's file (or the last one's), with the estimators shown."""
@@ -532,5 +535,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("splitter", self.splitter.saveState())
         self.settings.setValue("channel_panes", self.live_view.channels.layout_json())
+        self.settings.setValue("time_window", self.live_view.window_box.currentText())
         self.settings.sync()
         super().closeEvent(event)

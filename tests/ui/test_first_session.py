@@ -119,3 +119,46 @@ def test_reconnected_carries_the_time_the_data_came_back(window, qtbot, tmp_path
     rows = [window.event_console.table.item(r, 1).text() for r in range(window.event_console.table.rowCount())]
     assert "reconnected" in rows and window.event_console.times()[rows.index("reconnected")] == pytest.approx(
         event_time_s(view, back))
+
+
+def reopen(window, qtbot, tmp_path) -> MainWindow:
+    """Quit and start the app again with the same settings file."""
+    window.close()
+    again = MainWindow(window.settings, Sessions(), recordings_dir=tmp_path / "recordings")
+    qtbot.addWidget(again)
+    again.show()
+    return again
+
+
+def test_the_time_window_and_the_last_source_are_remembered(window, qtbot, tmp_path):
+    type_in_source_box(qtbot, window, "sim:?seed=9")
+    qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
+    box = window.live_view.window_box
+    qtbot.mouseClick(box, QtCore.Qt.LeftButton)
+    box.setCurrentIndex(box.findText("10 min"))  # picked from the open list
+    box.hidePopup()
+    again = reopen(window, qtbot, tmp_path)
+    assert again.live_view.window_box.currentText() == "10 min"
+    assert again.bar.source == "sim:?seed=9"
+
+
+def test_tuning_carried_into_the_next_live_session_is_said(window, qtbot, tmp_path):
+    from groundstation.estimation import ESTIMATORS
+
+    default_min = ESTIMATORS["ahf"].Settings().lambda_min
+    window.start_demo()
+    assert "tuning" not in window.source_label.text()  # from the defaults: nothing to say
+    click_tab(qtbot, window.controls, window.controls.indexOf(window.estimator_panel))
+    field = window.estimator_panel.boxes["ahf", "lambda_min"]
+    field.lineEdit().selectAll()
+    qtbot.keyClicks(field.lineEdit(), f"{default_min + 0.05:.3f}")
+    apply_button = next(b for b in window.estimator_panel.findChildren(QtWidgets.QPushButton) if b.text() == "Apply")
+    qtbot.mouseClick(apply_button, QtCore.Qt.LeftButton)
+    again = reopen(window, qtbot, tmp_path)
+    again.start_demo()
+    assert f"AHF λ min {default_min + 0.05:g} rad/s" in again.source_label.text()
+    assert again.session.view.settings()["ahf"]["lambda_min"] == pytest.approx(default_min + 0.05)
+    again.estimator_panel.restore_defaults()
+    again.disconnect()
+    again.start_demo()
+    assert "tuning" not in again.source_label.text()
