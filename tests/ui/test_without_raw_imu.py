@@ -24,6 +24,15 @@ def right_edge_s(window) -> float:
     return window.live_view.attitude.items[0].getViewBox().viewRange()[0][1]
 
 
+def badge_over(qtbot, window, seconds: float) -> set[str]:
+    """Every text the link badge showed over ``seconds``, read as the window shows it (5 times a second)."""
+    headlines = set()
+    for _ in range(int(seconds * 5)):
+        qtbot.wait(200)
+        headlines.add(window.link_panel.headline.text())
+    return headlines
+
+
 def test_estimated_mode_keeps_the_view_moving_on_the_onboard_estimate(window, qtbot):
     window.start_demo()
     session = window.session
@@ -63,10 +72,7 @@ def test_a_4_hz_autopilot_shows_its_own_estimate_as_the_attitude_and_its_link_st
     qtbot.mouseClick(window.uplink_panel.streams_button, QtCore.Qt.LeftButton)
     session = window.session
     qtbot.waitUntil(lambda: len(session.view.imu) > 30, timeout=30000)
-    headlines = set()
-    for _ in range(40):  # 8 s of the badge, read as the window shows it
-        qtbot.wait(200)
-        headlines.add(window.link_panel.headline.text())
+    headlines = badge_over(qtbot, window, 8.0)
     assert window.attitude_panel.title().startswith("Attitude (onboard — IMU at 4 Hz")
     assert headlines == {"LINK OK"}
 
@@ -77,9 +83,5 @@ def test_a_healthy_4_hz_bridge_keeps_its_badge_ok_and_shows_the_onboard_attitude
     qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
     session = window.session
     qtbot.waitUntil(lambda: len(session.view.imu) > 8, timeout=15000)
-    headlines = set()
-    for _ in range(30):  # 6 s of the badge, read as the window shows it
-        qtbot.wait(200)
-        headlines.add(window.link_panel.headline.text())
-    assert headlines == {"LINK OK"}
+    assert badge_over(qtbot, window, 6.0) == {"LINK OK"}
     assert window.attitude_panel.title() == "Attitude (onboard — IMU at 4 Hz)"
