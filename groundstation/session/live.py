@@ -18,6 +18,7 @@ from groundstation.recording import Recorder, default_recordings_dir
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import SettingsSchedule
 from groundstation.sources.base import Source, SourceClosed, SourceError
+from groundstation.sources.sniff import ForeignBytes
 
 RECONNECT_INTERVAL_S = 0.5
 COMMANDS = SPEC.enums["command"].values
@@ -83,6 +84,9 @@ class LiveSession:
         self._last_chunk_ns = 0
         self._uplink_seq = 0
         self._config_wanted = False
+        # Until a frame of the project's protocol decodes, what the bytes are instead (MAVLink?): ``heard_protocol``.
+        self._foreign = ForeignBytes() if pipeline.protocol == "gs" else None
+        self._reopened_as: str | None = None  # the port reopened, its data not yet back: the "reconnected" to note
         self.recorder = Recorder(
             recordings_dir if recordings_dir is not None else default_recordings_dir(),
             lambda: {  # each file's header has the settings in force when it starts
@@ -129,6 +133,13 @@ class LiveSession:
     def advance(self) -> None:
         """Nothing to move: the reader thread brings the rows."""
 
+    @property
+    def heard_protocol(self) -> str | None:
+        """"mavlink" when a session opened for the project's bridge hears an autopilot's MAVLink instead
+        (its bytes, or a UDP source's refused datagrams); None while its own frames decode or nothing is known."""
+        foreign = self._foreign
+        return foreign.protocol(bytes(getattr(self.source, "refused", b""))) if foreign is not None else None
+
     def seek(self, t_s: float) -> bool:
         return False
 
@@ -171,11 +182,19 @@ class LiveSession:
 
     def _take(self, t_host_ns: int, data: bytes) -> None:
         with self.lock:
+            if self._reopened_as is not None:  # "reconnected" when the data is back, not when the port reopened
+                self._note_locked({"kind": "reconnected", "source": self._reopened_as, "t_host_ns": t_host_ns})
+                self._reopened_as = None
             self.recorder.write_chunk(t_host_ns, data)
             if self._schedule is not None:
                 self._schedule.apply_before(self.pipeline, t_host_ns)
             self.pipeline.feed(t_host_ns, data)
             self._last_chunk_ns = t_host_ns
+            if self._foreign is not None:
+                if self.pipeline.decoder.stats.frames:
+                    self._foreign = None  # the project's own frames: nothing to guess
+                else:
+                    self._foreign.add(data)
             uplink = self.pipeline.take_uplink()  # MAVLink stream-rate requests: nothing that arms or moves it
         if uplink and self.source.can_send:
             self._send(uplink)
@@ -203,7 +222,7 @@ class LiveSession:
             except SourceError:
                 continue
             self.connected = True
-            self._note({"kind": "reconnected", "source": self.source.description})  # perhaps under a new name
+            self._reopened_as = self.source.description  # perhaps a new name; noted with the first chunk (``_take``)
             self._request_config()
             return True
         return False
@@ -266,7 +285,7 @@ class LiveSession:
     def _note_locked(self, event: dict) -> None:
         event = {"t_host_ns": self._last_chunk_ns, **event, "wall_time": time.time()}
         self.pipeline.events.append(event)
-        self.recorder.write_event(self._last_chunk_ns, event)
+        self.recorder.write_event(event["t_host_ns"], event)
 
     def _recorder_event(self, event: dict) -> None:
         """``recording_failed``/``recording_resumed``; the recorder is only called under ``lock``."""

@@ -251,6 +251,7 @@ class RevealSession:
     ``seek`` says whether the clock went back, so that views which only ever add rows start over."""
 
     seekable = True
+    heard_protocol = None  # a file is decoded as what it is
 
     def __init__(self, data: SessionData, path, setup: tuple = (None, None), *, speed: float = 1.0,
                  paused: bool = False, position_s: float = 0.0):

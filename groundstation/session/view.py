@@ -68,6 +68,7 @@ class Session(Protocol):
     recorder: object | None
     seekable: bool
     setup: tuple
+    heard_protocol: str | None  # "mavlink": a source opened for the project's bridge hears an autopilot instead
 
     @property
     def running(self) -> bool: ...

@@ -21,6 +21,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from groundstation.sources.base import Chunk, SourceError
+from groundstation.sources.sniff import SNIFF_BYTES
 from groundstation.sources.spec import Spec
 
 READ_TIMEOUT_S = 0.05
@@ -68,6 +69,7 @@ class UdpSource:
         self._remote = remote and _resolve(*remote, self.description)
         self._peer = self._remote
         self.ignored = Ignored()
+        self.refused = bytearray()  # the first datagrams refused before a sender was locked: what do they speak (``sniff``)?
         self._held: list[bytes] = []
         self._lock = threading.Lock()
         self._socket = self._bind()
@@ -103,6 +105,8 @@ class UdpSource:
             first = self._peer is None
             if first and data and self._admits(data):
                 self._peer = sender
+            elif first and len(self.refused) < SNIFF_BYTES:
+                self.refused += data[: SNIFF_BYTES - len(self.refused)]
             if sender != self._peer:
                 self.ignored.add(sender)
                 return None

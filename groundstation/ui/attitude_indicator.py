@@ -21,6 +21,7 @@ from groundstation.session.estimators import RECONVERGE_S
 from groundstation.session.view import Session
 from groundstation.ui.attitude_3d import AttitudeView3D
 from groundstation.ui.navigation import heading_now
+from groundstation.ui.sample_streams import headline
 
 SKY, GROUND, LINE = QtGui.QColor("#3a7bd5"), QtGui.QColor("#8b5a2b"), QtGui.QColor("white")
 VISIBLE_PITCH_DEG = 30.0  # from the centre to the top edge
@@ -113,14 +114,14 @@ class AttitudePanel(QtWidgets.QGroupBox):
         layout.addLayout(numbers)
 
     def show_session(self, session: Session, body: bool = True) -> None:
-        """The newest estimate of ``session``'s first estimator, the one shown first (AHF2 in the app's
-        sessions; a recording's own first otherwise); ``body``: the 3D view too."""
-        filters = session.view.filters
-        name = filters[0] if filters else "onboard"  # a log with the aircraft's estimate only
-        self.setTitle(f"Attitude ({name.upper()})")
+        """The newest estimate of the one ``sample_streams.headline`` names: the session's first estimator
+        (AHF2 in the app's sessions; a recording's own first otherwise), or the aircraft's own when there is
+        no raw IMU or it is too slow for host filtering (the title says why); ``body``: the 3D view too."""
+        name, why = headline(session.view)
+        self.setTitle(f"Attitude ({name.upper() if name != 'onboard' else 'onboard'}{' — ' + why if why else ''})")
         heading = heading_now(session.view)
         self.readouts["heading"].setText("—" if heading is None else f"{heading[0]:5.1f}° {heading[1]}")
-        table, prefix = (session.view.imu, f"{name}_q") if filters else (session.view.onboard, "q")
+        table, prefix = (session.view.onboard, "q") if name == "onboard" else (session.view.imu, f"{name}_q")
         last = table.tail(1)
         if not len(last):
             return

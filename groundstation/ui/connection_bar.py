@@ -141,7 +141,8 @@ class ConnectionBar(QtWidgets.QWidget):
         self._enable_connect()
 
     def _enable_connect(self) -> None:
-        self.connect_button.setEnabled(not self.disconnect_button.isEnabled() and bool(self.source))
+        # Also while a session runs: Connect (or Return) switches to the source typed (issue 24, defect 1).
+        self.connect_button.setEnabled(bool(self.source))
 
     def _connect(self) -> None:
         if self.connect_button.isEnabled():

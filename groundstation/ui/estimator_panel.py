@@ -67,7 +67,8 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.message.clear()
         while self._shown_row.count():
             box = self._shown_row.takeAt(0).widget()
-            box.setParent(None)  # off the panel now: deleteLater waits for the outermost event loop
+            box.hide()  # off the panel now: deleteLater waits for the outermost event loop, and a box
+            box.setParent(self)  # made a window of its own (setParent(None)) took the keyboard from the window
             box.deleteLater()
         self.shown = {}
         if session is None:

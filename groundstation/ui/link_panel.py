@@ -14,8 +14,10 @@ import time
 from PySide6 import QtWidgets
 
 from groundstation.session.view import Session
+from groundstation.ui.sample_streams import stream_interval_s
 
 LATE_FRAME_S = 0.25  # 25 samples missing at 100 Hz
+LATE_INTERVALS = 3  # a slower stream (an autopilot's 4 Hz) is late after three of its own intervals (issue 24, defect 6)
 NO_DATA_S = 1.0
 DEGRADED_LOSS_PCT = 2.0
 STYLES = {
@@ -56,8 +58,15 @@ def link_figures(session: Session, now_ns: int) -> dict[str, float]:
         "crc_total": counters["crc_errors"],
         "lost_total": counters["frames_lost"],
         "since_last_frame_s": link.since_last_frame_s(now_ns),
+        "late_after_s": late_after_s(stream_interval_s(session.view)),
         **clock,
     }
+
+
+def late_after_s(interval_s: float) -> float:
+    """How long without a frame makes the link late: ``LATE_FRAME_S``, or ``LATE_INTERVALS`` of the
+    samples' own interval on a slower stream (NaN: not known yet)."""
+    return LATE_INTERVALS * interval_s if LATE_INTERVALS * interval_s > LATE_FRAME_S else LATE_FRAME_S
 
 
 def link_state(session: Session, figures: dict[str, float]) -> tuple[str, str]:
@@ -69,7 +78,7 @@ def link_state(session: Session, figures: dict[str, float]) -> tuple[str, str]:
     since = figures["since_last_frame_s"]
     if since >= NO_DATA_S:
         return "down", "NO DATA" if math.isinf(since) else f"NO DATA for {since:.0f} s"
-    if since >= LATE_FRAME_S or figures["loss_pct"] >= DEGRADED_LOSS_PCT or figures["crc_per_s"] > 0:
+    if since >= figures["late_after_s"] or figures["loss_pct"] >= DEGRADED_LOSS_PCT or figures["crc_per_s"] > 0:
         return "degraded", "DEGRADED"
     return "ok", "LINK OK"
 

@@ -20,7 +20,7 @@ from groundstation.ui.channels import ChannelsView
 from groundstation.ui.mode_bands import ModeBands
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
-from groundstation.ui.series import Series, imu_quantities, onboard_quantities, truth_quantities
+from groundstation.ui.series import Series, clock_series, imu_quantities, onboard_quantities, truth_quantities
 from groundstation.ui.vibration_view import VibrationView
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
@@ -220,15 +220,15 @@ class LiveView(QtWidgets.QWidget):
     def _browse(self, new_range) -> None:
         """Pause, draw every sample once (the live draw holds only the window's), set the time range."""
         plots = self.current_plots()
-        imu = self.series.get("imu")
-        if not isinstance(plots, (StackedPlots, ChannelsView)) or imu is None or imu.end_s is None:
+        clock = clock_series(self.series)
+        if not isinstance(plots, (StackedPlots, ChannelsView)) or clock is None:
             return
         low, high = plots.items[0].getViewBox().viewRange()[0]
         self.pause_button.setChecked(True)
         if self._browsing is not plots:
             plots.draw(self.series, None, None)
             self._browsing = plots
-        plots.items[0].setXRange(*new_range(low, high, imu.start_s), padding=0)
+        plots.items[0].setXRange(*new_range(low, high, clock.start_s), padding=0)
 
     def refresh(self) -> bool:
         """Take the new rows; redraw the visible plots if anything grew. True when it drew."""

@@ -21,7 +21,9 @@ from groundstation.recording import default_recordings_dir
 from groundstation.session.playback import RevealSession
 from groundstation.session.view import Session
 from groundstation.sources import whole_file
+from groundstation.sources.sniff import as_mavlink
 from groundstation.ui.attitude_indicator import AttitudePanel
+from groundstation.ui.carried_over import carried_over_note
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.event_console import EventConsole
@@ -72,6 +74,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.loading = None  # a file being computed (``sessions.load``)
         self._recomputing = False  # the loading is a what-if of the session shown: it keeps the position
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
+        self.typed_source: str | None = None  # the source string of the live session shown (Connect)
         self.bar = ConnectionBar()
         self.bar.set_recent(self.recent_sources())
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
@@ -101,6 +104,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.loading_row.hide()
         self.live_view = LiveView(self._stored_hidden_curves())
         self.live_view.channels.restore_layout(settings.value("channel_panes"))
+        self.live_view.window_box.setCurrentText(str(settings.value("time_window", self.live_view.window_box.currentText())))
         self.link_panel = LinkPanel()
         self.attitude_panel = AttitudePanel()
         self.estimator_panel = EstimatorPanel()
@@ -134,6 +138,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.splitter.addWidget(scroll)
         self.splitter.setStretchFactor(0, 1)
         central = QtWidgets.QWidget()
+        # A click anywhere that takes no focus itself (a tab, a panel, the background) takes it from a
+        # text field, so that Space, the arrows, Home and End are the window's again (issue 24, defect 2).
+        central.setFocusPolicy(QtCore.Qt.ClickFocus)
         layout = QtWidgets.QVBoxLayout(central)
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
@@ -174,7 +181,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._start(lambda: self.sessions.open(self.sessions.demo_spec, settings=self._stored_estimator_settings(),
                                                recordings_dir=self.recordings_dir).start(), note)
 
-    def connect_serial(self, port: str, baud: int = 0) -> None:
+    def connect_serial(self, port: str, baud: int = 0, note: str = "") -> None:
         """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the
         banner), at ``baud`` if it is a serial port (0: the source's default); a file typed there (a
         recording, ``mavlink:FILE.tlog``, a flight log) is opened whole."""
@@ -186,7 +193,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("baud", baud)
         rate = {"baud": baud} if baud else {}
         self._start(lambda: self.sessions.open(port, settings=self._stored_estimator_settings(),
-                                               recordings_dir=self.recordings_dir, **rate).start())
+                                               recordings_dir=self.recordings_dir, **rate).start(), note)
+        self.typed_source = port if self.session is not None else None
         if self.session is not None:
             recent = [port, *(s for s in self.recent_sources() if s != port)][:RECENT_SOURCES]
             self.settings.setValue("recent_sources", recent)
@@ -300,7 +308,8 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.show_error(None)
         self._adopt(session)
-        self.source_label.setText(f"{session.source.description}{'  —  ' + note if note else ''}")
+        notes = [note, "" if session.source.is_replay else carried_over_note(self._stored_estimator_settings())]
+        self.source_label.setText("  —  ".join([session.source.description, *filter(None, notes)]))
 
     def export(self) -> ExportDialog | None:
         """The export dialog on the current session's file (or the last one's), with the estimators shown."""
@@ -325,11 +334,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.parameters_view.set_session(session)
         self.link_panel.refresh(session)
         self.bar.set_connected(True)
+        self.centralWidget().setFocus()  # out of the source box: the keys control the view
         self._sync_record_action()
         self.foxglove.follow(session)
 
     def disconnect(self) -> None:
         self.cancel_loading()
+        self.typed_source = None
         self.attitude_panel.clear()  # no attitude of a stopped session stands
         if self.session is not None:
             description = self.session.source.description
@@ -459,8 +470,19 @@ class MainWindow(QtWidgets.QMainWindow):
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
             self._sync_record_action()
+            self._follow_mavlink(session)
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")
+
+    def _follow_mavlink(self, session: Session) -> None:
+        """An autopilot's MAVLink heard on a source opened for the project's bridge (QGroundControl's habit:
+        udp://0.0.0.0:14550): the same port opened as ``mavlink:``, or the banner says how (issue 24, defect 4)."""
+        if session.heard_protocol != "mavlink" or self.typed_source is None:
+            return
+        typed, self.typed_source = self.typed_source, None  # once
+        spec = as_mavlink(typed, getattr(session.source, "baud", None))  # a port: udp, tcp or serial
+        self.bar.port_box.setEditText(spec)
+        self.connect_serial(spec, self.bar.baud, note=f"MAVLink heard on {typed}: opened as {spec}")
 
     @staticmethod
     def _recording_text(session: Session) -> str:
@@ -539,5 +561,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("splitter", self.splitter.saveState())
         self.settings.setValue("channel_panes", self.live_view.channels.layout_json())
+        self.settings.setValue("time_window", self.live_view.window_box.currentText())
         self.settings.sync()
         super().closeEvent(event)

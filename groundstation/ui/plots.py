@@ -26,7 +26,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from groundstation.ui.series import Series
+from groundstation.ui.series import Series, clock_series, shared_gaps
 
 # Paul Tol's "muted" palette (nine colours told apart by colour-blind readers and on white), with black
 # and the orange of his "vibrant" palette, which differs from all nine: eleven curves. By Tol's names,
@@ -167,7 +167,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._stale = True  # a curve was switched on: it needs its data even if nothing grew
         self._series: dict[str, Series] = {}  # as last drawn, for the crosshair
         self._specs = plots
-        self._gaps_drawn = 0
+        self._gaps_drawn: set[tuple[float, float]] = set()
         self.curves: list[tuple[Curve, pg.PlotDataItem]] = []
         self.older: list[pg.PlotDataItem] = []  # each curve's binned history (``Series.older``)
         self._older_drawn: list[tuple | None] = []
@@ -279,25 +279,25 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         for item in self.items:
             for region in [i for i in item.items if isinstance(i, pg.LinearRegionItem)]:
                 item.removeItem(region)
-        self._gaps_drawn = 0
+        self._gaps_drawn: set[tuple[float, float]] = set()
 
     def _mark_gaps(self, gaps: list[tuple[float, float]]) -> None:
         """Shade the time with no samples (port gone, radio lost), once per gap."""
-        for start, end in gaps[self._gaps_drawn :]:
+        for start, end in [g for g in gaps if g not in self._gaps_drawn]:
             for item in self.items:
                 region = pg.LinearRegionItem((start, end), movable=False, brush=GAP_BRUSH, pen=pg.mkPen(None))
                 region.setZValue(-10)
                 item.addItem(region, ignoreBounds=True)
-        self._gaps_drawn = len(gaps)
+        self._gaps_drawn.update(gaps)
 
     def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None) -> None:
         """Update the visible curves whose series grew (all of them when ``grew`` is None) and
         follow the newest ``window_s`` seconds (the whole session when None)."""
         everything, self._stale = grew is None or self._stale, False
-        imu = series.get("imu")
-        if imu is not None and imu.end_s is not None:
-            self._mark_gaps(imu.gaps)
-            everything |= self._follow_time(imu, window_s)  # the time axis moved: every plot is repainted anyway
+        clock = clock_series(series)
+        if clock is not None:
+            self._mark_gaps(shared_gaps(series))
+            everything |= self._follow_time(clock, window_s)  # the time axis moved: every plot is repainted anyway
         for i, (spec, curve) in enumerate(self.curves):
             grown = everything or spec.series in grew
             if not curve.isVisible() or not (grown or self._heads_of[i].has(i)):
@@ -315,7 +315,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 self.older[i].setData(t, older, **spec.connect(older))
                 self._older_drawn[i] = key
         self._series = series
-        if imu is not None and imu.end_s is not None:
+        if clock is not None:
             for item, heads in zip(self.items, self.heads):
                 self._fit_values(item, heads)
         for heads in self.heads:
@@ -334,10 +334,10 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._curve_end[i] = (series, float(t[-1])) if len(t) else None
         self._heads_of[i].drop(i)
 
-    def _follow_time(self, imu: Series, window_s: float | None) -> bool:
+    def _follow_time(self, clock: Series, window_s: float | None) -> bool:
         """Step the time axis along; a window longer than the session shows it from 0 until full.
         True when it moved."""
-        first, end = imu.start_s, imu.end_s
+        first, end = clock.start_s, clock.end_s
         span = end - first if window_s is None else window_s
         step = 2.0 ** math.ceil(math.log2(max(span, 1.0) / FOLLOW_STEPS))
         right = math.ceil(end / step + 1e-9) * step

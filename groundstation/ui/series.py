@@ -81,10 +81,17 @@ class Series:
             return 0
         time_s = rows[:, self.table.columns.index("time_s")]
         edges = time_s if self.end_s is None else np.concatenate(([self.end_s], time_s))
-        self.gaps += [(float(edges[i]), float(edges[i + 1])) for i in np.flatnonzero(np.diff(edges) > GAP_S)]
-        if self.recent.count + new > self.recent.capacity:
+        before = np.flatnonzero(np.diff(edges) > GAP_S)  # the gaps: between edges[i] and edges[i + 1]
+        self.gaps += [(float(edges[i]), float(edges[i + 1])) for i in before]
+        values = self._derive(rows, self.table.columns)
+        if len(before):  # a NaN row in the middle of each gap: no curve draws a line across it
+            at = before if self.end_s is not None else before + 1  # the row of ``time_s`` after the gap
+            mid_s = (edges[before] + edges[before + 1]) / 2
+            time_s = np.insert(time_s, at, mid_s)
+            values = {name: np.insert(column.astype(np.float32), at, np.nan) for name, column in values.items()}
+        if self.recent.count + len(time_s) > self.recent.capacity:
             self._bin_old_rows()
-        self.recent.append(time_s, self._derive(rows, self.table.columns))
+        self.recent.append(time_s, values)
         self.taken += new
         return new
 
@@ -150,6 +157,25 @@ class Series:
 
     def nbytes(self) -> int:
         return sum(c.time_s.nbytes + sum(v.nbytes for v in c.values.values()) for c in (self.recent, self.history))
+
+
+def clock_series(series: dict[str, Series]) -> Series | None:
+    """The sample series that carries the time axis: the raw IMU's, or the aircraft's own estimate's
+    when its samples are newer (the firmware's "estimated" mode sends no raw IMU); None before any sample."""
+    candidates = [s for s in (series.get("imu"), series.get("onboard")) if s is not None and s.end_s is not None]
+    return max(candidates, key=lambda s: s.end_s, default=None)
+
+
+def shared_gaps(series: dict[str, Series]) -> list[tuple[float, float]]:
+    """The stretches in which neither sample series ("imu", "onboard") had a sample: a series that never
+    had one leaves the other's gaps as they are."""
+    spans = [s.gaps for s in (series.get("imu"), series.get("onboard")) if s is not None and s.end_s is not None]
+    if not spans:
+        return []
+    shared = spans[0]
+    for gaps in spans[1:]:
+        shared = [(max(a0, b0), min(a1, b1)) for a0, a1 in shared for b0, b1 in gaps if max(a0, b0) < min(a1, b1)]
+    return shared
 
 
 def attitude_deg(prefix: str, q: np.ndarray) -> dict[str, np.ndarray]:

@@ -1,0 +1,59 @@
+"""Which sample stream carries the view, and at what rate; no Qt.
+
+A session's samples come as raw IMU (``imu``: the host estimators) and as the aircraft's own estimate
+(``onboard``). The firmware's "estimated" mode sends only the latter, and an autopilot on a slow link
+(RAW_IMU at 2-4 Hz) sends the IMU too slowly for host filtering (``autopilot.streams.MIN_FILTER_RATE_HZ``):
+then the onboard estimate is the one to show as the attitude (issue 24, defects 3 and 5), and the plots
+follow its time. The link's lateness is measured against the same streams' own rate (defect 6).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ
+from groundstation.session.view import ProductView
+from groundstation.ui.series import GAP_S
+
+RATE_ROWS = 20  # the newest rows a stream's rate is the median interval of
+
+
+def newest_time_s(table) -> float | None:
+    last = table.tail(1)
+    return float(last[0][table.columns.index("time_s")]) if len(last) else None
+
+
+def interval_s(table) -> float:
+    """The median interval of the newest samples of ``table`` (session time); NaN with fewer than 3."""
+    rows = table.tail(RATE_ROWS)
+    if len(rows) < 3:
+        return math.nan
+    steps = np.diff(rows[:, table.columns.index("time_s")])
+    steps = steps[np.isfinite(steps) & (steps > 0)]
+    return float(np.median(steps)) if len(steps) else math.nan
+
+
+def stream_interval_s(view: ProductView) -> float:
+    """The sample interval of the stream that carries the view now (``headline``): NaN when unknown."""
+    return interval_s(view.onboard if headline(view)[0] == "onboard" else view.imu)
+
+
+def headline(view: ProductView) -> tuple[str, str]:
+    """(estimate, why): the estimate to show as the attitude: the first host estimator (AHF2 in the app),
+    or "onboard" with the reason, when the session has no host estimator, when the raw IMU stopped while
+    the aircraft's estimate goes on ("estimated" mode), or when the IMU is too slow for host filtering."""
+    filters = view.filters
+    onboard_s = newest_time_s(view.onboard)
+    if onboard_s is None:
+        return (filters[0], "") if filters else ("onboard", "")
+    if not filters:
+        return "onboard", ""
+    imu_s = newest_time_s(view.imu)
+    if imu_s is None or onboard_s - imu_s > GAP_S:
+        return "onboard", "no raw IMU"
+    rate_hz = 1.0 / interval_s(view.imu)
+    if rate_hz < MIN_FILTER_RATE_HZ:  # NaN (too few samples yet) compares False
+        return "onboard", f"IMU at {rate_hz:.0f} Hz"
+    return filters[0], ""
