@@ -149,6 +149,13 @@ class Topics:
                 count += 1
         return count
 
+    def parameters(self, parameters: dict[str, float]) -> int:
+        """The autopilot's parameters (name -> value) as one message on ``/parameters`` at session time 0."""
+        schema = {"type": "object", "title": "parameters", "additionalProperties": {"type": ["number", "null"]}}
+        values = {name: (v if math.isfinite(v) else None) for name, v in parameters.items()}
+        self._channel("/parameters", schema).log(json.dumps(values).encode(), log_time=self.origin)
+        return 1
+
     def events(self, events: Iterable[dict], times_s: Iterable[float]) -> int:
         """Each event as a Foxglove ``Log`` on ``/events`` at its session time: its message (or its
         fields) as text, its kind as the name, a level from the kind."""

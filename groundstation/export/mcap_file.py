@@ -39,6 +39,9 @@ def write_mcap(data: SessionData, path, overwrite: bool = False, t_from: float |
             count = 0
             for name, columns in data.tables.items():
                 count += topics.rows(name, columns, in_range(columns["time_s"], t_from, t_to))
+            if data.parameters:  # the autopilot's parameters (last values; their changes are /events)
+                writer.write_metadata("parameters", {name: repr(value) for name, value in data.parameters.items()})
+                count += topics.parameters(data.parameters)
             times = np.array([event_time_s(e) for e in data.events])
             chosen = in_range(times, t_from, t_to)
             count += topics.events([data.events[i] for i in chosen], times[chosen])

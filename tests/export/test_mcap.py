@@ -131,3 +131,18 @@ def test_cli_exports_a_flight_log_and_refuses_cleanly(tmp_path):
                            capture_output=True, text=True, timeout=300)
     assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
     assert len(again.stderr.strip().splitlines()) == 1
+
+
+def test_an_autopilot_logs_parameters(tmp_path):
+    from tests.export.conftest import DATASETS
+    log = DATASETS / "flightlogs" / "px4_fmuv5_quad_hop.ulg"
+    if not log.exists():
+        pytest.skip("flight logs not found")
+    session = load_session(log, ["ahf"])
+    assert session.parameters
+    write_mcap(session, tmp_path / "hop.mcap")
+    (_, values), = read_mcap(tmp_path / "hop.mcap")["/parameters"]
+    assert values == {k: (v if math.isfinite(v) else None) for k, v in session.parameters.items()}
+    with open(tmp_path / "hop.mcap", "rb") as stream:
+        metadata = {m.name: m.metadata for m in make_reader(stream).iter_metadata()}
+    assert float(metadata["parameters"]["MC_ROLL_P"]) == session.parameters["MC_ROLL_P"]
