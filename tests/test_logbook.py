@@ -66,6 +66,10 @@ def test_a_row_per_log_and_estimator_as_each_log_alone(folder, local):
     for name, figures in truth.items():
         assert scored.loc[name, "incl_rmse_deg"] == figures["incl_rmse_deg"]
     assert mine["duration_s"].iloc[0] == pytest.approx(hop.time_s[-1] - hop.time_s[0])
+    from groundstation.analysis.vibration import vibration_summary
+    vibration = vibration_summary(hop)
+    assert mine["vibration_accel_m_s2"].iloc[0] == max(vibration.levels["accel"].values())
+    assert mine["vibration_source"].iloc[0] == vibration.source
     no_imu = logs[logs["path"] == CHOSEN[1]]
     assert len(no_imu) == 1 and no_imu["estimator"].isna().all() and no_imu["error"].isna().all()
     cut = logs[logs["path"] == "cut.bin"]

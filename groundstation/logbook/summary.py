@@ -21,6 +21,9 @@ LOG_COLUMNS = {
     "log_id": "string", "path": "string", "format": "string", "vehicle": "string", "firmware": "string",
     "duration_s": "double", "samples": "int64", "imu_rate_hz": "double", "link_loss_pct": "double",
     "warnings": "string", "error": "string",
+    # the vibration view's figures over the whole log (analysis.vibration): RMS above 5 Hz, the strongest peak
+    "vibration_accel_m_s2": "double", "vibration_gyro_deg_s": "double", "vibration_peak_hz": "double",
+    "vibration_source": "string",
     "estimator": "string", "reference": "string",  # reference: "truth", "onboard" or null (nothing to compare with)
     "incl_rmse_deg": "double", "incl_max_deg": "double", "heading_rmse_deg": "double", "heading_max_deg": "double",
     "pitch_rms_deg": "double", "pitch_max_deg": "double", "roll_rms_deg": "double", "roll_max_deg": "double",
@@ -85,6 +88,7 @@ def summarise(path, root, out, filters=None) -> list[dict]:
                   duration_s=float(time_s[-1] - time_s[0]) if len(time_s) > 1 else 0.0,
                   imu_rate_hz=imu_rate_hz(data), link_loss_pct=link_loss_pct(data),
                   warnings="\n".join(data.warnings) or None)
+    fields.update(vibration_fields(data))
     write_tables(data, out / "tables", fields["log_id"])
     rows = []
     if data.true_q is not None:
@@ -97,6 +101,22 @@ def summarise(path, root, out, filters=None) -> list[dict]:
     else:
         rows.extend({**fields, "estimator": name} for name in data.estimated)
     return rows or [fields]
+
+
+def vibration_fields(data) -> dict:
+    """The log's vibration level (the largest axis' RMS above the cut-off, per sensor), its strongest peak
+    and the table it was read from; empty when the log has too little IMU for a spectrum."""
+    from groundstation.analysis.vibration import VibrationError, vibration_summary
+
+    try:
+        summary = vibration_summary(data)
+    except VibrationError:
+        return {}
+    levels = {sensor: max((v for v in axes.values() if v is not None), default=None)
+              for sensor, axes in summary.levels.items()}
+    strongest = max(summary.peaks, key=lambda p: p.amplitude, default=None)
+    return {"vibration_accel_m_s2": levels.get("accel"), "vibration_gyro_deg_s": levels.get("gyro"),
+            "vibration_peak_hz": strongest.frequency_hz if strongest else None, "vibration_source": summary.source}
 
 
 def imu_rate_hz(data) -> float:
