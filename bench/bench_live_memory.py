@@ -18,9 +18,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import queue
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -121,16 +123,26 @@ def main() -> None:
         child(args.child, minutes, filters)
         return
     print(f"{', '.join(filters)}; checkpoints at {args.minutes} simulated minutes of 100 Hz frames")
-    for kind in ("baseline", "bounded"):
-        run = subprocess.run([sys.executable, __file__, "--child", kind, "--minutes", args.minutes, "--filters", args.filters],
-                             capture_output=True, text=True, check=True)
-        rows = [json.loads(line) for line in run.stdout.splitlines() if line.startswith("{")]
-        first = rows[0]
-        for row in rows:
-            print(f"{kind:8s} {row['minutes']:6.1f} min ({row['rows']:7d} IMU rows, {row['imu_columns']} columns, "
-                  f"{row['wall_s']:5.0f} s wall): RSS {row['rss_mb']:6.1f} MB (+{row['rss_mb'] - first['rss_mb']:5.1f}), "
-                  f"tables {row['tables_mb']:6.1f} MB, plot buffers {row['plots_mb']:5.1f} MB")
-
+    # Both runs at once, each line printed as it comes (on a loaded machine an hour takes a while).
+    runs = {kind: subprocess.Popen([sys.executable, __file__, "--child", kind, "--minutes", args.minutes, "--filters", args.filters],
+                                   stdout=subprocess.PIPE, text=True) for kind in ("baseline", "bounded")}
+    first: dict[str, dict] = {}
+    lines = queue.Queue()
+    for kind, run in runs.items():
+        threading.Thread(target=lambda run=run: [lines.put(line) for line in run.stdout] + [lines.put(None)], daemon=True).start()
+    ended = 0
+    while ended < len(runs):
+        line = lines.get()
+        if line is None:
+            ended += 1
+            continue
+        if not line.startswith("{"):
+            continue
+        row = json.loads(line)
+        start = first.setdefault(row["kind"], row)
+        print(f"{row['kind']:8s} {row['minutes']:6.1f} min ({row['rows']:7d} IMU rows, {row['imu_columns']} columns, "
+              f"{row['wall_s']:5.0f} s wall): RSS {row['rss_mb']:6.1f} MB (+{row['rss_mb'] - start['rss_mb']:5.1f}), "
+              f"tables {row['tables_mb']:6.1f} MB, plot buffers {row['plots_mb']:5.1f} MB", flush=True)
 
 if __name__ == "__main__":
     main()

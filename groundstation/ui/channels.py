@@ -143,9 +143,11 @@ class XYPlots(pg.GraphicsLayoutWidget):
             if sx is None or sy is None or not (sx.has(qx) and sy.has(qy)):
                 continue
             t, xs = sx.data(qx, window_s)
-            ty, ys = sy.data(qy, None if window_s is None else window_s + 60.0)  # and the row before the window
-            curve.setData(np.asarray(xs, dtype=float), ys.astype(float) if sy is sx else at_or_before(t, ty, ys),
-                          connect="finite")
+            if sy is sx:
+                ys = sy.data(qy, window_s)[1].astype(float)
+            else:
+                ys = at_or_before(t, *sy.data(qy, None if window_s is None else window_s + 60.0))  # and the row before
+            curve.setData(np.asarray(xs, dtype=float), ys, connect="finite")
 
 
 class CustomSeriesDialog(QtWidgets.QDialog):

@@ -119,13 +119,20 @@ def test_an_xy_plot_draws_east_against_north(window, qtbot):
     window.start_demo()
     view = window.live_view
     view.tabs.setCurrentWidget(view.channels)
+    view.window_box.setCurrentText("10 s")  # the session outlives the window: the XY plot shows the window's
     view.channels.add_xy("position.pos_e_m", "position.pos_n_m")
-    (curve,) = view.channels.xy_plots.curves
-    qtbot.waitUntil(lambda: curve.xData is not None and len(curve.xData) > 20, timeout=10000)
+    view.channels.add_xy("gps.lon_deg", "position.pos_n_m")  # another table's: its row at or before each time
+    curve, across = view.channels.xy_plots.curves
+    table = window.session.view.tables["position"]
+    qtbot.waitUntil(lambda: len(table) > 1300 and curve.xData is not None and across.xData is not None, timeout=30000)
+    assert len(curve.xData) < 1100
     table = window.session.view.tables["position"]
     east, north = table.column("pos_e_m"), table.column("pos_n_m")
     rows = np.flatnonzero(np.float32(east) == np.float32(curve.xData[-1]))
     assert len(rows) and np.float32(north[rows[-1]]) == np.float32(curve.yData[-1])
+    gps = window.session.view.tables["gps"]
+    assert len(across.xData) == len(across.yData) > 0
+    assert np.isin(np.float32(across.xData[np.isfinite(across.xData)]), np.float32(gps.column("lon_deg"))).all()
     assert view.channels.xy_plots.isVisible()
 
 
