@@ -439,6 +439,9 @@ class ChannelsView(QtWidgets.QWidget):
         self.right.replaceWidget(1, self.xy_plots)
         old.deleteLater()
         self.xy_plots.setVisible(bool(self.xy))
+        if self.xy:  # the time panes and the XY plots share the height, 3 to 2
+            height = max(self.right.height(), 500)
+            self.right.setSizes([height * 3 // 5, height * 2 // 5])
         self._fill_pane_box()
         self._make_series()
 
