@@ -3,6 +3,10 @@ window's plot model, faster than real time, RSS at checkpoints; bounded (as the 
 baseline (the bounds off: every table row kept, the plot history never merged).
 
     python bench/bench_live_memory.py [--minutes 10,60] [--filters ahf]
+    python bench/bench_live_memory.py --where S
+
+``--where S``: where the memory goes first: S simulated seconds through the pipeline with the app's
+estimators under ``tracemalloc`` (the Python heap by file), and each table's bytes per minute.
 
 Each run is a fresh process: the simulated bridge's bytes (``sim:``, magnetometer, barometer and GPS,
 as the demo) are read unpaced by a ``LiveSession`` (recording to a temporary folder, as the app does)
@@ -24,6 +28,7 @@ import sys
 import tempfile
 import threading
 import time
+import tracemalloc
 from pathlib import Path
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
@@ -111,12 +116,38 @@ def child(kind: str, minutes: list[float], filters: tuple[str, ...]) -> None:
     view.close()
 
 
+def where(seconds: float) -> None:
+    """The Python heap by file after ``seconds`` of the app's session, and each table's share."""
+    source = UnpacedSim(seconds)
+    pipeline = Pipeline(live_estimators())
+    tracemalloc.start()
+    try:
+        while True:
+            chunk = source.read()
+            pipeline.feed(chunk.t_host_ns, chunk.data)
+    except SourceClosed:
+        pass
+    heap = tracemalloc.take_snapshot().statistics("filename")
+    total = sum(s.size for s in heap)
+    print(f"where: {seconds:g} s of the app's session ({len(pipeline.imu)} IMU rows), Python heap {total / 1e6:.1f} MB:")
+    for stat in heap[:4]:
+        print(f"  {stat.size / 1e6:6.2f} MB ({100 * stat.size / total:4.1f} %) {Path(stat.traceback[0].filename).relative_to(Path.cwd().parent) if Path.cwd().parent in Path(stat.traceback[0].filename).parents else stat.traceback[0].filename}")
+    minutes = len(pipeline.imu) / 100.0 / 60.0
+    for name, table in sorted(pipeline.tables.items(), key=lambda item: -len(item[1]) * len(item[1].columns)):
+        if len(table):
+            print(f"  table {name:9s} {len(table.columns):3d} columns, {len(table) * len(table.columns) * 8 / 1e6 / minutes:5.2f} MB a minute")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--minutes", default="10,60", help="checkpoints, simulated minutes (default: 10,60)")
     parser.add_argument("--filters", default="ahf", help="the pipeline's estimators, or 'app' for the app's (default: ahf)")
+    parser.add_argument("--where", type=float, default=None, metavar="S", help="where the memory goes (tracemalloc), S seconds")
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.where:
+        where(args.where)
+        return
     minutes = [float(m) for m in args.minutes.split(",")]
     filters = live_estimators() if args.filters == "app" else tuple(args.filters.split(","))
     if args.child:
