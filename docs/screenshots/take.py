@@ -84,7 +84,6 @@ def tour() -> None:
                                  '["custom.roll_difference_deg"], ["baro.pressure_Pa"]], '
                                  '"xy": [["position.pos_e_m", "position.pos_n_m"]], '
                                  '"custom": {"roll_difference_deg": "ahf2_roll_deg - onboard_roll_deg"}}')
-    view.channels.set_session(window.session)  # the custom series of the layout on this session
     view.channels.search.setText("pos")
     wait(3)
     shoot(window, "channels.png")
