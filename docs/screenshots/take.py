@@ -4,8 +4,8 @@
 
 (QT_QPA_PLATFORM=offscreen works too: every picture is the widget's own rendering.) The tour: the
 simulated bridge typed into the Source box, live with one comparison estimator shown (live.png), the attitude panel with its
-horizon and 3D view (3d-view.png), the event console (events.png), the Channels tab with two panes
-(channels.png), the export dialog after an export (export-dialog.png), the flight just recorded
+horizon and 3D view (3d-view.png), the event console (events.png), the Channels tab with three panes, a custom series, an XY
+plot and a search (channels.png), the export dialog after an export (export-dialog.png), the flight just recorded
 replayed (replay.png), and a bridge on a pseudo-terminal unplugged (port-gone.png).
 """
 
@@ -80,7 +80,11 @@ def tour() -> None:
 
     view = window.live_view
     view.tabs.setCurrentWidget(view.channels)
-    view.channels.restore_layout('[["imu.gyr_x_rad_s", "imu.gyr_y_rad_s", "imu.gyr_z_rad_s"], ["baro.pressure_Pa"], ["onboard.lambda", "imu.ahf_lam"]]')
+    view.channels.restore_layout('{"panes": [["imu.gyr_x_rad_s", "imu.gyr_y_rad_s", "imu.gyr_z_rad_s"], '
+                                 '["custom.roll_difference_deg"], ["baro.pressure_Pa"]], '
+                                 '"xy": [["position.pos_e_m", "position.pos_n_m"]], '
+                                 '"custom": {"roll_difference_deg": "ahf2_roll_deg - onboard_roll_deg"}}')
+    view.channels.search.setText("pos")
     wait(3)
     shoot(window, "channels.png")
     view.tabs.setCurrentWidget(view.attitude)

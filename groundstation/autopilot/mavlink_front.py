@@ -49,7 +49,6 @@ from groundstation.autopilot.modes import status_event
 from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.catalogue import Catalogue, message_table
-from groundstation.session.table import Table
 
 SLOW_WARNING_S = 5.0  # the requester's retry interval: one retry's chance before the warning
 OTHER_TABLES_MAX = 256  # tables of senders other than the vehicle
@@ -245,7 +244,7 @@ class MavlinkFrontEnd:
                 return
             info = message_table(name, label, fields, units)
             p.catalogue = Catalogue({**p.catalogue.tables, name: info})
-            table = Table(info.column_names)
+            table = p.new_table(info.column_names)
             p.tables = {**p.tables, name: table}
         table.append((p._time_s, *values))
 

@@ -20,6 +20,7 @@ from groundstation.session.load import Loading, estimators_for, load_session
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
+from groundstation.session.table import LIVE_KEEP_ROWS
 from groundstation.sources import ReplaySource, SourceError, open_source
 
 DEMO_SPEC = "sim:"
@@ -41,8 +42,9 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
                               "the app's File > Open, or replay, export and evaluate FILE)")
         return replay_session(source)
     vehicle_system = getattr(source, "vehicle_system", None)  # MAVLink: the vehicle the user picked
+    # Bounded tables (``table.LIVE_KEEP_ROWS``): a flight of hours must not grow the app; the recording keeps every byte.
     pipeline = Pipeline(live_estimators() if filters is None else filters, settings, protocol=getattr(source, "protocol", "gs"),
-                        vehicle_system=vehicle_system)  # MAVLink sources say so
+                        vehicle_system=vehicle_system, keep_rows=LIVE_KEEP_ROWS)  # MAVLink sources say so
     metadata = {"source_spec": spec, **({"vehicle_system": vehicle_system} if vehicle_system is not None else {})}
     return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata=metadata)
 

@@ -35,8 +35,9 @@ def clock_figures(host_minus_device_ns: np.ndarray) -> dict[str, float]:
 
 
 class LinkStats:
-    def __init__(self) -> None:
-        self.per_second = Table(PER_SECOND_COLUMNS)
+    def __init__(self, new_table=Table) -> None:
+        """``new_table(columns)``: the session's tables (a live one's are bounded)."""
+        self.per_second = new_table(PER_SECOND_COLUMNS)
         self._start_ns: int | None = None
         self._second = 0
         self._at_second_start = (0,) * len(_COUNTERS)

@@ -47,7 +47,7 @@ from groundstation.session.clock import SessionClock
 from groundstation.session.estimators import EstimatorBank
 from groundstation.session.link import LinkStats
 from groundstation.autopilot.mavlink_front import MavlinkFrontEnd
-from groundstation.session.table import Table
+from groundstation.session.table import LIVE_CHUNK_ROWS, Table
 from groundstation.units import ACCEL_LSB_PER_G, GYRO_LSB_PER_DPS
 
 DEFAULT_FILTERS = ("ahf",)
@@ -314,12 +314,13 @@ class Pipeline:
     setting overrides (the recorded settings); ``forced`` to overrides that win over everything,
     including settings changed later in the session (the what-if ``--set`` of replay and export).
     ``vehicle_system``: on a MAVLink link, the system id the user picked as the vehicle (else the first
-    autopilot heard).
+    autopilot heard). ``keep_rows``: a live session's bound on every table's rows (``table.LIVE_KEEP_ROWS``;
+    None: every row stays, as a replay or a file needs).
     """
 
     def __init__(self, filters=DEFAULT_FILTERS, settings=None, forced=None, assumed_sensor: SensorConfig | None = None,
                  spec: Spec = SPEC, protocol: str = "gs", aiding: str | None = None, vehicle_system: int | None = None,
-                 accept_config_changes: bool = False):
+                 accept_config_changes: bool = False, keep_rows: int | None = None):
         if protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {protocol!r} (known: {', '.join(PROTOCOLS)})")
         self.protocol = protocol
@@ -327,11 +328,12 @@ class Pipeline:
         self.filters = self.bank.filters
         self.assumed_sensor = assumed_sensor or SensorConfig()
         self.clock = SessionClock()
-        self.link = LinkStats()
+        self.keep_rows = keep_rows
+        self.link = LinkStats(self.new_table)
         self.front = GsFrontEnd(self, spec) if protocol == "gs" else MavlinkFrontEnd(self, vehicle_system=vehicle_system)
         self.decoder = self.front.decoder  # ``decoder.stats``: the link's counters (firmware_protocol.DecoderStats)
         self.catalogue = self.front.catalogue(session_catalogue(self.bank.diagnostics(), spec))
-        self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
+        self.tables = {info.name: self.new_table(info.column_names) for info in self.catalogue}
         self.imu, self.onboard = self.tables["imu"], self.tables["onboard"]
         self.aiding = Aiding()
         self.config: dict | None = None  # the values of the last CONFIG frame
@@ -357,6 +359,12 @@ class Pipeline:
     @property
     def estimators(self):
         return self.bank.estimators
+
+    def new_table(self, columns) -> Table:
+        """A table of this session: within ``keep_rows`` if it has that bound."""
+        if self.keep_rows is None:
+            return Table(columns)
+        return Table(columns, chunk_rows=min(LIVE_CHUNK_ROWS, self.keep_rows), keep_rows=self.keep_rows)
 
     # -- input ----------------------------------------------------------------------------------
 

@@ -109,12 +109,15 @@ def recorded_setup(recording: Recording, filters=None, forced=None) -> RecordedS
                          protocol, warnings, vehicle_system)
 
 
-def pipeline_for(recording: Recording, filters=None, forced=None, accept_config_changes: bool = False) -> Pipeline:
+def pipeline_for(recording: Recording, filters=None, forced=None, accept_config_changes: bool = False,
+                 keep_rows: int | None = None) -> Pipeline:
     """A pipeline set up as the recorded session was (protocol, estimators and settings), plus ``forced``;
-    ``accept_config_changes``: a CONFIG that changes the scales without a device restart applies (else held)."""
+    ``accept_config_changes``: a CONFIG that changes the scales without a device restart applies (else held);
+    ``keep_rows``: tables bounded as a live session's (``Pipeline``)."""
     setup = recorded_setup(recording, filters, forced)
     pipeline = Pipeline(setup.filters, setup.settings, forced, protocol=setup.protocol, aiding=setup.aiding,
-                        vehicle_system=setup.vehicle_system, accept_config_changes=accept_config_changes)
+                        vehicle_system=setup.vehicle_system, accept_config_changes=accept_config_changes,
+                        keep_rows=keep_rows)
     pipeline.events += setup.warnings
     return pipeline
 

@@ -6,6 +6,13 @@ Rows are stored flat, 8 bytes per value and no Python object per row: the newest
 rows, with at most one growing chunk of slack; a column is read without copying the other columns,
 and ``extend`` adds a whole array of rows at once (the batch path).
 
+A live session's tables are bounded (``keep_rows``): once more than that many rows are sealed behind
+the newest, whole blocks are forgotten from the front, so an hours-long flight holds fewer than
+``keep_rows`` + two chunks of rows per table (the sealed ones and the growing one) (the recording on disk keeps every byte, and export and
+replay read it, not these tables). ``len`` still counts every row appended (the readers count new
+rows by it); ``array``, ``column`` and ``to_dict`` give the rows kept, ``forgotten`` says how many
+went before them.
+
 One writer thread may append while other threads read: the blocks and the growing chunk are
 published together as one tuple, and each append and each slice of the growing chunk holds the GIL,
 so a reader sees whole rows, in order. Readers copy the growing chunk by slicing it (a C copy) and
@@ -20,11 +27,18 @@ from array import array
 import numpy as np
 
 CHUNK_ROWS = 65_536  # 11 minutes at 100 Hz per block
+# A live session's bound: the newest 10 minutes at 100 Hz (the longest live window), kept in blocks of
+# 82 s so that forgetting the front frees memory in small steps: under 76 384 rows a table
+# (62 MB for the imu table of the app's ten estimators, 102 columns).
+LIVE_KEEP_ROWS = 60_000
+LIVE_CHUNK_ROWS = 8_192
 
 
 class Table:
-    def __init__(self, columns: tuple[str, ...] | list[str], chunk_rows: int = CHUNK_ROWS):
+    def __init__(self, columns: tuple[str, ...] | list[str], chunk_rows: int = CHUNK_ROWS, keep_rows: int | None = None):
         self.columns = tuple(columns)
+        self.keep_rows = keep_rows  # None: every row stays
+        self.forgotten = 0  # rows dropped from the front to stay within ``keep_rows``
         self._width = len(self.columns)
         self._chunk_values = chunk_rows * self._width
         self._state: tuple[tuple[np.ndarray, ...], array] = ((), array("d"))
@@ -45,14 +59,25 @@ class Table:
             blocks, growing = self._state
             rows.flags.writeable = False
             self._sealed_rows += len(rows)
-            self._state = (blocks + (rows,), growing)
+            self._state = (self._kept(blocks + (rows,)), growing)
 
     def _seal(self) -> None:
         blocks, growing = self._state
         if len(growing):
             block = np.frombuffer(growing, dtype=float).reshape(-1, self._width)  # never extended again
             self._sealed_rows += len(block)
-            self._state = (blocks + (block,), array("d"))
+            self._state = (self._kept(blocks + (block,)), array("d"))
+
+    def _kept(self, blocks: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+        """``blocks`` without the oldest ones that the newest ``keep_rows`` sealed rows do not need."""
+        if self.keep_rows is None:
+            return blocks
+        sealed = sum(len(b) for b in blocks)
+        while len(blocks) > 1 and sealed - len(blocks[0]) >= self.keep_rows:
+            sealed -= len(blocks[0])
+            self.forgotten += len(blocks[0])
+            blocks = blocks[1:]
+        return blocks
 
     def __len__(self) -> int:
         return self._sealed_rows + len(self._state[1]) // self._width

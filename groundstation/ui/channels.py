@@ -1,8 +1,11 @@
-"""Plot any channel: the list of every column of every table of the session, and plot panes the user
-fills from it (double-click a channel, or "Add to pane"); the panes share the live view's time
-axis and window. The layout (which channels in which pane) is kept as a list of lists of
-"table.column" names, which the window remembers in its settings.
+"""Plot any channel, as PlotJuggler users expect: the list of every column of every table of the
+session, filtered as one types in its search box; plot panes the user fills from it (drag a channel
+onto a pane, double-click it, or "Add to pane"), sharing the live view's time axis and window; XY
+plots of one channel against another (east against north); custom series, an expression of channels
+(``custom_series``); named layouts saved and chosen from the Layouts menu.
 
+A layout is the panes (lists of "table.column" names), the XY pairs and the custom series' expressions,
+as JSON (``layout_json``); the window remembers the last one, and the named ones, in its settings.
 The channels are the session's catalogue (``ProductView.catalogue``, derived from the protocol spec and
 the estimators): each listed by its label and unit.
 """
@@ -11,16 +14,21 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
+import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.view import Session
-from groundstation.session.view import ProductView
-from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
+from groundstation.analysis.expression import Expression, ExpressionError, at_or_before
+from groundstation.session.view import ProductView, Session
+from groundstation.ui.custom_series import CUSTOM, ExpressionDerive, expression_sources
+from groundstation.ui.plots import LEFT_AXIS_PX, PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
 
 PALETTE_HEX = tuple(PALETTE.values())  # the channels' curves take the palette's colours in turn
 
 PREFIX = "channel:"  # the series of a table's plotted columns, beside the live view's own series
+MIME = "application/x-groundstation-channels"  # dragged channels: "table.column" names, one a line
+LAYOUTS_KEY = "channel_layouts"  # the named layouts in the window's settings: JSON, name -> layout
 
 
 def channel_names(view: ProductView) -> set[str]:
@@ -28,14 +36,160 @@ def channel_names(view: ProductView) -> set[str]:
     return {f"{table.name}.{column.name}" for table, column in view.catalogue.channels()}
 
 
+def series_key(channel: str) -> str:
+    """The series a channel's curve reads: its table's, or a custom series' own."""
+    table = channel.split(".", 1)[0]
+    return PREFIX + (channel if table == CUSTOM else table)
+
+
 def pane_plots(panes: list[list[str]]) -> tuple[Plot, ...]:
     """One plot per pane, a curve per "table.column", coloured in turn from the palette."""
     plots = []
     for index, channels in enumerate(panes):
-        curves = tuple(Curve(PREFIX + name.split(".", 1)[0], name.split(".", 1)[1], name,
-                             PALETTE_HEX[i % len(PALETTE_HEX)]) for i, name in enumerate(channels))
+        curves = tuple(Curve(series_key(name), name.split(".", 1)[1], name, PALETTE_HEX[i % len(PALETTE_HEX)])
+                       for i, name in enumerate(channels))
         plots.append(Plot(f"pane {index + 1}", "", curves))
     return tuple(plots)
+
+
+def read_layout(stored) -> dict:
+    """A layout as ``ChannelsView.layout_json`` wrote it (or the older list of panes); ValueError if it is none."""
+    layout = json.loads(stored) if isinstance(stored, str) else stored
+    if isinstance(layout, list):
+        layout = {"panes": layout}
+    channel = lambda c: isinstance(c, str) and "." in c  # noqa: E731
+    panes, xy, custom = layout.get("panes"), layout.get("xy", []), layout.get("custom", {})
+    if not (isinstance(panes, list) and panes and all(isinstance(p, list) and all(map(channel, p)) for p in panes)
+            and isinstance(xy, list) and all(isinstance(p, list) and len(p) == 2 and all(map(channel, p)) for p in xy)
+            and isinstance(custom, dict) and all(isinstance(k, str) and isinstance(v, str) for k, v in custom.items())):
+        raise ValueError("not a channels layout")
+    return {"panes": panes, "xy": xy, "custom": custom}
+
+
+class ChannelTree(QtWidgets.QTreeWidget):
+    """The channel list; its channels drag as ``MIME``."""
+
+    def __init__(self):
+        super().__init__()
+        self.setHeaderLabel("channels (drag onto a pane, or double-click)")
+        self.setSelectionMode(QtWidgets.QAbstractItemView.ExtendedSelection)
+        self.setDragEnabled(True)
+        self.setDragDropMode(QtWidgets.QAbstractItemView.DragOnly)
+
+    def mimeTypes(self) -> list[str]:
+        return [MIME]
+
+    def mimeData(self, items) -> QtCore.QMimeData:
+        names = [item.data(0, QtCore.Qt.UserRole) for item in items if item.data(0, QtCore.Qt.UserRole)]
+        data = QtCore.QMimeData()
+        data.setData(MIME, "\n".join(names).encode())
+        data.setText("\n".join(names))
+        return data
+
+
+def dropped_channels(data: QtCore.QMimeData) -> list[str]:
+    return [n for n in bytes(data.data(MIME)).decode().splitlines() if n] if data.hasFormat(MIME) else []
+
+
+class PanePlots(StackedPlots):
+    """The panes; channels dropped on one are plotted in it (``dropped``: the names and the pane)."""
+
+    dropped = QtCore.Signal(list, int)
+
+    def __init__(self, plots, parent=None):
+        super().__init__(plots, parent=parent)
+        self.setAcceptDrops(True)
+
+    def dragEnterEvent(self, event) -> None:
+        if dropped_channels(event.mimeData()):
+            event.acceptProposedAction()
+
+    def dragMoveEvent(self, event) -> None:
+        if dropped_channels(event.mimeData()):
+            event.acceptProposedAction()
+
+    def dropEvent(self, event) -> None:
+        names = dropped_channels(event.mimeData())
+        if not names:
+            return
+        y = self.mapToScene(event.position().toPoint()).y()
+        # The pane under the pointer: the last whose top is above it (the legend's row counts as the first pane).
+        pane = sum(1 for item in self.items[1:] if item.sceneBoundingRect().top() <= y)
+        event.acceptProposedAction()
+        self.dropped.emit(names, pane)
+
+
+class XYPlots(pg.GraphicsLayoutWidget):
+    """One plot per pair: the second channel against the first over the live view's window, the
+    second's table sampled at the first's times (its newest row at or before each)."""
+
+    def __init__(self, pairs: list[list[str]], parent=None):
+        super().__init__(parent)
+        self.setBackground("w")
+        self.pairs = [tuple(p) for p in pairs]
+        self.curves: list[pg.PlotDataItem] = []
+        for index, (x, y) in enumerate(self.pairs):
+            item = self.addPlot(row=0, col=index)
+            item.setLabel("bottom", x)
+            item.setLabel("left", y)
+            item.getAxis("left").setWidth(LEFT_AXIS_PX)
+            item.showGrid(x=True, y=True, alpha=0.2)
+            self.curves.append(item.plot(pen=pg.mkPen(PALETTE_HEX[index % len(PALETTE_HEX)], width=1)))
+
+    def draw(self, series: dict[str, Series], window_s: float | None) -> None:
+        for (x, y), curve in zip(self.pairs, self.curves):
+            sx, sy = series.get(series_key(x)), series.get(series_key(y))
+            qx, qy = x.split(".", 1)[1], y.split(".", 1)[1]
+            if sx is None or sy is None or not (sx.has(qx) and sy.has(qy)):
+                continue
+            t, xs = sx.data(qx, window_s)
+            if sy is sx:
+                ys = sy.data(qy, window_s)[1].astype(float)
+            else:
+                ys = at_or_before(t, *sy.data(qy, None if window_s is None else window_s + 60.0))  # and the row before
+            curve.setData(np.asarray(xs, dtype=float), ys, connect="finite")
+
+
+class CustomSeriesDialog(QtWidgets.QDialog):
+    """Name and expression of a custom series; a bad expression is said here, and the dialog stays."""
+
+    def __init__(self, sources: dict | None, taken: set[str], parent=None):
+        super().__init__(parent)
+        self.setWindowTitle("New custom series")
+        self.sources, self.taken = sources, taken
+        self.name = QtWidgets.QLineEdit(placeholderText="roll_difference_deg")
+        self.expression = QtWidgets.QLineEdit(placeholderText="ahf2_roll_deg - onboard_roll_deg")
+        self.message = QtWidgets.QLabel(wordWrap=True)
+        self.message.setStyleSheet("color:#8b0000")
+        buttons = QtWidgets.QDialogButtonBox(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
+        buttons.accepted.connect(self.accept)
+        buttons.rejected.connect(self.reject)
+        form = QtWidgets.QFormLayout(self)
+        form.addRow("name", self.name)
+        form.addRow("expression", self.expression)
+        form.addRow(QtWidgets.QLabel("channels as table.column or a column's own name, the Attitude tab's "
+                                     "angles (ahf2_roll_deg); + - * / **; abs, sqrt, sin, cos, arctan2, degrees …",
+                                     wordWrap=True))
+        form.addRow(self.message)
+        form.addRow(buttons)
+
+    def accept(self) -> None:
+        name = self.name.text().strip()
+        if not name.isidentifier():
+            self.message.setText("the name: letters, digits and _, not starting with a digit (roll_difference_deg)")
+            return
+        if name in self.taken:
+            self.message.setText(f"there is a custom series {name} already")
+            return
+        if self.sources is None:
+            self.message.setText("connect, start the demo or open a file first: the channels come from the session")
+            return
+        try:
+            Expression(self.expression.text(), self.sources)
+        except ExpressionError as error:
+            self.message.setText(str(error))
+            return
+        super().accept()
 
 
 class ChannelsView(QtWidgets.QWidget):
@@ -44,38 +198,54 @@ class ChannelsView(QtWidgets.QWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.session: Session | None = None
+        self.settings: QtCore.QSettings | None = None  # where the named layouts are kept (``use_settings``)
         self.panes: list[list[str]] = [[]]
+        self.xy: list[list[str]] = []
+        self.custom: dict[str, str] = {}  # name -> expression
         self.selected_pane = 0
         self.series: dict[str, Series] = {}
-        self.tree = QtWidgets.QTreeWidget()
-        self.tree.setHeaderLabel("channels (double-click to plot)")
+        self.search = QtWidgets.QLineEdit(placeholderText="search channels")
+        self.search.setClearButtonEnabled(True)
+        self.search.textChanged.connect(self._filter)
+        self.tree = ChannelTree()
         self.tree.itemDoubleClicked.connect(lambda item, _: self.add(item.data(0, QtCore.Qt.UserRole)))
         self.pane_box = QtWidgets.QComboBox()
         self.pane_box.currentIndexChanged.connect(self._pane_selected)
         buttons = {"Add to pane": self._add_selected, "New pane": self.new_pane,
-                   "Clear pane": self.clear_pane, "Remove pane": self.remove_pane}
+                   "Clear pane": self.clear_pane, "Remove pane": self.remove_pane,
+                   "XY of 2 selected": self._xy_selected, "Custom series…": self.new_custom}
         controls = QtWidgets.QGridLayout()
         controls.addWidget(QtWidgets.QLabel("pane"), 0, 0)
         controls.addWidget(self.pane_box, 0, 1)
         for index, (text, slot) in enumerate(buttons.items()):
             button = QtWidgets.QPushButton(text)
-            button.clicked.connect(slot)
+            button.clicked.connect(lambda _=False, slot=slot: slot())
             controls.addWidget(button, 1 + index // 2, index % 2)
+        self.layouts_menu = QtWidgets.QMenu("Layouts", self)
+        self.layouts_menu.aboutToShow.connect(self._fill_layouts_menu)
+        layouts = QtWidgets.QToolButton(text="Layouts", popupMode=QtWidgets.QToolButton.InstantPopup)
+        layouts.setMenu(self.layouts_menu)
+        controls.addWidget(layouts, 1 + len(buttons) // 2, 0, 1, 2)
         left = QtWidgets.QWidget()
         left_layout = QtWidgets.QVBoxLayout(left)
         left_layout.setContentsMargins(0, 0, 0, 0)
+        left_layout.addWidget(self.search)
         left_layout.addWidget(self.tree, 1)
         left_layout.addLayout(controls)
+        self.right = QtWidgets.QSplitter(QtCore.Qt.Vertical)
+        self.stacked = self._new_plots()
+        self.xy_plots = XYPlots([])
+        self.right.addWidget(self.stacked)
+        self.right.addWidget(self.xy_plots)
         self.splitter = QtWidgets.QSplitter()
         self.splitter.addWidget(left)
-        self.stacked = self._new_plots()
-        self.splitter.addWidget(self.stacked)
+        self.splitter.addWidget(self.right)
         self.splitter.setStretchFactor(1, 1)
         self.splitter.setSizes([220, 800])
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.splitter)
-        self._fill_pane_box()
+        self._rebuild()
 
     # -- what the live view asks of a tab --------------------------------------------------------
 
@@ -96,41 +266,96 @@ class ChannelsView(QtWidgets.QWidget):
             return
         taken = {name for name, s in self.series.items() if s.take(self.session.lock)}
         self.stacked.draw({"imu": series["imu"], **self.series}, window_s, None if grew is None else taken | {"imu"})
+        if self.xy and (grew is None or taken):
+            self.xy_plots.draw(self.series, window_s)
 
     # -- the session and the layout ----------------------------------------------------------------
 
     def set_session(self, session: Session | None) -> None:
         self.session = session
-        self.tree.clear()
-        if session is not None:
-            parents: dict[str, QtWidgets.QTreeWidgetItem] = {}
-            for table, column in session.view.catalogue.channels():
-                if table.name not in parents:
-                    parents[table.name] = QtWidgets.QTreeWidgetItem([table.name])  # the label is a sentence
-                    parents[table.name].setToolTip(0, table.label)
-                    self.tree.addTopLevelItem(parents[table.name])
-                child = QtWidgets.QTreeWidgetItem([column.header])
-                child.setData(0, QtCore.Qt.UserRole, f"{table.name}.{column.name}")
-                child.setToolTip(0, column.description or f"{table.name}.{column.name}")
-                parents[table.name].addChild(child)
+        self._fill_tree()
         self.stacked.clear_data()  # the same panes: only their data is new (plots are slow to build)
         self._make_series()
 
+    def _fill_tree(self) -> None:
+        self.tree.clear()
+        if self.session is None:
+            return
+        parents: dict[str, QtWidgets.QTreeWidgetItem] = {}
+        entries = [(t.name, t.label, f"{t.name}.{c.name}", c.header, c.description) for t, c in self.session.view.catalogue.channels()]
+        entries += [(CUSTOM, "custom series (expressions)", f"{CUSTOM}.{name}", name, text) for name, text in self.custom.items()]
+        for table, label, channel, header, description in entries:
+            if table not in parents:
+                parents[table] = QtWidgets.QTreeWidgetItem([table])  # the label is a sentence
+                parents[table].setToolTip(0, label)
+                parents[table].setFlags(parents[table].flags() & ~QtCore.Qt.ItemIsDragEnabled)
+                self.tree.addTopLevelItem(parents[table])
+            child = QtWidgets.QTreeWidgetItem([header])
+            child.setData(0, QtCore.Qt.UserRole, channel)
+            child.setToolTip(0, description or channel)
+            parents[table].addChild(child)
+        self._filter(self.search.text())
+
+    def _filter(self, text: str) -> None:
+        """Show the channels whose name or label holds every word typed (any case), and their tables."""
+        words = text.lower().split()
+        for i in range(self.tree.topLevelItemCount()):
+            parent = self.tree.topLevelItem(i)
+            shown = 0
+            for j in range(parent.childCount()):
+                child = parent.child(j)
+                haystack = f"{child.data(0, QtCore.Qt.UserRole)} {child.text(0)}".lower()
+                match = all(word in haystack for word in words)
+                child.setHidden(not match)
+                shown += match
+            parent.setHidden(not shown)
+            parent.setExpanded(bool(words) and bool(shown))
+
     def layout_json(self) -> str:
-        return json.dumps(self.panes)
+        return json.dumps({"panes": self.panes, "xy": self.xy, "custom": self.custom})
 
     def restore_layout(self, stored: str | None) -> None:
-        """Panes as ``layout_json`` wrote them; anything unreadable leaves one empty pane."""
+        """A layout as ``layout_json`` wrote it (or the older list of panes); anything unreadable leaves one empty pane."""
         try:
-            panes = json.loads(stored) if stored else [[]]
-            if not (isinstance(panes, list) and panes and all(isinstance(p, list) and all(isinstance(c, str) and "." in c
-                                                                                          for c in p) for p in panes)):
-                raise ValueError
+            layout = read_layout(stored) if stored else None
         except ValueError:
-            panes = [[]]
-        self.panes = panes
+            layout = None
+        layout = layout or {"panes": [[]], "xy": [], "custom": {}}
+        self.panes, self.xy, self.custom = layout["panes"], layout["xy"], layout["custom"]
         self.selected_pane = 0
+        self._fill_tree()
         self._rebuild()
+
+    def use_settings(self, settings: QtCore.QSettings) -> None:
+        """The window's settings: the last layout ("channel_panes") now, the named layouts when asked."""
+        self.settings = settings
+        self.restore_layout(settings.value("channel_panes"))
+
+    def named_layouts(self) -> dict[str, str]:
+        try:
+            stored = json.loads(self.settings.value(LAYOUTS_KEY) or "{}") if self.settings is not None else {}
+        except ValueError:
+            return {}  # a damaged settings file must not break the menu
+        return stored if isinstance(stored, dict) else {}
+
+    def save_layout(self, name: str) -> None:
+        if self.settings is not None and name.strip():
+            self.settings.setValue(LAYOUTS_KEY, json.dumps({**self.named_layouts(), name.strip(): self.layout_json()}))
+
+    def _fill_layouts_menu(self) -> None:
+        menu = self.layouts_menu
+        menu.clear()
+        menu.addAction("Save layout as…").triggered.connect(lambda _=False: self._ask_layout_name())
+        named = self.named_layouts()
+        if named:
+            menu.addSeparator()
+        for name, stored in sorted(named.items()):
+            menu.addAction(name).triggered.connect(lambda _=False, s=stored: self.restore_layout(s))
+
+    def _ask_layout_name(self) -> None:
+        name, ok = QtWidgets.QInputDialog.getText(self, "Save layout", "name of this layout")
+        if ok:
+            self.save_layout(name)
 
     def add(self, channel: str | None, pane: int | None = None) -> None:
         """Plot ``channel`` ("table.column") in ``pane`` (the selected one by default)."""
@@ -138,6 +363,26 @@ class ChannelsView(QtWidgets.QWidget):
         if channel and channel not in self.panes[pane]:
             self.panes[pane].append(channel)
             self._rebuild()
+
+    def add_xy(self, x: str, y: str) -> None:
+        """An XY plot of ``y`` against ``x`` ("table.column" each)."""
+        if [x, y] not in self.xy:
+            self.xy.append([x, y])
+            self._rebuild()
+
+    def add_custom(self, name: str, expression: str) -> None:
+        """A custom series ``name`` (listed under "custom"); plot it as any channel: "custom.NAME"."""
+        self.custom[name] = expression
+        self._fill_tree()
+        self._make_series()
+
+    def new_custom(self) -> CustomSeriesDialog:
+        """The dialog asking a custom series' name and expression (checked against the session's channels)."""
+        sources = expression_sources(self.session.view) if self.session is not None else None
+        dialog = CustomSeriesDialog(sources, set(self.custom), self)
+        dialog.accepted.connect(lambda: self.add_custom(dialog.name.text().strip(), dialog.expression.text()))
+        dialog.open()
+        return dialog
 
     def new_pane(self) -> None:
         self.panes.append([])
@@ -158,6 +403,16 @@ class ChannelsView(QtWidgets.QWidget):
         for item in self.tree.selectedItems():
             self.add(item.data(0, QtCore.Qt.UserRole))
 
+    def _xy_selected(self) -> None:
+        chosen = [c for c in (item.data(0, QtCore.Qt.UserRole) for item in self.tree.selectedItems()) if c]
+        if len(chosen) == 2:
+            self.add_xy(*chosen)
+
+    def _dropped(self, channels: list[str], pane: int) -> None:
+        self.selected_pane = min(pane, len(self.panes) - 1)
+        for channel in channels:
+            self.add(channel)
+
     def _pane_selected(self, index: int) -> None:
         if index >= 0:
             self.selected_pane = index
@@ -169,30 +424,53 @@ class ChannelsView(QtWidgets.QWidget):
         self.pane_box.setCurrentIndex(self.selected_pane)
         self.pane_box.blockSignals(False)
 
-    def _new_plots(self) -> StackedPlots:
-        plots = StackedPlots(pane_plots(self.panes))
+    def _new_plots(self) -> PanePlots:
+        plots = PanePlots(pane_plots(self.panes))
         plots.userInteracted.connect(self.userInteracted)
+        plots.dropped.connect(self._dropped)
         return plots
 
     def _rebuild(self) -> None:
-        """New plots for the panes, and the series they draw."""
+        """New plots for the panes and the XY pairs, and the series they draw."""
         old, self.stacked = self.stacked, self._new_plots()
-        self.splitter.replaceWidget(1, self.stacked)
+        self.right.replaceWidget(0, self.stacked)
         old.deleteLater()
+        old, self.xy_plots = self.xy_plots, XYPlots(self.xy)
+        self.right.replaceWidget(1, self.xy_plots)
+        old.deleteLater()
+        self.xy_plots.setVisible(bool(self.xy))
+        if self.xy:  # the time panes and the XY plots share the height, 3 to 2
+            height = max(self.right.height(), 500)
+            self.right.setSizes([height * 3 // 5, height * 2 // 5])
         self._fill_pane_box()
         self._make_series()
 
     def _make_series(self) -> None:
         """A series for each plotted table of the session, holding only its plotted columns (from its
-        first row: a channel added later shows its past too)."""
+        oldest row kept: a channel added later shows its past too), and one per plotted custom series."""
         self.series = {}
         if self.session is None:
             return
-        known = channel_names(self.session.view)
+        view = self.session.view
+        known = channel_names(view)
         wanted: dict[str, list[str]] = {}
-        for channel in (c for pane in self.panes for c in pane if c in known):
+        plotted = [c for pane in self.panes for c in pane] + [c for pair in self.xy for c in pair]
+        for channel in dict.fromkeys(plotted):
             table, column = channel.split(".", 1)
-            wanted.setdefault(table, []).append(column)
+            if channel in known:
+                wanted.setdefault(table, []).append(column)
+            elif table == CUSTOM and column in self.custom:
+                self._custom_series(column)
         for table, columns in wanted.items():
-            self.series[PREFIX + table] = Series(self.session.view.tables[table], lambda rows, names, columns=tuple(
+            self.series[PREFIX + table] = Series(view.tables[table], lambda rows, names, columns=tuple(
                 columns): {c: rows[:, names.index(c)] for c in columns})
+
+    def _custom_series(self, name: str) -> None:
+        """The series of custom series ``name``; none when this session lacks a channel it uses."""
+        view = self.session.view
+        sources = expression_sources(view)
+        try:
+            derive = ExpressionDerive(name, Expression(self.custom[name], sources), sources, view.tables, self.session.lock)
+        except ExpressionError:
+            return
+        self.series[series_key(f"{CUSTOM}.{name}")] = Series(view.tables[derive.table], derive)

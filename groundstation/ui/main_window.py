@@ -103,7 +103,7 @@ class MainWindow(QtWidgets.QMainWindow):
         loading_layout.addWidget(self.loading_cancel)
         self.loading_row.hide()
         self.live_view = LiveView(self._stored_hidden_curves())
-        self.live_view.channels.restore_layout(settings.value("channel_panes"))
+        self.live_view.channels.use_settings(settings)
         self.live_view.window_box.setCurrentText(str(settings.value("time_window", self.live_view.window_box.currentText())))
         self.link_panel = LinkPanel()
         self.attitude_panel = AttitudePanel()

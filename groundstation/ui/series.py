@@ -4,8 +4,13 @@ Each tick takes only the rows added since the last one (``Table.tail``), convert
 (quaternions to pitch, roll and heading in degrees, rad/s to °/s) and appends them. Only plotted
 quantities are kept, as float32 (time float64). The last ``RECENT_S`` seconds stay at full
 resolution, so windows up to 10 minutes are slices, not copies; older samples are kept as the minimum and maximum
-of every ``BIN_ROWS`` (what peak downsampling would draw of them anyway), which holds a 2-hour
-session in some 20 MB instead of 100, drawn as a second curve (``older``).
+of every ``BIN_ROWS`` (what peak downsampling would draw of them anyway), drawn as a second curve
+(``older``). The history is bounded: past ``HISTORY_BINS`` bins, neighbouring bins are merged in
+pairs (the minimum of their minima, the maximum of their maxima) and new bins take twice the rows,
+so all bins keep one width and a series holds at most
+``RECENT_S`` of samples and 2 x ``HISTORY_BINS`` points per quantity however long the flight, and a
+4-hour flight still has a bin every 7 s or less: at least two per pixel of a whole-session plot
+1000 pixels wide, whose peak downsampling draws each pixel's minimum and maximum, so it looks the same.
 """
 
 from __future__ import annotations
@@ -21,6 +26,7 @@ INITIAL_ROWS = 8192
 GAP_S = 0.25  # samples further apart than this mark a gap (port gone, radio lost): 25 at 100 Hz
 RECENT_S = 660.0  # kept at full resolution: the 10-minute window and a margin
 BIN_ROWS = 10  # older samples: min and max of each 10 (0.1 s at 100 Hz)
+HISTORY_BINS = 4096  # more, and the history's bins are merged in pairs
 
 Derive = Callable[[np.ndarray, tuple[str, ...]], dict[str, np.ndarray]]
 
@@ -60,6 +66,25 @@ class Columns:
         return int(np.searchsorted(self.time_s[: self.count], t_s))
 
 
+def min_max_bins(first_s: np.ndarray, last_s: np.ndarray, lows: dict[str, np.ndarray], highs: dict[str, np.ndarray],
+                 size: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Every ``size`` consecutive entries (each spanning ``first_s``..``last_s`` with values ``lows``..``highs``:
+    samples, or bins already) as one bin: two points, (its first time, the minimum), (its last time, the
+    maximum). The one rule for binning samples and for merging bins. An entry NaN in every quantity (a
+    restart's gap row, or a bin holding one) keeps its bin NaN, so the older curve breaks there too; other NaN
+    (a quantity missing in some rows) are left out of the minimum and maximum."""
+    whole = len(first_s) // size * size
+    restart = np.logical_and.reduce([np.isnan(c[:whole]) for c in lows.values()]).reshape(-1, size).any(axis=1)
+    binned = {}
+    for name in lows:
+        pairs = np.column_stack([np.fmin.reduce(lows[name][:whole].reshape(-1, size), axis=1),
+                                 np.fmax.reduce(highs[name][:whole].reshape(-1, size), axis=1)])
+        pairs[restart] = np.nan
+        binned[name] = pairs.ravel()
+    times = np.column_stack([first_s[:whole].reshape(-1, size)[:, 0], last_s[:whole].reshape(-1, size)[:, -1]])
+    return times.ravel(), binned
+
+
 class Series:
     """``derive(rows, columns)`` -> ``{name: 1-D array}``: the quantities of some new table rows."""
 
@@ -68,6 +93,7 @@ class Series:
         self._derive = derive
         self.taken = 0  # table rows taken so far
         self.recent = Columns()
+        self.bin_rows = BIN_ROWS  # samples per bin of the history: doubles as its bins are merged
         self.history = Columns()  # two rows per bin of older samples: (first time, min), (last time, max)
         self.gaps: list[tuple[float, float]] = []  # (last sample before, first sample after), seconds
 
@@ -98,21 +124,22 @@ class Series:
     def _bin_old_rows(self) -> None:
         """Move whole bins of rows older than ``RECENT_S`` into the history as min/max pairs."""
         r = self.recent
-        old = r.since(r.time_s[r.count - 1] - RECENT_S) // BIN_ROWS * BIN_ROWS
+        size = self.bin_rows
+        old = r.since(r.time_s[r.count - 1] - RECENT_S) // size * size
         if old == 0:
             return  # all recent: the buffer grows instead
-        times = r.time_s[:old].reshape(-1, BIN_ROWS)
-        # A restart's gap row (NaN in every quantity) keeps its bin NaN, so the older curve breaks there
-        # too; other NaN (a quantity missing in some rows) are left out of the min and max.
-        restart = np.logical_and.reduce([np.isnan(c[:old]) for c in r.values.values()]).reshape(-1, BIN_ROWS).any(axis=1)
-        binned = {}
-        for name, column in r.values.items():
-            bins = column[:old].reshape(-1, BIN_ROWS)
-            pairs = np.column_stack([np.fmin.reduce(bins, axis=1), np.fmax.reduce(bins, axis=1)])
-            pairs[restart] = np.nan
-            binned[name] = pairs.ravel()
-        self.history.append(np.column_stack([times[:, 0], times[:, -1]]).ravel(), binned)
+        values = {name: column[:old] for name, column in r.values.items()}
+        self.history.append(*min_max_bins(r.time_s[:old], r.time_s[:old], values, values, size))
         r.drop_front(old)
+        h = self.history
+        if h.count > 2 * HISTORY_BINS:
+            whole = h.count // 4 * 4  # whole pairs of bins (two points each); an odd last bin stays as it is
+            times, merged = min_max_bins(h.time_s[:whole:2], h.time_s[1:whole:2], {n: c[:whole:2] for n, c in h.values.items()},
+                                         {n: c[1:whole:2] for n, c in h.values.items()}, 2)
+            self.history = Columns()
+            self.history.append(np.concatenate([times, h.time_s[whole : h.count]]),
+                                {n: np.concatenate([merged[n], c[whole : h.count]]) for n, c in h.values.items()})
+            self.bin_rows = 2 * size
 
     @property
     def end_s(self) -> float | None:

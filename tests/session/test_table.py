@@ -115,3 +115,22 @@ def test_a_reader_copying_a_large_growing_chunk_never_stops_the_writer():
         done.set()
         reader.join()
     assert len(table) == 30_000
+
+
+def test_a_bounded_table_keeps_its_newest_rows_and_counts_them_all():
+    """A live session's table (``keep_rows``) fed far more rows than its bound keeps the newest ones, at most
+    the bound and one chunk, in order; ``len`` counts every row (readers count new rows by it) and ``tail``
+    gives the newest."""
+    table = Table(COLUMNS, chunk_rows=64, keep_rows=500)
+    rows = np.column_stack([np.arange(20_000.0), -np.arange(20_000.0), np.ones(20_000)])
+    for i, row in enumerate(rows):
+        table.append(row)
+        if i % 997 == 0:
+            kept = table.array()
+            assert 0 < len(kept) <= 500 + 64 + 64 and kept[-1, 0] == i
+    kept = table.array()
+    assert len(table) == 20_000 and table.forgotten == 20_000 - len(kept) and 500 <= len(kept) <= 500 + 2 * 64
+    assert np.array_equal(kept, rows[table.forgotten :]) and np.array_equal(table.column("a"), rows[table.forgotten :, 1])
+    assert np.array_equal(table.tail(300), rows[-300:])
+    table.extend(rows[:2000])  # the batch path's bulk rows are bounded too
+    assert len(table) == 22_000 and len(table.array()) <= 2000 + 64

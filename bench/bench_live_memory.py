@@ -1,0 +1,179 @@
+"""Memory of a long live session (defect 13): 100 Hz simulated frames through the live session and the
+window's plot model, faster than real time, RSS at checkpoints; bounded (as the app runs) and the
+baseline (the bounds off: every table row kept, the plot history never merged).
+
+    python bench/bench_live_memory.py [--minutes 10,60] [--filters ahf]
+    python bench/bench_live_memory.py --where S
+
+``--where S``: where the memory goes first: S simulated seconds through the pipeline with the app's
+estimators under ``tracemalloc`` (the Python heap by file), and each table's bytes per minute.
+
+Each run is a fresh process: the simulated bridge's bytes (``sim:``, magnetometer, barometer and GPS,
+as the demo) are read unpaced by a ``LiveSession`` (recording to a temporary folder, as the app does)
+whose pipeline runs ``--filters``, while the main thread keeps a ``LiveView`` (offscreen; its
+10-minute window, two channels on the Channels tab) refreshed. RSS after handing freed heap pages back
+(``bench_ui.rss_mb``). The app's ten estimators (``--filters app``) make the imu table 102 columns wide
+instead of 20 and run slower than real time on this machine; the bound is in rows, so the bounded RSS is
+flat either way and the baseline's slope scales with the width.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import queue
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import tracemalloc
+from pathlib import Path
+
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+from PySide6 import QtWidgets  # noqa: E402
+
+from bench_ui import rss_mb  # noqa: E402
+from groundstation.estimation import live_estimators  # noqa: E402
+from groundstation.session.live import LiveSession  # noqa: E402
+from groundstation.session.pipeline import Pipeline  # noqa: E402
+from groundstation.session.table import LIVE_KEEP_ROWS  # noqa: E402
+from groundstation.sim.stream import SimStream  # noqa: E402
+from groundstation.sources.base import Chunk, SourceClosed  # noqa: E402
+from groundstation.sources.sim import parse_scenario  # noqa: E402
+from groundstation.sources.spec import parse_spec  # noqa: E402
+from groundstation.ui import series as series_module  # noqa: E402
+from groundstation.ui.live_view import LiveView  # noqa: E402
+
+STEP_S = 0.5  # simulated seconds of frames per read
+
+
+class UnpacedSim:
+    """The simulated bridge's bytes as fast as they are made, presented as a live link (recorded)."""
+
+    is_replay = False
+    can_reopen = False
+    can_send = False
+    protocol = "gs"
+    description = "simulated bridge, unpaced"
+
+    def __init__(self, duration_s: float):
+        self.stream = SimStream(parse_scenario(parse_spec(f"sim:?duration={duration_s}")))
+        self.duration_s = duration_s
+        self._t_s = 0.0
+        self._pending: list = []
+
+    def read(self) -> Chunk | None:
+        while not self._pending:
+            if self._t_s >= self.duration_s:
+                raise SourceClosed
+            self._t_s += STEP_S
+            self._pending = self.stream.advance(self._t_s)
+        chunk = self._pending.pop(0)
+        return Chunk(int(chunk.t_s * 1e9), chunk.data)
+
+    def close(self) -> None:
+        self._t_s = self.duration_s
+
+
+def table_mb(pipeline: Pipeline) -> float:
+    """The rows the session's tables hold now."""
+    tables = [*pipeline.tables.values(), pipeline.link.per_second]
+    return sum(len(t.array()) * len(t.columns) * 8 for t in tables) / 1e6
+
+
+def child(kind: str, minutes: list[float], filters: tuple[str, ...]) -> None:
+    app = QtWidgets.QApplication([])
+    if kind == "baseline":
+        series_module.HISTORY_BINS = 1 << 40  # the plot history never merged, as before
+    pipeline = Pipeline(filters, keep_rows=LIVE_KEEP_ROWS if kind == "bounded" else None)
+    view = LiveView()
+    view.window_box.setCurrentText("10 min")
+    view.channels.restore_layout('[["imu.gyr_x_rad_s"], ["baro.pressure_Pa"]]')
+    with tempfile.TemporaryDirectory() as folder:
+        session = LiveSession(UnpacedSim(60.0 * max(minutes) + 1.0), pipeline, recordings_dir=Path(folder))
+        view.set_session(session)
+        checkpoints = [0.0, *sorted(minutes)]
+        started = time.monotonic()
+        with session:
+            while checkpoints:
+                app.processEvents()
+                view.refresh()
+                done_min = (len(pipeline.imu) / 100.0) / 60.0
+                if done_min >= checkpoints[0] or not session.running:
+                    with session.lock:
+                        rss, tables = rss_mb(), table_mb(pipeline)
+                    plots = sum(s.nbytes() for s in [*view.series.values(), *view.channels.series.values()]) / 1e6
+                    print(json.dumps({"kind": kind, "minutes": round(done_min, 2), "rss_mb": rss, "tables_mb": tables,
+                                      "plots_mb": plots, "rows": len(pipeline.imu), "wall_s": time.monotonic() - started,
+                                      "imu_columns": len(pipeline.imu.columns)}), flush=True)
+                    checkpoints.pop(0)
+                    if not session.running:
+                        break
+                time.sleep(0.05)
+    view.close()
+
+
+def where(seconds: float) -> None:
+    """The Python heap by file after ``seconds`` of the app's session, and each table's share."""
+    source = UnpacedSim(seconds)
+    pipeline = Pipeline(live_estimators())
+    tracemalloc.start()
+    try:
+        while True:
+            chunk = source.read()
+            pipeline.feed(chunk.t_host_ns, chunk.data)
+    except SourceClosed:
+        pass
+    heap = tracemalloc.take_snapshot().statistics("filename")
+    total = sum(s.size for s in heap)
+    print(f"where: {seconds:g} s of the app's session ({len(pipeline.imu)} IMU rows), Python heap {total / 1e6:.1f} MB:")
+    for stat in heap[:4]:
+        print(f"  {stat.size / 1e6:6.2f} MB ({100 * stat.size / total:4.1f} %) {Path(stat.traceback[0].filename).relative_to(Path.cwd().parent) if Path.cwd().parent in Path(stat.traceback[0].filename).parents else stat.traceback[0].filename}")
+    minutes = len(pipeline.imu) / 100.0 / 60.0
+    for name, table in sorted(pipeline.tables.items(), key=lambda item: -len(item[1]) * len(item[1].columns)):
+        if len(table):
+            print(f"  table {name:9s} {len(table.columns):3d} columns, {len(table) * len(table.columns) * 8 / 1e6 / minutes:5.2f} MB a minute")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--minutes", default="10,60", help="checkpoints, simulated minutes (default: 10,60)")
+    parser.add_argument("--filters", default="ahf", help="the pipeline's estimators, or 'app' for the app's (default: ahf)")
+    parser.add_argument("--where", type=float, default=None, metavar="S", help="where the memory goes (tracemalloc), S seconds")
+    parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.where:
+        where(args.where)
+        return
+    minutes = [float(m) for m in args.minutes.split(",")]
+    filters = live_estimators() if args.filters == "app" else tuple(args.filters.split(","))
+    if args.child:
+        child(args.child, minutes, filters)
+        return
+    print(f"{', '.join(filters)}; checkpoints at {args.minutes} simulated minutes of 100 Hz frames")
+    # Both runs at once, each line printed as it comes (on a loaded machine an hour takes a while).
+    runs = {kind: subprocess.Popen([sys.executable, __file__, "--child", kind, "--minutes", args.minutes, "--filters", args.filters],
+                                   stdout=subprocess.PIPE, text=True) for kind in ("baseline", "bounded")}
+    first: dict[str, dict] = {}
+    lines = queue.Queue()
+    for kind, run in runs.items():
+        threading.Thread(target=lambda run=run: [lines.put(line) for line in run.stdout] + [lines.put(None)], daemon=True).start()
+    ended = 0
+    while ended < len(runs):
+        line = lines.get()
+        if line is None:
+            ended += 1
+            continue
+        if not line.startswith("{"):
+            continue
+        row = json.loads(line)
+        start = first.setdefault(row["kind"], row)
+        print(f"{row['kind']:8s} {row['minutes']:6.1f} min ({row['rows']:7d} IMU rows, {row['imu_columns']} columns, "
+              f"{row['wall_s']:5.0f} s wall): RSS {row['rss_mb']:6.1f} MB (+{row['rss_mb'] - start['rss_mb']:5.1f}), "
+              f"tables {row['tables_mb']:6.1f} MB, plot buffers {row['plots_mb']:5.1f} MB", flush=True)
+
+if __name__ == "__main__":
+    main()
