@@ -17,7 +17,7 @@ def assert_bins_hold_min_max(older_t, older_v, t, v):
     covered = v[: ends[-1]].astype(np.float32)
     low = np.minimum.reduceat(covered, starts)
     high = np.maximum.reduceat(covered, starts)
-    assert np.array_equal(older_v[0::2], low) and np.array_equal(older_v[1::2], high)
+    assert np.array_equal(older_v[0::2], low, equal_nan=True) and np.array_equal(older_v[1::2], high, equal_nan=True)
 
 
 def feed(series, table, rows, parts):
