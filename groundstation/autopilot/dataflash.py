@@ -7,7 +7,8 @@ Messages and units used (ArduPilot's LogStructure): ``IMU`` (instance ``I`` 0: `
 degrees, ZYX, body -> NED: the onboard estimate), ``MAG`` (instance 0, ``MagX..Z`` mGauss), ``BARO``
 (instance 0, ``Press`` Pa, ``Temp`` °C), ``GPS`` (instance 0: ``Lat``/``Lng`` degrees, ``Alt`` m,
 ``Spd`` m/s, ``GCrs`` degrees, ``VZ`` m/s down, ``Status`` fix type, ``NSats``). A log whose logging
-bitmask left out ``IMU`` still opens, with the onboard attitude only.
+bitmask left out ``IMU`` still opens, with the onboard attitude only. ``MSG``, ``ERR``, ``EV``, ``MODE``,
+``ARM`` and ``PARM``: what the autopilot said and how it was set (``messages.dataflash_said``).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from pymavlink import DFReader
 from groundstation import quaternion
 from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, series
+from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -41,17 +43,21 @@ def read_dataflash(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
-    rows = defaultdict(list)
+    rows, said = defaultdict(list), []
     chatter = Chatter()  # DFReader prints a "bad header" line per damaged byte, some from C: counted, not shown
     try:
         with chatter.caught():
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
         clocks = {name: boot_clock(reader, name) for name in FIELDS}
         wanted = [name for name, clock in clocks.items() if clock is not None]
+        # the messages, events and parameters where the log stamps them in TimeUS (older logs' MSG, MODE: not at all)
+        wanted += [name for name in DATAFLASH_SAID if boot_clock(reader, name) == CLOCKS[0]]
         with chatter.caught(descriptors=False):  # reading prints from Python only
             while wanted and (msg := reader.recv_match(type=wanted)) is not None:
-                if getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
-                    name = msg.get_type()
+                name = msg.get_type()
+                if name in DATAFLASH_SAID:
+                    said.append(msg)
+                elif getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
                     field, us_per_unit = clocks[name]
                     rows[name].append([getattr(msg, field) * us_per_unit, *(getattr(msg, f) for f in FIELDS[name])])
                 if progress is not None and len(rows["ATT"]) % 1024 == 0:
@@ -59,6 +65,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
+    log.events, log.parameters = dataflash_said(said, reader.mav_type)
     skipped = [line.split()[1] for line in chatter.lines if line.startswith("Skipped ")]  # "Skipped N bad bytes ..."
     damaged = chatter.count("bad header") + sum(int(n) for n in skipped if n.isdigit())
     if damaged:

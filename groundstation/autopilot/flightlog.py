@@ -9,7 +9,8 @@ named columns whose names carry their units, in this project's frames (body FRD,
 - ``gps``: ``lat_deg``, ``lon_deg``, ``alt_m``, ``vel_{n,e,d}_m_s``, ``fix_type``, ``satellites``;
 - ``truth``: ``q{w,x,y,z}`` — a simulator's true attitude when the log has one (PX4 SITL).
 
-A stream the log lacks is None, and ``notes`` says so in words.
+A stream the log lacks is None, and ``notes`` says so in words. ``events``: what the autopilot said
+(texts, modes, arming, parameter changes: ``messages``) at its times; ``parameters``: name -> last value.
 """
 
 from __future__ import annotations
@@ -101,3 +102,5 @@ class FlightLog:
     units: dict[str, dict[str, str]] = dataclasses.field(default_factory=dict)  # table -> column -> unit
     notes: list[str] = dataclasses.field(default_factory=list)
     damage: list[str] = dataclasses.field(default_factory=list)  # what the reader dropped as damaged
+    events: list[tuple[int, dict]] = dataclasses.field(default_factory=list)  # (time µs, event without times)
+    parameters: dict[str, float] = dataclasses.field(default_factory=dict)

@@ -20,6 +20,7 @@ standard gravity (9.80665 m/s²). Axes need no change: both autopilots report bo
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 
 from pymavlink import mavutil
@@ -34,6 +35,8 @@ from groundstation.autopilot.records import (
     LinkHealth,
     MagReading,
     OnboardAttitude,
+    ParamValue,
+    StatusText,
     VehicleStatus,
 )
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -48,6 +51,9 @@ MILLI_SCALES = (1e-3, 1e-3, 0.1)
 SCALED_IMU_TYPES = ("SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3")
 PRESSURE_TYPES = ("SCALED_PRESSURE", "SCALED_PRESSURE2", "SCALED_PRESSURE3")
 UINT16_UNKNOWN = 65535
+# MAV_PARAM_TYPE -> struct format of an integer PX4 copies byte for byte into PARAM_VALUE's float
+MAVLINK1_HEADER, MAVLINK2_HEADER = 6, 10  # bytes before the payload (magic 0xFE, 0xFD)
+PX4_INTEGER_FORMATS = {1: "<B", 2: "<b", 3: "<H", 4: "<h", 5: "<I", 6: "<i"}
 
 
 @dataclass
@@ -94,7 +100,7 @@ class MessageMapper:
             "HEARTBEAT": self._heartbeat, "SYS_STATUS": self._sys_status, "RADIO_STATUS": self._radio,
             "RAW_IMU": self._raw_imu, "HIGHRES_IMU": self._highres_imu,
             "ATTITUDE": self._attitude, "ATTITUDE_QUATERNION": self._attitude_quaternion,
-            "GPS_RAW_INT": self._gps,
+            "GPS_RAW_INT": self._gps, "STATUSTEXT": self._statustext, "PARAM_VALUE": self._param_value,
             **{name: self._scaled_imu for name in SCALED_IMU_TYPES},
             **{name: self._pressure for name in PRESSURE_TYPES},
         }  # fmt: skip
@@ -116,7 +122,18 @@ class MessageMapper:
         if msg.autopilot != MAV_AUTOPILOT_INVALID:  # a GCS, camera or companion on the same system id
             self.autopilot[sender[0]] = msg.autopilot
         armed = bool(msg.base_mode & MAV_MODE_FLAG_SAFETY_ARMED)
-        return [VehicleStatus(*sender, t_host_ns, msg.autopilot, msg.type, mavutil.mode_string_v10(msg), armed, msg.system_status)]
+        return [VehicleStatus(*sender, t_host_ns, msg.autopilot, msg.type, mavutil.mode_string_v10(msg), armed,
+                              msg.system_status, msg.custom_mode)]  # fmt: skip
+
+    def _statustext(self, msg, sender, t_host_ns):
+        """The text as a record of its own, and the numbers (severity, id, chunk) as a row of ``statustext``."""
+        return [generic(msg, sender, t_host_ns), StatusText(*sender, t_host_ns, msg.severity, msg.text, msg.id, msg.chunk_seq)]
+
+    def _param_value(self, msg, sender, t_host_ns):
+        buffer = bytes(msg.get_msgbuf())
+        payload = buffer[MAVLINK2_HEADER if buffer[:1] == b"\xfd" else MAVLINK1_HEADER :]
+        value = param_value(payload, msg.param_value, msg.param_type, self.autopilot.get(sender[0]))
+        return [generic(msg, sender, t_host_ns), ParamValue(*sender, t_host_ns, msg.param_id, value)]
 
     def _sys_status(self, msg, sender, t_host_ns):
         voltage = msg.voltage_battery / 1000.0 if msg.voltage_battery != UINT16_UNKNOWN else math.nan
@@ -172,6 +189,16 @@ class MessageMapper:
         satellites = msg.satellites_visible if msg.satellites_visible != 255 else -1
         return [GpsReading(*sender, t_host_ns, msg.time_usec, msg.lat * 1e-7, msg.lon * 1e-7, msg.alt / 1000.0,
                            speed * math.cos(course), speed * math.sin(course), math.nan, msg.fix_type, satellites)]  # fmt: skip
+
+
+def param_value(payload: bytes, value: float, param_type: int, autopilot: int | None) -> float:
+    """A PARAM_VALUE's number: a PX4 integer from the float's 4 bytes (the start of the payload, exact
+    where a float conversion could not keep a NaN pattern's bits), every other value as sent (ArduPilot
+    converts its integers to the float; an autopilot not yet heard is taken as doing so)."""
+    fmt = PX4_INTEGER_FORMATS.get(param_type)
+    if autopilot != MAV_AUTOPILOT_PX4 or fmt is None or len(payload) < 4:
+        return float(value)
+    return float(struct.unpack_from(fmt, payload)[0])
 
 
 def generic(msg, sender, t_host_ns) -> GenericMessage:

@@ -10,7 +10,10 @@ axes (FRD). They go where the project's own frames go:
 - ``MagReading`` / ``BaroReading`` / ``GpsReading`` -> ``mag_raw`` / ``baro`` / ``gps`` and Aiding
   (GPS velocity aids only when all three NED components are known: GPS_RAW_INT has no vertical speed);
 - ``VehicleStatus`` / ``Battery`` / ``LinkHealth`` -> ``heartbeat`` / ``sys_status`` / ``radio_status``
-  (the mode and arming are events when they change);
+  (the mode and arming are a ``vehicle_status`` event when they change, ``modes``);
+- ``StatusText`` -> a ``message`` event per whole text (chunks joined), ``ParamValue`` -> the pipeline's
+  ``parameters`` and a ``parameter`` event when a known one changes (``messages``); their numbers also
+  reach the ``statustext`` and ``param_value`` tables as generic rows;
 - ``GenericMessage`` -> one table per message type, added to the catalogue when the first one
   arrives (a message from another sender than the vehicle: ``<type>_<system>_<component>``).
 
@@ -41,6 +44,8 @@ import math
 from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
+from groundstation.autopilot.messages import StatusTexts, message_event, parameter_change
+from groundstation.autopilot.modes import status_event
 from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.catalogue import Catalogue, message_table
@@ -70,9 +75,11 @@ class MavlinkFrontEnd:
         self._first_request_ns: int | None = None
         self._slow_warned = False
         self._status: tuple | None = None  # (mode, armed) last seen
+        self._texts = StatusTexts()
         self._route = {rec.ImuSample: self._imu, rec.OnboardAttitude: self._attitude, rec.MagReading: self._mag,
                        rec.BaroReading: self._baro, rec.GpsReading: self._gps, rec.GenericMessage: self._generic,
-                       rec.VehicleStatus: self._vehicle_status, rec.Battery: self._record_row, rec.LinkHealth: self._record_row}  # fmt: skip
+                       rec.VehicleStatus: self._vehicle_status, rec.Battery: self._record_row, rec.LinkHealth: self._record_row,
+                       rec.StatusText: self._text, rec.ParamValue: self._parameter}  # fmt: skip
 
     @staticmethod
     def catalogue(catalogue: Catalogue) -> Catalogue:
@@ -189,7 +196,24 @@ class MavlinkFrontEnd:
         self.pipeline.bank.armed = r.armed  # the rest calibrator refuses while armed
         if (r.mode, r.armed) != self._status:
             self._status = (r.mode, r.armed)
-            self.pipeline.events.append({"t_host_ns": t_host_ns, "kind": "vehicle_status", "mode": r.mode, "armed": r.armed})
+            self.pipeline.events.append(status_event(r.mode, r.armed, **self._times(t_host_ns)))
+
+    def _text(self, t_host_ns: int, r: rec.StatusText) -> None:
+        """The vehicle's texts (another sender's, such as a test driver's chatter, stay out of the events)."""
+        if self._from_vehicle(r):
+            for severity, text in self._texts.add(r):
+                self.pipeline.events.append(message_event(text, severity, "STATUSTEXT", **self._times(t_host_ns)))
+
+    def _parameter(self, t_host_ns: int, r: rec.ParamValue) -> None:
+        if self._from_vehicle(r):
+            change = parameter_change(self.pipeline.parameters, r.name, r.value, **self._times(t_host_ns))
+            if change is not None:
+                self.pipeline.events.append(change)
+
+    def _times(self, t_host_ns: int) -> dict:
+        """An event's times: the host's, and the session time reached (the plots' axis) once there is one."""
+        t_s = self.pipeline._time_s
+        return {"t_host_ns": t_host_ns, "session_time_s": t_s} if math.isfinite(t_s) else {"t_host_ns": t_host_ns}
 
     def _record_row(self, t_host_ns: int, r) -> None:
         """A mapped record's row: the vehicle's table, another sender's own (any radio's: ``radio_status``)."""

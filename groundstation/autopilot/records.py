@@ -88,9 +88,10 @@ class VehicleStatus(NamedTuple):
     t_host_ns: int
     autopilot: int  # MAV_AUTOPILOT: 3 ArduPilot, 12 PX4, 8 none (a GCS, camera, companion)
     vehicle_type: int  # MAV_TYPE
-    mode: str  # pymavlink's name for the custom mode ("LOITER", "MANUAL", ...)
+    mode: str  # the custom mode's name (``modes.mavlink_mode``: "LOITER", "MANUAL", ...)
     armed: bool
     system_status: int  # MAV_STATE
+    custom_mode: int  # the autopilot's own mode number (ArduPilot: per vehicle type; PX4: main and sub mode)
 
 
 class Battery(NamedTuple):
@@ -118,7 +119,30 @@ class GenericMessage(NamedTuple):
     units: dict[str, str]  # field -> unit, where pymavlink's message definition gives one
 
 
-Record = ImuSample | OnboardAttitude | MagReading | BaroReading | GpsReading | LinkHealth | VehicleStatus | Battery | GenericMessage
+class StatusText(NamedTuple):
+    """STATUSTEXT: one chunk of a text the autopilot says (MAVLink 2 splits a long one in 50-character
+    chunks sharing an ``id``; ``id`` 0: the whole text in one message)."""
+
+    system: int
+    component: int
+    t_host_ns: int
+    severity: int  # MAV_SEVERITY: 0 emergency ... 7 debug
+    text: str
+    id: int
+    chunk_seq: int
+
+
+class ParamValue(NamedTuple):
+    """PARAM_VALUE: one of the autopilot's parameters, its value as a number (``parameters.mavlink_value``)."""
+
+    system: int
+    component: int
+    t_host_ns: int
+    name: str
+    value: float
+
+
+Record = ImuSample | OnboardAttitude | MagReading | BaroReading | GpsReading | LinkHealth | VehicleStatus | Battery | GenericMessage | StatusText | ParamValue
 
 
 # The tables a session keeps of these records, live (``session``'s MAVLink front-end) and logged
@@ -126,7 +150,7 @@ Record = ImuSample | OnboardAttitude | MagReading | BaroReading | GpsReading | L
 RECORD_TABLES = {
     VehicleStatus: ("heartbeat", "HEARTBEAT: what the vehicle is and does",
                     {"autopilot": ("autopilot", ""), "vehicle_type": ("vehicle_type", ""), "armed": ("armed", ""),
-                     "system_status": ("system_status", "")}),
+                     "system_status": ("system_status", ""), "custom_mode": ("custom_mode", "")}),
     Battery: ("sys_status", "SYS_STATUS: battery and the autopilot's view of the link",
               {"voltage_v": ("voltage", "V"), "current_a": ("current", "A"), "remaining_pct": ("remaining", "%"),
                "drop_rate_comm_pct": ("drop_rate_comm", "%"), "errors_comm": ("errors_comm", "")}),

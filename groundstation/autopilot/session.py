@@ -71,7 +71,8 @@ def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionDat
         t_us = log.onboard.time_us
         tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0])}
         return build_product(describe(log), log_catalogue(log, {}), tables, (), protocol=AUTOPILOT_PROTOCOL,
-                             true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage))
+                             true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage),
+                             events=log_events(log, t_us[0]), parameters=dict(log.parameters))
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
     mag = on_rows(t_us, log.mag, MAG_COLUMNS)
@@ -97,7 +98,14 @@ def log_session(log: FlightLog, filters, forced: dict, share=None) -> SessionDat
     catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()})
     return build_product(describe(log), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
                          true_q=interpolated(t_us, log.truth), true_frame="NED",
-                         settings_at_start=settings, settings_at_end=settings, damage=list(log.damage))
+                         settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
+                         events=log_events(log, t_us[0]), parameters=dict(log.parameters))
+
+
+def log_events(log: FlightLog, t0_us: int) -> list[dict]:
+    """What the autopilot said (``FlightLog.events``) at session time: seconds from the first sample row
+    (before it: negative), which is both the event's ``t_s`` and its place on the plots' axis."""
+    return [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
 
 
 def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np.ndarray]:

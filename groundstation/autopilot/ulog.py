@@ -6,7 +6,8 @@ body FRD, full rate; logs before ~2018 also carry ``magnetometer_ga[3]`` there),
 ``vehicle_air_data`` (``baro_pressure_pa``) or ``sensor_baro`` (``pressure``: hPa up to PX4 1.12, Pa
 after), ``vehicle_gps_position`` (``lat``/``lon`` 1e-7 degrees and ``alt`` mm, or ``latitude_deg``/
 ``longitude_deg``/``altitude_msl_m`` from PX4 1.14; ``vel_{n,e,d}_m_s``), and in SITL logs
-``vehicle_attitude_groundtruth`` (the simulator's true attitude, kept as truth).
+``vehicle_attitude_groundtruth`` (the simulator's true attitude, kept as truth); ``vehicle_status``
+(``nav_state``, ``arming_state``), the logged messages and parameters: ``messages.ulog_said``.
 """
 
 from __future__ import annotations
@@ -20,13 +21,14 @@ from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.flightlog import (
     GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, implausible_message, implausible_times, series,
 )
+from groundstation.autopilot.messages import ulog_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAGIC = FORMATS["ulog"].magic
 TOPICS = ["sensor_combined", "vehicle_attitude", "vehicle_attitude_groundtruth", "vehicle_magnetometer", "vehicle_air_data",
-          "sensor_baro", "vehicle_gps_position"]  # fmt: skip
+          "sensor_baro", "vehicle_gps_position", "vehicle_status"]  # fmt: skip
 GAUSS_TO_UT = 100.0
 
 
@@ -70,6 +72,7 @@ def read_ulog(path, progress=None) -> FlightLog:
         log.mag = series(mag["timestamp"], {c: mag[f"magnetometer_ga[{i}]"] * GAUSS_TO_UT for i, c in enumerate(MAG_COLUMNS)}, mag_topic)
     log.baro = _baro(topics)
     log.gps = _gps(topics.get("vehicle_gps_position"))
+    log.events, log.parameters = ulog_said(ulog, topics.get("vehicle_status"))
     return log
 
 

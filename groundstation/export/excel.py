@@ -1,4 +1,5 @@
-"""A session as an Excel workbook: ``Session``, ``Attitude``, ``Sensors``, ``Link`` and ``Chart`` sheets.
+"""A session as an Excel workbook: ``Session``, ``Attitude``, ``Sensors``, ``Link`` and ``Chart`` sheets, and
+``Parameters`` for an autopilot's session.
 
 openpyxl in write-only mode: rows go to disk as they are made, so memory stays bounded whatever the
 session's length. The file is written beside the destination and renamed only when complete
@@ -15,6 +16,7 @@ from openpyxl import Workbook
 from groundstation.export.columns import select_rows
 from groundstation.export.excel_chart import write_chart_sheets
 from groundstation.export.excel_columns import attitude_block, chart_block, link_blocks, sensor_blocks
+from groundstation.export.excel_parameters import write_parameters_sheet
 from groundstation.export.excel_session import session_rows, write_session_sheet
 from groundstation.export.excel_stream import EXCEL_MAX_ROWS, as_os_error, check_width, discard, save, table_rows, write_table
 from groundstation.export.files import atomic_output
@@ -75,6 +77,7 @@ def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to
             for title, blocks in tables.items():
                 titles += write_table(workbook, title, blocks, max_rows, advance)
             write_chart_sheets(workbook, chart, advance)
+            parameters = write_parameters_sheet(workbook, data)
             save(workbook, temporary)
         except BaseException as error:  # a cancel, a failure, Ctrl-C: no temporary file may stay behind
             discard(workbook)
@@ -82,4 +85,4 @@ def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to
             if os_error is not None:  # a full disk, said as atomic_output says it
                 raise os_error from error
             raise
-    return titles + ["Chart"]
+    return titles + ["Chart", *parameters]

@@ -64,6 +64,7 @@ class BatchSession:
         self.config: dict | None = None
         self.sensor: SensorConfig | None = None
         self.events: list[dict] = []
+        self.parameters: dict[str, float] = {}  # the project's aircraft has none (an autopilot's: ``Pipeline``)
         self.unexpected_frames: dict[str, int] = {}
         self.t0_host_ns: int | None = None
         self.decoder: BatchDecode | None = None  # ``decoder.stats``: the link's counters

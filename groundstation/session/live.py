@@ -44,6 +44,7 @@ class PipelineView:
     imu = property(lambda self: self._pipeline.imu)
     onboard = property(lambda self: self._pipeline.onboard)
     events = property(lambda self: self._pipeline.events)
+    parameters = property(lambda self: self._pipeline.parameters)
     config = property(lambda self: self._pipeline.config)
     protocol = property(lambda self: self._pipeline.protocol)
     t0_host_ns = property(lambda self: self._pipeline.t0_host_ns)

@@ -97,7 +97,7 @@ def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: 
         link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
         events=[{**event, "t_s": (event["t_host_ns"] - t0_ns) / 1e9} for event in pipeline.events],
         settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=damage,
-        magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
+        parameters=dict(pipeline.parameters), magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
     )
 
 

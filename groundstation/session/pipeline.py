@@ -336,6 +336,7 @@ class Pipeline:
         self.aiding = Aiding()
         self.config: dict | None = None  # the values of the last CONFIG frame
         self.sensor: SensorConfig | None = None  # in use for conversion; None while holding
+        self.parameters: dict[str, float] = {}  # an autopilot's, as last reported (MAVLink PARAM_VALUE)
         self.events: list[dict] = []  # what happened, in stream order: config, warnings, settings, acks
         self.unexpected_frames: dict[str, int] = {}  # frames of uplink types that came down, by type name
         self.t0_host_ns: int | None = None  # arrival of the first chunk: the origin of host times

@@ -140,6 +140,7 @@ class Revealed:
         self.filters = data.filters
         self.catalogue = data.catalogue
         self.config = data.config
+        self.parameters = data.parameters  # as last set: each change is also an event, revealed with the clock
         self.t0_host_ns = None  # every event carries its session time
         self.protocol = data.protocol
         self._settings = data.settings_at_end

@@ -4,6 +4,7 @@ or the dataset reader. One shape, filled by one builder (``build_product``):
 - ``tables``: every table as columns, exactly as ``catalogue`` describes them (``imu`` with every
   estimator's quaternion and diagnostics, ``onboard``, one per frame or message type, ``position``);
 - ``events``, ``link`` (the decoder's counters), ``config``, the estimators' settings at start and end;
+- ``parameters``: an autopilot's parameters, name -> value as last set (their changes are events);
 - ``protocol``: what the link spoke ("gs", "mavlink"; None for a dataset), ``metadata``, ``damage``;
 - the truth an evaluation scores against, on the sample rows, where the session has one.
 
@@ -50,6 +51,7 @@ class SessionData:
     true_q: np.ndarray | None = None  # (N, 4) on the sample rows: truth rotating body vectors into true_frame
     true_frame: str = "ENU"
     moving: np.ndarray | None = None  # (N,) bool on the sample rows: the samples an evaluation scores
+    parameters: dict[str, float] = dataclasses.field(default_factory=dict)  # an autopilot's: name -> last value
 
     @property
     def sample_table(self) -> str:

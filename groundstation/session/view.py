@@ -35,6 +35,7 @@ class ProductView(Protocol):
     imu: object
     onboard: object
     events: list[dict]
+    parameters: dict[str, float]  # an autopilot's, name -> value (``SessionData.parameters``)
     config: dict | None
     protocol: str | None
     t0_host_ns: int | None  # None: every event carries its ``session_time_s``

@@ -4,7 +4,9 @@ live MAVLink path: the same truth profiles as the rest of the simulator, the sam
 It sends ``HEARTBEAT`` (ArduPilot, quadrotor, disarmed STABILIZE) and ``SYS_STATUS`` at 1 Hz,
 ``RAW_IMU`` and ``ATTITUDE`` at a telemetry-link rate until the ground station asks for more,
 ``SCALED_PRESSURE`` at 10 Hz and ``GPS_RAW_INT`` at 5 Hz, and ``RADIO_STATUS`` at 1 Hz from a SiK radio
-(system 51, component 68). ``RAW_IMU`` is in ArduPilot's units (mG, mrad/s, mgauss): an ideal IMU on the
+(system 51, component 68). ``texts`` are said as ArduPilot says them, in ``STATUSTEXT`` at their times:
+one message for up to 50 characters, else 50-character chunks sharing an ``id`` (MAVLink 2's rule;
+MAVLink 1 has no ``id``, so a long text is cut at 50 characters there). ``RAW_IMU`` is in ArduPilot's units (mG, mrad/s, mgauss): an ideal IMU on the
 body axes (FRD) from the truth plus white noise, rounded to those integers. ``ATTITUDE`` is the truth, so
 the onboard estimate it carries is exact.
 
@@ -50,7 +52,7 @@ BATTERY = {"voltage_battery": 12_600, "current_battery": 150, "battery_remaining
 
 class MavlinkAircraft:
     def __init__(self, scenario: Scenario = Scenario(), base_rate_hz: float = 200.0, telemetry_rate_hz: float = 4.0,
-                 mavlink1: bool = False):  # fmt: skip
+                 mavlink1: bool = False, texts: tuple[tuple[float, int, str], ...] = ()):  # fmt: skip
         self.scenario = scenario
         self.profile = make_profile(scenario.profile, scenario.duration_s, scenario.seed)
         self.link = Link(scenario.link, scenario.seed)
@@ -67,6 +69,8 @@ class MavlinkAircraft:
         self._replies: list[SentFrame] = []
         self.requests: list[tuple[str, float]] = []  # (message, interval s) as asked by the ground
         self.refused: list[int] = []  # MAV_CMD numbers of commands that were not stream requests
+        self.texts = sorted(texts)  # (time s, MAV_SEVERITY, text) still to say
+        self._text_id = 0
 
     @property
     def end_s(self) -> float:
@@ -133,6 +137,8 @@ class MavlinkAircraft:
         yaw, pitch, roll = quat.to_euler_zyx(truth.q_body_to_ned).T
         frames = []
         for i, t in enumerate(t_s.tolist()):
+            while self.texts and self.texts[0][0] <= t:
+                frames += self._statustext(t, *self.texts.pop(0)[1:])
             for name, interval in self.intervals_s.items():
                 if t + 1e-9 < self._due_s[name]:
                     continue
@@ -140,6 +146,18 @@ class MavlinkAircraft:
                 encoder, msg = self._message(name, i, t, truth, acc_mg, gyr_mrad, mag_mgauss, (yaw, pitch, roll))
                 frames.append(self._frame(encoder, msg, t, int(round(t * 1e6))))
         return frames
+
+    def _statustext(self, t_s: float, severity: int, text: str) -> list[SentFrame]:
+        chunks = [text[at : at + 50] for at in range(0, max(len(text), 1), 50)]
+        if len(chunks) > 1 and self.mavlink1:
+            chunks = chunks[:1]
+        if len(chunks) > 1:
+            self._text_id = self._text_id % 65535 + 1
+            if len(chunks[-1]) == 50:
+                chunks.append("")  # the NUL that ends the text needs a chunk of its own
+        text_id = self._text_id if len(chunks) > 1 else 0
+        a = self._autopilot
+        return [self._frame(a, a.statustext_encode(severity, chunk.encode(), text_id, seq), t_s, None) for seq, chunk in enumerate(chunks)]
 
     def _message(self, name, i, t, truth, acc_mg, gyr_mrad, mag_mgauss, euler):
         a = self._autopilot

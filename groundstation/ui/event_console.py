@@ -1,6 +1,7 @@
 """The event console: the session's events (``view.events``: configuration, warnings, commands
 and their ACKs, settings changes, reboots and clock jumps, gaps, the port lost and back, the
-recording started, stopped or failed) with their session times; a click moves the view there.
+recording started, stopped or failed; an autopilot's texts, modes and parameter changes) with their
+session times; a click moves the view there. Alarms and an autopilot's errors are red.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import math
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from firmware_protocol import SPEC
+from groundstation.autopilot.messages import ALARM_SEVERITIES
 from groundstation.session.view import ProductView, Session
 
 # Kinds a pilot must not miss, shown in red.
@@ -79,7 +81,7 @@ class EventConsole(QtWidgets.QWidget):
             cells[0].setData(QtCore.Qt.UserRole, t_s)
             cells[2].setToolTip(describe(event))
             for column, cell in enumerate(cells):
-                if event.get("kind") in ALARMS:
+                if event.get("kind") in ALARMS or event.get("severity") in ALARM_SEVERITIES:
                     cell.setForeground(QtGui.QColor("#b00020"))
                 self.table.setItem(row, column, cell)
         self.shown += len(new)

@@ -17,6 +17,7 @@ from groundstation import estimation
 from groundstation.session.view import Session
 from groundstation.ui.navigation import aiding_series
 from groundstation.ui.channels import ChannelsView
+from groundstation.ui.mode_bands import ModeBands
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities
@@ -89,6 +90,7 @@ class LiveView(QtWidgets.QWidget):
         self._view = None
         self.frames_drawn = 0  # for the tests and the benchmark
         self._browsing: StackedPlots | None = None  # paused, and drawn whole to look back in time
+        self.mode_bands = ModeBands()  # an autopilot's flight modes under the curves
         self.window_box = QtWidgets.QComboBox()
         self.window_box.addItems(list(WINDOWS_S))
         self.window_box.setCurrentText(DEFAULT_WINDOW)
@@ -233,6 +235,10 @@ class LiveView(QtWidgets.QWidget):
         if grew - {"imu", "onboard"}:
             self._show_aiding_tabs()
         plots = self.current_plots()
+        ends = [s.end_s for s in (self.series["imu"], self.series["onboard"]) if s.end_s is not None]
+        self.mode_bands.update_spans(view.events, max(ends) if ends else None)
+        if isinstance(plots, StackedPlots):
+            self.mode_bands.show(plots)
         # A curve switched on after the data stopped (a replay at its end) is drawn all the same.
         if self.paused or not (grew or getattr(plots, "stale", False)):
             return False

@@ -25,6 +25,8 @@ from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.event_console import EventConsole
+from groundstation.ui.mode_bands import status_text
+from groundstation.ui.parameters_view import ParametersView
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
@@ -111,6 +113,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.event_console = EventConsole()
         self.event_console.timeRequested.connect(self.live_view.show_time)
         controls.addTab(self.event_console, "Events")
+        self.parameters_view = ParametersView()
+        controls.addTab(self.parameters_view, "Parameters")
         self.controls = controls
         side = QtWidgets.QWidget()
         side_layout = QtWidgets.QVBoxLayout(side)
@@ -142,6 +146,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.source_label = QtWidgets.QLabel("no source")
         self.recording_label = QtWidgets.QLabel("not recording")
         self.statusBar().addWidget(self.source_label, 1)
+        self.mode_label = QtWidgets.QLabel()  # an autopilot's flight mode and arming now
+        self.statusBar().addPermanentWidget(self.mode_label)
         self.statusBar().addPermanentWidget(self.recording_label)
         self.record_action = QtGui.QAction("Start recording", self, shortcut=QtGui.QKeySequence("Ctrl+R"))
         self.record_action.setShortcutContext(QtCore.Qt.ApplicationShortcut)
@@ -312,6 +318,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels())
         self.uplink_panel.set_session(session)
         self.event_console.set_session(session)
+        self.parameters_view.set_session(session)
         self.link_panel.refresh(session)
         self.bar.set_connected(True)
         self._sync_record_action()
@@ -430,6 +437,8 @@ class MainWindow(QtWidgets.QMainWindow):
             self.replay_bar.refresh()
             self.uplink_panel.refresh()
             self.event_console.refresh()
+            self.parameters_view.refresh()
+            self.mode_label.setText(status_text(self.live_view.mode_bands.spans))
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
             self._sync_record_action()

@@ -118,19 +118,24 @@ def dataflash_record(msg_id: int, payload: bytes) -> bytes:
     return b"\xa3\x95" + bytes([msg_id]) + payload
 
 
+def packing(fmt: str) -> str:
+    """A DataFlash format as a struct format: its text fields ``n``, ``N``, ``Z`` are 4, 16 and 64 bytes."""
+    return "<" + fmt.replace("n", "4s").replace("N", "16s").replace("Z", "64s")
+
+
 def dataflash_fmt(msg_id: int, name: str, fmt: str, labels: str) -> bytes:
-    length = 3 + struct.calcsize("<" + fmt.replace("n", "4s").replace("N", "16s").replace("Z", "64s"))
+    length = 3 + struct.calcsize(packing(fmt))
     return dataflash_record(128, struct.pack("<BB4s16s64s", msg_id, length, name.encode(), fmt.encode(), labels.encode()))
 
 
 def write_dataflash(path, messages: dict[str, tuple[str, str, list[tuple]]]) -> None:
-    """``messages``: name -> (struct format of the fields, labels, rows); rows of all types are written
+    """``messages``: name -> (DataFlash format of the fields, labels, rows); rows of all types are written
     in order of their first field (TimeUS)."""
     out = bytearray(dataflash_fmt(128, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns"))
     rows = []
     for msg_id, (name, (fmt, labels, values)) in enumerate(messages.items(), start=130):
         out += dataflash_fmt(msg_id, name, fmt, labels)
-        rows += [(row[0], msg_id, struct.pack("<" + fmt, *row)) for row in values]
+        rows += [(row[0], msg_id, struct.pack(packing(fmt), *row)) for row in values]
     for _, msg_id, payload in sorted(rows, key=lambda r: r[:2]):
         out += dataflash_record(msg_id, payload)
     Path(path).write_bytes(bytes(out))
