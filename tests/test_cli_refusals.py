@@ -25,6 +25,10 @@ WRONG_COMMAND_LINES = [
     ("export {tmp}/flight.gsrec --out {tmp}/y.csv --filters ''", "--filters"),
     ("import {tmp}/flight.gsrec --out {tmp}/flight.tlog", "MAVLink"),
     ("protocol --decode /dev/zero", "not a file"),
+    ("vibration {tmp}/missing.bin", "no such file"),
+    ("vibration {tmp}/flight.gsrec --from 1.5 --to 1", "--from"),
+    ("vibration {tmp}/flight.gsrec --from 0.5 --to 0.7", "too few samples"),
+    ("vibration {tmp}/flight.gsrec --what-if notch --what-if-hz 0", "frequency"),
 ]
 
 

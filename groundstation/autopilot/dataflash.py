@@ -37,6 +37,10 @@ FIELDS = {  # each row: the time in µs (``CLOCKS``), then these
 # The autopilot's boot clock, by the first field a message's format has: (field, µs per unit).
 CLOCKS = (("TimeUS", 1), ("T", 1000), ("TimeMS", 1000))
 MGAUSS_TO_UT = 0.1
+# Kept whole as tables of their own (analysis/vibration.py reads them): the vibration and clip counters
+# (``VIBE``), the motor outputs (``RCOU``, PWM µs) and ESC telemetry (``ESC``: ``RPM``); a table per
+# instance (``VIBE``, ``VIBE_1`` ...) as the instances share their timestamps. -> instance field.
+TABLES = {"VIBE": "IMU", "RCOU": None, "ESC": "Instance"}
 
 
 def read_dataflash(path, progress=None) -> FlightLog:
@@ -44,19 +48,23 @@ def read_dataflash(path, progress=None) -> FlightLog:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
     rows, said = defaultdict(list), []
+    tables: dict[str, list] = defaultdict(list)
+    units: dict[str, dict[str, str]] = {}
     chatter = Chatter()  # DFReader prints a "bad header" line per damaged byte, some from C: counted, not shown
     try:
         with chatter.caught():
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
         clocks = {name: boot_clock(reader, name) for name in FIELDS}
         wanted = [name for name, clock in clocks.items() if clock is not None]
-        # the messages, events and parameters where the log stamps them in TimeUS (older logs' MSG, MODE: not at all)
-        wanted += [name for name in DATAFLASH_SAID if boot_clock(reader, name) == CLOCKS[0]]
+        # the messages, events, parameters and other tables where the log stamps them in TimeUS (older logs' MSG, MODE: not at all)
+        wanted += [name for name in (*DATAFLASH_SAID, *TABLES) if boot_clock(reader, name) == CLOCKS[0]]
         with chatter.caught(descriptors=False):  # reading prints from Python only
             while wanted and (msg := reader.recv_match(type=wanted)) is not None:
                 name = msg.get_type()
                 if name in DATAFLASH_SAID:
                     said.append(msg)
+                elif name in TABLES:
+                    _table_row(msg, tables, units)
                 elif getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
                     field, us_per_unit = clocks[name]
                     rows[name].append([getattr(msg, field) * us_per_unit, *(getattr(msg, f) for f in FIELDS[name])])
@@ -95,7 +103,24 @@ def read_dataflash(path, progress=None) -> FlightLog:
         course = np.radians(gps[:, 5])
         columns = [gps[:, 1], gps[:, 2], gps[:, 3], gps[:, 4] * np.cos(course), gps[:, 4] * np.sin(course), gps[:, 6], gps[:, 7], gps[:, 8]]
         log.gps = series(gps[:, 0], dict(zip(GPS_COLUMNS, columns)), "GPS[0]")
+    for name, values in tables.items():
+        fields = list(units[name])
+        table = np.array(values, dtype=float)
+        log.tables[name] = series(table[:, 0], dict(zip(fields, table[:, 1:].T)), name)
+        log.units[name] = units[name]
     return log
+
+
+def _table_row(msg, tables: dict, units: dict) -> None:
+    """One ``TABLES`` message as a row (TimeUS first) of its instance's table, its fields' units noted once."""
+    kind = msg.get_type()
+    instance = int(getattr(msg, TABLES[kind], 0) or 0) if TABLES[kind] else 0
+    name = kind if instance == 0 else f"{kind}_{instance}"
+    if name not in units:
+        names, unit_list = msg.get_fieldnames(), getattr(msg.fmt, "units", None) or []
+        given = dict(zip(names, unit_list))
+        units[name] = {f: given.get(f, "") for f in names if f not in ("TimeUS", TABLES[kind])}
+    tables[name].append([msg.TimeUS, *(getattr(msg, f) for f in units[name])])
 
 
 def boot_clock(reader, name: str) -> tuple[str, int] | None:

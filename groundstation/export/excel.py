@@ -1,5 +1,5 @@
-"""A session as an Excel workbook: ``Session``, ``Attitude``, ``Sensors``, ``Link`` and ``Chart`` sheets, and
-``Parameters`` for an autopilot's session.
+"""A session as an Excel workbook: ``Session``, ``Attitude``, ``Sensors``, ``Link``, ``Chart`` and ``Vibration``
+sheets, and ``Parameters`` for an autopilot's session.
 
 openpyxl in write-only mode: rows go to disk as they are made, so memory stays bounded whatever the
 session's length. The file is written beside the destination and renamed only when complete
@@ -19,6 +19,7 @@ from groundstation.export.excel_columns import attitude_block, chart_block, link
 from groundstation.export.excel_parameters import write_parameters_sheet
 from groundstation.export.excel_session import session_rows, write_session_sheet
 from groundstation.export.excel_stream import EXCEL_MAX_ROWS, as_os_error, check_width, discard, save, table_rows, write_table
+from groundstation.export.excel_vibration import write_vibration_sheet
 from groundstation.export.files import atomic_output
 from groundstation.session.product import SessionData
 
@@ -77,6 +78,7 @@ def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to
             for title, blocks in tables.items():
                 titles += write_table(workbook, title, blocks, max_rows, advance)
             write_chart_sheets(workbook, chart, advance)
+            write_vibration_sheet(workbook, data, window)
             parameters = write_parameters_sheet(workbook, data)
             save(workbook, temporary)
         except BaseException as error:  # a cancel, a failure, Ctrl-C: no temporary file may stay behind
@@ -85,4 +87,4 @@ def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to
             if os_error is not None:  # a full disk, said as atomic_output says it
                 raise os_error from error
             raise
-    return titles + ["Chart", *parameters]
+    return titles + ["Chart", "Vibration", *parameters]

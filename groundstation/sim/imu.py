@@ -29,6 +29,7 @@ from groundstation import mounting as mountings
 from groundstation import units
 from groundstation.sim.profiles import Truth
 from groundstation.sim.seeds import stream
+from groundstation.sim.vibration import MotorVibration, VibrationSettings
 
 
 @dataclasses.dataclass(frozen=True)
@@ -53,6 +54,8 @@ class MPU6050Settings:
     temperature_start_c: float = 25.0
     temperature_end_c: float = 30.0
     warmup_time_constant_s: float = 120.0
+    # Not the part's: the motors' vibration reaching it (sim/vibration.py); off by default.
+    vibration: VibrationSettings = VibrationSettings()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -96,6 +99,7 @@ class MPU6050:
         # The offset registers (written by the firmware), in physical units.
         self.gyro_offset_dps = np.zeros(3)
         self.accel_offset_g = np.zeros(3)
+        self._vibration = MotorVibration(s.vibration) if s.vibration.hover_hz > 0 else None
 
     def temperature_c(self, t_s) -> np.ndarray:
         s = self.settings
@@ -114,7 +118,12 @@ class MPU6050:
         temp_c = self.temperature_c(truth.t_s)
         warm_c = (temp_c - s.temperature_start_c)[:, None]
         rate_dps = np.degrees(truth.rate_body_rad_s @ self._body_to_sensor.T)
-        force_g = (truth.specific_force_body_m_s2() @ self._body_to_sensor.T) / units.STANDARD_GRAVITY_M_S2
+        force_body_m_s2 = truth.specific_force_body_m_s2()
+        if self._vibration is not None:  # body axes, then to the sensor's with the motion
+            shake_dps, shake_m_s2 = self._vibration(truth.t_s, force_body_m_s2)
+            rate_dps = rate_dps + shake_dps @ self._body_to_sensor.T
+            force_body_m_s2 = force_body_m_s2 + shake_m_s2
+        force_g = (force_body_m_s2 @ self._body_to_sensor.T) / units.STANDARD_GRAVITY_M_S2
         gyr_dps = (
             rate_dps @ self._gyr_matrix.T
             + self.gyro_turn_on_bias_dps

@@ -7,9 +7,11 @@ import dataclasses
 
 from groundstation.errors import UserError
 from groundstation.sim.firmware import MODES, FirmwareSettings
+from groundstation.sim.imu import MPU6050Settings
 from groundstation.sim.link import LinkSettings
 from groundstation.sim.profiles import DEFAULT_DURATION_S, MAX_DURATION_S, PROFILES
 from groundstation.sim.stream import Scenario
+from groundstation.sim.vibration import VibrationSettings
 
 # Rates of the optional sensors (Hz); each must divide the output rate.
 EXTRA_SENSOR_RATES_HZ = {"mag": 50, "baro": 25, "gps": 5}
@@ -31,6 +33,13 @@ def add_scenario_arguments(parser: argparse.ArgumentParser) -> None:
                         help=f"board clock error (default: {FirmwareSettings.clock_drift_ppm:g})")
     parser.add_argument("--sample-jitter-us", type=float, default=FirmwareSettings.sample_jitter_us, metavar="US",
                         help=f"σ of the sampling-time jitter (default: {FirmwareSettings.sample_jitter_us:g})")
+    shake = parser.add_argument_group("motor vibration (default: none)")
+    shake.add_argument("--vibration", type=float, default=0.0, metavar="HZ",
+                       help="rotor frequency at hover thrust; it follows the thrust (f ∝ √thrust), with its 2nd harmonic")
+    shake.add_argument("--vibration-accel", type=float, default=VibrationSettings.accel_m_s2, metavar="M_S2",
+                       help=f"accelerometer amplitude at hover, strongest axis (default: {VibrationSettings.accel_m_s2:g})")
+    shake.add_argument("--vibration-gyro", type=float, default=VibrationSettings.gyro_dps, metavar="DPS",
+                       help=f"gyro amplitude at hover, strongest axis (default: {VibrationSettings.gyro_dps:g})")
     board = parser.add_argument_group("board mishaps (default: none)")
     board.add_argument("--reboot-after", type=float, default=0.0, metavar="S",
                        help="the board resets once after S seconds: clock and sequence restart at 0, it boots again")
@@ -86,6 +95,8 @@ def scenario_from_args(args: argparse.Namespace, duration_s: float | None) -> Sc
             latency_ms=args.latency_ms, jitter_ms=args.jitter_ms, usb_batch_ms=args.usb_batch_ms,
             dropout_every_s=args.dropout_every or 0.0, dropout_s=args.dropout_s,
         )
+        vibration = VibrationSettings(args.vibration, args.vibration_accel, args.vibration_gyro)
     except ValueError as error:
         raise UserError(str(error)) from None
-    return dataclasses.replace(Scenario(), profile=args.scenario, duration_s=duration_s, seed=args.seed, firmware=firmware, link=link)
+    return dataclasses.replace(Scenario(), profile=args.scenario, duration_s=duration_s, seed=args.seed, firmware=firmware, link=link,
+                               imu=MPU6050Settings(vibration=vibration))

@@ -50,8 +50,8 @@ def sim_book(sim_session, tmp_path_factory):
 
 def test_sheets_headers_row_counts_and_layout(sim_session, sim_book):
     sheets, book = sim_book
-    assert sheets == ["Session", "Attitude", "Sensors", "Link", "Chart"]
-    assert book.sheetnames == ["Session", "Attitude", "Sensors", "Link", "Chart", "Chart data"]
+    assert sheets == ["Session", "Attitude", "Sensors", "Link", "Chart", "Vibration"]
+    assert book.sheetnames == ["Session", "Attitude", "Sensors", "Link", "Chart", "Chart data", "Vibration"]
     assert book["Chart data"].sheet_state == "hidden"
     attitude = book["Attitude"]
     assert [c.value for c in attitude[1]] == ATTITUDE_HEADERS
