@@ -38,5 +38,5 @@ def run(args: argparse.Namespace) -> int:
         progress.done()
     for warning in data.warnings:
         print(f"warning: {warning}")
-    print(f"wrote {write_report(data, args.out, overwrite=True)}")
+    print(f"wrote {write_report(data, args.out, Path(args.file).name, overwrite=True)}")
     return 0

@@ -52,12 +52,13 @@ tr.alarm td { color: #a00; }
 """
 
 
-def write_report(data: SessionData, out, overwrite: bool = False) -> Path:
-    """The report of ``data`` written to ``out`` (``.html``), whole or not at all."""
+def write_report(data: SessionData, out, file_name: str = "", overwrite: bool = False) -> Path:
+    """The report of ``data`` (computed from the file ``file_name``) written to ``out`` (``.html``),
+    whole or not at all."""
     out = Path(out)
     if out.suffix.lower() not in (".html", ".htm"):
         raise UserError(f"{out}: a report is an HTML page; name it .html")
-    page = report_html(data)
+    page = report_html(data, file_name)
     with atomic_output(out, overwrite) as temporary:
         try:
             Path(temporary).write_text(page, encoding="utf-8")
@@ -66,14 +67,14 @@ def write_report(data: SessionData, out, overwrite: bool = False) -> Path:
     return out
 
 
-def report_html(data: SessionData) -> str:
+def report_html(data: SessionData, file_name: str = "") -> str:
     vibration, vibration_note = _vibration(data)
     found = findings(data, vibration)
-    title = f"Flight report: {data.metadata.get('source', 'session')}"
+    title = f"Flight report: {file_name or data.metadata.get('source', 'session')}"
     parts = [f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{_e(title)}</title>"
              f"<style>{STYLE}</style></head><body>", f"<h1>{_e(title)}</h1>",
              f"<p class=\"detail\">made by groundstation {__version__} on {datetime.date.today().isoformat()}</p>",
-             flight_section(data), findings_section(found), attitude_section(data),
+             flight_section(data, file_name), findings_section(found), attitude_section(data),
              vibration_section(vibration, vibration_note), link_section(data), events_section(data), "</body></html>"]
     return "\n".join(parts)
 
@@ -113,15 +114,23 @@ def firmware(data: SessionData) -> str:
     return "not recorded"
 
 
+def vehicle(data: SessionData) -> str:
+    meta = data.metadata
+    if meta.get("autopilot"):
+        return str(meta["autopilot"])
+    if data.protocol == "gs":
+        return "this project's aircraft" + (f" (simulated, scenario '{meta['scenario']}')" if meta.get("scenario") else "")
+    return "not recorded"
+
+
 def duration_s(data: SessionData) -> float:
     ends = [float(np.nanmax(c["time_s"])) for c in data.tables.values() if len(c.get("time_s", ())) and np.isfinite(c["time_s"]).any()]
     return max(ends, default=0.0)
 
 
-def flight_section(data: SessionData) -> str:
+def flight_section(data: SessionData, file_name: str) -> str:
     meta = data.metadata
-    rows = [["file", meta.get("source", "")], ["vehicle", meta.get("autopilot") or meta.get("scenario") or
-            ("this project's aircraft" if data.protocol == "gs" else "not recorded")],
+    rows = [["file", file_name or "-"], ["source", meta.get("source", "")], ["vehicle", vehicle(data)],
             ["firmware", firmware(data)], ["duration", f"{duration_s(data):.1f} s"],
             ["IMU samples", f"{len(data.tables['imu']['time_s'])}" + (f" at {meta['imu_rate_hz']:g} Hz" if meta.get("imu_rate_hz") else "")],
             ["host estimators", ", ".join(data.estimated) or "none (no IMU samples)"],

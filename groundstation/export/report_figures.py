@@ -28,6 +28,17 @@ def nice_ticks(lo: float, hi: float, count: int = 5) -> list[float]:
     return [first + i * step for i in range(int((hi - first) / step + 1e-9) + 1)]
 
 
+def log_ticks(lo: float, hi: float, most: int = 8) -> list[float]:
+    """Ticks of a log axis spanning 10**lo .. 10**hi, as their logarithms: 1, 2 and 5 times the powers
+    of ten inside it, or the powers alone where those are too many."""
+    powers = range(math.floor(lo), math.ceil(hi) + 1)
+    for multiples in ((1, 2, 5), (1,)):
+        ticks = [math.log10(m) + p for p in powers for m in multiples if lo <= math.log10(m) + p <= hi]
+        if len(ticks) <= most:
+            return ticks
+    return ticks
+
+
 def reduced(x: np.ndarray, y: np.ndarray, columns: int) -> tuple[np.ndarray, np.ndarray]:
     """At most the lowest and the highest point of each of ``columns`` equal spans of ``x``, in x order
     (finite points only)."""
@@ -88,9 +99,9 @@ def line_plot(series: list[tuple[str, np.ndarray, np.ndarray]], title: str, x_la
     for tick in nice_ticks(x_lo, x_hi):
         out.append(f'<line x1="{px(tick):.1f}" x2="{px(tick):.1f}" y1="{top}" y2="{bottom}" stroke="#eee"/>'
                    f'<text x="{px(tick):.1f}" y="{bottom + 14}" text-anchor="middle">{tick:g}</text>')
-    y_ticks = [t for t in nice_ticks(math.floor(y_lo), math.ceil(y_hi)) if y_lo <= t <= y_hi] if log_y else nice_ticks(y_lo, y_hi)
+    y_ticks = log_ticks(y_lo, y_hi) if log_y else nice_ticks(y_lo, y_hi)
     for tick in y_ticks:
-        text = f"{10 ** tick:g}" if log_y else f"{tick:g}"
+        text = f"{10 ** tick:.3g}" if log_y else f"{tick:g}"
         out.append(f'<line x1="{left}" x2="{left + plot_w}" y1="{py(tick):.1f}" y2="{py(tick):.1f}" stroke="#eee"/>'
                    f'<text x="{left - 4}" y="{py(tick) + 4:.1f}" text-anchor="end">{text}</text>')
     for x, label in marks:

@@ -158,7 +158,15 @@ def vibration_findings(v: VibrationSummary) -> list[Finding]:
                                f"high vibration: {level:.1f} m/s² RMS above 5 Hz on {axis}",
                                f"ArduPilot: normally fine below {VIBE_FINE_M_S2:g}, a problem above {VIBE_BAD_M_S2:g} m/s²",
                                values={"level_m_s2": level}))
-    clips = sum(e.get("clips", 0) for e in (v.clipping or {}).get("imus", {}).values())
+    logged = (v.clipping or {}).get("imus", {})  # the autopilot's own VIBE: its accelerometer RMS above 5 Hz at full rate
+    vibe = [(e[f"max_vibe_{a}_m_s2"], imu, a) for imu, e in logged.items() for a in "xyz" if f"max_vibe_{a}_m_s2" in e]
+    if vibe and max(vibe)[0] >= VIBE_FINE_M_S2:
+        level, imu, axis = max(vibe)
+        out.append(Finding("high" if level >= VIBE_BAD_M_S2 else "medium", "vibration",
+                           f"high vibration: the autopilot logged VIBE up to {level:.1f} m/s² (IMU {imu}, {axis})",
+                           f"ArduPilot: normally fine below {VIBE_FINE_M_S2:g}, a problem above {VIBE_BAD_M_S2:g} m/s²",
+                           values={"level_m_s2": level}))
+    clips = sum(e.get("clips", 0) for e in logged.values())
     if clips:
         out.append(Finding("high", "clipping", f"the accelerometer clipped {clips} times", "samples beyond its range are lost"))
     if v.peaks:

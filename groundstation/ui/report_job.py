@@ -37,7 +37,7 @@ class ReportJob:
     def _run(self) -> None:
         try:
             data = self._load(self.source, *self._setup)
-            self.message = f"Flight report of {self.source.name} written to {write_report(data, self.out, overwrite=True)}"
+            self.message = f"Flight report of {self.source.name} written to {write_report(data, self.out, self.source.name, overwrite=True)}"
         except UserError as error:
             self.error = str(error)
         except Exception as error:  # noqa: BLE001 — a worker's bug must reach the window, not vanish with the thread
