@@ -13,6 +13,8 @@ this project's units and frames, with no Qt and no session machinery.
   as a ``SessionData`` with the host estimators run on it.
 - ``mavlink_front``: the live pipeline's MAVLink front-end (records into the session's stages and tables).
 - ``agreement``: host estimators' pitch/roll difference from the autopilot's own estimate.
+- ``messages``: what the autopilot says (texts as ``message`` events, STATUSTEXT chunks joined) and its
+  parameters; ``modes``: flight modes by name and ``mode_spans`` (the plots' bands, a report's phases).
 
 Frames: ArduPilot and PX4 report IMU and attitude on the body axes x forward, y right, z down (FRD)
 and attitude body -> NED, which are this project's conventions (docs/conventions.md), so no axis

@@ -102,13 +102,12 @@ def mode_spans(events: Iterable[dict], end_s: float) -> list[ModeSpan]:
     changes = sorted(((event_time_s(e), e["mode"], e.get("armed")) for e in events if e.get("kind") == STATUS_KIND),
                      key=lambda change: change[0])
     spans: list[ModeSpan] = []
-    for i, (t_s, mode, armed) in enumerate(changes):
+    for t_s, mode, armed in changes:
         if spans and (spans[-1].mode, spans[-1].armed) == (mode, armed):
             continue
-        stop = changes[i + 1][0] if i + 1 < len(changes) else end_s
         if spans:
             spans[-1] = dataclasses.replace(spans[-1], end_s=t_s)
-        spans.append(ModeSpan(t_s, max(stop, t_s), mode, armed))
+        spans.append(ModeSpan(t_s, t_s, mode, armed))
     if spans:
         spans[-1] = dataclasses.replace(spans[-1], end_s=max(end_s, spans[-1].start_s))
     return spans

@@ -121,7 +121,7 @@ def describe_event(event: dict) -> str:
                 f"gyro calibration {SPEC.enum_name(GYRO_CALIBRATION, event['gyro_calibration'])}")
     if "message" in event:
         return str(event["message"])
-    return ", ".join(f"{k} = {v}" for k, v in event.items() if k not in ("t_host_ns", "t_s", "kind"))  # e.g. an ACK
+    return ", ".join(f"{k} = {v}" for k, v in event.items() if k not in ("t_host_ns", "t_s", "session_time_s", "kind"))  # e.g. an ACK
 
 
 def error_table(data: SessionData) -> list[list]:

@@ -81,8 +81,7 @@ class ModeBands:
             region.setZValue(-20)  # beneath the curves and the gaps' shading
             region.setToolTip(label(span))
             if row == 0:
-                pg.InfLineLabel(region.lines[0], text=label(span), position=0.92, rotateAxis=(1, 0), anchor=(0, 1),
-                                color="#333")  # fmt: skip
+                pg.InfLineLabel(region.lines[0], text=label(span), position=0.98, anchors=[(0, 0), (0, 0)], color="#333")
             item.addItem(region, ignoreBounds=True)
             out.append(region)
         return out

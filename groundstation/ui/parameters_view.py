@@ -4,7 +4,7 @@ during the session are in the Events tab."""
 
 from __future__ import annotations
 
-from PySide6 import QtCore, QtWidgets
+from PySide6 import QtWidgets
 
 from groundstation.session.view import Session
 
@@ -53,10 +53,8 @@ class ParametersView(QtWidgets.QWidget):
         self._shown = parameters
         self.table.setRowCount(len(parameters))
         for row, name in enumerate(sorted(parameters)):
-            value = QtWidgets.QTableWidgetItem(shown_value(parameters[name]))
-            value.setTextAlignment(QtCore.Qt.AlignRight | QtCore.Qt.AlignVCenter)
             self.table.setItem(row, 0, QtWidgets.QTableWidgetItem(name))
-            self.table.setItem(row, 1, value)
+            self.table.setItem(row, 1, QtWidgets.QTableWidgetItem(shown_value(parameters[name])))
         self.table.resizeColumnToContents(0)
         self._filter(self.filter_box.text())
 

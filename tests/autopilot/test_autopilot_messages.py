@@ -14,7 +14,9 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from groundstation.autopilot.messages import StatusTexts
 from groundstation.autopilot.modes import mode_spans
+from groundstation.autopilot.records import StatusText
 from groundstation.session.load import load_session
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 from groundstation.sim.stream import Scenario
@@ -118,6 +120,15 @@ def test_px4_integer_parameters_are_read_from_their_bytes_and_long_texts_are_joi
     assert data.parameters == {"COM_RC_LOSS_T": 0.5, "MAV_SYS_ID": 1000.0}
     assert [(e["severity"], e["message"]) for e in of_kind(data, "message")] == [("CRITICAL", text), ("INFO", "Takeoff detected")]
     assert [e["mode"] for e in of_kind(data, "vehicle_status")] == [mavutil.interpret_px4_mode(0, (4 << 16) | (4 << 24))]
+
+
+def test_a_text_whose_last_chunk_never_came_is_said_as_far_as_it_got():
+    """Chunks lost on the radio: the next text of the sender ends the broken one, said as far as it got."""
+    first = "A" * 50
+    joined = StatusTexts()
+    said = [joined.add(StatusText(1, 1, 0, 4, text, text_id, seq))
+            for text_id, seq, text in ((3, 0, first), (4, 0, "B" * 50), (4, 1, "end"), (0, 0, "whole"))]  # fmt: skip
+    assert said == [[], [(4, first)], [(4, "B" * 50 + "end")], [(4, "whole")]]
 
 
 TEXTS = ((0.3, mavlink.MAV_SEVERITY_INFO, "ArduCopter V4.5.7 (simulated)"),
