@@ -14,19 +14,21 @@ import sys
 from groundstation import __version__
 from groundstation.errors import UserError
 
-# name -> (module, one-line help). Later issues add their commands here.
+FILES = "a recording, a dataset CSV, a .tlog, .bin or .ulg"  # what load_session opens (formats.FORMATS)
+# name -> (module, one-line help: what the command takes and does). Later issues add their commands here.
 COMMANDS: dict[str, tuple[str, str]] = {
-    "app": ("groundstation.commands.app", "start the desktop app (--demo: on the simulated radio bridge)"),
+    "app": ("groundstation.commands.app", f"the desktop app: a live source (--port; --demo, the default: the simulated bridge) or a file: {FILES}"),
     "protocol": ("groundstation.commands.protocol", "show the wire protocol or decode a raw byte file"),
-    "evaluate": ("groundstation.commands.evaluate", "score the attitude estimators against truth (inclination RMSE)"),
+    "evaluate": ("groundstation.commands.evaluate", f"score the attitude estimators on {FILES}: against its truth, else against the onboard estimate"),
     "bridge-sim": ("groundstation.commands.bridge_sim", "the simulated aircraft on a pseudo-terminal, streaming in real time"),
     "simulate": ("groundstation.commands.simulate", "write a simulated session (raw bytes + truth CSV) as fast as possible"),
     "ports": ("groundstation.commands.ports", "list the serial ports with description and VID:PID"),
-    "replay": ("groundstation.commands.replay", "replay a recording headless, with a live one-line summary"),
+    "replay": ("groundstation.commands.replay", f"compute {FILES} headless and print its totals (--speed: paced, with a live summary)"),
     "record": ("groundstation.commands.record", "record a live source headless (--port SPEC), printing link health"),
     "import": ("groundstation.commands.import_csv", "turn a dataset CSV (raw IMU layout, plain or .gz) into a recording"),
-    "export": ("groundstation.commands.export", "export a recording or dataset CSV to CSV or Parquet"),
-    "vibration": ("groundstation.commands.vibration", "vibration spectra, peaks, levels, clipping and a notch suggestion of a session"),
+    "export": ("groundstation.commands.export", f"export {FILES} to CSV, Parquet or an Excel workbook"),
+    "vibration": ("groundstation.commands.vibration", f"vibration spectra, peaks, levels, clipping and a notch suggestion of {FILES}"),
+    "report": ("groundstation.commands.report", f"a flight report of {FILES}: one HTML page that opens offline"),
     "experiments": ("groundstation.commands.experiments", "the seed papers' experiments on the simulator: tables and PNG figures"),
 }
 

@@ -83,3 +83,25 @@ def test_import_reports_progress_and_keeps_every_value(tmp_path, capsys, monkeyp
     samples = open_recording(tmp_path / "trial.gsrec").samples
     for name in expected.columns:
         assert np.array_equal(samples[name], expected[name].to_numpy(dtype=float), equal_nan=True), name
+
+
+def test_every_command_that_opens_any_file_says_so_in_its_one_line_help():
+    """A command whose FILE takes every format (its argument's help is ``formats.described()``) names
+    each of them where a user first looks: ``groundstation --help`` and the top of its own ``--help``."""
+    from groundstation import formats
+    from groundstation.cli import build_parser
+
+    everything = formats.described()
+    takers = []
+    overview = run_cli("--help").stdout
+    for name, (_, one_line) in COMMANDS.items():
+        result = run_cli(name, "--help")
+        assert result.returncode == 0, result.stderr
+        if everything not in " ".join(result.stdout.split()):
+            continue
+        takers.append(name)
+        for what in ("recording", "dataset CSV", *(s for f in formats.flight_logs() for s in f.suffixes)):
+            assert what in one_line, f"'groundstation {name} --help' takes {what} but its help does not say so"
+        assert " ".join(one_line.split()) in " ".join(result.stdout.split())
+    assert {"app", "evaluate", "replay", "export", "report"} <= set(takers)
+    assert "recording or dataset CSV" not in overview and build_parser() is not None

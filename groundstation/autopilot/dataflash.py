@@ -1,4 +1,6 @@
-"""ArduPilot DataFlash ``.bin`` logs through pymavlink's ``DFReader`` (the autopilot's own clock, ``TimeUS``).
+"""ArduPilot DataFlash ``.bin`` logs through pymavlink's ``DFReader`` (the autopilot's own clock: ``TimeUS``,
+or ``TimeMS`` in logs of ArduPilot before 3.3, 2015, whose ``GPS`` carries its boot time in ``T`` ms
+and GPS time of week in ``TimeMS``).
 
 Messages and units used (ArduPilot's LogStructure): ``IMU`` (instance ``I`` 0: ``GyrX..Z`` rad/s,
 ``AccX..Z`` m/s², body FRD, every sample the logging rate keeps), ``ATT`` (``Roll``, ``Pitch``, ``Yaw`` in
@@ -11,8 +13,6 @@ bitmask left out ``IMU`` still opens, with the onboard attitude only. ``MSG``, `
 
 from __future__ import annotations
 
-import contextlib
-import io
 import itertools
 from collections import defaultdict
 
@@ -20,23 +20,25 @@ import numpy as np
 from pymavlink import DFReader
 
 from groundstation import quaternion
+from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.logtables import DataflashTables
-from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, series
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, series
 from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAGIC = FORMATS["dataflash"].magic  # every DataFlash record starts with these two bytes
-FIELDS = {
-    "IMU": ("TimeUS", "GyrX", "GyrY", "GyrZ", "AccX", "AccY", "AccZ"),
-    "ATT": ("TimeUS", "Yaw", "Pitch", "Roll"),
-    "MAG": ("TimeUS", "MagX", "MagY", "MagZ"),
-    "BARO": ("TimeUS", "Press", "Temp"),
-    "GPS": ("TimeUS", "Lat", "Lng", "Alt", "Spd", "GCrs", "VZ", "Status", "NSats"),
+FIELDS = {  # each row: the time in µs (``CLOCKS``), then these
+    "IMU": ("GyrX", "GyrY", "GyrZ", "AccX", "AccY", "AccZ"),
+    "ATT": ("Yaw", "Pitch", "Roll"),
+    "MAG": ("MagX", "MagY", "MagZ"),
+    "BARO": ("Press", "Temp"),
+    "GPS": ("Lat", "Lng", "Alt", "Spd", "GCrs", "VZ", "Status", "NSats"),
 }
+# The autopilot's boot clock, by the first field a message's format has: (field, µs per unit).
+CLOCKS = (("TimeUS", 1), ("T", 1000), ("TimeMS", 1000))
 MGAUSS_TO_UT = 0.1
-
 
 def read_dataflash(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
@@ -44,18 +46,24 @@ def read_dataflash(path, progress=None) -> FlightLog:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
     rows, said = defaultdict(list), []
     every = DataflashTables()  # every message type as a table (``logtables``)
-    chatter = io.StringIO()  # DFReader prints "bad header" lines for damaged bytes: counted, not shown
+    chatter = Chatter()  # DFReader prints a "bad header" line per damaged byte, some from C: counted, not shown
     try:
-        with contextlib.redirect_stdout(chatter):
+        with chatter.caught():
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
+        clocks = {name: boot_clock(reader, name) for name in FIELDS}
+        # the messages, events and parameters where the log stamps them in TimeUS (older logs' MSG, MODE: not at all)
+        stamped = {name for name in DATAFLASH_SAID if boot_clock(reader, name) == CLOCKS[0]}
+        with chatter.caught(descriptors=False):  # reading prints from Python only
             for count in itertools.count():
                 if (msg := reader.recv_msg()) is None:
                     break
                 every.add(msg)
-                if msg.get_type() in DATAFLASH_SAID:
+                name = msg.get_type()
+                if name in stamped:
                     said.append(msg)
-                elif msg.get_type() in FIELDS and getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
-                    rows[msg.get_type()].append([getattr(msg, f) for f in FIELDS[msg.get_type()]])
+                elif clocks.get(name) is not None and getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
+                    field, us_per_unit = clocks[name]
+                    rows[name].append([getattr(msg, field) * us_per_unit, *(getattr(msg, f) for f in FIELDS[name])])
                 if progress is not None and count % 4096 == 0:
                     progress(reader.percent, 100)
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
@@ -63,9 +71,13 @@ def read_dataflash(path, progress=None) -> FlightLog:
     log = FlightLog(path, "dataflash", "ArduPilot")
     log.events, log.parameters = dataflash_said(said, reader.mav_type)
     log.tables, log.units = every.tables()
-    damaged = chatter.getvalue().count("bad header")
+    skipped = [line.split()[1] for line in chatter.lines if line.startswith("Skipped ")]  # "Skipped N bad bytes ..."
+    damaged = chatter.count("bad header") + sum(int(n) for n in skipped if n.isdigit())
     if damaged:
-        log.notes.append(f"{damaged} damaged bytes skipped")
+        log.damage.append(f"{damaged} damaged bytes skipped")
+    cut = unfinished_record_bytes(reader)
+    if cut:
+        log.damage.append(cut_message(cut))
     if rows["IMU"]:
         imu = np.array(rows["IMU"], dtype=float)
         values = np.column_stack([imu[:, 1:4], imu[:, 4:7] / STANDARD_GRAVITY_M_S2])
@@ -82,10 +94,32 @@ def read_dataflash(path, progress=None) -> FlightLog:
     if rows["BARO"]:
         baro = np.array(rows["BARO"], dtype=float)
         log.baro = series(baro[:, 0], {"pressure_hpa": baro[:, 1] / 100.0, "temperature_c": baro[:, 2]}, "BARO[0]")
-    gps = np.array(rows["GPS"], dtype=float).reshape(-1, len(FIELDS["GPS"]))
+    gps = np.array(rows["GPS"], dtype=float).reshape(-1, 1 + len(FIELDS["GPS"]))  # the time, then the fields
     gps = gps[gps[:, 7] >= 2]  # a 2D fix or better
     if len(gps):
         course = np.radians(gps[:, 5])
         columns = [gps[:, 1], gps[:, 2], gps[:, 3], gps[:, 4] * np.cos(course), gps[:, 4] * np.sin(course), gps[:, 6], gps[:, 7], gps[:, 8]]
         log.gps = series(gps[:, 0], dict(zip(GPS_COLUMNS, columns)), "GPS[0]")
     return log
+
+
+def boot_clock(reader, name: str) -> tuple[str, int] | None:
+    """(field, µs per unit) of the boot clock in message ``name``'s format; None if the log has no such message."""
+    fmt = next((f for f in reader.formats.values() if f.name == name), None)
+    if fmt is None:
+        return None
+    return next(((field, scale) for field, scale in CLOCKS if field in fmt.columns), None)
+
+
+def unfinished_record_bytes(reader) -> int:
+    """Bytes at the end of the file that start a record and stop before its end (a cut log), else 0.
+    Trailing bytes that start no record (a block-based log's unused page) do not count."""
+    starts = [(offsets[-1], mtype) for mtype, offsets in enumerate(reader.offsets) if offsets and mtype in reader.formats]
+    if not starts:
+        return 0
+    start, mtype = max(starts)
+    end = start + reader.formats[mtype].len
+    if end > reader.data_len:  # the last record indexed runs past the end
+        return reader.data_len - start
+    tail = reader.data_map[end : end + 2]
+    return reader.data_len - end if len(tail) and tail == MAGIC[: len(tail)] else 0

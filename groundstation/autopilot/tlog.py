@@ -29,7 +29,7 @@ from firmware_protocol.decoder import BACK_TOLERANCE_US
 
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder, new_parser
-from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, series
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, cut_message, series
 from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
 from groundstation.errors import UserError
 from groundstation.autopilot.vehicle import Vehicle
@@ -57,8 +57,12 @@ def packet_length(data, at: int) -> int | None:
     return None
 
 
+UNFINISHED = b""  # packets(): the file ends inside this record
+
+
 def packets(data: bytes) -> Iterator[tuple[int, bytes | None]]:
-    """(receive time µs since 1970, packet bytes) in file order; ``(skipped_bytes, None)`` for junk."""
+    """(receive time µs since 1970, packet bytes) in file order; ``(skipped_bytes, None)`` for junk, and
+    last ``(its bytes, UNFINISHED)`` when the file ends inside a record (a cut log)."""
     at, last_us, end = 0, None, len(data)
     while at + 8 < end:
         (stamp_us,) = STAMP.unpack_from(data, at)
@@ -68,11 +72,18 @@ def packets(data: bytes) -> Iterator[tuple[int, bytes | None]]:
             yield stamp_us, data[at + 8 : at + 8 + length]
             last_us, at = stamp_us, at + 8 + length
             continue
+        if length is not None and plausible:  # a record that runs past the end
+            yield end - at, UNFINISHED
+            return
         start = at
         at += 1
         while at + 8 < end and not _looks_like_record(data, at, last_us):
             at += 1
-        yield at - start if at + 8 < end else end - start, None
+        if at + 8 >= end:  # junk to the end
+            at = end
+        yield at - start, None
+    if at < end:  # a record cut inside its receive time
+        yield end - at, UNFINISHED
 
 
 def _looks_like_record(data, at: int, last_us: int | None) -> bool:
@@ -96,7 +107,7 @@ def messages(path, progress=None) -> Iterator[tuple[int, object]]:
     for i, (stamp_us, packet) in enumerate(packets(data)):
         if progress is not None and i % 8192 == 0:
             progress(i, max(len(data) // 40, i + 1))  # ~40 B per record
-        if packet is None:
+        if not packet:
             yield stamp_us, None
             continue
         try:
@@ -113,9 +124,12 @@ class SessionPackets:
     bad_bytes: int  # bytes between the records, skipped
     bad_runs: int
     compressed: bool  # receive times replaced by the autopilot's clock (the module's rule)
+    unfinished_bytes: int = 0  # of the record the file ends inside
 
     def notes(self) -> list[str]:
         out = [f"{self.bad_runs} damaged byte runs ({self.bad_bytes} bytes) skipped"] if self.bad_runs else []
+        if self.unfinished_bytes:
+            out.append(cut_message(self.unfinished_bytes))
         if self.compressed:
             out.append("receive times compressed (the autopilot clock runs faster): timed by the autopilot clock")
         return out
@@ -123,9 +137,11 @@ class SessionPackets:
 
 def session_packets(data: bytes) -> SessionPackets:
     """The packets of a ``.tlog``'s bytes with the receive times a session feeds them at."""
-    stamped, bad_bytes, bad_runs = [], 0, 0
+    stamped, bad_bytes, bad_runs, unfinished = [], 0, 0, 0
     for stamp_us, packet in packets(data):
-        if packet is None:
+        if packet is UNFINISHED:
+            unfinished = stamp_us
+        elif packet is None:
             bad_bytes, bad_runs = bad_bytes + stamp_us, bad_runs + 1
         else:  # a packet that fails its check is the decoder's to count, as on a live link
             stamped.append((stamp_us * 1000, bytes(packet)))
@@ -133,7 +149,7 @@ def session_packets(data: bytes) -> SessionPackets:
     compressed = on_autopilot is not None
     if compressed:
         stamped = list(zip(on_autopilot, (packet for _, packet in stamped)))
-    return SessionPackets(stamped, bad_bytes, bad_runs, compressed)
+    return SessionPackets(stamped, bad_bytes, bad_runs, compressed, unfinished)
 
 
 def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:

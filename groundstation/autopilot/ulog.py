@@ -12,14 +12,14 @@ after), ``vehicle_gps_position`` (``lat``/``lon`` 1e-7 degrees and ``alt`` mm, o
 
 from __future__ import annotations
 
-import contextlib
 import io
 
 import numpy as np
 from pyulog import ULog
 
+from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.flightlog import (
-    GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, implausible_message, implausible_times, series,
+    GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, implausible_message, implausible_times, series,
 )
 from groundstation.autopilot.logtables import ulog_tables
 from groundstation.autopilot.messages import ulog_said
@@ -35,13 +35,19 @@ def read_ulog(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
         if f.read(7) != MAGIC:
             raise UserError(f"{path}: not a PX4 ULog file (it does not start with 'ULog')")
-    chatter = io.StringIO()  # pyulog prints what it finds damaged: kept as a note
+    chatter = Chatter()  # pyulog prints what it finds damaged: kept as a note
     try:
-        with contextlib.redirect_stdout(chatter):
-            ulog = ULog(str(path))  # every topic: each is a table (``logtables``)
+        with open(path, "rb") as raw, chatter.caught(descriptors=False):
+            handle = LastRead(raw)
+            ulog = ULog(handle)  # every topic: each is a table (``logtables``)
     except Exception as error:  # pyulog raises ULogException and struct/index errors on damaged files
         raise UserError(f"{path}: cannot read this ULog file ({error})") from None
     log = FlightLog(path, "ulog", ulog.msg_info_dict.get("sys_name", "PX4"))
+    if ulog.file_corruption:
+        log.damage.append("damaged bytes: pyulog found records it could not read and skipped to the next sync; "
+                          "the messages in them are missing")
+    if handle.unfinished_bytes:
+        log.damage.append(cut_message(handle.unfinished_bytes))
     topics = {}
     for data in ulog.data_list:
         if len(data.data["timestamp"]):
@@ -52,7 +58,7 @@ def read_ulog(path, progress=None) -> FlightLog:
             if data.multi_id == 0:
                 topics[data.name] = data.data
     log.tables, log.units = ulog_tables(ulog.data_list)
-    log.notes += [line.strip() for line in chatter.getvalue().splitlines() if line.strip()]
+    log.notes += chatter.lines
     if (sc := topics.get("sensor_combined")) is not None:
         values = [*(sc[f"gyro_rad[{i}]"] for i in range(3)), *(sc[f"accelerometer_m_s2[{i}]"] / STANDARD_GRAVITY_M_S2 for i in range(3))]
         log.imu = series(sc["timestamp"], dict(zip(IMU_COLUMNS, values)), "sensor_combined")
@@ -94,3 +100,35 @@ def _gps(gps):
     fix = gps["fix_type"] >= 2
     columns = [lat, lon, alt, gps["vel_n_m_s"], gps["vel_e_m_s"], gps["vel_d_m_s"], gps["fix_type"], gps["satellites_used"]]
     return series(gps["timestamp"][fix], {c: np.asarray(v, dtype=float)[fix] for c, v in zip(GPS_COLUMNS, columns)}, "vehicle_gps_position")
+
+
+class LastRead(io.RawIOBase):
+    """The file pyulog reads, watched for how its reading ended. pyulog reads each message as its 3-byte
+    header, then the payload the header announces, and stops at the first read that comes back short.
+    A file that ends between two messages ends on an empty header read; any other short read is a
+    message the file stops inside (``unfinished_bytes``: what there was of it)."""
+
+    def __init__(self, raw):
+        super().__init__()
+        self.raw = raw
+        self.unfinished_bytes = 0
+        self._header = 0  # bytes of the last full 3-byte read: a header whose payload comes next
+
+    def read(self, size=-1):
+        data = self.raw.read(size)
+        if size is not None and 0 <= len(data) < size:
+            self.unfinished_bytes = len(data) + self._header if (data or self._header) else 0
+        self._header = 3 if size == 3 and len(data) == 3 else 0
+        return data
+
+    def readable(self):
+        return True
+
+    def seekable(self):
+        return True
+
+    def seek(self, offset, whence=io.SEEK_SET):
+        return self.raw.seek(offset, whence)
+
+    def tell(self):
+        return self.raw.tell()

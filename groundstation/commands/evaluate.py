@@ -10,6 +10,8 @@ the file has one (heading error after removing one constant offset: estimation/e
 with an onboard estimate (a flight log), it is each estimator's pitch/roll difference from that
 estimate, labelled as agreement (the onboard estimate is not truth); ``--json`` gives
 ``{"agreement_with_onboard": {name: {"pitch_rms_deg", "pitch_max_deg", "roll_rms_deg", "roll_max_deg", "rows"}}}``.
+What the file lost and the session's warnings (``SessionData.warnings``: damage, a cut log, an IMU too
+slow to filter) are printed first, and ``--json`` carries them under ``"warnings"`` when there are any.
 """
 
 from __future__ import annotations
@@ -60,15 +62,16 @@ def run(args: argparse.Namespace) -> int:
         data = load_session(args.file, names, overrides, bar, args.accept_config_changes, imu=args.imu)
     finally:
         bar.done()
-    for warning in data.warnings:  # beside the JSON, not in it
+    for warning in data.warnings:  # on stderr beside the JSON, and in it
         print(f"warning: {warning}", file=sys.stderr if args.json else sys.stdout)
+    carried = {"warnings": data.warnings} if data.warnings else {}
     if data.true_q is None and data.has_onboard():
         if not data.estimated:
             raise UserError(f"{args.file}: no IMU samples, so no host estimator ran; only the onboard estimate is there")
-        return print_agreement(onboard_agreement(data), data.metadata.get("imu_warning"), args.json)
+        return print_agreement(onboard_agreement(data), carried, args.json)
     results = data.evaluate()
     if args.json:
-        print(json.dumps(results, indent=2))
+        print(json.dumps({**results, **carried}, indent=2))
     else:
         print(f"{'estimator':<10} {'incl RMSE (deg)':>16} {'incl max (deg)':>15} {'heading RMSE (deg)':>19} {'heading max (deg)':>18}")
         for name, f in results.items():
@@ -77,13 +80,11 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def print_agreement(results: dict, warning: str | None, as_json: bool) -> int:
+def print_agreement(results: dict, carried: dict, as_json: bool) -> int:
     if as_json:
-        print(json.dumps({"agreement_with_onboard": results}, indent=2))
+        print(json.dumps({"agreement_with_onboard": results, **carried}, indent=2))
         return 0
     print(AGREEMENT_TITLE)
-    if warning:
-        print(f"warning: {warning}")
     print(f"{'estimator':<10} {'pitch RMS (deg)':>16} {'pitch max (deg)':>16} {'roll RMS (deg)':>15} {'roll max (deg)':>15}")
     for name, f in results.items():
         print(f"{name:<10} {f['pitch_rms_deg']:>16.3f} {f['pitch_max_deg']:>16.3f} {f['roll_rms_deg']:>15.3f} {f['roll_max_deg']:>15.3f}")

@@ -1,4 +1,5 @@
-"""``groundstation export``: a session (recording or dataset CSV) to CSV, Parquet or an Excel workbook.
+"""``groundstation export``: a session (a recording, a dataset CSV, a .tlog, .bin or .ulg) to CSV, Parquet
+or an Excel workbook.
 
 Everything given is checked before the decoding starts (``groundstation.export.request``).
 """

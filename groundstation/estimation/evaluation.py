@@ -46,10 +46,15 @@ def inclination_error_rad(q_est, q_true, truth_frame: str = "ENU") -> np.ndarray
     return np.arctan2(cross, np.sum(down_est * down_true, axis=-1))
 
 
+def truth_in_ned(q_true, truth_frame: str = "ENU") -> np.ndarray:
+    """The truth (body -> ``truth_frame``) as body -> NED, comparable with the estimates angle for angle."""
+    return quaternion.multiply(_TO_NED[truth_frame], q_true)
+
+
 def heading_error_rad(q_est, q_true, truth_frame: str = "ENU") -> np.ndarray:
     """Per-sample heading error (rad, in (-π, π]) of estimates (body -> NED) against the truth, after
     removing the trial's constant offset (module docstring); NaN where the truth is NaN."""
-    q_e = quaternion.multiply(q_est, quaternion.conjugate(quaternion.multiply(_TO_NED[truth_frame], q_true)))
+    q_e = quaternion.multiply(q_est, quaternion.conjugate(truth_in_ned(q_true, truth_frame)))
     psi = 2.0 * np.arctan2(q_e[..., 3], q_e[..., 0])
     known = np.isfinite(psi)
     if not known.any():

@@ -69,8 +69,10 @@ class SessionData:
 
     @property
     def warnings(self) -> list[str]:
-        """What every command says besides its result: what the recording lost, then the session's warnings."""
-        return [*self.damage, *(str(e["message"]) for e in self.events if e.get("kind") in ("warning", "config_conflict"))]
+        """What every command says besides its result: what the recording lost, a flight log's IMU too slow
+        to filter, then the session's warnings."""
+        slow = [self.metadata["imu_warning"]] if self.metadata.get("imu_warning") else []
+        return [*self.damage, *slow, *(str(e["message"]) for e in self.events if e.get("kind") in ("warning", "config_conflict"))]
 
     def quaternion(self, name: str) -> np.ndarray:
         """(N, 4) w-first, body -> NED, on the sample rows: a host estimator's, or ``onboard`` (its rows

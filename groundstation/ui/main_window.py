@@ -323,6 +323,40 @@ class MainWindow(QtWidgets.QMainWindow):
         dialog.show()
         return dialog
 
+    def flight_report(self, out: Path | None = None):
+        """File > Flight report…: the session's file (or the last one's) as an HTML report, written in
+        the background; the status bar says where (the banner, why not). ``out``: skip the file dialog."""
+        from groundstation.ui.report_job import ReportJob
+
+        file = self.session.file() if self.session is not None else self.last_file
+        if file is None:
+            self.show_error("Nothing to report on yet: open a recording or flight log, or connect first.")
+            return None
+        source = Path(file[0])
+        if out is None:
+            chosen, _ = QtWidgets.QFileDialog.getSaveFileName(self, "Flight report", str(source.with_suffix(".html")), "HTML page (*.html)")
+            if not chosen:
+                return None
+            out = Path(chosen)
+        setup = self.session.setup if self.session is not None else (None, None)
+        try:
+            job = self.report_job = ReportJob(self.sessions.load_session, source, out, setup).start()
+        except UserError as error:
+            self.show_error(str(error))
+            return None
+        self.statusBar().showMessage(f"writing the flight report of {source.name}…")
+        timer = QtCore.QTimer(self, interval=200)
+
+        def check() -> None:
+            if job.done:
+                timer.stop()
+                self.show_error(job.error)
+                self.statusBar().showMessage(job.message or "")
+
+        timer.timeout.connect(check)
+        timer.start()
+        return job
+
     def _adopt(self, session: Session) -> None:
         self.session = session
         self.attitude_panel.clear()  # nothing of the previous session's attitude
@@ -381,6 +415,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.fast_imu_action.setCheckable(True)
         self.fast_imu_action.setChecked(self.sessions.imu == "fast")
         self.fast_imu_action.toggled.connect(self.use_fast_imu)
+        self._action(file, "Flight &report…", "Ctrl+Shift+R", self.flight_report)
         file.addAction(self.record_action)
         file.addAction(self.foxglove.action)
         file.addSeparator()

@@ -1,0 +1,42 @@
+"""``groundstation report FILE --out report.html``: a flight report of any session file, one HTML page
+that opens offline (``groundstation.export.report``): the flight, findings ranked by severity,
+attitude, vibration, link, events and messages. What the file lost is printed first, as every
+command does."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from groundstation.commands.options import add_estimator_options, estimator_options
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from groundstation import formats
+
+    parser.add_argument("file", metavar="FILE", help=formats.described())
+    parser.add_argument("--out", required=True, type=Path, metavar="OUT.html", help="the HTML page to write")
+    parser.add_argument("--overwrite", action="store_true", help="replace OUT.html if it exists")
+    add_estimator_options(parser, None)
+
+
+def run(args: argparse.Namespace) -> int:
+    from groundstation.commands.progress import ProgressBar
+    from groundstation.errors import UserError
+    from groundstation.export.report import write_report
+    from groundstation.export.request import check_destination
+    from groundstation.session.load import load_session
+
+    filters, overrides = estimator_options(args)
+    if args.out.suffix.lower() not in (".html", ".htm"):
+        raise UserError(f"{args.out}: a report is an HTML page; name it .html")
+    check_destination(args.out, args.overwrite)  # said before the long load: an existing OUT, a missing folder
+    progress = ProgressBar(f"computing {Path(args.file).name}")
+    try:
+        data = load_session(args.file, filters, overrides, progress)
+    finally:
+        progress.done()
+    for warning in data.warnings:
+        print(f"warning: {warning}")
+    print(f"wrote {write_report(data, args.out, Path(args.file).name, overwrite=True)}")
+    return 0
