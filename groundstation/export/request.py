@@ -79,6 +79,15 @@ def check_destination(out: Path, overwrite: bool) -> None:
     probe.unlink()
 
 
+def met(data):
+    """``data`` with only the estimators whose needs its data met (``SessionData.aiding``): without a
+    magnetometer HF+mag is HF and ECF+mag is ECF, without GPS the unscented filters are tilt filters,
+    and a column of each would only repeat another. Asked for by name (``filters``), they are exported."""
+    from groundstation.estimation import runnable
+
+    return dataclasses.replace(data, filters=runnable(data.aiding(), data.filters))
+
+
 def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, int, int], None] | None = None,
                cancel=None) -> ExportResult:
     """Computes ``request.source`` with ``load`` (``session.load.load_session``: the caller's, so that the
@@ -97,6 +106,8 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
 
     data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes)
     decoding(1, 1)
+    if request.filters is None:
+        data = met(data)
     if request.format == ".xlsx":
         sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,
                                 forced=request.overrides, overwrite=request.overwrite,

@@ -14,7 +14,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from groundstation.estimation import live_estimators
-from groundstation.session.load import Loading, estimators_for, load_session
+from groundstation.session.load import Loading, load_session
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
@@ -54,11 +54,9 @@ def replay_session(source: ReplaySource) -> LiveSession:
 class Sessions:
     """How the window opens sessions, handed to it (``ui.main_window.MainWindow``) so that the window
     imports no maker of sessions: a source live (``open``), a file computed whole in a worker
-    (``load``, then ``playback.RevealSession``), the estimators a file opens with, and the loader an
-    export runs."""
+    (``load``, then ``playback.RevealSession``), and the loader an export runs."""
 
     demo_spec = DEMO_SPEC
     open = staticmethod(open_session)
     load = Loading
-    estimators_for = staticmethod(estimators_for)
     load_session = staticmethod(load_session)

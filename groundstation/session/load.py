@@ -16,7 +16,7 @@ import numpy as np
 from groundstation import formats, mounting, quaternion
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
-from groundstation.estimation import create, runnable
+from groundstation.estimation import create, live_estimators, runnable
 from groundstation.estimation.evaluation import run_on_trial
 from groundstation.recording import Recording
 from groundstation.session.batch import BatchSession, batch_replay
@@ -29,11 +29,13 @@ from groundstation.units import STANDARD_GRAVITY_M_S2
 
 
 def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
-    """Decode, import or read ``path`` by its format (``formats``) and run the estimators; UserError with a
+    """Decode, import or read ``path`` by its format (``formats``) and run the estimators (``filters``; None:
+    ``estimators_for``); UserError with a
     clear message on bad input. A file of no known format is tried as a recording, whose reader says
     what the file looks like instead. ``accept_config_changes``: a recording's CONFIG that changes the
     scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``)."""
     file_format = formats.sniff(path) or formats.FORMATS["recording"]
+    filters = estimators_for(path) if filters is None else filters
     if not accept_config_changes:
         return file_format.loader()(Path(path), filters, forced, progress)
     if file_format.name != "recording":
@@ -128,13 +130,14 @@ def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], devic
 
 
 
-def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:
-    """The estimators a file opens with: a recording's own (None); for files that record none (flight
-    logs, dataset CSVs) those of the app's set whose needs such a file meets (``formats.FILE_AIDING``, as
-    ``evaluate`` chooses): one check box adds the others."""
+def estimators_for(path) -> tuple[str, ...] | None:
+    """The estimators a file opens with when none are asked, in the app and in every command: a
+    recording's own (None); for files that record none (flight logs, dataset CSVs) the live estimators
+    (``live_estimators``, those the app shows) whose needs such a file meets (``formats.FILE_AIDING``).
+    An export then writes those the data met (``export.request.run_export``)."""
     file_format = formats.sniff(path)
     if file_format is not None and not file_format.replayable:
-        return runnable(formats.FILE_AIDING, app_filters)
+        return runnable(formats.FILE_AIDING, live_estimators())
     return None
 
 

@@ -87,6 +87,9 @@ class AttitudeIndicator(QtWidgets.QWidget):
         painter.end()
 
 
+WIDEST_READOUT = {"pitch": " -90.0°", "roll": "-180.0°", "yaw": "-180.0°", "heading": "360.0° compass"}
+
+
 class AttitudePanel(QtWidgets.QGroupBox):
     """The horizon, the 3D view of the body beside it, and the readouts of one estimate."""
 
@@ -106,6 +109,9 @@ class AttitudePanel(QtWidgets.QGroupBox):
         for name, label in self.readouts.items():
             label.setAlignment(QtCore.Qt.AlignRight)
             label.setStyleSheet("font-family: monospace; font-size: 14px")
+            # Wide enough for the widest reading from the start: the side column takes its width from
+            # its contents when it is made, and a label that grows later would be cut ("-122.4").
+            label.setMinimumWidth(label.fontMetrics().horizontalAdvance(WIDEST_READOUT[name]) + 4)
             numbers.addRow(name, label)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addWidget(self.reconverging)

@@ -28,7 +28,8 @@ DEFAULT_WINDOW = "30 s"
 # of an older recording has (CF1, KF, EKF) share one. The aircraft's own estimate is wine.
 ONBOARD_COLOUR = PALETTE["wine"]
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
-HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
+# The sensors' headings in colours no estimator takes (the palette's are theirs; black is AHF2's).
+HEADING_COLORS = {"compass": "#8c8c8c", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
 # The tabs that appear once a series of theirs has rows.
 AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
@@ -155,6 +156,7 @@ class LiveView(QtWidgets.QWidget):
             self._filters = filters
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
+        self.position.protocol = session.view.protocol if session is not None else None
         self.channels.set_session(session)
         self._show_aiding_tabs()
 

@@ -16,11 +16,12 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.errors import UserError
 from groundstation import formats
-from groundstation.estimation import ESTIMATORS, label, live_estimators
+from groundstation.estimation import ESTIMATORS, label
 from groundstation.recording import default_recordings_dir
 from groundstation.session.playback import RevealSession
 from groundstation.session.view import Session
 from groundstation.sources import whole_file
+from groundstation.ui.about import show_about
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import EstimatorPanel
@@ -32,6 +33,7 @@ from groundstation.ui.config_banner import ConfigBanner
 from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
+from groundstation.ui.vehicle_badge import VehicleBadge
 
 REDRAW_HZ = 30
 # Every how many ticks the side panels redraw: the horizon at 15 Hz, the 3D view (its paint costs
@@ -142,6 +144,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.source_label = QtWidgets.QLabel("no source")
         self.recording_label = QtWidgets.QLabel("not recording")
         self.statusBar().addWidget(self.source_label, 1)
+        self.vehicle_badge = VehicleBadge()  # an autopilot's mode and arming, always in sight
+        self.statusBar().addPermanentWidget(self.vehicle_badge)
         self.statusBar().addPermanentWidget(self.recording_label)
         self.record_action = QtGui.QAction("Start recording", self, shortcut=QtGui.QKeySequence("Ctrl+R"))
         self.record_action.setShortcutContext(QtCore.Qt.ApplicationShortcut)
@@ -194,7 +198,7 @@ class MainWindow(QtWidgets.QMainWindow):
         app's estimators); computed in a worker, then played from the start (``tick`` adopts it)."""
         self.disconnect()
         path = Path(path)
-        self._load(path, self.sessions.estimators_for(path, live_estimators()), None, f"computing {path.name}")
+        self._load(path, None, None, f"computing {path.name}")  # the estimators: ``load.estimators_for``
 
     def _load(self, path: Path, filters, forced, text: str, recompute: bool = False) -> None:
         if self.loading is not None:
@@ -299,7 +303,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_error("Nothing to export yet: connect, start the simulated bridge or open a recording first.")
             return None
         setup = self.session.setup if self.session is not None else (None, None)
-        dialog = ExportDialog(self.sessions.load_session, *file, parent=self, setup=setup)
+        dialog = ExportDialog(self.sessions.load_session, *file, parent=self, setup=setup, settings=self.settings)
         dialog.setModal(False)  # the live view goes on while it exports
         dialog.show()
         return dialog
@@ -313,7 +317,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.uplink_panel.set_session(session)
         self.event_console.set_session(session)
         self.link_panel.refresh(session)
-        self.bar.set_connected(True)
+        self.bar.set_connected(True, getattr(session.source, "path", None) if session.source.is_replay else None)
         self._sync_record_action()
 
     def disconnect(self) -> None:
@@ -364,6 +368,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._action(view, "To the end (live: follow the newest data)", "End", lambda: self.to_end(True))
         help_menu = self.menuBar().addMenu("&Help")
         self._action(help_menu, "&Keyboard shortcuts", "F1", self.show_shortcuts)
+        help_menu.addAction("&About groundstation").triggered.connect(lambda _=False: show_about(self))
 
     def _action(self, menu: QtWidgets.QMenu, text: str, key: str, slot) -> QtGui.QAction:
         action = menu.addAction(text)
@@ -419,6 +424,7 @@ class MainWindow(QtWidgets.QMainWindow):
         figures = self.ticks % FIGURES_EVERY == 0
         if figures:
             self.link_panel.refresh(session)
+            self.vehicle_badge.refresh(session)
             self.recording_banner.refresh(session)
             self.config_banner.refresh(session)
         if session is None:
