@@ -40,7 +40,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.message.setWordWrap(True)
         # Its room from the start: a message appearing after Apply must not move the fields (the next
         # click would land on another one).
-        self.message.setMinimumHeight(MESSAGE_LINES * self.message.fontMetrics().lineSpacing())
+        self.message.setFixedHeight(MESSAGE_LINES * self.message.fontMetrics().lineSpacing())
         self.message.setAlignment(QtCore.Qt.AlignTop | QtCore.Qt.AlignLeft)
         self._layout = QtWidgets.QFormLayout(self)
         self._shown_row = QtWidgets.QGridLayout()
