@@ -27,7 +27,7 @@ FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet"}  # suffix -> 
 class ExportRequest:
     source: Path
     out: Path
-    filters: list[str] | None = None  # None: the recorded estimators
+    filters: list[str] | None = None  # None: the file's own or the default set, those its data met (``met``)
     overrides: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)  # --set
     t_from: float | None = None
     t_to: float | None = None

@@ -55,6 +55,7 @@ class EventConsole(QtWidgets.QWidget):
         self.table.setWordWrap(True)
         self.table.setTextElideMode(QtCore.Qt.ElideNone)
         self.table.setMinimumHeight(MIN_ROWS * self.table.verticalHeader().defaultSectionSize())
+        self._wrapped_at = -1  # the details column's width the rows were last wrapped to
         self.table.cellClicked.connect(self._clicked)
         self.table.setToolTip("Click an event to show its moment in the plots")
         layout = QtWidgets.QVBoxLayout(self)
@@ -67,6 +68,9 @@ class EventConsole(QtWidgets.QWidget):
         self.table.setRowCount(0)
 
     def refresh(self) -> None:
+        if self.table.columnWidth(2) != self._wrapped_at:  # the details column (stretched) changed width:
+            self._wrapped_at = self.table.columnWidth(2)  # the tab shown, the window resized
+            self.table.resizeRowsToContents()
         if self.session is None:
             return
         view = self.session.view
