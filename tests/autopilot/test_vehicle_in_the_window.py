@@ -2,7 +2,6 @@
 arming always in sight, the battery without invented numbers, the GPS fix in MAVLink's words, the
 radio's signal as a channel over time. The real window on real UDP (live) or a real .tlog (replay)."""
 
-import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
@@ -41,20 +40,6 @@ def last_messages(path, types):
         if msg.get_type() != "HEARTBEAT" or msg.autopilot == mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA:
             last[msg.get_type()] = msg
     return [last[t] for t in types]
-
-
-@pytest.fixture
-def window(qtbot, tmp_path):
-    from PySide6 import QtCore
-
-    from groundstation.session.factory import Sessions
-    from groundstation.ui.main_window import MainWindow
-
-    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    main = MainWindow(settings, Sessions(), recordings_dir=tmp_path / "recordings")
-    qtbot.addWidget(main)
-    main.show()
-    return main
 
 
 def test_a_tlog_says_what_the_autopilot_does_not_measure_and_its_fix_in_mavlinks_words(window, qtbot):
