@@ -12,6 +12,8 @@ import pandas as pd
 import pytest
 
 from groundstation.cli import main
+from groundstation.estimation import live_estimators, runnable
+from groundstation.formats import FILE_AIDING
 from groundstation.recording import RecordingWriter, open_recording
 from tests.session.full_disk import tiny_tmpfs
 
@@ -72,7 +74,10 @@ def test_set_on_an_estimator_the_recording_did_not_run(dataset, tmp_path, capsys
     assert main(["import", str(csv), "--out", str(recording)]) == 0
     message = "--set hf: not among the estimators of this session (ahf); add hf with --filters"
     fails_with(capsys, ["export", str(recording), "--out", str(tmp_path / "out.csv"), "--set", "hf.beta=1"], message)
-    fails_with(capsys, ["export", str(csv), "--out", str(tmp_path / "out.csv"), "--set", "hf.beta=1"], message)
+    # A dataset CSV runs the app's default set (hf among them): an estimator outside it is refused the same way.
+    default = ", ".join(runnable(FILE_AIDING, live_estimators()))
+    message = f"--set cf1: not among the estimators of this session ({default}); add cf1 with --filters"
+    fails_with(capsys, ["export", str(csv), "--out", str(tmp_path / "out.csv"), "--set", "cf1.time_constant_s=1"], message)
     # and with hf run, the setting takes effect: a different answer than the default beta
     default = json.loads(run_json(["evaluate", str(csv), "--filters", "hf", "--json"]))["hf"]["incl_rmse_deg"]
     changed = json.loads(run_json(["evaluate", str(csv), "--filters", "hf", "--set", "hf.beta=1", "--json"]))["hf"]["incl_rmse_deg"]

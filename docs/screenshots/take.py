@@ -18,6 +18,7 @@ from pathlib import Path
 
 from PySide6 import QtCore, QtWidgets
 
+from groundstation.session.factory import Sessions
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.ui.main_window import MainWindow
 
@@ -28,7 +29,7 @@ out.mkdir(parents=True, exist_ok=True)
 os.environ.setdefault("GROUNDSTATION_RECORDINGS", tempfile.mkdtemp())
 app = QtWidgets.QApplication(sys.argv[:1])
 settings = QtCore.QSettings(os.path.join(tempfile.mkdtemp(), "settings.ini"), QtCore.QSettings.Format.IniFormat)
-window = MainWindow(settings)
+window = MainWindow(settings, Sessions())
 window.setGeometry(0, 0, 1400, 860)
 window.show()
 

@@ -17,17 +17,21 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from groundstation.estimation.ahf import Ahf, Hf
-from groundstation.estimation.ahf2 import Ahf2, Ahf2m
-from groundstation.estimation.base import Estimator
-from groundstation.estimation.cf1 import Cf1
-from groundstation.estimation.ecf import Ecf
-from groundstation.estimation.ekf import Ekf
-from groundstation.estimation.kf import Kf
-from groundstation.estimation.marg import Ecfm, Hfm
-from groundstation.estimation.mcf import Mcf
-from groundstation.estimation.ukf import Sssrukf, Ukf
-from groundstation.estimation.vqf import Vqf
+from groundstation.estimation.compiled_cache import use_user_cache
+
+use_user_cache()  # before the estimators import numba: their compiled kernels survive a re-install
+
+from groundstation.estimation.ahf import Ahf, Hf  # noqa: E402
+from groundstation.estimation.ahf2 import Ahf2, Ahf2m  # noqa: E402
+from groundstation.estimation.base import Estimator  # noqa: E402
+from groundstation.estimation.cf1 import Cf1  # noqa: E402
+from groundstation.estimation.ecf import Ecf  # noqa: E402
+from groundstation.estimation.ekf import Ekf  # noqa: E402
+from groundstation.estimation.kf import Kf  # noqa: E402
+from groundstation.estimation.marg import Ecfm, Hfm  # noqa: E402
+from groundstation.estimation.mcf import Mcf  # noqa: E402
+from groundstation.estimation.ukf import Sssrukf, Ukf  # noqa: E402
+from groundstation.estimation.vqf import Vqf  # noqa: E402
 
 # The one list of estimators, in the order the app, evaluate and exports show them: each class says its
 # label, colour, needs and whether live sessions run it (``base.Estimator``). A new estimator is its

@@ -41,7 +41,10 @@ def select_rows(time_s: np.ndarray, t_from: float | None = None, t_to: float | N
     if len(rows) == 0:
         raise UserError(f"no samples between {t_from} s and {t_to} s (the session lasts {time_s[-1] if len(time_s) else 0:.1f} s)")
     if rate_hz is not None:
-        period = np.median(np.diff(time_s)) if len(time_s) > 1 else 1.0
+        # A table's rows can share a time or lack one (NaN): the period is that of the rows that have both.
+        steps = np.diff(time_s)
+        steps = steps[np.isfinite(steps) & (steps > 0)]
+        period = float(np.median(steps)) if len(steps) else 1.0 / rate_hz
         step = max(1, int(round(1.0 / (rate_hz * period))))
         rows = rows[::step]
     return rows

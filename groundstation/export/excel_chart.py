@@ -1,12 +1,15 @@
-"""The workbook's ``Chart`` sheet: line charts of pitch and of roll over time for every estimate.
+"""The workbook's ``Chart`` sheet: charts of pitch and of roll over time for every estimate.
 
 The charts read a decimated copy of the angles (``chart_block``: at most 2,000 points per series) on
-a hidden ``Chart data`` sheet, so Excel draws them at once even for hours of flight.
+a hidden ``Chart data`` sheet, so Excel draws them at once even for hours of flight. They are scatter
+charts drawn as lines: time is a number on a value axis (a line chart's category axis labels every
+point, which LibreOffice crams into an unreadable row), and the axes' labels sit at the low edge of
+the plot, not where the other axis crosses zero (mid-plot for angles around zero).
 """
 
 from __future__ import annotations
 
-from openpyxl.chart import LineChart, Reference
+from openpyxl.chart import Reference, ScatterChart, Series
 
 from groundstation.export.excel_stream import EXCEL_MAX_ROWS, Block, write_table
 
@@ -14,19 +17,24 @@ DATA_TITLE = "Chart data"
 CHART_ROWS = 22  # rows each chart spans at the default row height (its 11 cm)
 
 
-def line_chart(data_sheet, title: str, first_column: int, series: int, points: int) -> LineChart:
-    chart = LineChart()
+def line_chart(data_sheet, title: str, first_column: int, series: int, points: int, span_s: tuple[float, float]) -> ScatterChart:
+    chart = ScatterChart(scatterStyle="line")
     chart.title = title
     chart.y_axis.title, chart.x_axis.title = title, "time (s)"
-    chart.x_axis.number_format = "0"
-    chart.x_axis.delete = chart.y_axis.delete = False  # openpyxl's default hides the axes in recent Excel
+    chart.x_axis.number_format, chart.y_axis.number_format = "0", "0"
+    chart.x_axis.axPos = "b"  # openpyxl says "l" for both value axes
+    chart.x_axis.scaling.min, chart.x_axis.scaling.max = span_s  # the session, not the next round number
+    for axis in (chart.x_axis, chart.y_axis):
+        axis.delete = False  # openpyxl's default hides the axes in recent Excel
+        axis.tickLblPos = "low"  # at the plot's edge whatever the values' sign
     chart.height, chart.width = 11, 30  # cm
-    values = Reference(data_sheet, min_col=first_column, max_col=first_column + series - 1, min_row=1, max_row=points + 1)
-    chart.add_data(values, titles_from_data=True)
-    chart.set_categories(Reference(data_sheet, min_col=1, min_row=2, max_row=points + 1))
-    for line in chart.series:
+    times = Reference(data_sheet, min_col=1, min_row=2, max_row=points + 1)
+    for column in range(first_column, first_column + series):
+        line = Series(Reference(data_sheet, min_col=column, min_row=1, max_row=points + 1), times, title_from_data=True)
+        line.marker.symbol = "none"
         line.smooth = False
         line.graphicalProperties.line.width = 12700  # 1 pt, in EMU
+        chart.series.append(line)
     return chart
 
 
@@ -40,5 +48,6 @@ def write_chart_sheets(workbook, block: Block, advance) -> None:
     sheet.append([f"Pitch and roll of every estimate, {points} points (decimated for the chart; "
                   f"the full data are on the Attitude sheet). Chart data: the hidden sheet '{DATA_TITLE}'."])
     if series:
-        sheet.add_chart(line_chart(data_sheet, "pitch (°)", 2, series, points), "A3")
-        sheet.add_chart(line_chart(data_sheet, "roll (°)", 2 + series, series, points), f"A{3 + CHART_ROWS + 1}")
+        span_s = (float(block[0].values[0]), float(block[0].values[-1]))
+        sheet.add_chart(line_chart(data_sheet, "pitch (°)", 2, series, points, span_s), "A3")
+        sheet.add_chart(line_chart(data_sheet, "roll (°)", 2 + series, series, points, span_s), f"A{3 + CHART_ROWS + 1}")

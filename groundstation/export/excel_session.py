@@ -26,6 +26,15 @@ LINK_COUNTS = (
 )  # fmt: skip
 GYRO_CALIBRATION = SPEC.frame("CONFIG").field("gyro_calibration")  # "unknown" from firmware older than the field
 SHOWN_METADATA = {"source", "port", "start_utc", "app_version", "protocol_version", "estimator_settings", "filters"}
+# The other header fields, by what a reader calls them (a field not listed: its name with spaces).
+METADATA_LABELS = {
+    "source_spec": "source (as typed)", "format": "file format", "format_version": "recording format version",
+    "protocol": "link protocol", "protocol_fingerprint": "protocol fingerprint (ground station)",
+    "vehicle_system": "MAVLink vehicle (system id)", "aiding_estimator": "aiding estimator",
+    "autopilot": "autopilot", "imu_rate_hz": "IMU rate (Hz)", "imu_warning": "IMU warning",
+    "time_origin_s": "time origin (s)", "notes": "notes",
+}  # fmt: skip
+PROTOCOLS = {"gs": "the project's own (firmware_protocol)", "mavlink": "MAVLink (an autopilot)"}
 
 
 class Heading(str):
@@ -65,15 +74,16 @@ def facts(data: SessionData, rows: np.ndarray) -> list[list]:
     out += [[label, meta[key]] for key, label in (("app_version", "ground station version"),
                                                   ("protocol_version", "protocol version (ground station)")) if key in meta]
     out += firmware(data)
-    out += [[key, value] for key, value in meta.items()
+    out += [[METADATA_LABELS.get(key, key.replace("_", " ")), PROTOCOLS.get(value, value) if key == "protocol" else value]
+            for key, value in meta.items()
             if key not in SHOWN_METADATA and isinstance(value, (str, int, float)) and not isinstance(value, bool)]
     return out
 
 
 def firmware(data: SessionData) -> list[list]:
     """What the aircraft's last CONFIG frame said; a dataset has no aircraft."""
-    if "autopilot" in data.metadata:
-        return [["mounting", "the autopilot's body axes (x forward, y right, z down), as logged"]]
+    if "autopilot" in data.metadata or data.protocol == "mavlink":  # an autopilot sends no CONFIG frame
+        return [["mounting", "the autopilot's body axes (x forward, y right, z down), as it sends them"]]
     if data.link is None:
         return [["mounting", "dataset: the IMU axes are taken as the body axes"]]
     config = data.config

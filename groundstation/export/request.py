@@ -27,7 +27,7 @@ FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet", ".mcap": "MCA
 class ExportRequest:
     source: Path
     out: Path
-    filters: list[str] | None = None  # None: the recorded estimators
+    filters: list[str] | None = None  # None: the file's own or the default set, those its data met (``met``)
     overrides: dict[str, dict[str, float]] = dataclasses.field(default_factory=dict)  # --set
     t_from: float | None = None
     t_to: float | None = None
@@ -81,6 +81,15 @@ def check_destination(out: Path, overwrite: bool) -> None:
     probe.unlink()
 
 
+def met(data):
+    """``data`` with only the estimators whose needs its data met (``SessionData.aiding``): without a
+    magnetometer HF+mag is HF and ECF+mag is ECF, without GPS the unscented filters are tilt filters,
+    and a column of each would only repeat another. Asked for by name (``filters``), they are exported."""
+    from groundstation.estimation import runnable
+
+    return dataclasses.replace(data, filters=runnable(data.aiding(), data.filters))
+
+
 def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, int, int], None] | None = None,
                cancel=None) -> ExportResult:
     """Computes ``request.source`` with ``load`` (``session.load.load_session``: the caller's, so that the
@@ -99,6 +108,8 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
 
     data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes)
     decoding(1, 1)
+    if request.filters is None:
+        data = met(data)
     if request.format == ".xlsx":
         sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,
                                 forced=request.overrides, overwrite=request.overwrite,

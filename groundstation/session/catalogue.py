@@ -147,10 +147,27 @@ TRUTH = TableInfo("truth", "the true attitude (a simulator's), body -> NED", (TI
 HEADING = Column("heading_deg", "deg", "compass heading", 2, "tilt-compensated, from the aiding estimator's pitch and roll")
 
 
+# A diagnostic's unit read from its name's suffix (the project's naming rule, longest suffix first), and
+# the diagnostics whose names carry none: AHF's λ is a rate (seed 000, eq. 20).
+_SUFFIX_UNIT = (("_rad_s", "rad/s"), ("_deg_s", "deg/s"), ("_m_s2", "m/s2"), ("_m_s", "m/s"), ("_pct", "%"),
+                ("_deg", "deg"), ("_rad", "rad"), ("_uT", "uT"), ("_s", "s"), ("_m", "m"))
+_DIAGNOSTIC_NAMED = {"lam": ("λ", "rad/s"), "e_a": ("e_a", "1"), "status": ("status", "bits")}
+
+
+def diagnostic_column(name: str, diagnostic: str) -> Column:
+    """An estimator's diagnostic as a channel: "ahf2 bias x" in rad/s for ``ahf2_bias_x_rad_s``."""
+    if diagnostic in _DIAGNOSTIC_NAMED:
+        text, unit = _DIAGNOSTIC_NAMED[diagnostic]
+    else:
+        suffix, unit = next(((s, u) for s, u in _SUFFIX_UNIT if diagnostic.endswith(s)), ("", "1"))
+        text = diagnostic.removesuffix(suffix).replace("_", " ")
+    return Column(f"{name}_{diagnostic}", unit, f"{name} {text}", 4)
+
+
 def estimator_columns(name: str, diagnostics: tuple[str, ...]) -> tuple[Column, ...]:
     """An estimator's columns in the ``imu`` table: its quaternion (body -> NED) and diagnostics."""
     quaternion = tuple(Column(f"{name}_q{c}", "1", f"{name} q{c}", 6) for c in "wxyz")
-    return quaternion + tuple(Column(f"{name}_{d}", "1", f"{name} {d}", 4) for d in diagnostics)
+    return quaternion + tuple(diagnostic_column(name, d) for d in diagnostics)
 
 
 @dataclasses.dataclass(frozen=True)

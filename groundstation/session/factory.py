@@ -16,7 +16,7 @@ from pathlib import Path
 from groundstation import formats
 from groundstation.autopilot.session import FAST_IMU_FORMATS, IMU_STREAMS
 from groundstation.estimation import live_estimators
-from groundstation.session.load import Loading, estimators_for, load_session
+from groundstation.session.load import Loading, load_session
 from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import pipeline_for
@@ -58,8 +58,7 @@ def replay_session(source: ReplaySource) -> LiveSession:
 class Sessions:
     """How the window opens sessions, handed to it (``ui.main_window.MainWindow``) so that the window
     imports no maker of sessions: a source live (``open``), a file computed whole in a worker
-    (``load``, then ``playback.RevealSession``), the estimators a file opens with, and the loader an
-    export runs."""
+    (``load``, then ``playback.RevealSession``), and the loader an export runs."""
 
     demo_spec = DEMO_SPEC
     open = staticmethod(open_session)
@@ -70,5 +69,4 @@ class Sessions:
         """``path`` computed in a worker; a flight log that can hold a full-rate IMU on the stream ``imu`` names."""
         fast_possible = getattr(formats.sniff(path), "name", None) in FAST_IMU_FORMATS
         return Loading(path, filters, forced, self.imu if fast_possible else IMU_STREAMS[0])
-    estimators_for = staticmethod(estimators_for)
     load_session = staticmethod(load_session)

@@ -17,7 +17,7 @@ from groundstation import formats, mounting, quaternion
 from groundstation.autopilot.session import FAST_IMU_FORMATS, IMU_STREAMS, attach_simstate_truth
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
-from groundstation.estimation import create, runnable
+from groundstation.estimation import create, live_estimators, runnable
 from groundstation.estimation.evaluation import run_on_trial
 from groundstation.recording import Recording
 from groundstation.session.batch import BatchSession, batch_replay
@@ -31,12 +31,14 @@ from groundstation.units import STANDARD_GRAVITY_M_S2
 
 def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False,
                  imu: str = IMU_STREAMS[0]) -> SessionData:
-    """Decode, import or read ``path`` by its format (``formats``) and run the estimators; UserError with a
+    """Decode, import or read ``path`` by its format (``formats``) and run the estimators (``filters``; None:
+    ``estimators_for``); UserError with a
     clear message on bad input. A file of no known format is tried as a recording, whose reader says
     what the file looks like instead. ``accept_config_changes``: a recording's CONFIG that changes the
     scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``).
     ``imu``: the stream the estimators run on (``IMU_STREAMS``): "fast", a flight log's full-rate IMU."""
     file_format = formats.sniff(path) or formats.FORMATS["recording"]
+    filters = estimators_for(path) if filters is None else filters
     if imu != IMU_STREAMS[0]:
         if file_format.name not in FAST_IMU_FORMATS:
             raise UserError(f"{path}: --imu {imu}: a {file_format.description} has no full-rate IMU stream (only "
@@ -140,13 +142,14 @@ def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], devic
 
 
 
-def estimators_for(path, app_filters: tuple[str, ...]) -> tuple[str, ...] | None:
-    """The estimators a file opens with: a recording's own (None); for files that record none (flight
-    logs, dataset CSVs) those of the app's set whose needs such a file meets (``formats.FILE_AIDING``, as
-    ``evaluate`` chooses): one check box adds the others."""
+def estimators_for(path) -> tuple[str, ...] | None:
+    """The estimators a file opens with when none are asked, in the app and in every command: a
+    recording's own (None); for files that record none (flight logs, dataset CSVs) the live estimators
+    (``live_estimators``, those the app shows) whose needs such a file meets (``formats.FILE_AIDING``).
+    An export then writes those the data met (``export.request.run_export``)."""
     file_format = formats.sniff(path)
     if file_format is not None and not file_format.replayable:
-        return runnable(formats.FILE_AIDING, app_filters)
+        return runnable(formats.FILE_AIDING, live_estimators())
     return None
 
 

@@ -88,6 +88,11 @@ class SessionData:
         """The host estimators that ran: ``filters``, none for a session without IMU samples."""
         return self.filters if self.sample_table == "imu" else ()
 
+    def aiding(self) -> frozenset[str]:
+        """The aiding the estimators had ("mag", "gps"; ``Estimator.needs``): a sensor with readings in the session."""
+        has_rows = {name for name in ("mag_raw", "gps") if len(self.tables.get(name, {}).get("time_s", ()))}
+        return frozenset({"mag"} if self.magnetometer or "mag_raw" in has_rows else set()) | ({"gps"} if "gps" in has_rows else set())
+
     def has_onboard(self) -> bool:
         return ONBOARD in self.tables and bool(np.isfinite(self.tables[ONBOARD]["qw"]).any())
 

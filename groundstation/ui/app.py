@@ -50,8 +50,8 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
 
 def prepare_estimators(app):
     """The live session's estimators made once before the window opens, under a splash screen that
-    says so. The first start on a machine compiles their numba kernels (some seconds; later starts load
-    them from numba's cache in well under one), which would otherwise freeze the window without a word."""
+    says so. The first start on a machine compiles their numba kernels (some seconds; later starts, also after a re-install, load
+    them from the user's cache folder: ``estimation.compiled_cache``), which would otherwise freeze the window without a word."""
     from PySide6 import QtCore, QtGui, QtWidgets
 
     from groundstation.estimation import create, live_estimators

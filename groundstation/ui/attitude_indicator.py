@@ -88,6 +88,9 @@ class AttitudeIndicator(QtWidgets.QWidget):
         painter.end()
 
 
+WIDEST_READOUT = {"pitch": " -90.0°", "roll": "-180.0°", "yaw": "-180.0°", "heading": "360.0° compass"}
+
+
 class AttitudePanel(QtWidgets.QGroupBox):
     """The horizon, the 3D view of the body beside it, and the readouts of one estimate."""
 
@@ -98,7 +101,9 @@ class AttitudePanel(QtWidgets.QGroupBox):
         views = QtWidgets.QHBoxLayout()
         views.addWidget(self.indicator)
         views.addWidget(self.body_view)
-        self.reconverging = QtWidgets.QLabel()
+        # Over the top of the horizon, not in the layout: appearing after a settings change (Apply) it
+        # would push every panel below it down, and the user's next click would land on another field.
+        self.reconverging = QtWidgets.QLabel(self.indicator)
         self.reconverging.setWordWrap(True)
         self.reconverging.setStyleSheet("background:#ffe9a8; color:#5a4000; padding:4px; border:1px solid #e0b040")
         self.reconverging.hide()
@@ -107,10 +112,16 @@ class AttitudePanel(QtWidgets.QGroupBox):
         for name, label in self.readouts.items():
             label.setAlignment(QtCore.Qt.AlignRight)
             label.setStyleSheet("font-family: monospace; font-size: 14px")
+            # Wide enough for the widest reading from the start: the side column takes its width from
+            # its contents when it is made, and a label that grows later would be cut ("-122.4").
+            label.setMinimumWidth(label.fontMetrics().horizontalAdvance(WIDEST_READOUT[name]) + 4)
             numbers.addRow(name, label)
         layout = QtWidgets.QVBoxLayout(self)
-        layout.addWidget(self.reconverging)
         layout.addLayout(views)
+        # Its own height always, spare height to the panels below: the side column is re-laid out
+        # whenever a label there changes, and a panel between its minimum and preferred heights
+        # would take or give 50 px each time, moving everything under it (the field the user aims at).
+        self.setSizePolicy(QtWidgets.QSizePolicy.Preferred, QtWidgets.QSizePolicy.Fixed)
         layout.addLayout(numbers)
 
     def show_session(self, session: Session, body: bool = True) -> None:
@@ -137,6 +148,8 @@ class AttitudePanel(QtWidgets.QGroupBox):
             return
         kind, left_s = restart
         self.reconverging.setText(f"⚠ Re-converging after {RESTART_WORDS[kind]}: the estimates may be off for {math.ceil(left_s)} s more")
+        self.reconverging.setFixedWidth(self.indicator.width())
+        self.reconverging.adjustSize()
         self.reconverging.show()
 
     def clear(self) -> None:

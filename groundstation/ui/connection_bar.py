@@ -136,7 +136,12 @@ class ConnectionBar(QtWidgets.QWidget):
         except ValueError:
             return 0
 
-    def set_connected(self, connected: bool) -> None:
+    def set_connected(self, connected: bool, file=None) -> None:
+        """``file``: the file being played back: the box names it (not the port used before) and the
+        button that stops it says "Close file"."""
+        if file is not None:
+            self.port_box.setEditText(str(file))
+        self.disconnect_button.setText("Close file" if connected and file is not None else "Disconnect")
         self.disconnect_button.setEnabled(connected)
         self._enable_connect()
 

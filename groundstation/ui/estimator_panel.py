@@ -19,6 +19,7 @@ from groundstation.estimation import ESTIMATORS, label
 from groundstation.session.view import Session
 
 SHOWN_COLUMNS = 4  # "show" check boxes per row
+MESSAGE_LINES = 3  # "applied: ..." for a few estimators at once
 
 
 def defaults(name: str) -> dict[str, float]:
@@ -37,6 +38,10 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.boxes: dict[tuple[str, str], QtWidgets.QDoubleSpinBox] = {}
         self.message = QtWidgets.QLabel()
         self.message.setWordWrap(True)
+        # Its room from the start: a message appearing after Apply must not move the fields (the next
+        # click would land on another one).
+        self.message.setFixedHeight(MESSAGE_LINES * self.message.fontMetrics().lineSpacing())
+        self.message.setAlignment(QtCore.Qt.AlignTop | QtCore.Qt.AlignLeft)
         self._layout = QtWidgets.QFormLayout(self)
         self._shown_row = QtWidgets.QGridLayout()
         self._layout.addRow("show", self._shown_row)
@@ -139,7 +144,8 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             except ValueError as error:
                 self.message.setText(f"{label(name)}: {error}")
                 return
-            changed.append(f"{label(name)} " + ", ".join(f"{k} = {v:g}" for k, v in overrides.items()))
+            symbols = {setting: text for setting, text, _ in self.tunable[name]}  # as the fields are labelled
+            changed.append(f"{label(name)} " + ", ".join(f"{symbols[k]} = {v:g}" for k, v in overrides.items()))
         self.message.setText(("applied: " + "; ".join(changed)) if changed else "nothing changed")
 
     def restore_defaults(self) -> None:

@@ -16,6 +16,7 @@ from groundstation.session.view import Session, event_session_time_s
 
 # Kinds a pilot must not miss, shown in red.
 ALARMS = frozenset({"warning", "config_conflict", "disconnected", "device_reset", "clock_jump", "gap", "recording_failed"})
+MIN_ROWS = 12  # the table's height at least, in one-line rows
 HIDDEN_FIELDS = frozenset({"kind", "t_host_ns", "wall_time", "session_time_s"})
 # Events that carry a frame's values (CONFIG, ACK) show its enum fields by member name ("unknown" included).
 ENUM_FIELDS = {kind: {f.name: f for f in SPEC.frame(kind.upper()).fields if f.enum} for kind in ("config", "ack")}
@@ -40,7 +41,12 @@ class EventConsole(QtWidgets.QWidget):
         self.table.verticalHeader().hide()
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.NoEditTriggers)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectRows)
-        self.table.setWordWrap(False)
+        # The details wrap in their column, rows as tall as they need: the side column is narrow, and a
+        # detail cut at its edge ("CONFIG: firmware 1.2.0, ±…") says nothing.
+        self.table.setWordWrap(True)
+        self.table.setTextElideMode(QtCore.Qt.ElideNone)
+        self.table.setMinimumHeight(MIN_ROWS * self.table.verticalHeader().defaultSectionSize())
+        self._wrapped_at = -1  # the details column's width the rows were last wrapped to
         self.table.cellClicked.connect(self._clicked)
         self.table.setToolTip("Click an event to show its moment in the plots")
         layout = QtWidgets.QVBoxLayout(self)
@@ -53,6 +59,9 @@ class EventConsole(QtWidgets.QWidget):
         self.table.setRowCount(0)
 
     def refresh(self) -> None:
+        if self.table.columnWidth(2) != self._wrapped_at:  # the details column (stretched) changed width:
+            self._wrapped_at = self.table.columnWidth(2)  # the tab shown, the window resized
+            self.table.resizeRowsToContents()
         if self.session is None:
             return
         view = self.session.view
@@ -73,9 +82,12 @@ class EventConsole(QtWidgets.QWidget):
                 if event.get("kind") in ALARMS or event.get("severity") in ALARM_SEVERITIES:
                     cell.setForeground(QtGui.QColor("#b00020"))
                 self.table.setItem(row, column, cell)
+        first = self.shown
         self.shown += len(new)
         self.table.resizeColumnToContents(0)
         self.table.resizeColumnToContents(1)
+        for row in range(first, self.shown):
+            self.table.resizeRowToContents(row)
         if at_bottom:
             self.table.scrollToBottom()
 

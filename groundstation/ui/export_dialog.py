@@ -1,4 +1,9 @@
-"""The export dialog: format, file, time range, rate; progress and Cancel while ``ExportJob`` runs."""
+"""The export dialog: format, file, time range, rate; progress and Cancel while ``ExportJob`` runs.
+
+The file goes where the user's last export went (remembered in the settings), at first into their
+Documents folder (their home without one), not beside the recording in the app's data folder, where
+a user would not look for it.
+"""
 
 from __future__ import annotations
 
@@ -12,13 +17,27 @@ from groundstation.ui.export_job import FORMATS, ExportJob
 POLL_MS = 100
 STATUS_LINES = 4
 MIN_WIDTH_PX = 560
+FOLDER_KEY = "export_folder"  # in the window's settings
+
+
+def default_folder(settings: QtCore.QSettings | None) -> Path:
+    """The folder of the last export if it still exists, else Documents, else home."""
+    remembered = settings.value(FOLDER_KEY) if settings is not None else None
+    documents = QtCore.QStandardPaths.writableLocation(QtCore.QStandardPaths.DocumentsLocation)
+    for folder in (remembered, documents):
+        if folder and Path(folder).is_dir():
+            return Path(folder)
+    return Path.home()
 
 
 class ExportDialog(QtWidgets.QDialog):
-    def __init__(self, load, source: Path, duration_s: float, parent=None, setup: tuple = (None, None)):
+    def __init__(self, load, source: Path, duration_s: float, parent=None, setup: tuple = (None, None),
+                 settings: QtCore.QSettings | None = None):
         """``load``: how the file is computed (``session.load.load_session``); ``setup``: the estimators
-        and forced settings it is computed with (None: its own), those the window shows."""
+        and forced settings it is computed with (None: its own), those the window shows; ``settings``:
+        where the export folder is remembered."""
         super().__init__(parent)
+        self.settings = settings
         self._load = load
         self.setWindowTitle(f"Export {source.name}")
         self.source = Path(source)
@@ -28,7 +47,8 @@ class ExportDialog(QtWidgets.QDialog):
         for suffix, (label, _) in FORMATS.items():
             self.format_box.addItem(f"{label} ({suffix})", suffix)
         self.format_box.currentIndexChanged.connect(self._format_changed)
-        self.path_edit = QtWidgets.QLineEdit(str(self.source.with_suffix(self.format_box.currentData())))
+        name = self.source.with_suffix(self.format_box.currentData()).name
+        self.path_edit = QtWidgets.QLineEdit(str(default_folder(settings) / name))
         browse = QtWidgets.QPushButton("Browse…")
         browse.clicked.connect(self._browse)
         self.t_from = self._seconds(0.0, duration_s)
@@ -94,6 +114,8 @@ class ExportDialog(QtWidgets.QDialog):
         except UserError as error:
             self.status.setText(str(error))
             return
+        if self.settings is not None:
+            self.settings.setValue(FOLDER_KEY, str(self.job.out.parent.resolve()))
         self.export_button.setEnabled(False)
         self.cancel_button.setText("Cancel")
         self.status.setText("exporting…")

@@ -1,5 +1,6 @@
 """Link health: frames/s, loss, CRC failures, bytes/s, time since the last frame, latency; on a
-MAVLink link also both radios' signal (RADIO_STATUS) and the battery (SYS_STATUS) when they arrive.
+MAVLink link also both radios' signal (RADIO_STATUS) and the battery (SYS_STATUS: voltage, current and
+remaining; BATTERY_STATUS: the charge used) when they arrive, each figure only when the autopilot knows it.
 
 The headline turns amber when the link degrades (losses, CRC failures, a late frame) and red when
 frames stop or the port is gone. Figures of the last complete second, from the session view's link
@@ -34,8 +35,10 @@ RADIO_FIELDS = {
     "RSSI ground / air": ("radio_status", "{rssi:.0f} / {remote_rssi:.0f}"),
     "noise ground / air": ("radio_status", "{noise:.0f} / {remote_noise:.0f}"),
     "radio rx errors": ("radio_status", "{rx_errors:.0f}"),
-    "battery": ("sys_status", "{voltage_V:.2f} V, {remaining_pct:.0f} %"),
 }
+WIDEST_VALUE = "12.60 V, 35.2 A, 1250 mAh used, 100 % left"  # the battery's, the longest a row shows
+BATTERY = "battery"  # its row: SYS_STATUS, with what BATTERY_STATUS adds when the autopilot sends it
+NOT_REPORTED = "not reported"
 
 
 def link_figures(session: Session, now_ns: int) -> dict[str, float]:
@@ -84,16 +87,28 @@ def link_state(session: Session, figures: dict[str, float]) -> tuple[str, str]:
 
 
 def radio_figures(session: Session) -> dict[str, str]:
-    """RADIO_FIELDS' text for the tables that have a row (none on the project's own link)."""
+    """RADIO_FIELDS' text and the battery's for the tables that have a row (none on the project's own link)."""
     tables = session.view.tables
-    shown = {}
     with session.lock:
-        last = {name: tables[name].tail(1) for name in {t for t, _ in RADIO_FIELDS.values()} if name in tables}
-    for label, (name, text) in RADIO_FIELDS.items():
-        rows = last.get(name)
-        if rows is not None and len(rows):
-            shown[label] = text.format(**dict(zip(tables[name].columns, rows[0].tolist())))
+        last = {name: dict(zip(tables[name].columns, rows[0].tolist()))
+                for name in {*(t for t, _ in RADIO_FIELDS.values()), "sys_status", "battery_status"}
+                if name in tables and len(rows := tables[name].tail(1))}
+    shown = {label: text.format(**last[name]) for label, (name, text) in RADIO_FIELDS.items() if name in last}
+    if "sys_status" in last:
+        shown[BATTERY] = battery_text(last["sys_status"], last.get("battery_status"))
     return shown
+
+
+def battery_text(status: dict[str, float], detail: dict[str, float] | None = None) -> str:
+    """Voltage, current, charge used and remaining, each only when known: SYS_STATUS says unknown
+    with UINT16_MAX and -1 (NaN in the table), and an autopilot without a battery monitor sends 0 V,
+    which no battery powering it can read. The charge used comes from BATTERY_STATUS (-1: unknown)."""
+    used = (detail or {}).get("current_consumed_mAh", math.nan)
+    parts = [f"{status['voltage_V']:.2f} V" if status["voltage_V"] > 0 else "",
+             f"{status['current_A']:.1f} A" if math.isfinite(status["current_A"]) else "",
+             f"{used:.0f} mAh used" if math.isfinite(used) and used >= 0 else "",
+             f"{status['remaining_pct']:.0f} % left" if math.isfinite(status["remaining_pct"]) else ""]
+    return ", ".join(p for p in parts if p) or NOT_REPORTED
 
 
 def _number(value: float, fmt: str) -> str:
@@ -105,10 +120,12 @@ class LinkPanel(QtWidgets.QGroupBox):
         super().__init__("Link", parent)
         self.headline = QtWidgets.QLabel("no source")
         self.headline.setStyleSheet(STYLES["idle"])
-        self.values = {name: QtWidgets.QLabel("—") for name in (*FIELDS, *RADIO_FIELDS)}
+        self.values = {name: QtWidgets.QLabel("—") for name in (*FIELDS, *RADIO_FIELDS, BATTERY)}
         self.form = QtWidgets.QFormLayout(self)
         self.form.addRow(self.headline)
         for name, label in self.values.items():
+            # As wide as its widest figure from the start (the side column's width is set when it is made).
+            label.setMinimumWidth(label.fontMetrics().horizontalAdvance(WIDEST_VALUE) + 4)
             self.form.addRow(name, label)
         self._show_radio({})
 
@@ -119,7 +136,7 @@ class LinkPanel(QtWidgets.QGroupBox):
             self.headline.setStyleSheet(STYLES[state])
 
     def _show_radio(self, figures: dict[str, str]) -> None:
-        for name in RADIO_FIELDS:
+        for name in (*RADIO_FIELDS, BATTERY):
             self.form.setRowVisible(self.values[name], name in figures)
             self.values[name].setText(figures.get(name, "—"))
 

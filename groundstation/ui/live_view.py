@@ -31,7 +31,8 @@ DEFAULT_WINDOW = "30 s"
 ONBOARD_COLOUR = PALETTE["wine"]
 TRUTH_COLOUR = "#000000"  # dashed black, as the figures draw truth
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
-HEADING_COLORS = {"compass": "#000000", "GPS": "#b8860b"}
+# The sensors' headings in colours no estimator takes (the palette's are theirs; black is AHF2's).
+HEADING_COLORS = {"compass": "#8c8c8c", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
 # The tabs that appear once a series of theirs has rows.
 AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
@@ -164,6 +165,7 @@ class LiveView(QtWidgets.QWidget):
             self._curves_of = shown
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
             plots.clear_data()
+        self.position.protocol = session.view.protocol if session is not None else None
         self.channels.set_session(session)
         self.vibration.set_session(session)
         self._show_aiding_tabs()

@@ -16,18 +16,18 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.errors import UserError
 from groundstation import formats
-from groundstation.estimation import ESTIMATORS, label, live_estimators
+from groundstation.estimation import ESTIMATORS, label
 from groundstation.recording import default_recordings_dir
 from groundstation.session.playback import RevealSession
 from groundstation.session.view import Session
 from groundstation.sources import whole_file
 from groundstation.sources.sniff import as_mavlink
+from groundstation.ui.about import show_about
 from groundstation.ui.attitude_indicator import AttitudePanel
 from groundstation.ui.carried_over import carried_over_note
 from groundstation.ui.connection_bar import ConnectionBar
 from groundstation.ui.estimator_panel import EstimatorPanel
 from groundstation.ui.event_console import EventConsole
-from groundstation.ui.mode_bands import status_text
 from groundstation.ui.parameters_view import ParametersView
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.foxglove_switch import FoxgloveSwitch
@@ -37,6 +37,7 @@ from groundstation.ui.config_banner import ConfigBanner
 from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
+from groundstation.ui.vehicle_badge import VehicleBadge
 
 REDRAW_HZ = 30
 # Every how many ticks the side panels redraw: the horizon at 15 Hz, the 3D view (its paint costs
@@ -154,8 +155,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.source_label = QtWidgets.QLabel("no source")
         self.recording_label = QtWidgets.QLabel("not recording")
         self.statusBar().addWidget(self.source_label, 1)
-        self.mode_label = QtWidgets.QLabel()  # an autopilot's flight mode and arming now
-        self.statusBar().addPermanentWidget(self.mode_label)
+        self.vehicle_badge = VehicleBadge()  # an autopilot's mode and arming, always in sight
+        self.statusBar().addPermanentWidget(self.vehicle_badge)
         self.statusBar().addPermanentWidget(self.recording_label)
         self.record_action = QtGui.QAction("Start recording", self, shortcut=QtGui.QKeySequence("Ctrl+R"))
         self.record_action.setShortcutContext(QtCore.Qt.ApplicationShortcut)
@@ -212,7 +213,7 @@ class MainWindow(QtWidgets.QMainWindow):
         app's estimators); computed in a worker, then played from the start (``tick`` adopts it)."""
         self.disconnect()
         path = Path(path)
-        self._load(path, self.sessions.estimators_for(path, live_estimators()), None, f"computing {path.name}")
+        self._load(path, None, None, f"computing {path.name}")  # the estimators: ``load.estimators_for``
 
     def _load(self, path: Path, filters, forced, text: str, recompute: bool = False) -> None:
         if self.loading is not None:
@@ -318,7 +319,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.show_error("Nothing to export yet: connect, start the simulated bridge or open a recording first.")
             return None
         setup = self.session.setup if self.session is not None else (None, None)
-        dialog = ExportDialog(self.sessions.load_session, *file, parent=self, setup=setup)
+        dialog = ExportDialog(self.sessions.load_session, *file, parent=self, setup=setup, settings=self.settings)
         dialog.setModal(False)  # the live view goes on while it exports
         dialog.show()
         return dialog
@@ -367,7 +368,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.event_console.set_session(session)
         self.parameters_view.set_session(session)
         self.link_panel.refresh(session)
-        self.bar.set_connected(True)
+        self.bar.set_connected(True, getattr(session.source, "path", None) if session.source.is_replay else None)
         self.centralWidget().setFocus()  # out of the source box: the keys control the view
         self._sync_record_action()
         self.foxglove.follow(session)
@@ -428,6 +429,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._action(view, "To the end (live: follow the newest data)", "End", lambda: self.to_end(True))
         help_menu = self.menuBar().addMenu("&Help")
         self._action(help_menu, "&Keyboard shortcuts", "F1", self.show_shortcuts)
+        help_menu.addAction("&About groundstation").triggered.connect(lambda _=False: show_about(self))
 
     def use_fast_imu(self, fast: bool) -> None:
         """Run a flight log's estimators on its full-rate IMU (or its logged one): the open file again."""
@@ -489,6 +491,7 @@ class MainWindow(QtWidgets.QMainWindow):
         figures = self.ticks % FIGURES_EVERY == 0
         if figures:
             self.link_panel.refresh(session)
+            self.vehicle_badge.refresh(self.live_view.mode_bands.spans if session is not None else [])
             self.recording_banner.refresh(session)
             self.config_banner.refresh(session)
         if session is None:
@@ -501,7 +504,6 @@ class MainWindow(QtWidgets.QMainWindow):
             self.uplink_panel.refresh()
             self.event_console.refresh()
             self.parameters_view.refresh()
-            self.mode_label.setText(status_text(self.live_view.mode_bands.spans))
             self.estimator_panel.sync_shown(self.live_view.attitude.visible_labels())
             self.recording_label.setText(self._recording_text(session))
             self._sync_record_action()

@@ -28,14 +28,6 @@ def label(span: ModeSpan) -> str:
     return span.mode + ("" if span.armed is None else " (armed)" if span.armed else " (disarmed)")
 
 
-def status_text(spans: list[ModeSpan]) -> str:
-    """The mode and arming now, for the status bar; empty without modes."""
-    if not spans:
-        return ""
-    last = spans[-1]
-    return f"Mode {last.mode}" + ("" if last.armed is None else ", ARMED" if last.armed else ", disarmed")
-
-
 class ModeBands:
     """Keeps each plot widget's bands matching the spans; ``show`` is cheap when nothing changed (the
     last span only grows with a live session: its bands are stretched, not redrawn)."""

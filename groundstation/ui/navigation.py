@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from firmware_protocol import SPEC
 from groundstation.geodesy import ned_from_geodetic, pressure_altitude_m
@@ -23,6 +24,16 @@ from groundstation.ui.series import Series
 FIX_2D = SPEC.enums["gps_fix"].values["fix_2d"]
 FIX_NAMES = {value: "no fix" if name == "none" else name.removeprefix("fix_").upper()
              for name, value in SPEC.enums["gps_fix"].values.items()}
+# An autopilot's GPS_RAW_INT.fix_type is MAVLink's GPS_FIX_TYPE: its own words, before the comma
+# ("RTK Fixed, 3D position" -> "RTK Fixed").
+MAVLINK_FIX_NAMES = {value: entry.description.split(",")[0].rstrip(".") for value, entry in mavlink.enums["GPS_FIX_TYPE"].items()
+                     if not entry.name.endswith("ENUM_END")}
+
+
+def fix_name(fix_type: float, protocol: str | None) -> str:
+    """A GPS solution's fix type in words, by the numbering of the link that carried it."""
+    names = MAVLINK_FIX_NAMES if protocol == "mavlink" else FIX_NAMES
+    return names.get(int(fix_type), f"fix type {int(fix_type)}") if math.isfinite(fix_type) else "—"
 HEADING_STALE_S = 2.0  # a heading reading this much older than the newest sample no longer counts
 
 

@@ -11,14 +11,15 @@ axis costs more than drawing the curves, so the time axis advances by a fraction
 the value axes change only when the data leaves them or shrinks well inside them; a window longer
 than the session shows it from 0. The legend above the plots has one entry per label and toggles a
 curve on every plot that carries that label. A crosshair follows the mouse and reads every visible
-curve at the nearest sample under it, in an overlay over the plots (a label in the layout would
-widen the plots as it grows). A circular quantity (a heading, 0..360°) is not joined across its
+curve at the nearest sample under it, in a small table beside the cursor over the plots (a label in
+the layout would widen the plots as it grows; a band across them would hide their tops). A circular quantity (a heading, 0..360°) is not joined across its
 jumps from one end of the circle to the other. A reference curve (the aircraft's own estimate) is
 dashed and drawn beneath the others.
 """
 
 from __future__ import annotations
 
+import html
 import math
 from dataclasses import dataclass
 
@@ -40,6 +41,7 @@ FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a 
 HEAD_S = 1.0  # a curve takes its head's samples when these span this: one whole repaint a second
 Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
+READOUT_GAP_PX = 16  # between the cursor and the readout beside it
 LEGEND_COLUMNS = 6  # more entries (eight estimators, compass and GPS) wrap onto a second legend row
 
 
@@ -227,7 +229,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self.readout = QtWidgets.QLabel(self)  # over the plots: it never takes room from them
         self.readout.setStyleSheet("background: rgba(255, 255, 255, 215); color: #222; padding: 2px 4px")
         self.readout.setAttribute(QtCore.Qt.WA_TransparentForMouseEvents)
-        self.readout.setWordWrap(True)
+        self.readout.setTextFormat(QtCore.Qt.RichText)
         self.readout.hide()
         self.scene().sigMouseMoved.connect(self._mouse_moved)
         for label, curve in in_legend.items():  # the legend drives the others
@@ -378,11 +380,19 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             line.setPos(t_s)
             line.show()
         self.readout.setText(self.read_at(t_s))
-        top = self.mapFromScene(self.items[0].getViewBox().sceneBoundingRect().topLeft())
-        self.readout.setFixedWidth(max(self.width() - top.x() - 8, 100))
         self.readout.adjustSize()
-        self.readout.move(top.x() + 4, top.y() + 4)
+        self.readout.move(*self._readout_place(self.mapFromScene(position)))
         self.readout.show()
+
+    def _readout_place(self, cursor: QtCore.QPoint) -> tuple[int, int]:
+        """Beside the cursor, on the side with room (right, else left), never over the point read; a
+        box as large as its text, so the curves elsewhere stay in sight."""
+        size = self.readout.size()
+        x = cursor.x() + READOUT_GAP_PX
+        if x + size.width() > self.width():
+            x = cursor.x() - READOUT_GAP_PX - size.width()
+        y = min(max(cursor.y() - size.height() // 2, 0), max(self.height() - size.height(), 0))
+        return max(x, 0), y
 
     def leaveEvent(self, event) -> None:
         self.readout.hide()
@@ -391,16 +401,18 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         super().leaveEvent(event)
 
     def read_at(self, t_s: float) -> str:
-        """The visible curves' values at the samples nearest ``t_s``."""
-        parts = [f"t {t_s:.2f} s"]
+        """The visible curves' values at the samples nearest ``t_s``, a row per legend label and a
+        column per plot (rich text); a curve without a value there (a gap) is left blank, not "nan"."""
         visible = self.visible_labels()
-        for spec in self._specs:
-            values = []
+        rows: dict[str, dict[int, float]] = {}
+        for column, spec in enumerate(self._specs):
             for curve in spec.curves:
                 s = self._series.get(curve.series)
                 value = None if s is None or curve.label not in visible else s.value_at(curve.quantity, t_s)
-                if value is not None:
-                    values.append(f"{curve.label} {value:+.2f}")
-            if values:
-                parts.append(f"{spec.title} ({spec.unit}): " + ", ".join(values))
-        return "\n".join(parts)
+                if value is not None and math.isfinite(value):
+                    rows.setdefault(curve.label, {})[column] = value
+        header = "".join(f"<th align=right>&nbsp;{spec.axis_label}</th>" for spec in self._specs)
+        body = "".join(f"<tr><td>{html.escape(label)}</td>" + "".join(
+            f"<td align=right>&nbsp;{values[c]:+.2f}</td>" if c in values else "<td></td>" for c in range(len(self._specs)))
+            + "</tr>" for label, values in rows.items())
+        return f"<table cellspacing=0><tr><th align=left>t {t_s:.2f} s</th>{header}</tr>{body}</table>"

@@ -19,7 +19,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.ui.navigation import FIX_NAMES, newest_row
+from groundstation.ui.navigation import fix_name, newest_row
 from groundstation.ui.plots import Curve, Plot, StackedPlots, refit
 from groundstation.ui.series import Series
 
@@ -72,6 +72,7 @@ class PositionView(QtWidgets.QWidget):
         self.height = StackedPlots((height_plot(),))
         self.height.userInteracted.connect(self.userInteracted)
         self._drawn_s = -math.inf  # the newest position sample shown on the track and in numbers
+        self.protocol: str | None = None  # the session's link: how its GPS numbers fix types
         self._fused_listed = True
         self._list_fused(False)
         self.note = QtWidgets.QLabel(NO_GPS)
@@ -161,4 +162,4 @@ class PositionView(QtWidgets.QWidget):
         speed = math.hypot(gps["vel_n_m_s"], gps["vel_e_m_s"]) if gps else None
         self.readouts["ground speed"].setText(number(speed, ".1f", " m/s"))
         self.readouts["satellites"].setText(number(gps.get("satellites"), ".0f"))
-        self.readouts["fix"].setText(FIX_NAMES.get(int(gps["fix_type"]), "?") if gps else "—")
+        self.readouts["fix"].setText(fix_name(gps["fix_type"], self.protocol) if gps else "—")

@@ -39,6 +39,7 @@ class UplinkPanel(QtWidgets.QGroupBox):
         self.session: Session | None = None
         self.sent: list[Sent] = []
         self._events_seen = 0
+        self._config_mode: int | None = None  # the mode of the last CONFIG, which the mode box was set to
         self.mode_box = QtWidgets.QComboBox()
         self.mode_box.addItems(list(MODES))
         self.mode_button = QtWidgets.QPushButton("Set mode")
@@ -96,6 +97,7 @@ class UplinkPanel(QtWidgets.QGroupBox):
         self.mavlink_controls.setVisible(mavlink)
         self.sent = []
         self._events_seen = 0
+        self._config_mode = None
         self.answers.setText("")
         self.config_label.setText("no CONFIG yet" if can_send else "(this source cannot send: no uplink)")
 
@@ -127,6 +129,10 @@ class UplinkPanel(QtWidgets.QGroupBox):
                         ms = (event["t_host_ns"] - sent.sent_ns) / 1e6
                         sent.answer = f"ACK {RESULTS.get(event['result'], event['result'])} ({ms:.0f} ms)"
         config = self.session.view.config
+        if config is not None and config.get("mode") != self._config_mode:
+            # The firmware's mode changed (or is first known): the box shows it until the user picks another.
+            self._config_mode = config.get("mode")
+            self.mode_box.setCurrentText(MODE_NAMES.get(self._config_mode, self.mode_box.currentText()))
         if config is not None:
             self.config_label.setText(
                 f"mode {MODE_NAMES.get(config.get('mode'), '?')}, {config.get('rate_hz')} Hz, ±{config.get('accel_fs_g')} g, "

@@ -8,7 +8,8 @@ from groundstation.sim.udp_bridge import UdpBridge
 
 
 @pytest.fixture
-def mavlink_window(qtbot, tmp_path):
+def window(qtbot, tmp_path):
+    """A real main window, its settings and recordings in the test's folder."""
     from PySide6 import QtCore
 
     from groundstation.session.factory import Sessions
@@ -16,9 +17,14 @@ def mavlink_window(qtbot, tmp_path):
     from groundstation.ui.main_window import MainWindow
 
     settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
-    window = MainWindow(settings, Sessions(), recordings_dir=tmp_path / "recordings")
-    qtbot.addWidget(window)
-    window.show()
+    main = MainWindow(settings, Sessions(), recordings_dir=tmp_path / "recordings")
+    qtbot.addWidget(main)
+    main.show()
+    return main
+
+
+@pytest.fixture
+def mavlink_window(window):
     port = free_udp_port()
     window.connect_serial(f"mavlink:udpin:127.0.0.1:{port}")
     assert not window.banner.isVisible(), window.banner.text()

@@ -39,7 +39,8 @@ def test_link_panel_shows_both_radios_signal_and_the_battery(qtbot, mavlink_wind
     assert values["noise ground / air"].text() == f"{RADIO_STATUS['noise']} / {RADIO_STATUS['remnoise']}"
     assert values["radio rx errors"].text() == str(RADIO_STATUS["rxerrors"])
     qtbot.waitUntil(lambda: values["battery"].text() != "—", timeout=8000)
-    assert values["battery"].text() == f"{BATTERY['voltage_battery'] / 1000:.2f} V, {BATTERY['battery_remaining']} %"
+    assert values["battery"].text() == (f"{BATTERY['voltage_battery'] / 1000:.2f} V, {BATTERY['current_battery'] / 100:.1f} A, "
+                                        f"{BATTERY['battery_remaining']} % left")  # mV, cA, %
     assert window.link_panel.values["RSSI ground / air"].isVisibleTo(window.link_panel)
     window.disconnect()  # no figure of a stopped link stands
     qtbot.waitUntil(lambda: not window.link_panel.values["RSSI ground / air"].isVisibleTo(window.link_panel), timeout=3000)

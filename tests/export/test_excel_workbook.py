@@ -173,7 +173,7 @@ def test_charts_of_pitch_and_roll_read_a_decimated_range(sim_session, tmp_path, 
     charts = book["Chart"]._charts
     assert [c.title.tx.rich.p[0].r[0].t for c in charts] == ["pitch (°)", "roll (°)"]
     assert all(len(c.series) == 3 for c in charts)  # ahf, hf, onboard
-    assert "'Chart data'!$B$2:$B$" in charts[0].series[0].val.numRef.f
+    assert "'Chart data'!$B$2:$B$" in charts[0].series[0].yVal.numRef.f  # against time: xVal
     data = columns(book["Chart data"])
     step = -(-len(sim_session) // 100)
     assert len(data["time (s)"]) <= 100

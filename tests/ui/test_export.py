@@ -1,5 +1,7 @@
 """The export dialog writes the file it names, from a worker thread, with progress; Cancel leaves nothing."""
 
+from pathlib import Path
+
 import pandas as pd
 
 from groundstation.session.load import load_session
@@ -47,3 +49,26 @@ def test_cancel_leaves_no_file(qtbot, recording, tmp_path):
     qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=20000)
     assert dialog.status.text() == "cancelled; nothing was written"
     assert not out.exists() and not list(tmp_path.glob(".cancelled*"))
+
+
+def test_the_dialog_saves_into_documents_then_where_the_user_last_exported(window, qtbot, recording, tmp_path, monkeypatch):
+    """Not beside the recording in the app's hidden data folder (issue 24, defect 9)."""
+    home = tmp_path / "home"
+    (home / "Documents").mkdir(parents=True)
+    monkeypatch.setenv("HOME", str(home))
+    monkeypatch.delenv("XDG_DOCUMENTS_DIR", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(home / ".config"))  # no user-dirs.dirs: Documents is ~/Documents
+    open_file(window, qtbot, recording)
+    dialog = window.export()
+    qtbot.addWidget(dialog)
+    assert Path(dialog.path_edit.text()) == home / "Documents" / "flight.xlsx"
+    elsewhere = tmp_path / "exports"
+    elsewhere.mkdir()
+    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
+    dialog.path_edit.setText(str(elsewhere / "first.csv"))
+    dialog.export_button.click()
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=20000)
+    dialog.close()
+    again = window.export()
+    qtbot.addWidget(again)
+    assert Path(again.path_edit.text()).parent == elsewhere  # remembered, also across restarts (the settings)

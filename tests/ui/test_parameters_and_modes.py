@@ -51,7 +51,7 @@ def test_modes_are_bands_on_the_plots_and_the_mode_is_in_the_status_bar(copter):
     top = [i for i in copter.live_view.attitude.items[0].items if isinstance(i, pg.LinearRegionItem) and i.zValue() == -20]
     labels = [c.toPlainText() for b in top for c in b.lines[0].childItems() if isinstance(c, pg.InfLineLabel)]
     assert labels == ["LOITER (armed)", "RTL (armed)", "RTL (disarmed)"]
-    assert copter.mode_label.text() == "Mode RTL, disarmed"
+    assert copter.vehicle_badge.text() == "disarmed · RTL" and copter.vehicle_badge.isVisible()
 
 
 def test_the_autopilots_texts_are_in_events(copter):

@@ -175,3 +175,25 @@ def test_frames_add_only_the_newest_samples_and_a_stopped_series_is_drawn_whole(
     plots.draw(restarted, 30.0, {"imu"})
     assert not heads.pending  # nothing joined to the previous series' curve
     np.testing.assert_array_equal(pitch.xData, restarted["imu"].data("ahf_pitch_deg", 30.0)[0])
+
+
+def test_the_readout_sits_beside_the_cursor_and_leaves_gaps_blank(plots, qtbot):
+    """Not a band across the tops of the curves, no "+nan" over a gap (issue 24, defect 10)."""
+    series = series_until(60.0, FILTERS[:2])
+    plots.draw(series, 30.0, None)
+    qtbot.wait(50)
+    view = plots.items[0].getViewBox()
+    for t_s in (35.0, 58.0):  # mid-plot, then near the right edge: the box goes to the cursor's left
+        scene = view.mapViewToScene(QtCore.QPointF(t_s, 0.0))
+        plots.scene().sigMouseMoved.emit(scene)
+        cursor = plots.mapFromScene(scene)
+        box = plots.readout.geometry()
+        assert plots.readout.isVisible() and not box.adjusted(-4, -4, 4, 4).contains(cursor)
+        assert box.width() < plots.width() / 2 and plots.rect().contains(box)
+        assert (box.left() > cursor.x()) == (t_s == 35.0)
+    gap = series_until(60.0, FILTERS[:2])
+    table = gap["imu"].recent.values["ahf_pitch_deg"]
+    table[3000:3100] = np.nan  # 30 s to 31 s: no AHF pitch (a gap row's NaN)
+    plots.draw(gap, 30.0, None)
+    text = plots.read_at(30.5)
+    assert "nan" not in text.lower() and "AHF" in text  # its roll is still read
