@@ -21,6 +21,7 @@ import json
 import sys
 from pathlib import Path
 
+from groundstation.commands.folder import add_folder_options, run_folder
 from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
 from groundstation.errors import UserError
 
@@ -39,12 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_config_option(parser)
     add_imu_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    parser.add_argument("--out", type=Path, metavar="OUT",
-                        help="for a FOLDER: the Parquet dataset to write (OUT/logs.parquet, a row per log and "
-                             "estimator; OUT/tables/<table>/log_id=<id>/, each log's tables)")
-    parser.add_argument("--workers", type=int, metavar="N", help="for a FOLDER: processes at once (default: one per core)")
-    parser.add_argument("--dask", metavar="SCHEDULER",
-                        help="for a FOLDER: run the logs as tasks on this Dask scheduler (tcp://HOST:8786) instead")
+    add_folder_options(parser, "the Parquet dataset to write (OUT/logs.parquet, a row per log and estimator; "
+                               "OUT/tables/<table>/log_id=<id>/, each log's tables)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -54,7 +51,7 @@ def run(args: argparse.Namespace) -> int:
 
     names, overrides = estimator_options(args)
     if Path(args.file).is_dir():
-        return evaluate_folder_command(args, names, overrides)
+        return run_folder(args, names, overrides, pages=False)
     if args.out is not None or args.dask is not None or args.workers is not None:
         raise UserError("--out, --workers and --dask are for a folder of logs; one file prints its figures")
     bar = ProgressBar("computing")  # shown after a second: a long recording or log
@@ -90,28 +87,3 @@ def print_agreement(results: dict, carried: dict, as_json: bool) -> int:
         print(f"{name:<10} {f['pitch_rms_deg']:>16.3f} {f['pitch_max_deg']:>16.3f} {f['roll_rms_deg']:>15.3f} {f['roll_max_deg']:>15.3f}")
     return 0
 
-
-def evaluate_folder_command(args: argparse.Namespace, names, overrides) -> int:
-    """Every log under the folder into one Parquet dataset, a progress line per log; a log that cannot be
-    read is said and has its error in its row, the batch goes on."""
-    from groundstation.logbook.folder import evaluate_folder
-
-    if args.out is None:
-        raise UserError(f"{args.file} is a folder: say where its dataset goes with --out OUT")
-    if overrides:
-        raise UserError("--set applies to one file; a folder runs every estimator with its own settings")
-    if args.workers is not None and args.workers < 1:
-        raise UserError(f"--workers must be at least 1, not {args.workers}")
-
-    def progress(done: int, total: int, path: Path, rows: list[dict], seconds: float) -> None:
-        error = rows[0].get("error")
-        estimators = [row["estimator"] for row in rows if row["estimator"]]
-        said = (f"error: {error}" if error else f"{len(estimators)} estimators against the {rows[0]['reference']}"
-                if rows[0]["reference"] else f"{len(estimators)} estimators, nothing to compare them with")
-        print(f"[{done}/{total}] {rows[0]['path']}: {said} ({seconds:.1f} s)", flush=True)
-
-    rows = evaluate_folder(args.file, args.out, names, args.workers, args.dask, progress)
-    logs = {row["log_id"] for row in rows}
-    failed = {row["log_id"] for row in rows if row["error"]}
-    print(f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} unreadable) and tables/")
-    return 0

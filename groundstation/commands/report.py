@@ -14,8 +14,12 @@ from groundstation.commands.options import add_estimator_options, estimator_opti
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from groundstation import formats
 
-    parser.add_argument("file", metavar="FILE", help=formats.described())
-    parser.add_argument("--out", required=True, type=Path, metavar="OUT.html", help="the HTML page to write")
+    parser.add_argument("file", metavar="FILE", help=f"{formats.described()}; or a FOLDER of them (every one under it)")
+    parser.add_argument("--out", required=True, type=Path, metavar="OUT",
+                        help="OUT.html, the page to write; for a FOLDER, a folder: OUT/index.html (the logs worst "
+                             "first), OUT/reports/ (a page per log), and the dataset evaluate DIR writes")
+    parser.add_argument("--workers", type=int, metavar="N", help="for a FOLDER: processes at once (default: one per core)")
+    parser.add_argument("--dask", metavar="SCHEDULER", help="for a FOLDER: run the logs as tasks on this Dask scheduler")
     parser.add_argument("--overwrite", action="store_true", help="replace OUT.html if it exists")
     add_estimator_options(parser, None)
 
@@ -28,6 +32,12 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.session.load import load_session
 
     filters, overrides = estimator_options(args)
+    if Path(args.file).is_dir():
+        from groundstation.commands.folder import run_folder
+
+        return run_folder(args, filters, overrides, pages=True)
+    if args.dask is not None or args.workers is not None:
+        raise UserError("--workers and --dask are for a folder of logs")
     if args.out.suffix.lower() not in (".html", ".htm"):
         raise UserError(f"{args.out}: a report is an HTML page; name it .html")
     check_destination(args.out, args.overwrite)  # said before the long load: an existing OUT, a missing folder

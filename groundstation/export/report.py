@@ -52,6 +52,9 @@ tr.alarm td { color: #a00; }
 """
 
 
+NOT_RECORDED = "not recorded"  # a vehicle or firmware the session does not name
+
+
 def write_report(data: SessionData, out, file_name: str = "", overwrite: bool = False) -> Path:
     """The report of ``data`` (computed from the file ``file_name``) written to ``out`` (``.html``),
     whole or not at all."""
@@ -68,7 +71,7 @@ def write_report(data: SessionData, out, file_name: str = "", overwrite: bool = 
 
 
 def report_html(data: SessionData, file_name: str = "") -> str:
-    vibration, vibration_note = _vibration(data)
+    vibration, vibration_note = vibration_of(data)
     found = findings(data, vibration)
     title = f"Flight report: {file_name or data.metadata.get('source', 'session')}"
     parts = [f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{_e(title)}</title>"
@@ -79,7 +82,7 @@ def report_html(data: SessionData, file_name: str = "") -> str:
     return "\n".join(parts)
 
 
-def _vibration(data: SessionData) -> tuple[VibrationSummary | None, str]:
+def vibration_of(data: SessionData) -> tuple[VibrationSummary | None, str]:
     try:
         return vibration_summary(data), ""
     except VibrationError as error:
@@ -111,7 +114,7 @@ def firmware(data: SessionData) -> str:
             return m.group(0)
     if data.config:
         return f"this project's firmware, protocol {data.metadata.get('protocol_version', '?')}"
-    return "not recorded"
+    return NOT_RECORDED
 
 
 def vehicle(data: SessionData) -> str:
@@ -120,7 +123,7 @@ def vehicle(data: SessionData) -> str:
         return str(meta["autopilot"])
     if data.protocol == "gs":
         return "this project's aircraft" + (f" (simulated, scenario '{meta['scenario']}')" if meta.get("scenario") else "")
-    return "not recorded"
+    return NOT_RECORDED
 
 
 def duration_s(data: SessionData) -> float:

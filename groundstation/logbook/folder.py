@@ -9,6 +9,7 @@ the existing engine for this; the output folder must be one the workers can writ
 from __future__ import annotations
 
 import concurrent.futures
+import functools
 import multiprocessing
 import os
 import time
@@ -16,6 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from groundstation.errors import UserError
+from groundstation.logbook.index import write_index
 from groundstation.logbook.summary import LOG_COLUMNS, log_fields, summarise
 
 
@@ -36,9 +38,11 @@ def logs_in(folder: Path, out: Path | None = None) -> list[Path]:
 
 
 def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_scheduler: str | None = None,
-                    progress: Callable[[int, int, Path, list[dict], float], None] | None = None) -> list[dict]:
+                    progress: Callable[[int, int, Path, list[dict], float], None] | None = None,
+                    pages: bool = False) -> list[dict]:
     """Every log's rows (``summary.LOG_COLUMNS``), written as ``out/logs.parquet`` beside ``out/tables``;
-    ``progress(done, total, path, rows, seconds)`` after each log."""
+    ``progress(done, total, path, rows, seconds)`` after each log; ``pages``: each log's flight report in
+    ``out/reports/`` and ``out/index.html`` listing them worst first."""
     folder, out = Path(folder), Path(out)
     if not folder.is_dir():
         raise UserError(f"{folder}: not a folder")
@@ -55,19 +59,22 @@ def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_
         if progress is not None:
             progress(len(results), len(paths), path, rows, time.monotonic() - started)
 
-    run(paths, folder, out, filters, workers, dask_scheduler, finished)
+    task = functools.partial(summarise, page=pages)
+    run(task, paths, folder, out, filters, workers, dask_scheduler, finished)
     rows = [row for path in paths for row in results[path]]
     write_logs(rows, out / "logs.parquet")
+    if pages:
+        write_index(rows, out / "index.html")
     return rows
 
 
-def _on_processes(paths, folder, out, filters, workers, _scheduler, finished) -> None:
+def _on_processes(task, paths, folder, out, filters, workers, _scheduler, finished) -> None:
     pending = list(paths)
     workers = max(1, workers or os.cpu_count() or 1)
     while pending:
         context = multiprocessing.get_context("spawn")  # no fork of a process holding threads (Qt, pyarrow)
         with concurrent.futures.ProcessPoolExecutor(min(workers, len(pending)), mp_context=context) as pool:
-            futures = {pool.submit(summarise, p, folder, out, filters): p for p in pending}
+            futures = {pool.submit(task, p, folder, out, filters): p for p in pending}
             broken = False
             for future in concurrent.futures.as_completed(futures):
                 path = futures[future]
@@ -81,21 +88,21 @@ def _on_processes(paths, folder, out, filters, workers, _scheduler, finished) ->
         if broken:
             # A worker died; the pool does not say on which log, so the first unfinished one runs alone
             # (an error row if it dies again) and a new pool takes the rest.
-            _alone(pending.pop(0), folder, out, filters, finished)
+            _alone(task, pending.pop(0), folder, out, filters, finished)
 
 
-def _alone(path, folder, out, filters, finished) -> None:
+def _alone(task, path, folder, out, filters, finished) -> None:
     """Runs one log in a process of its own: its rows, or an error row when that process dies too."""
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(1, mp_context=context) as pool:
         try:
-            rows = pool.submit(summarise, path, folder, out, filters).result()
+            rows = pool.submit(task, path, folder, out, filters).result()
         except concurrent.futures.process.BrokenProcessPool:
             rows = [{**log_fields(Path(path), Path(folder)), "error": "the process reading it died (a crash or out of memory)"}]
     finished(path, rows)
 
 
-def _on_dask(paths, folder, out, filters, _workers, scheduler, finished) -> None:
+def _on_dask(task, paths, folder, out, filters, _workers, scheduler, finished) -> None:
     try:
         from distributed import Client, as_completed
     except ImportError:
@@ -105,7 +112,7 @@ def _on_dask(paths, folder, out, filters, _workers, scheduler, finished) -> None
     except (OSError, TimeoutError, ValueError) as error:
         raise UserError(f"--dask {scheduler}: cannot reach the scheduler ({error})") from None
     with client:
-        futures = {client.submit(summarise, str(p), str(folder), str(out), filters, pure=False): p for p in paths}
+        futures = {client.submit(task, str(p), str(folder), str(out), filters, pure=False): p for p in paths}
         for future in as_completed(futures):
             path = futures[future]
             try:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import re
 from pathlib import Path
 
 import numpy as np
@@ -24,30 +23,17 @@ LOG_COLUMNS = {
     # the vibration view's figures over the whole log (analysis.vibration): RMS above 5 Hz, the strongest peak
     "vibration_accel_m_s2": "double", "vibration_gyro_deg_s": "double", "vibration_peak_hz": "double",
     "vibration_source": "string",
+    # the flight report's findings (export.report_findings): how many, the worst severity and its title
+    "findings": "int64", "worst_severity": "string", "worst_finding": "string",
     "estimator": "string", "reference": "string",  # reference: "truth", "onboard" or null (nothing to compare with)
     "incl_rmse_deg": "double", "incl_max_deg": "double", "heading_rmse_deg": "double", "heading_max_deg": "double",
     "pitch_rms_deg": "double", "pitch_max_deg": "double", "roll_rms_deg": "double", "roll_max_deg": "double",
 }
-_FIRMWARE = re.compile(r"\b(Ardu\w+|PX4\w*|Rover|Blimp)\s+V?\d+\.\d+(\.\d+)?[\w.-]*")
 
 
 def log_id(path: Path, root: Path) -> str:
     """A stable id of a log: the first 12 hex digits of the SHA-1 of its path under the folder."""
     return hashlib.sha1(path.relative_to(root).as_posix().encode()).hexdigest()[:12]
-
-
-def vehicle_and_firmware(data) -> tuple[str | None, str | None]:
-    """What flew and on which firmware: the log's own words where it says so (metadata), else the first
-    autopilot message that names a firmware version ("ArduCopter V4.3.6 (...)")."""
-    vehicle = data.metadata.get("vehicle") or data.metadata.get("autopilot")
-    firmware = data.metadata.get("firmware")
-    if firmware is None:
-        for event in data.events:
-            found = _FIRMWARE.search(str(event.get("message", "")))
-            if found:
-                firmware = found.group(0)
-                break
-    return (str(vehicle) if vehicle else None), (str(firmware) if firmware else None)
 
 
 def link_loss_pct(data) -> float:
@@ -68,10 +54,12 @@ def log_fields(path: Path, root: Path) -> dict:
     return fields
 
 
-def summarise(path, root, out, filters=None) -> list[dict]:
+def summarise(path, root, out, filters=None, page: bool = False) -> list[dict]:
     """The rows of ``path`` (a row per estimator; one row with ``error`` when it cannot be read), its
-    tables written under ``out/tables``."""
+    tables written under ``out/tables``; ``page``: its flight report too, ``out/reports/<log_id>.html``."""
     from groundstation.autopilot.agreement import onboard_agreement
+    from groundstation.export.report import NOT_RECORDED, firmware, vehicle, vibration_of, write_report
+    from groundstation.export.report_findings import findings
     from groundstation.session.load import load_session
 
     path, root, out = Path(path), Path(root), Path(out)
@@ -82,14 +70,21 @@ def summarise(path, root, out, filters=None) -> list[dict]:
         return [{**fields, "error": str(error)}]
     except Exception as error:  # a defect in a reader must cost this log only, and say what it was
         return [{**fields, "error": f"internal error while reading ({type(error).__name__}: {error})"}]
-    vehicle, firmware = vehicle_and_firmware(data)
     time_s = data.time_s
-    fields.update(vehicle=vehicle, firmware=firmware, samples=len(data),
+    said = {"vehicle": vehicle(data), "firmware": firmware(data)}
+    fields.update({k: v for k, v in said.items() if v != NOT_RECORDED}, samples=len(data),
                   duration_s=float(time_s[-1] - time_s[0]) if len(time_s) > 1 else 0.0,
                   imu_rate_hz=imu_rate_hz(data), link_loss_pct=link_loss_pct(data),
                   warnings="\n".join(data.warnings) or None)
-    fields.update(vibration_fields(data))
+    vibration, _ = vibration_of(data)
+    fields.update(vibration_fields(vibration))
+    found = findings(data, vibration)
+    fields.update(findings=len(found), worst_severity=found[0].severity if found else None,
+                  worst_finding=found[0].title if found else None)
     write_tables(data, out / "tables", fields["log_id"])
+    if page:
+        (out / "reports").mkdir(exist_ok=True)
+        write_report(data, out / "reports" / f"{fields['log_id']}.html", fields["path"], overwrite=True)
     rows = []
     if data.true_q is not None:
         for name, scores in data.evaluate().items():
@@ -103,14 +98,11 @@ def summarise(path, root, out, filters=None) -> list[dict]:
     return rows or [fields]
 
 
-def vibration_fields(data) -> dict:
+def vibration_fields(summary) -> dict:
     """The log's vibration level (the largest axis' RMS above the cut-off, per sensor), its strongest peak
-    and the table it was read from; empty when the log has too little IMU for a spectrum."""
-    from groundstation.analysis.vibration import VibrationError, vibration_summary
-
-    try:
-        summary = vibration_summary(data)
-    except VibrationError:
+    and the table it was read from (``analysis.vibration``); empty when the log has too little IMU for a
+    spectrum (``summary`` None)."""
+    if summary is None:
         return {}
     levels = {sensor: max((v for v in axes.values() if v is not None), default=None)
               for sensor, axes in summary.levels.items()}
