@@ -1,0 +1,9 @@
+"""The bundle's executable: the same command line as the installed package's ``groundstation``."""
+
+import multiprocessing
+
+from groundstation.cli import main
+
+if __name__ == "__main__":
+    multiprocessing.freeze_support()  # evaluate DIR's worker processes start from this executable too
+    raise SystemExit(main())
