@@ -5,8 +5,8 @@ workbook (styles, the Session sheet, the chart); the data rows of the big tables
 objects: ``rows_xml`` builds their ``<row>`` XML a stretch at a time with pyarrow's string kernels
 (numbers as their shortest round-trip text, NaN/inf as no cell), and ``save`` puts it in each sheet's
 ``<sheetData>`` as it writes the zip. The cells are those openpyxl wrote value by value (tests read
-them back with openpyxl and LibreOffice); a 1 h export's 8.3 M cells take about a quarter of
-openpyxl's time (bench/bench_excel.py).
+them back with openpyxl and LibreOffice); a 1 h export's 7.3 M cells take about a tenth of
+openpyxl's CPU time (bench/bench_excel.out.md).
 
 Excel holds at most 1,048,576 rows per sheet and openpyxl does not check it in write-only mode, so
 ``write_table`` continues on ``TITLE (2)``, ``TITLE (3)``, ... by itself.
@@ -180,7 +180,9 @@ def save(workbook, path) -> None:
     parts = io.BytesIO()  # openpyxl's workbook: every part, the big sheets with their header row only
     ExcelWriter(workbook, ZipFile(parts, "w", ZIP_DEFLATED, allowZip64=True)).save()
     spliced = {sheet.path[1:]: sheet for sheet in workbook._sheets if isinstance(sheet, ColumnSheet)}
-    archive = ZipFile(path, "w", ZIP_DEFLATED, allowZip64=True)
+    # deflate's fastest level: at openpyxl's (6) compressing the sheets took 4/5 of the export's time;
+    # level 1 takes a quarter of that for a file about 1.2x the size
+    archive = ZipFile(path, "w", ZIP_DEFLATED, allowZip64=True, compresslevel=1)
     try:
         with ZipFile(parts) as made:
             for info in made.infolist():
