@@ -63,7 +63,8 @@ class _Registry(MutableMapping):
 
 # The one list of estimators, in the order the app, evaluate and exports show them: each class says its
 # label, colour, needs and whether live sessions run it (``base.Estimator``). A new estimator is its
-# module and its class added here (or ``register(cls)``); nothing else names it.
+# module, its class's module in ``_BUILT_IN`` and its name added here (or ``register(cls)``); nothing else
+# names it (tests/test_cli.py checks each name is its class's ``name``).
 ESTIMATORS: MutableMapping[str, type[Estimator]] = _Registry({
     "ahf2": "Ahf2", "vqf": "Vqf", "ahf": "Ahf", "hf": "Hf", "ecf": "Ecf", "hfm": "Hfm", "ecfm": "Ecfm", "mcf": "Mcf",
     "ukf": "Ukf", "sssrukf": "Sssrukf", "cf1": "Cf1", "kf": "Kf", "ekf": "Ekf", "ahf2m": "Ahf2m",
