@@ -105,3 +105,22 @@ def test_every_command_that_opens_any_file_says_so_in_its_one_line_help():
         assert " ".join(one_line.split()) in " ".join(result.stdout.split())
     assert {"app", "evaluate", "replay", "export", "report"} <= set(takers)
     assert "recording or dataset CSV" not in overview and build_parser() is not None
+
+
+HEAVY = ("numpy", "numba", "pandas", "pyarrow", "PySide6", "scipy", "openpyxl")
+
+
+def test_help_imports_none_of_the_heavy_libraries():
+    # Help is read before anything runs: it should not wait seconds for numba's compiler or Qt.
+    probe = ("import sys\nfrom groundstation.cli import main\n"
+             "for argv in ([], ['export'], ['replay'], ['app']):\n"
+             "    try:\n        main([*argv, '--help'])\n    except SystemExit:\n        pass\n"
+             f"print(sorted(m for m in {HEAVY!r} if m in sys.modules), file=sys.stderr)")
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=120)
+    assert result.stderr.strip() == "[]"
+
+
+def test_the_estimator_registry_names_its_classes_by_their_own_names():
+    from groundstation.estimation import ESTIMATORS
+
+    assert [cls.name for cls in ESTIMATORS.values()] == list(ESTIMATORS)

@@ -15,30 +15,75 @@ and the position use.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import math
+from collections.abc import Iterator, MutableMapping
+from typing import TYPE_CHECKING
 
 from groundstation.estimation.compiled_cache import use_user_cache
 
-use_user_cache()  # before the estimators import numba: their compiled kernels survive a re-install
+if TYPE_CHECKING:
+    from groundstation.estimation.base import Estimator
 
-from groundstation.estimation.ahf import Ahf, Hf  # noqa: E402
-from groundstation.estimation.ahf2 import Ahf2, Ahf2m  # noqa: E402
-from groundstation.estimation.base import Estimator  # noqa: E402
-from groundstation.estimation.cf1 import Cf1  # noqa: E402
-from groundstation.estimation.ecf import Ecf  # noqa: E402
-from groundstation.estimation.ekf import Ekf  # noqa: E402
-from groundstation.estimation.kf import Kf  # noqa: E402
-from groundstation.estimation.marg import Ecfm, Hfm  # noqa: E402
-from groundstation.estimation.mcf import Mcf  # noqa: E402
-from groundstation.estimation.ukf import Sssrukf, Ukf  # noqa: E402
-from groundstation.estimation.vqf import Vqf  # noqa: E402
+use_user_cache()  # before any estimator imports numba: their compiled kernels survive a re-install
+
+# Each built-in estimator's class by module and name, imported when first asked for: its module imports
+# numba (seconds), which ``--help`` and the window's first frame need not wait for (bench/bench_help.py).
+_BUILT_IN = {
+    "Ahf2": "ahf2", "Vqf": "vqf", "Ahf": "ahf", "Hf": "ahf", "Ecf": "ecf", "Hfm": "marg", "Ecfm": "marg",
+    "Mcf": "mcf", "Ukf": "ukf", "Sssrukf": "ukf", "Cf1": "cf1", "Kf": "kf", "Ekf": "ekf", "Ahf2m": "ahf2",
+}
+
+
+def _built_in(class_name: str) -> type:
+    return getattr(importlib.import_module(f"groundstation.estimation.{_BUILT_IN[class_name]}"), class_name)
+
+
+class _Registry(MutableMapping):
+    """name -> estimator class; the names (keys, ``in``, ``len``) without importing any estimator, a
+    class imported when it is looked up."""
+
+    def __init__(self, entries: dict[str, str | type]):
+        self._entries = entries  # name -> class, or the class's name in ``_BUILT_IN`` until first looked up
+
+    def __getitem__(self, name: str) -> type:
+        entry = self._entries[name]
+        if isinstance(entry, str):
+            entry = self._entries[name] = _built_in(entry)
+        return entry
+
+    def __setitem__(self, name: str, cls: type) -> None:
+        self._entries[name] = cls
+
+    def __delitem__(self, name: str) -> None:
+        del self._entries[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._entries)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
 
 # The one list of estimators, in the order the app, evaluate and exports show them: each class says its
 # label, colour, needs and whether live sessions run it (``base.Estimator``). A new estimator is its
-# module and its class added here (or ``register(cls)``); nothing else names it.
-ESTIMATORS: dict[str, type[Estimator]] = {
-    cls.name: cls for cls in (Ahf2, Vqf, Ahf, Hf, Ecf, Hfm, Ecfm, Mcf, Ukf, Sssrukf, Cf1, Kf, Ekf, Ahf2m)
-}
+# module, its class's module in ``_BUILT_IN`` and its name added here (or ``register(cls)``); nothing else
+# names it (tests/test_cli.py checks each name is its class's ``name``).
+ESTIMATORS: MutableMapping[str, type[Estimator]] = _Registry({
+    "ahf2": "Ahf2", "vqf": "Vqf", "ahf": "Ahf", "hf": "Hf", "ecf": "Ecf", "hfm": "Hfm", "ecfm": "Ecfm", "mcf": "Mcf",
+    "ukf": "Ukf", "sssrukf": "Sssrukf", "cf1": "Cf1", "kf": "Kf", "ekf": "Ekf", "ahf2m": "Ahf2m",
+})
+
+
+def __getattr__(name: str):
+    """``from groundstation.estimation import Hf`` (and ``Estimator``), imported on first use."""
+    if name in _BUILT_IN:
+        return _built_in(name)
+    if name == "Estimator":
+        return importlib.import_module("groundstation.estimation.base").Estimator
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 # The estimator whose attitude turns the magnetometer into a compass heading and the acceleration
 # into position (seed 004), unless a session names another (``Pipeline(aiding=...)``).
 AIDING_ESTIMATOR = "ahf2"

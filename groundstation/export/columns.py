@@ -95,14 +95,27 @@ def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:
     out = {}
     for info in reading_tables(data):
         values = data.tables[info.name]
-        at = np.searchsorted(data.time_s, values["time_s"])
-        inside = at < len(data.time_s)
+        at = np.searchsorted(data.time_s, values["time_s"])  # each reading's IMU row
+        # ``rows`` ascend: each reading whose IMU row is exported, and that row's place among them
+        place = np.searchsorted(rows, at)
+        exported = place < len(rows)
+        exported[exported] = rows[place[exported]] == at[exported]
         prefix = info.export_prefix
         for column in info.column_names[1:]:
-            full = np.full(len(data.time_s), np.nan)
-            full[at[inside]] = values[column][inside]
-            out[column if column.startswith(prefix) else f"{prefix}_{column}"] = full[rows]
+            placed = np.full(len(rows), np.nan)
+            placed[place[exported]] = values[column][exported]  # of two readings on one row, the later
+            out[column if column.startswith(prefix) else f"{prefix}_{column}"] = placed
     return out
+
+
+ROWS_PER_STRETCH = 65_536  # a Parquet row group; the exported columns in memory at once (~70 columns: ~37 MB)
+
+
+def export_stretches(data: SessionData, rows: np.ndarray, rows_per_stretch: int = ROWS_PER_STRETCH):
+    """``export_columns`` of consecutive stretches of ``rows``: what a writer holds at once does not grow
+    with the session's length."""
+    for start in range(0, max(len(rows), 1), rows_per_stretch):
+        yield export_columns(data, rows[start:start + rows_per_stretch])
 
 
 def reading_tables(data: SessionData) -> list:

@@ -12,6 +12,7 @@ or a cancel leaves nothing at the destination.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import os
 import secrets
 from collections.abc import Callable
@@ -96,7 +97,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
     exports import no maker of sessions) and writes ``request.out``; ``progress(stage, done, total)``
     with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises ExportCancelled,
     nothing written."""
-    from groundstation.export.columns import export_columns, select_rows
+    from groundstation.export.columns import export_stretches, select_rows
     from groundstation.export.excel import ExportCancelled, write_workbook
     from groundstation.export.tabular import write_csv, write_parquet
     report = progress or (lambda stage, done, total: None)
@@ -122,7 +123,9 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
         report("writing", 1, 1)
         written = f"{messages} messages on {len(data.tables)} tables, /tf, /attitude/* and /events"
     else:
-        columns = export_columns(data, select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz))
-        (write_csv if request.format == ".csv" else write_parquet)(columns, request.out, request.overwrite)
-        written = f"{len(columns['time_s'])} rows, {len(columns)} columns"
+        rows = select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz)
+        stretches = export_stretches(data, rows)
+        first = next(stretches)
+        (write_csv if request.format == ".csv" else write_parquet)(itertools.chain([first], stretches), request.out, request.overwrite)
+        written = f"{len(rows)} rows, {len(first)} columns"
     return ExportResult(f"wrote {request.out}: {written}", data.warnings)

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import numpy as np
-import pandas as pd
 
 from groundstation.export.files import atomic_output
 
 
-def write_csv(columns: dict, path, overwrite: bool = False) -> None:
+def write_csv(columns: dict | Iterable[dict], path, overwrite: bool = False) -> None:
     """pyarrow's CSV writer (C++, several times faster than formatting in Python): a header of the
     column names, then one line per row; floats as their shortest round-trip text (read back, every
     value is the float64 written, bit for bit), NaN as an empty field, integers in full, booleans as
@@ -19,21 +20,45 @@ def write_csv(columns: dict, path, overwrite: bool = False) -> None:
     at 2.75x a bare pyarrow write; bench/bench_csv.out.md): now they are exact, and files of filter
     quaternions are up to 1.5x larger.
     """
-    import pyarrow as pa
     import pyarrow.csv as pacsv
 
-    values = [np.asarray(v) for v in columns.values()]
-    for name, v in zip(columns, values):
-        if v.dtype.kind not in "fiub":
-            raise TypeError(f"CSV export: column {name!r} has dtype {v.dtype}, not a number")
-    empty_nan = len(values) > 1
-    arrays = [pa.array(v, from_pandas=empty_nan and v.dtype.kind == "f") for v in values]
-    table = pa.Table.from_arrays(arrays, names=list(columns))
     with atomic_output(path, overwrite) as temporary, open(temporary, "wb") as out:
-        out.write((",".join(columns) + "\n").encode())  # pyarrow would quote the names
-        pacsv.write_csv(table, out, pacsv.WriteOptions(include_header=False, quoting_style="none"))
+        writer = None
+        for batch in record_batches(columns, empty_nan=None):
+            if writer is None:
+                out.write((",".join(batch.schema.names) + "\n").encode())  # pyarrow would quote the names
+                writer = pacsv.CSVWriter(out, batch.schema, write_options=pacsv.WriteOptions(include_header=False, quoting_style="none"))
+            writer.write_batch(batch)
+        writer.close()
 
 
-def write_parquet(columns: dict, path, overwrite: bool = False) -> None:
+def write_parquet(columns: dict | Iterable[dict], path, overwrite: bool = False) -> None:
+    """Parquet straight from the arrays (no DataFrame copy), a row group per stretch of rows
+    (``columns.export_stretches``), so the writer holds one stretch at a time; NaN is stored as null, as
+    pandas' writer did. The same bytes as ``pyarrow.parquet.write_table`` of the whole table with that
+    row-group size (tests/export/test_tabular_stretches.py)."""
+    import pyarrow.parquet as pq
+
     with atomic_output(path, overwrite) as temporary:
-        pd.DataFrame(columns).to_parquet(temporary, index=False)
+        writer = None
+        for batch in record_batches(columns, empty_nan=True):
+            if writer is None:
+                writer = pq.ParquetWriter(temporary, batch.schema)
+            writer.write_batch(batch, row_group_size=max(batch.num_rows, 1))
+        writer.close()
+
+
+def record_batches(columns: dict | Iterable[dict], empty_nan: bool | None):
+    """Each stretch of export columns (one dict: the whole) as a pyarrow record batch, numbers only
+    (TypeError names a column that is not). ``empty_nan``: NaN as null in float columns; None: so
+    unless the table has a single column (its null would be a blank CSV line, which readers skip)."""
+    import pyarrow as pa
+
+    for stretch in [columns] if isinstance(columns, dict) else columns:
+        values = [np.asarray(v) for v in stretch.values()]
+        for name, v in zip(stretch, values):
+            if v.dtype.kind not in "fiub":
+                raise TypeError(f"export: column {name!r} has dtype {v.dtype}, not a number")
+        as_null = len(values) > 1 if empty_nan is None else empty_nan
+        yield pa.RecordBatch.from_arrays([pa.array(v, from_pandas=as_null and v.dtype.kind == "f") for v in values],
+                                         names=list(stretch))

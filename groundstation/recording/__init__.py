@@ -7,11 +7,22 @@
 A live session records through a ``Recorder``, which survives a failing disk (``recorder.py``).
 """
 
-from groundstation.recording.format import EXTENSION, FORMAT_VERSION, RecordingError
-from groundstation.recording.paths import default_recordings_dir, new_recording_path
-from groundstation.recording.reader import Recording, open_recording
-from groundstation.recording.recorder import Recorder
-from groundstation.recording.writer import RecordingWriter
+import importlib
+
+# Each name's module, imported on first use: the reader imports numpy, which a command's ``--help``
+# (it names the recording's suffix and magic) need not wait for.
+_MODULES = {
+    "EXTENSION": "format", "FORMAT_VERSION": "format", "RecordingError": "format",
+    "default_recordings_dir": "paths", "new_recording_path": "paths", "Recording": "reader",
+    "open_recording": "reader", "Recorder": "recorder", "RecordingWriter": "writer",
+}
+
+
+def __getattr__(name: str):
+    if name not in _MODULES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"groundstation.recording.{_MODULES[name]}"), name)
+
 
 __all__ = [
     "EXTENSION",
