@@ -72,7 +72,9 @@ def read_dataflash(path, progress=None) -> FlightLog:
     log.events, log.parameters = dataflash_said(said, reader.mav_type)
     log.tables, log.units = every.tables()
     skipped = [line.split()[1] for line in chatter.lines if line.startswith("Skipped ")]  # "Skipped N bad bytes ..."
-    damaged = chatter.count("bad header") + sum(int(n) for n in skipped if n.isdigit())
+    # The same damaged bytes, counted twice: once a "bad header" each while DFReader indexes the file, once
+    # as "Skipped N bad bytes" while it reads the messages; either pass may see them.
+    damaged = max(chatter.count("bad header"), sum(int(n) for n in skipped if n.isdigit()))
     if damaged:
         log.damage.append(f"{damaged} damaged bytes skipped")
     cut = unfinished_record_bytes(reader)

@@ -17,6 +17,7 @@ class ProgressBar:
         self._start = time.monotonic()
         self._delay_s = SHOW_AFTER_S if delay_s is None else delay_s
         self._shown = False
+        self._drawn = ""
 
     def __call__(self, done: float, total: float) -> None:
         elapsed = time.monotonic() - self._start
@@ -25,7 +26,11 @@ class ProgressBar:
         fraction = min(done / total, 1.0)
         eta = elapsed * (1 - fraction) / fraction if fraction > 0 else float("nan")
         bar = "#" * int(fraction * self.WIDTH)
-        self.stream.write(f"\r{self.label} [{bar:<{self.WIDTH}}] {fraction:4.0%} ETA {eta:4.0f} s")
+        text = f"\r{self.label} [{bar:<{self.WIDTH}}] {fraction:4.0%} ETA {eta:4.0f} s"
+        if text == self._drawn:  # a reader may report many times a percent: the terminal gets each change once
+            return
+        self._drawn = text
+        self.stream.write(text)
         self.stream.flush()
         self._shown = True
 

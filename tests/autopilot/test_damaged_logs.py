@@ -122,7 +122,7 @@ def warnings_of(argv, capfd) -> tuple[list[str], str]:
 def test_a_corrupt_block_in_a_bin_is_counted_not_printed(tmp_path, capfd):
     path = damaged_copy("arducopter_cubeorange_2023-07-06_10-12-18.bin", tmp_path, "corrupt")
     warnings, said = warnings_of(["replay", str(path)], capfd)
-    assert "bad header" not in said and len(said.splitlines()) < 10
+    assert "bad header" not in said and len(said.split("\n")) < 10  # a progress bar redraws itself on one line ("\r")
     skipped = [w for w in warnings if w.endswith("damaged bytes skipped")]
     assert len(skipped) == 1
     # the block, plus at most the record it cut into (a DataFlash record is at most 255 bytes)

@@ -88,7 +88,7 @@ def test_the_keys_work_after_typing_a_source_and_clicking_around(window, qtbot):
 def test_reconnected_carries_the_time_the_data_came_back(window, qtbot, tmp_path):
     """The bridge's port vanishes for 2 s every 3 s (an unplugged adapter); the Events tab's
     "reconnected" line stands where the data resumed, not where the port was lost."""
-    from groundstation.ui.event_console import event_time_s
+    from groundstation.session.view import event_session_time_s
 
     link = tmp_path / "radio"
     process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "hover",
@@ -114,11 +114,11 @@ def test_reconnected_carries_the_time_the_data_came_back(window, qtbot, tmp_path
     events = list(view.events)
     lost = next(e for e in events if e["kind"] == "disconnected")
     back = next(e for e in events if e["kind"] == "reconnected")
-    gap_s = event_time_s(view, back) - event_time_s(view, lost)
+    gap_s = event_session_time_s(view, back) - event_session_time_s(view, lost)
     assert 1.0 < gap_s < 4.0  # the port was gone 2 s; reopening is tried every 0.5 s
     rows = [window.event_console.table.item(r, 1).text() for r in range(window.event_console.table.rowCount())]
     assert "reconnected" in rows and window.event_console.times()[rows.index("reconnected")] == pytest.approx(
-        event_time_s(view, back))
+        event_session_time_s(view, back))
 
 
 def reopen(window, qtbot, tmp_path) -> MainWindow:

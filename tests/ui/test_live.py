@@ -21,7 +21,7 @@ def test_plotted_pitch_is_the_pipelines_ahf_pitch(window, qtbot):
     # away, or to the neighbouring float32 at a rounding boundary: one float32 ulp at most.
     expected = np.float32(np.degrees(quaternion.to_euler_zyx(np.array(q))[1]))
     assert abs(pitch - expected) <= abs(np.spacing(expected))  # spacing is negative for a negative number
-    assert f"AHF {pitch:+.2f}" in window.live_view.attitude.read_at(t)  # the crosshair's readout
+    assert f"<td>AHF</td><td align=right>&nbsp;{pitch:+.2f}</td>" in window.live_view.attitude.read_at(t)  # the crosshair's readout: AHF's row, pitch column
     assert len(window.live_view.attitude.drawn(onboard)[0]) > 100  # the aircraft's own estimate is drawn too
     assert window.link_panel.headline.text() == "LINK OK"
     assert str(session.recording_path) in window.recording_label.text()

@@ -37,7 +37,9 @@ def test_no_uplink_control_is_enabled_when_the_source_cannot_send(window, qtbot,
     window.start_demo()
     assert window.session.source.can_send is True
     assert send.isEnabled() and window.uplink_panel.isEnabled()
-    boxes = window.estimator_panel.findChildren(QtWidgets.QCheckBox)  # the replay's extra ones gone at once
+    # the replay's extra ones gone at once (hidden at once, deleted at Qt's next deferred deletion)
+    QtCore.QCoreApplication.sendPostedEvents(None, QtCore.QEvent.DeferredDelete)
+    boxes = window.estimator_panel.findChildren(QtWidgets.QCheckBox)
     assert sorted(b.text() for b in boxes) == sorted(b.text() for b in window.estimator_panel.shown.values())
 
 
