@@ -25,6 +25,7 @@ def acc_pitch_roll(ax, ay, az):
     return math.atan2(ax, math.sqrt(ay * ay + az * az)), math.atan2(-ay, -az)
 
 
+@register_jitable
 def euler_rates(roll_rad, pitch_rad, gx, gy, gz):
     """ZYX Euler angle rates (yaw, pitch, roll) in rad/s from body rates (rad/s)."""
     s, c = math.sin(roll_rad), math.cos(roll_rad)
