@@ -64,6 +64,7 @@ def quaternion_of(yaw_rad, pitch_rad, roll_rad):
     return (cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr, cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr)
 
 
+@register_jitable
 def quaternion_product(p, q):
     """``p ⊗ q`` (Hamilton, w first) as a tuple: ``quaternion.multiply`` for one sample on plain floats."""
     pw, px, py, pz = p
