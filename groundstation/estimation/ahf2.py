@@ -104,10 +104,11 @@ import dataclasses
 import math
 from typing import NamedTuple
 
-from groundstation.estimation.base import CommonSettings, Estimator
-from groundstation.estimation.tilt import quaternion_product, wrap_pi
+from numba import njit
+from numba.extending import register_jitable
 
-_new_tuple = tuple.__new__
+from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_MAGNETOMETER, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, record, sample
+from groundstation.estimation.tilt import quaternion_product, wrap_pi
 
 
 @dataclasses.dataclass(frozen=True)
@@ -142,6 +143,7 @@ class Ahf2Diagnostics(NamedTuple):
     bias_z_rad_s: float
 
 
+@register_jitable
 def _rotate(q, x, y, z):
     """R(q) v."""
     w, a, b, c = q
@@ -149,11 +151,13 @@ def _rotate(q, x, y, z):
     return x + w * tx + b * tz - c * ty, y + w * ty + c * tx - a * tz, z + w * tz + a * ty - b * tx
 
 
+@register_jitable
 def _yaw_turn(psi_rad):
     """q_z(ψ): a turn by ψ about the NED vertical."""
     return (math.cos(0.5 * psi_rad), 0.0, 0.0, math.sin(0.5 * psi_rad))
 
 
+@register_jitable
 def _matrix(q):
     """R(q), row-major."""
     w, x, y, z = q
@@ -164,164 +168,215 @@ def _matrix(q):
     )
 
 
-class Ahf2(Estimator):
+# Parameters after the guard's (base.P_OWN): the settings in their order, then 1 for ahf2m (step 8)
+(_TAU_ACC, _RATE_REF, _TAU_RATE, _LAM_MAX, _LAM_MIN, _LOWPASS, _GAIN, _ADAPTIVE, _REST_BIAS, _TAU_REST, _REST_GYR_TH,
+ _REST_ACC_TH, _REST_MIN, _TAU_BIAS_REST, _KI, _BIAS_MAX, _TAU_MAG, _FOLLOW_MAG) = range(P_OWN, P_OWN + 18)  # fmt: skip
+# State after q and the guard's: the diagnostics (λ, e_a, rest, τ, b), then q_g, q_c, the low-pass's start
+# (1 while it runs, its elapsed time, ∫x dt), its rate v and output ā (x: a_I, then R(q_g) row-major),
+# ω̄, the rest detector's (1 once it has a sample, its gyro and accelerometer low-passes, t_rest), ψ_m
+# and 1 once it is known
+_LAM, _E_A, _REST, _TAU, _BIAS = range(STATE_DIAG, STATE_DIAG + 5)
+_QG = _BIAS + 3
+_QC = _QG + 4
+_STARTING, _START_T, _SUMS = _QC + 4, _QC + 5, _QC + 6
+_V = _SUMS + 12
+_LP = _V + 12
+_RATE_LP = _LP + 12
+_REST_SEEN, _REST_GYR, _REST_ACC, _REST_T = _RATE_LP + 1, _RATE_LP + 2, _RATE_LP + 5, _RATE_LP + 8
+_HEADING, _HEADING_KNOWN = _REST_T + 1, _REST_T + 2
+
+
+@register_jitable
+def _set_attitude(state, q):
+    """``q = q_z(ψ_m) ⊗ q_c ⊗ q_g`` with q_c the identity; the low-pass starts again from the next
+    accelerometer sample."""
+    state[_QG], state[_QG + 1], state[_QG + 2], state[_QG + 3] = quaternion_product(_yaw_turn(-state[_HEADING]), q)
+    state[_QC], state[_QC + 1], state[_QC + 2], state[_QC + 3] = 1.0, 0.0, 0.0, 0.0
+    state[_STARTING], state[_START_T] = 1.0, 0.0
+    for i in range(12):
+        state[_SUMS + i] = 0.0
+
+
+@njit(cache=True)
+def ahf2_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
+    """One sample of AHF2 or AHF2M (module docstring, steps 1-8): base.py's compiled kernels."""
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    if status & (INITIALISED | REINITIALISED):
+        _set_attitude(state, (state[0], state[1], state[2], state[3]))
+    if status & NO_UPDATE:
+        return status
+    bx, by, bz = state[_BIAS], state[_BIAS + 1], state[_BIAS + 2]
+    wx, wy, wz = gx - bx, gy - by, gz - bz
+    # 1. strapdown, exact for a rate constant over the sample. Square roots by math.sqrt (correctly rounded):
+    # x ** 0.5 is pow compiled, NumPy's sqrt interpreted, 1 ulp apart on some inputs
+    q_g = (state[_QG], state[_QG + 1], state[_QG + 2], state[_QG + 3])
+    rate = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if rate > 0.0:
+        half = 0.5 * rate * dt_s
+        k = math.sin(half) / rate
+        q1, q2, q3, q4 = quaternion_product(q_g, (math.cos(half), wx * k, wy * k, wz * k))
+        r = 1.0 / math.sqrt(q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4)
+        q_g = (q1 * r, q2 * r, q3 * r, q4 * r)
+        state[_QG], state[_QG + 1], state[_QG + 2], state[_QG + 3] = q_g
+    # 2a. the low-pass's time constant: shorter while the body turns fast
+    rate_lp = state[_RATE_LP] + (rate - state[_RATE_LP]) * dt_s / (p[_TAU_RATE] + dt_s)
+    state[_RATE_LP] = rate_lp
+    tau = p[_TAU_ACC] / (1.0 + rate_lp / p[_RATE_REF])
+    state[_TAU] = tau
+    q_c = (state[_QC], state[_QC + 1], state[_QC + 2], state[_QC + 3])
+    turned = False  # whether step 4 turned q_c, by (ux, uy) δ (NED)
+    tx = ty = 0.0
+    if p[_REST_BIAS] != 0.0:
+        _detect_rest(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s)
+    if acc_ok:
+        # 2. low-pass in I: the specific force, and the rotation into I that step 7 maps with
+        ix, iy, iz = _rotate(q_g, ax, ay, az)
+        m = _matrix(q_g)
+        x = (ix, iy, iz, m[0], m[1], m[2], m[3], m[4], m[5], m[6], m[7], m[8])
+        if p[_TAU_ACC] <= 0.0:
+            for i in range(12):
+                state[_LP + i] = x[i]
+        elif state[_STARTING] != 0.0:  # the first τ seconds: the mean so far (VQF's start)
+            t = state[_START_T] + dt_s
+            for i in range(12):
+                state[_SUMS + i] = state[_SUMS + i] + x[i] * dt_s
+                state[_LP + i] = state[_SUMS + i] / t
+                state[_V + i] = 0.0
+            state[_START_T] = t
+            state[_STARTING] = 0.0 if t >= tau else 1.0
+        else:
+            h = dt_s / tau
+            k = 2.0 * h / tau  # ω_n² Δt
+            den = 1.0 + 2.0 * h + 2.0 * h * h  # 1 + 2ζω_n Δt + ω_n² Δt²
+            for i in range(12):
+                v = (state[_V + i] + k * (x[i] - state[_LP + i])) / den
+                state[_V + i] = v
+                state[_LP + i] = state[_LP + i] + v * dt_s
+        lx, ly, lz = state[_LP], state[_LP + 1], state[_LP + 2]
+        # 3. disagreement of this sample: angle of a_E(now) to the vertical, ‖ĝ × â‖ = its sine
+        ex, ey, ez = _rotate(q_c, ix, iy, iz)
+        lam = p[_LAM_MAX]
+        if p[_ADAPTIVE] != 0.0:
+            e = math.sqrt(ex * ex + ey * ey) / math.sqrt(ex * ex + ey * ey + ez * ez)
+            e_a = p[_LOWPASS] * state[_E_A] + (1.0 - p[_LOWPASS]) * p[_GAIN] * e
+            state[_E_A] = e_a
+            lam = min(max(lam - e_a, p[_LAM_MIN]), p[_LAM_MAX])
+        state[_LAM] = lam
+        # 4. turn q_c toward the low-passed gravity (up = -z in NED)
+        ex, ey, ez = _rotate(q_c, lx, ly, lz)
+        horiz = math.sqrt(ex * ex + ey * ey)
+        if horiz > 0.0:
+            phi = math.atan2(horiz, -ez)
+            delta = min(phi, lam * dt_s)
+            ux, uy = -ey / horiz, ex / horiz  # a_E × (0, 0, -1), normalised
+            sh = math.sin(0.5 * delta)
+            q_c = quaternion_product((math.cos(0.5 * delta), ux * sh, uy * sh, 0.0), q_c)
+            state[_QC], state[_QC + 1], state[_QC + 2], state[_QC + 3] = q_c
+            turned, tx, ty = True, ux * delta, uy * delta
+    q = quaternion_product(q_c, q_g)
+    if p[_FOLLOW_MAG] != 0.0:
+        q = quaternion_product(_yaw_turn(_follow_magnetometer(state, p, q, dt_s, mx, my, mz)), q)
+    state[0], state[1], state[2], state[3] = q
+    if turned and p[_KI] > 0.0 and state[_REST] == 0.0 and state[_STARTING] == 0.0:
+        # 7. bias in motion: the correction turn in body axes drives the integral
+        # (body axes through the low-passed rotation: cᵢ = Σⱼ L̄ⱼᵢ vⱼ, v the turn in I). Not while
+        # the low-pass starts (its first τ, the mean so far): the correction then undoes where the
+        # start began, not a bias; integrated, it wound up after a reboot in flight (+1.9° RMS for
+        # the next 10 s, tests/session/test_reboot_in_flight.py).
+        vx, vy, vz = _rotate((q_c[0], -q_c[1], -q_c[2], -q_c[3]), tx, ty, 0.0)
+        m0 = _LP + 3
+        cx = state[m0] * vx + state[m0 + 3] * vy + state[m0 + 6] * vz
+        cy = state[m0 + 1] * vx + state[m0 + 4] * vy + state[m0 + 7] * vz
+        cz = state[m0 + 2] * vx + state[m0 + 5] * vy + state[m0 + 8] * vz
+        ki, bound = p[_KI], p[_BIAS_MAX]
+        state[_BIAS] = min(max(bx - ki * cx, -bound), bound)
+        state[_BIAS + 1] = min(max(by - ki * cy, -bound), bound)
+        state[_BIAS + 2] = min(max(bz - ki * cz, -bound), bound)
+    return status
+
+
+@register_jitable
+def _follow_magnetometer(state, p, q6, dt_s, mx, my, mz):
+    """Step 8 (module docstring): ψ_m, moved toward the magnetometer's heading when this sample has a reading."""
+    hx, hy, _ = _rotate(q6, mx, my, mz)
+    if hx * hx + hy * hy > 0.0:  # False for NaN (no reading) too
+        target = -math.atan2(hy, hx)
+        if state[_HEADING_KNOWN] == 0.0:
+            state[_HEADING], state[_HEADING_KNOWN] = target, 1.0
+        else:
+            tau_s = p[_TAU_MAG] * (1.0 + state[_RATE_LP] / p[_RATE_REF])
+            state[_HEADING] += dt_s / (tau_s + dt_s) * wrap_pi(target - state[_HEADING])
+    return state[_HEADING]
+
+
+@register_jitable
+def _detect_rest(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
+    """Steps 5 and 6 (module docstring)."""
+    k = dt_s / (p[_TAU_REST] + dt_s)
+    if state[_REST_SEEN] == 0.0:
+        state[_REST_SEEN] = 1.0
+        state[_REST_GYR], state[_REST_GYR + 1], state[_REST_GYR + 2] = gx, gy, gz
+        state[_REST_ACC], state[_REST_ACC + 1], state[_REST_ACC + 2] = ax, ay, az
+    mx, my, mz = state[_REST_GYR], state[_REST_GYR + 1], state[_REST_GYR + 2]
+    mx, my, mz = mx + k * (gx - mx), my + k * (gy - my), mz + k * (gz - mz)
+    state[_REST_GYR], state[_REST_GYR + 1], state[_REST_GYR + 2] = mx, my, mz
+    still = mx * mx + my * my + mz * mz < p[_REST_GYR_TH] ** 2
+    if acc_ok:
+        nx, ny, nz = state[_REST_ACC], state[_REST_ACC + 1], state[_REST_ACC + 2]
+        nx, ny, nz = nx + k * (ax - nx), ny + k * (ay - ny), nz + k * (az - nz)
+        state[_REST_ACC], state[_REST_ACC + 1], state[_REST_ACC + 2] = nx, ny, nz
+        still = still and (ax - nx) ** 2 + (ay - ny) ** 2 + (az - nz) ** 2 < p[_REST_ACC_TH] ** 2
+    state[_REST_T] = state[_REST_T] + dt_s if still else 0.0
+    state[_REST] = 1.0 if state[_REST_T] >= p[_REST_MIN] else 0.0
+    if state[_REST] != 0.0:
+        # the mean since rest began for the first τ_bias_rest, then a first-order low-pass
+        kb = dt_s / (min(state[_REST_T] - p[_REST_MIN], p[_TAU_BIAS_REST]) + dt_s)
+        for i in range(3):
+            state[_BIAS + i] = state[_BIAS + i] + kb * (state[_REST_GYR + i] - state[_BIAS + i])
+
+
+@njit(cache=True)
+def ahf2_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, ahf2_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
+
+
+class Ahf2(CompiledEstimator):
     name = "ahf2"
     label = "AHF2"
     colour = "black"
     estimates_gyro_bias = True
     Settings = Ahf2Settings
     Diagnostics = Ahf2Diagnostics
+    kernel = staticmethod(ahf2_kernel)
+    run_kernel = staticmethod(ahf2_run)
 
-    def __init__(self, settings=None):
+    def __init__(self, settings=None, dtype=None):
         s = self.Settings() if settings is None else settings
         if not (s.rate_ref_rad_s > 0.0 and s.tau_rate_s > 0.0 and 0.0 <= s.lambda_min <= s.lambda_max):
             raise ValueError("need rate_ref_rad_s > 0, tau_rate_s > 0 and 0 <= lambda_min <= lambda_max")
-        super().__init__(s)
+        super().__init__(s, dtype)
 
-    def _reset_state(self):
-        self._bias = (0.0, 0.0, 0.0)
-        self._q_g = self._q_c = (1.0, 0.0, 0.0, 0.0)
-        self._acc_lp = None
-        self._start = (0.0, [0.0] * 12)  # elapsed time and ∫x dt while the low-pass starts
-        self._rate_lp = 0.0
-        self._tau = self.settings.tau_acc_s
-        self._e_a = 0.0
-        self._lam = self.settings.lambda_max
-        self._rest_gyr = None
-        self._rest_acc = None
-        self._rest_t = 0.0
-        self._rest = 0.0
-        self._heading_offset = 0.0  # ψ_m (step 8), rad
-        self._heading_known = False
-
-    def _set_attitude(self, q):
-        self._q = q
-        self._q_g = quaternion_product(_yaw_turn(-self._heading_offset), q)  # q = q_z(ψ_m) ⊗ q_c ⊗ q_g
-        self._q_c = (1.0, 0.0, 0.0, 0.0)
-        self._start = (0.0, [0.0] * 12)  # the low-pass starts again from the next accelerometer sample
-
-    def _diagnostics(self, status):
-        return Ahf2Diagnostics(status, self._lam, self._e_a, self._rest, self._tau, *self._bias)
-
-    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
+    def _parameters(self):
         s = self.settings
-        bx, by, bz = self._bias
-        wx, wy, wz = gx - bx, gy - by, gz - bz
-        # 1. strapdown, exact for a rate constant over the sample
-        q_g = self._q_g
-        rate = (wx * wx + wy * wy + wz * wz) ** 0.5
-        if rate > 0.0:
-            half = 0.5 * rate * dt_s
-            k = math.sin(half) / rate
-            q1, q2, q3, q4 = quaternion_product(q_g, (math.cos(half), wx * k, wy * k, wz * k))
-            r = (q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4) ** -0.5
-            q_g = self._q_g = (q1 * r, q2 * r, q3 * r, q4 * r)
-        # 2a. the low-pass's time constant: shorter while the body turns fast
-        self._rate_lp += (rate - self._rate_lp) * dt_s / (s.tau_rate_s + dt_s)
-        self._tau = s.tau_acc_s / (1.0 + self._rate_lp / s.rate_ref_rad_s)
-        q_c = self._q_c
-        turn = None  # the correction turn of step 4 (NED), when there is one
-        if s.rest_bias:
-            self._detect_rest(gx, gy, gz, ax, ay, az, acc_ok, dt_s)
-        if acc_ok:
-            # 2. low-pass in I: the specific force, and the rotation into I that step 7 maps with
-            ix, iy, iz = _rotate(q_g, ax, ay, az)
-            x = (ix, iy, iz, *_matrix(q_g))
-            if s.tau_acc_s <= 0.0:
-                lp = x
-            elif self._start is not None:  # the first τ seconds: the mean so far (VQF's start)
-                t, sums = self._start
-                t = t + dt_s
-                sums = [si + xi * dt_s for si, xi in zip(sums, x)]
-                lp = [si / t for si in sums]
-                self._acc_lp = ([0.0] * len(x), lp)
-                self._start = None if t >= self._tau else (t, sums)
-            else:
-                v, lp = self._acc_lp
-                h = dt_s / self._tau
-                k = 2.0 * h / self._tau  # ω_n² Δt
-                den = 1.0 + 2.0 * h + 2.0 * h * h  # 1 + 2ζω_n Δt + ω_n² Δt²
-                v = [(vi + k * (xi - li)) / den for vi, xi, li in zip(v, x, lp)]
-                lp = [li + vi * dt_s for li, vi in zip(lp, v)]
-                self._acc_lp = (v, lp)
-            lx, ly, lz = lp[0], lp[1], lp[2]
-            # 3. disagreement of this sample: angle of a_E(now) to the vertical, ‖ĝ × â‖ = its sine
-            ex, ey, ez = _rotate(q_c, ix, iy, iz)
-            lam = s.lambda_max
-            if s.adaptive:
-                e = (ex * ex + ey * ey) ** 0.5 * (ex * ex + ey * ey + ez * ez) ** -0.5
-                e_a = s.lowpass * self._e_a + (1.0 - s.lowpass) * s.error_gain * e
-                self._e_a = e_a
-                lam = min(max(lam - e_a, s.lambda_min), s.lambda_max)
-            self._lam = lam
-            # 4. turn q_c toward the low-passed gravity (up = -z in NED)
-            ex, ey, ez = _rotate(q_c, lx, ly, lz)
-            horiz = (ex * ex + ey * ey) ** 0.5
-            if horiz > 0.0:
-                phi = math.atan2(horiz, -ez)
-                delta = min(phi, lam * dt_s)
-                ux, uy = -ey / horiz, ex / horiz  # a_E × (0, 0, -1), normalised
-                sh = math.sin(0.5 * delta)
-                q_c = self._q_c = quaternion_product((math.cos(0.5 * delta), ux * sh, uy * sh, 0.0), q_c)
-                turn = (ux * delta, uy * delta)
-        q = quaternion_product(q_c, q_g)
-        if self.uses_magnetometer:
-            q = quaternion_product(_yaw_turn(self._follow_magnetometer(q, dt_s)), q)
-        self._q = q
-        if turn is not None and s.motion_bias_ki > 0.0 and not self._rest and self._start is None:
-            # 7. bias in motion: the correction turn in body axes drives the integral
-            # (body axes through the low-passed rotation: cᵢ = Σⱼ L̄ⱼᵢ vⱼ, v the turn in I). Not while
-            # the low-pass starts (its first τ, the mean so far): the correction then undoes where the
-            # start began, not a bias; integrated, it wound up after a reboot in flight (+1.9° RMS for
-            # the next 10 s, tests/session/test_reboot_in_flight.py).
-            vx, vy, vz = _rotate((q_c[0], -q_c[1], -q_c[2], -q_c[3]), turn[0], turn[1], 0.0)
-            m = lp[3:]
-            cx = m[0] * vx + m[3] * vy + m[6] * vz
-            cy = m[1] * vx + m[4] * vy + m[7] * vz
-            cz = m[2] * vx + m[5] * vy + m[8] * vz
-            ki, m = s.motion_bias_ki, s.bias_max_rad_s
-            bx = min(max(bx - ki * cx, -m), m)
-            by = min(max(by - ki * cy, -m), m)
-            bz = min(max(bz - ki * cz, -m), m)
-            self._bias = (bx, by, bz)
-        return q, _new_tuple(Ahf2Diagnostics, (status, self._lam, self._e_a, self._rest, self._tau, *self._bias))
+        own = [s.tau_acc_s, s.rate_ref_rad_s, s.tau_rate_s, s.lambda_max, s.lambda_min, s.lowpass, s.error_gain, s.adaptive, s.rest_bias,
+               s.tau_rest_s, s.rest_gyr_rad_s, s.rest_acc_g, s.rest_min_s, s.tau_bias_rest_s, s.motion_bias_ki, s.bias_max_rad_s, s.tau_mag_s]  # fmt: skip
+        return [float(v) for v in own] + [float(self.uses_magnetometer)]
 
-    def _follow_magnetometer(self, q6, dt_s):
-        """Step 8 (module docstring): ψ_m, moved toward the magnetometer's heading when this sample has a reading."""
-        mag = self._mag
-        if mag is not None:
-            hx, hy, _ = _rotate(q6, *mag)
-            if hx * hx + hy * hy > 0.0:  # False for NaN too
-                target = -math.atan2(hy, hx)
-                if not self._heading_known:
-                    self._heading_offset, self._heading_known = target, True
-                else:
-                    tau_s = self.settings.tau_mag_s * (1.0 + self._rate_lp / self.settings.rate_ref_rad_s)
-                    self._heading_offset += dt_s / (tau_s + dt_s) * wrap_pi(target - self._heading_offset)
-        return self._heading_offset
-
-    def _detect_rest(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
-        """Steps 5 and 6 (module docstring)."""
+    def _initial_state(self):
         s = self.settings
-        k = dt_s / (s.tau_rest_s + dt_s)
-        if self._rest_gyr is None:
-            self._rest_gyr, self._rest_acc = (gx, gy, gz), (ax, ay, az)
-        mx, my, mz = self._rest_gyr
-        mx, my, mz = mx + k * (gx - mx), my + k * (gy - my), mz + k * (gz - mz)
-        self._rest_gyr = (mx, my, mz)
-        still = mx * mx + my * my + mz * mz < s.rest_gyr_rad_s**2
-        if acc_ok:
-            nx, ny, nz = self._rest_acc
-            nx, ny, nz = nx + k * (ax - nx), ny + k * (ay - ny), nz + k * (az - nz)
-            self._rest_acc = (nx, ny, nz)
-            still = still and (ax - nx) ** 2 + (ay - ny) ** 2 + (az - nz) ** 2 < s.rest_acc_g**2
-        self._rest_t = self._rest_t + dt_s if still else 0.0
-        self._rest = 1.0 if self._rest_t >= s.rest_min_s else 0.0
-        if self._rest:
-            # the mean since rest began for the first τ_bias_rest, then a first-order low-pass
-            kb = dt_s / (min(self._rest_t - s.rest_min_s, s.tau_bias_rest_s) + dt_s)
-            bx, by, bz = self._bias
-            self._bias = (bx + kb * (mx - bx), by + kb * (my - by), bz + kb * (mz - bz))
+        state = [0.0] * (_HEADING_KNOWN + 1 - STATE_DIAG)
+        state[_LAM - STATE_DIAG], state[_TAU - STATE_DIAG] = s.lambda_max, s.tau_acc_s
+        state[_QG - STATE_DIAG] = state[_QC - STATE_DIAG] = 1.0
+        state[_STARTING - STATE_DIAG] = 1.0
+        return state
+
+    def reset(self, q0=None) -> None:
+        super().reset(q0)
+        # ahf2m's yaw on (re-)initialising is not the compass's: ψ_m follows it (step 8), from yaw 0
+        self._params[P_MAGNETOMETER] = 0.0
+        if q0 is not None:
+            _set_attitude(self._state, tuple(self._values()[:4]))
 
 
 class Ahf2m(Ahf2):

@@ -64,7 +64,7 @@ Robust stepping (every estimator, decided here once):
 
 Status flags are bits of ``diag.status`` (plain ints, cheap per sample).
 
-Compiled estimators (``CompiledEstimator``: ahf, hf, ecf, cf1, kf, ekf, hfm, ecfm, ukf, sssrukf): each one's
+Compiled estimators (``CompiledEstimator``: ahf, ahf2, ahf2m, hf, ecf, cf1, kf, ekf, hfm, ecfm, mcf, ukf, sssrukf): each one's
 per-sample arithmetic is written once, as a ``kernel(state, params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
 -> status`` on scalars and two small float arrays (a GPS-aided one, ``gps_aided``, takes the fix's
 ``vel_n, vel_e, vel_d, heading`` after the magnetometer's, NaN for none), that starts with this module's

@@ -70,20 +70,30 @@ def tilt_from_field_rad(mx, my, mz, heading_rad_: float, dip_rad: float, roll_hi
     Scalars (per-sample code); any unit for ``m_b``. None when the reading's direction cannot match the
     field at that heading (its east component exceeds what rolling can give) or is zero.
     """
+    found, pitch, roll = field_tilt_rad(mx, my, mz, heading_rad_, dip_rad, roll_hint_rad)
+    return (pitch, roll) if found else None
+
+
+@register_jitable  # also compiled: mcf's kernel
+def field_tilt_rad(mx, my, mz, heading_rad_, dip_rad, roll_hint_rad):
+    """``tilt_from_field_rad`` as ``(found, pitch, roll)``, (False, 0, 0) for None."""
     n = math.sqrt(mx * mx + my * my + mz * mz)
     if not n > 0.0:
-        return None
+        return False, 0.0, 0.0
     mx, my, mz = mx / n, my / n, mz / n
     cd = math.cos(dip_rad)
     dx, dy, dz = math.cos(heading_rad_) * cd, -math.sin(heading_rad_) * cd, math.sin(dip_rad)  # eq. 13
     rho = math.hypot(my, mz)
     if not abs(dy) <= rho:
-        return None
-    # (Rx(φ) m)_y = cos φ m_y - sin φ m_z = ρ cos(φ + α) = d_y
+        return False, 0.0, 0.0
+    # (Rx(φ) m)_y = cos φ m_y - sin φ m_z = ρ cos(φ + α) = d_y: two rolls, the one nearer the hint
     alpha = math.atan2(mz, my)
     spread = math.acos(dy / rho)
-    roll = min((s * spread - alpha for s in (1.0, -1.0)), key=lambda r: abs(math.remainder(r - roll_hint_rad, 2 * math.pi)))
+    roll = spread - alpha
+    other = -spread - alpha
+    if abs(wrap_pi(other - roll_hint_rad)) < abs(wrap_pi(roll - roll_hint_rad)):
+        roll = other
     ux, uz = mx, math.sin(roll) * my + math.cos(roll) * mz
     # Ry(θ) turns (u_x, u_z) by -θ in the x-z plane onto (d_x, d_z)
     pitch = math.atan2(uz * dx - ux * dz, ux * dx + uz * dz)
-    return pitch, math.remainder(roll, 2 * math.pi)
+    return True, pitch, wrap_pi(roll)

@@ -45,11 +45,13 @@ from typing import NamedTuple
 
 import numpy as np
 
-from groundstation import quaternion
+from numba import njit
+from numba.extending import register_jitable
+
 from groundstation.analysis.spectrum import amplitude_spectrum
-from groundstation.estimation.base import CommonSettings, Estimator
-from groundstation.estimation.compass import level_heading_rad, tilt_from_field_rad
-from groundstation.estimation.tilt import acc_pitch_roll, euler_rates, wrap_pi
+from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, record, sample
+from groundstation.estimation.compass import field_tilt_rad, level_heading_rad
+from groundstation.estimation.tilt import acc_pitch_roll, euler_of, euler_rates, quaternion_of, unit_field, wrap_pi
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,7 +71,65 @@ class McfDiagnostics(NamedTuple):
     mag_dip_rad: float  # the dip in use; 0 until known (then the compass tilt is not used)
 
 
-class Mcf(Estimator):
+# Parameters after the guard's (base.P_OWN); state after q, the guard's and the diagnostics: the angles
+# (yaw, pitch, roll, rad) and the dip (NaN until known)
+_ACC_WEIGHT, _TAU_S, _TAU_HEADING_S, _DECLINATION = range(P_OWN, P_OWN + 4)
+_USED, _DIP_SHOWN, _YAW, _PITCH, _ROLL, _DIP = range(STATE_DIAG, STATE_DIAG + 6)
+
+
+@njit(cache=True)
+def mcf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
+    """One sample of MCF (module docstring): base.py's compiled kernels."""
+    status, acc_ok, dt_s = guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+    field, _, _, _ = unit_field(mx, my, mz)  # a usable reading (finite, non-zero)
+    if status & (INITIALISED | REINITIALISED):
+        # the guard set q from gravity, yaw from the compass (magnetic) when there is a reading
+        yaw, pitch, roll = euler_of((state[0], state[1], state[2], state[3]))
+        if field:
+            yaw += p[_DECLINATION]
+            state[0], state[1], state[2], state[3] = quaternion_of(yaw, pitch, roll)
+        state[_YAW], state[_PITCH], state[_ROLL] = yaw, pitch, roll
+    if status & NO_UPDATE:
+        return status
+    yaw, pitch, roll = state[_YAW], state[_PITCH], state[_ROLL]
+    dyaw, dpitch, droll = euler_rates(roll, pitch, gx, gy, gz)
+    yaw, pitch, roll = yaw + dyaw * dt_s, pitch + dpitch * dt_s, roll + droll * dt_s  # gyro source
+    # the absolute sources, weighted: the accelerometer's tilt, then the compass's
+    total, sum_pitch, sum_roll = 0.0, 0.0, 0.0
+    if acc_ok:
+        pitch_a, roll_a = acc_pitch_roll(ax, ay, az)
+        w = p[_ACC_WEIGHT]
+        total, sum_pitch, sum_roll = w, w * (pitch_a - pitch), w * wrap_pi(roll_a - roll)
+        if state[_DIP] != state[_DIP] and field:  # NaN: learn the dip now
+            state[_DIP] = _dip_rad(ax, ay, az, mx, my, mz)
+            state[_DIP_SHOWN] = state[_DIP]
+    if field and state[_DIP] == state[_DIP]:
+        found, pitch_m, roll_m = field_tilt_rad(mx, my, mz, yaw - p[_DECLINATION], state[_DIP], roll)
+        if found:
+            w = 1.0 - p[_ACC_WEIGHT]
+            total, sum_pitch, sum_roll = total + w, sum_pitch + w * (pitch_m - pitch), sum_roll + w * wrap_pi(roll_m - roll)
+    if total > 0.0:
+        k = dt_s / (p[_TAU_S] + dt_s)  # 1 - α
+        pitch += k * sum_pitch / total
+        roll += k * sum_roll / total
+    state[_USED] = 0.0
+    if field:
+        heading = level_heading_rad(pitch, roll, mx, my, mz) + p[_DECLINATION]
+        yaw += dt_s / (p[_TAU_HEADING_S] + dt_s) * wrap_pi(heading - yaw)
+        state[_USED] = 1.0
+    yaw, roll = wrap_pi(yaw), wrap_pi(roll)
+    state[_YAW], state[_PITCH], state[_ROLL] = yaw, pitch, roll
+    state[0], state[1], state[2], state[3] = quaternion_of(yaw, pitch, roll)
+    return status
+
+
+@njit(cache=True)
+def mcf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    for k in range(dt.shape[0]):  # base.CompiledEstimator
+        record(state, k, mcf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
+
+
+class Mcf(CompiledEstimator):
     name = "mcf"
     label = "MCF"
     colour = "sand"
@@ -77,70 +137,29 @@ class Mcf(Estimator):
     uses_magnetometer = True
     Settings = McfSettings
     Diagnostics = McfDiagnostics
+    kernel = staticmethod(mcf_kernel)
+    run_kernel = staticmethod(mcf_run)
 
-    def __init__(self, settings=None):
+    def __init__(self, settings=None, dtype=None):
         s = self.Settings() if settings is None else settings
         if not (s.crossover_hz > 0 and s.heading_crossover_hz > 0 and 0.0 <= s.acc_weight <= 1.0):
             raise ValueError("need crossover_hz > 0, heading_crossover_hz > 0 and 0 <= acc_weight <= 1")
-        self._tau_s = 1.0 / (2.0 * math.pi * s.crossover_hz)
-        self._tau_heading_s = 1.0 / (2.0 * math.pi * s.heading_crossover_hz)
-        super().__init__(s)
+        super().__init__(s, dtype)
 
-    def _reset_state(self):
-        self._angles = (0.0, 0.0, 0.0)  # yaw, pitch, roll (rad)
-        self._dip = self.settings.mag_dip_rad
-        self._used = 0
+    def _parameters(self):
+        s = self.settings
+        return [s.acc_weight, 1.0 / (2.0 * math.pi * s.crossover_hz), 1.0 / (2.0 * math.pi * s.heading_crossover_hz), s.declination_rad]
 
-    def _set_attitude(self, q):
-        self._q = q
-        self._angles = tuple(quaternion.to_euler_zyx(np.array(q)).tolist())
+    def reset(self, q0=None) -> None:
+        super().reset(q0)
+        self._state[_YAW : _ROLL + 1] = euler_of(tuple(self._values()[:4]))  # the angles of q0 (identity: 0)
 
-    def _diagnostics(self, status):
-        return McfDiagnostics(status, self._used, self._dip if self._dip == self._dip else 0.0)
-
-    def _attitude_from_acc(self, ax, ay, az, yaw_rad):
-        pitch, roll = acc_pitch_roll(float(ax), float(ay), float(az))
-        m = self._field()
-        if m is not None:
-            yaw_rad = float(level_heading_rad(pitch, roll, *m)) + self.settings.declination_rad
-        return tuple(quaternion.from_euler_zyx(yaw_rad, pitch, roll).tolist())
-
-    def _field(self):
-        """The reading as three floats, or None when missing or not finite and non-zero."""
-        m = self._mag
-        if m is None or not 0.0 < m[0] * m[0] + m[1] * m[1] + m[2] * m[2] < math.inf:
-            return None
-        return m
-
-    def _update(self, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status):
-        yaw, pitch, roll = self._angles
-        dyaw, dpitch, droll = euler_rates(roll, pitch, gx, gy, gz)
-        yaw, pitch, roll = yaw + dyaw * dt_s, pitch + dpitch * dt_s, roll + droll * dt_s  # gyro source
-        sources = []  # (weight, pitch, roll) of the absolute sources
-        if acc_ok:
-            pitch_a, roll_a = acc_pitch_roll(ax, ay, az)
-            sources.append((self.settings.acc_weight, pitch_a, roll_a))
-            if self._dip != self._dip and (m := self._field()) is not None:  # NaN: learn the dip now
-                self._dip = _dip_rad(ax, ay, az, *m)
-        m = self._field()
-        tilt_m = None if m is None or self._dip != self._dip else tilt_from_field_rad(*m, yaw - self.settings.declination_rad, self._dip, roll)
-        if tilt_m is not None:
-            sources.append((1.0 - self.settings.acc_weight, *tilt_m))
-        total = sum(w for w, _, _ in sources)
-        if total > 0.0:
-            k = dt_s / (self._tau_s + dt_s)  # 1 - α
-            pitch += k * sum(w * (p - pitch) for w, p, _ in sources) / total
-            roll += k * sum(w * wrap_pi(r - roll) for w, _, r in sources) / total
-        self._used = 0
-        if m is not None:
-            heading = float(level_heading_rad(pitch, roll, *m)) + self.settings.declination_rad
-            yaw += dt_s / (self._tau_heading_s + dt_s) * wrap_pi(heading - yaw)
-            self._used = 1
-        self._angles = (wrap_pi(yaw), pitch, wrap_pi(roll))
-        self._q = tuple(quaternion.from_euler_zyx(*self._angles).tolist())
-        return self._q, self._diagnostics(status)
+    def _initial_state(self):
+        dip = self.settings.mag_dip_rad
+        return [0.0, dip if dip == dip else 0.0, 0.0, 0.0, 0.0, dip]  # compass_used, dip shown, angles, dip
 
 
+@register_jitable
 def _dip_rad(ax, ay, az, mx, my, mz):
     """Dip of the field below the horizontal: asin of the reading's component along the measured down."""
     dot = -(ax * mx + ay * my + az * mz) / math.sqrt((ax * ax + ay * ay + az * az) * (mx * mx + my * my + mz * mz))

@@ -25,6 +25,7 @@ def acc_pitch_roll(ax, ay, az):
     return math.atan2(ax, math.sqrt(ay * ay + az * az)), math.atan2(-ay, -az)
 
 
+@register_jitable
 def euler_rates(roll_rad, pitch_rad, gx, gy, gz):
     """ZYX Euler angle rates (yaw, pitch, roll) in rad/s from body rates (rad/s)."""
     s, c = math.sin(roll_rad), math.cos(roll_rad)
@@ -63,6 +64,7 @@ def quaternion_of(yaw_rad, pitch_rad, roll_rad):
     return (cy * cp * cr + sy * sp * sr, cy * cp * sr - sy * sp * cr, cy * sp * cr + sy * cp * sr, sy * cp * cr - cy * sp * sr)
 
 
+@register_jitable
 def quaternion_product(p, q):
     """``p ⊗ q`` (Hamilton, w first) as a tuple: ``quaternion.multiply`` for one sample on plain floats."""
     pw, px, py, pz = p
