@@ -17,16 +17,23 @@ DATA_TITLE = "Chart data"
 CHART_ROWS = 22  # rows each chart spans at the default row height (its 11 cm)
 
 
-def line_chart(data_sheet, title: str, first_column: int, series: int, points: int, span_s: tuple[float, float]) -> ScatterChart:
+def numeric_chart(title: str, x_title: str, y_title: str, span: tuple[float, float]) -> ScatterChart:
+    """A chart of lines against a number (time, frequency), its labels at the bottom and left edges: the
+    one axis layout of every chart in the workbook (a category axis would label every point)."""
     chart = ScatterChart(scatterStyle="line")
     chart.title = title
-    chart.y_axis.title, chart.x_axis.title = title, "time (s)"
-    chart.x_axis.number_format, chart.y_axis.number_format = "0", "0"
+    chart.x_axis.title, chart.y_axis.title = x_title, y_title
     chart.x_axis.axPos = "b"  # openpyxl says "l" for both value axes
-    chart.x_axis.scaling.min, chart.x_axis.scaling.max = span_s  # the session, not the next round number
+    chart.x_axis.scaling.min, chart.x_axis.scaling.max = span  # the data's, not the next round number
     for axis in (chart.x_axis, chart.y_axis):
         axis.delete = False  # openpyxl's default hides the axes in recent Excel
         axis.tickLblPos = "low"  # at the plot's edge whatever the values' sign
+    return chart
+
+
+def line_chart(data_sheet, title: str, first_column: int, series: int, points: int, span_s: tuple[float, float]) -> ScatterChart:
+    chart = numeric_chart(title, "time (s)", title, span_s)
+    chart.x_axis.number_format, chart.y_axis.number_format = "0", "0"
     chart.height, chart.width = 11, 30  # cm
     times = Reference(data_sheet, min_col=1, min_row=2, max_row=points + 1)
     for column in range(first_column, first_column + series):

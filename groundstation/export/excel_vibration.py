@@ -9,6 +9,8 @@ from __future__ import annotations
 from openpyxl.cell import WriteOnlyCell
 from openpyxl.chart import Reference, ScatterChart, Series
 
+from groundstation.export.excel_chart import numeric_chart
+
 from groundstation.analysis.vibration import AXES, VibrationError, vibration_summary
 from groundstation.export.excel_stream import header_cell, text_cell
 
@@ -43,15 +45,13 @@ def write_vibration_sheet(workbook, data, window: tuple[float, float]) -> None:
                 cell.number_format = "0.000" if cell is cells[0] else "0.00000"
             sheet.append(cells)
         last = first + len(spectrum.frequency_hz) - 1
-        sheet.add_chart(amplitude_chart(sheet, sensor, unit, first, last), f"G{first - 1}")
+        span_hz = (float(spectrum.frequency_hz[0]), float(spectrum.frequency_hz[-1]))
+        sheet.add_chart(amplitude_chart(sheet, sensor, unit, first, last, span_hz), f"G{first - 1}")
         written = last
 
 
-def amplitude_chart(sheet, sensor: str, unit: str, first: int, last: int) -> ScatterChart:
-    chart = ScatterChart()
-    chart.title = f"{sensor} amplitude spectrum"
-    chart.x_axis.title, chart.y_axis.title = "frequency (Hz)", f"amplitude ({unit})"
-    chart.x_axis.delete = chart.y_axis.delete = False  # openpyxl's default hides the axes in recent Excel
+def amplitude_chart(sheet, sensor: str, unit: str, first: int, last: int, span_hz: tuple[float, float]) -> ScatterChart:
+    chart = numeric_chart(f"{sensor} amplitude spectrum", "frequency (Hz)", f"amplitude ({unit})", span_hz)
     chart.height, chart.width = 9, 22  # cm
     chart.style = 13
     x = Reference(sheet, min_col=1, min_row=first, max_row=last)

@@ -222,8 +222,8 @@ def vibration_section(v: VibrationSummary | None, note: str) -> str:
                           numeric_from=2))
     else:
         out.append("<p>No peak stands out of the spectrum.</p>")
-    out.append(_table(["sensor", "x", "y", "z", "unit"], [[s, *(f"{a.get(k, float('nan')):.3f}" for k in "xyz"), UNITS[s]]
-                                                         for s, a in v.levels.items()]))
+    out.append(_table(["sensor", "x", "y", "z", "unit"],  # a level is None where the stream is too slow for it
+                      [[s, *("—" if a.get(k) is None else f"{a[k]:.3f}" for k in "xyz"), UNITS[s]] for s, a in v.levels.items()]))
     text = v.lines()
     clipping = [line for line in text if line.startswith(("VIBE", "vehicle_imu_status", "motors:"))]
     out += [f"<p>{_e(line)}</p>" for line in clipping]

@@ -150,7 +150,7 @@ def differences_deg(data: SessionData) -> dict[str, np.ndarray]:
 
 def vibration_findings(v: VibrationSummary) -> list[Finding]:
     out = []
-    accel = v.levels.get("accel", {})
+    accel = {axis: level for axis, level in v.levels.get("accel", {}).items() if level is not None}  # None: sampled too slowly
     if accel:
         axis, level = max(accel.items(), key=lambda item: item[1])
         if level >= VIBE_FINE_M_S2:
