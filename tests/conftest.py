@@ -1,4 +1,5 @@
-"""Test-wide setup: Qt never needs a display (CI has none); hypothesis reproducible and without deadlines.
+"""Test-wide setup: Qt never needs a display (CI has none); hypothesis reproducible and without deadlines;
+garbage collected between tests in the main thread.
 
 hypothesis: no deadline anywhere (a loaded 2-core machine takes several times a test's usual time, and a
 deadline then fails a correct test); with the environment variable ``CI`` set, examples are derived
@@ -7,8 +8,10 @@ random, and a failure prints the ``@reproduce_failure`` blob and the falsifying 
 ``@example`` in the test.
 """
 
+import gc
 import os
 
+import pytest
 from hypothesis import settings
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
@@ -16,3 +19,13 @@ os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 settings.register_profile("groundstation", deadline=None, print_blob=True)
 settings.register_profile("ci", settings.get_profile("groundstation"), derandomize=True)
 settings.load_profile("ci" if os.environ.get("CI") else "groundstation")
+
+
+@pytest.fixture(autouse=True)
+def collect_in_the_main_thread():
+    """The window turns Python's automatic collection off (ui/gui_collector.py: a collection in a loading
+    thread can deadlock with Qt); between tests the garbage is collected here, in the main thread, and
+    what survives is frozen so that the next collection costs one test's garbage, not the whole heap."""
+    yield
+    gc.collect()
+    gc.freeze()

@@ -31,6 +31,7 @@ from groundstation.ui.event_console import EventConsole
 from groundstation.ui.parameters_view import ParametersView
 from groundstation.ui.export_dialog import ExportDialog
 from groundstation.ui.foxglove_switch import FoxgloveSwitch
+from groundstation.ui.gui_collector import collect_in_gui_thread
 from groundstation.ui.link_panel import LinkPanel
 from groundstation.ui.live_view import LiveView
 from groundstation.ui.config_banner import ConfigBanner
@@ -67,6 +68,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def __init__(self, settings: QtCore.QSettings, sessions, recordings_dir: Path | None = None):
         super().__init__()
+        collect_in_gui_thread()  # never in a loading thread: ui/gui_collector.py
         self.setWindowTitle("groundstation")
         self.settings = settings
         self.sessions = sessions
