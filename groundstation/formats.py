@@ -27,6 +27,9 @@ from groundstation.recording.format import MAGIC as RECORDING_MAGIC
 # aiding (a tlog's GPS has no vertical speed, a dataset none), so the GPS-aided filters (slow tilt filters
 # without it, at ~100x the others' cost) run only when asked for (``estimation.runnable``).
 FILE_AIDING = frozenset({"mag"})
+# What a flight log's estimators run on: its logged IMU, or its full-rate one (``autopilot.session``): here,
+# where the command line's help can name them without importing the readers.
+IMU_STREAMS = ("regular", "fast")
 
 
 @dataclasses.dataclass(frozen=True)

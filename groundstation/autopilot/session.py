@@ -34,11 +34,11 @@ from groundstation.session import aiding
 from groundstation.session.catalogue import POSITION, TRUTH, Catalogue, message_table, session_catalogue
 from groundstation.session.pipeline import DEFAULT_FILTERS
 from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns
+from groundstation.formats import IMU_STREAMS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAX_GAP_S = 1.0
 BURST_GAP = 1.5  # of a full-rate stream's median period: a longer gap ends a burst
-IMU_STREAMS = ("regular", "fast")  # what the estimators run on: the log's IMU, or its full-rate one (``fast_imu``)
 FAST_IMU_FORMATS = ("dataflash", "ulog")  # the formats that can hold a full-rate IMU (``logtables``)
 READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
 PROGRESS_STEPS = 1000

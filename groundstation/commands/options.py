@@ -26,7 +26,7 @@ def add_config_option(parser: argparse.ArgumentParser) -> None:
 
 
 def add_imu_option(parser: argparse.ArgumentParser) -> None:
-    from groundstation.autopilot.session import IMU_STREAMS
+    from groundstation.formats import IMU_STREAMS
 
     parser.add_argument("--imu", choices=IMU_STREAMS, default=IMU_STREAMS[0],
                         help="the IMU stream a flight log's estimators run on: its logged IMU (default), or 'fast': the "

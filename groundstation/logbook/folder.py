@@ -105,8 +105,8 @@ def _alone(task, path, folder, out, filters, finished) -> None:
 def _on_dask(task, paths, folder, out, filters, _workers, scheduler, finished) -> None:
     try:
         from distributed import Client, as_completed
-    except ImportError:
-        raise UserError("--dask needs Dask: pip install \"groundstation[dask]\"") from None
+    except ImportError as error:
+        raise UserError(f"--dask needs Dask ({error}): pip install \"groundstation[dask]\"") from None
     try:
         client = Client(scheduler, timeout="5s")
     except (OSError, TimeoutError, ValueError) as error:

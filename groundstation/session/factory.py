@@ -14,7 +14,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from groundstation import formats
-from groundstation.autopilot.session import FAST_IMU_FORMATS, IMU_STREAMS
+from groundstation.autopilot.session import FAST_IMU_FORMATS
+from groundstation.formats import IMU_STREAMS
 from groundstation.estimation import live_estimators
 from groundstation.session.load import Loading, load_session
 from groundstation.session.live import LiveSession

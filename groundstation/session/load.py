@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from groundstation import formats, mounting, quaternion
-from groundstation.autopilot.session import FAST_IMU_FORMATS, IMU_STREAMS, attach_simstate_truth
+from groundstation.autopilot.session import FAST_IMU_FORMATS, attach_simstate_truth
+from groundstation.formats import IMU_STREAMS
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create, live_estimators, runnable

@@ -1,4 +1,4 @@
-"""Builds the desktop bundle: ``python packaging/build.py [--dist DIR] [--work DIR]``.
+"""Builds the desktop bundle: ``python bundle/build.py [--dist DIR] [--work DIR]``.
 
 One folder (``DIR/groundstation/``) with the ``groundstation`` executable (``groundstation.exe`` on
 Windows) and everything it needs: no Python installation on the user's machine. Build it on the system
@@ -36,11 +36,11 @@ def main() -> int:
     try:
         import PyInstaller  # noqa: F401
     except ImportError:
-        print("packaging/build.py needs PyInstaller: pip install pyinstaller", file=sys.stderr)
+        print("bundle/build.py needs PyInstaller: pip install pyinstaller", file=sys.stderr)
         return 2
     executable = build(args.dist, args.work)
     if executable is None:
-        print("packaging/build.py: PyInstaller failed (its messages are above)", file=sys.stderr)
+        print("bundle/build.py: PyInstaller failed (its messages are above)", file=sys.stderr)
         return 1
     print(f"built {executable}")
     return 0

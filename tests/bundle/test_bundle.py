@@ -1,7 +1,7 @@
-"""The desktop bundle (packaging/build.py, PyInstaller): built here for Linux, it starts the app on its
+"""The desktop bundle (bundle/build.py, PyInstaller): built here for Linux, it starts the app on its
 demo offscreen for 10 s with no traceback, answers --help, and exports a recording to the same file as
 the installed package. Minutes of building: marked ``slow``, outside the README's test command;
-``pytest -m slow tests/packaging`` runs it."""
+``pytest -m slow tests/bundle`` runs it."""
 
 import os
 import signal
@@ -23,7 +23,7 @@ def executable(tmp_path_factory):
         return Path(os.environ["GROUNDSTATION_BUNDLE"])
     pytest.importorskip("PyInstaller")
     folder = tmp_path_factory.mktemp("bundle")
-    done = subprocess.run([sys.executable, str(ROOT / "packaging" / "build.py"), "--dist", str(folder / "dist"),
+    done = subprocess.run([sys.executable, str(ROOT / "bundle" / "build.py"), "--dist", str(folder / "dist"),
                            "--work", str(folder / "work")], capture_output=True, text=True, timeout=1800)
     assert done.returncode == 0, done.stderr[-3000:]
     path = folder / "dist" / "groundstation" / "groundstation"
