@@ -96,5 +96,24 @@ class TcpBridge(_Pump):
                     if not data:
                         break
                     self._received(data)
+                _close_gently(client)
             self._drop.clear()
         self.server.close()
+
+
+def _close_gently(client: socket.socket) -> None:
+    """A FIN after the last bytes, then the peer's unread bytes drained: closing with unread bytes sends a
+    reset, and the peer's kernel then drops the bytes it had not yet handed to the session."""
+    try:
+        client.shutdown(socket.SHUT_WR)
+    except OSError:
+        return
+    deadline = time.monotonic() + 1.0
+    while time.monotonic() < deadline:
+        try:
+            if not client.recv(4096):
+                return
+        except TimeoutError:
+            continue
+        except OSError:
+            return
