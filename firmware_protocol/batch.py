@@ -132,31 +132,34 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
     known = tables.known[type_ids]
     keep = ~duplicate & known
     kept = _Kept(buf, starts[keep], type_ids[keep], seqs[keep], tables)
+    duplicates, unknown_types = int(duplicate.sum()), int((~duplicate & ~known).sum())
+    # Intermediates of an hour's frames are ~6 MB each: each goes once used (the decode's peak memory).
+    del type_ids, seqs, duplicate, known, keep
     chunk_of = np.searchsorted(scan.stops, kept.starts, side="right")  # the chunk whose feed reaches the frame
     placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, progress)
+    del kept.t32, kept.timestamped
 
     stats = placed.rules.stats
     stats.bytes_in = n
     stats.frame_bytes = int((scan.ends - starts).sum())
     stats.bytes_skipped = int(scan.stops[-1]) - stats.frame_bytes if len(scan.stops) else 0
     stats.bad_lengths, stats.crc_errors = int(scan.bad_at.size), int(scan.crc_at.size)
-    stats.duplicates = int(duplicate.sum())
-    stats.unknown_types = int((~duplicate & ~known).sum())
+    stats.duplicates, stats.unknown_types = duplicates, unknown_types
     stats.frames = len(placed.index)
     stats.frames_lost = int(placed.lost.sum())
 
     # Counters after each chunk: what lies before the scan's stop then.
     stops = scan.stops
-    emitted_at = kept.starts[placed.emitter]  # a held frame comes out with the frame that confirms it
-    frame_ends = np.cumsum(scan.ends - starts)
-    accepted_before = np.searchsorted(starts, stops)
+    emitted_at = np.sort(kept.starts[placed.emitter])  # a held frame comes out with the frame that confirms it
+    frame_ends = np.concatenate(([0], np.cumsum(scan.ends - starts)))
     counters = {
-        "frames": np.searchsorted(np.sort(emitted_at), stops),
+        "frames": np.searchsorted(emitted_at, stops),
         "bytes_in": chunk_ends.copy(),
         "crc_errors": np.searchsorted(scan.crc_at, stops),
         "frames_lost": np.concatenate(([0], np.cumsum(placed.lost)))[np.searchsorted(kept.starts, stops)],
-        "bytes_skipped": stops - np.concatenate(([0], frame_ends))[accepted_before],
+        "bytes_skipped": stops - frame_ends[np.searchsorted(starts, stops)],
     }
+    del emitted_at, frame_ends, starts, placed.lost, scan
 
     order_of = placed.index  # kept index of each frame returned, in return order
     frames = {}

@@ -25,7 +25,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("window", ("groundstation.ui",)),
     ("makers and exports", (
         "groundstation.export", "groundstation.loaders", "groundstation.session.factory", "groundstation.session.load",
-        "groundstation.session.live", "groundstation.session.batch", "groundstation.session.replay",
+        "groundstation.session.live", "groundstation.session.batch", "groundstation.session.estimate_run",
+        "groundstation.session.replay",
         "groundstation.session.pipeline", "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session",
         "groundstation.logbook",
     )),
@@ -40,8 +41,8 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 # What the window and the exports read is the product (``session.product``, ``session.view``); these
 # make it, and neither may reach them, not even through another module.
-MAKERS = ("groundstation.session.pipeline", "groundstation.session.batch", "groundstation.session.live",
-          "groundstation.session.factory", "groundstation.session.load", "groundstation.session.replay",
+MAKERS = ("groundstation.session.pipeline", "groundstation.session.batch", "groundstation.session.estimate_run",
+          "groundstation.session.live", "groundstation.session.factory", "groundstation.session.load", "groundstation.session.replay",
           "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session", "groundstation.loaders")
 READERS = ("groundstation.ui", "groundstation.export")
 

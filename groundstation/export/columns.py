@@ -72,8 +72,8 @@ def sensor_columns(data: SessionData) -> dict[str, np.ndarray]:
 def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[str, np.ndarray]:
     rows = np.arange(len(data)) if rows is None else rows
     out = {"time_s": data.time_s[rows]}
-    for name, q in data.attitudes().items():
-        out.update(attitude_columns(name, q[rows]))
+    for name, q in data.attitudes(rows).items():
+        out.update(attitude_columns(name, q))
     out.update({name: values[rows] for name, values in sensor_columns(data).items()})
     if data.true_q is not None:
         out.update({f"true_q{c}": data.true_q[rows, i] for i, c in enumerate("wxyz")})

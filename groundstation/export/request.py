@@ -12,7 +12,6 @@ or a cancel leaves nothing at the destination.
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import os
 import secrets
 from collections.abc import Callable
@@ -107,7 +106,11 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
             raise ExportCancelled("export cancelled; nothing was written")
         report("decoding", done, total)
 
-    data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes)
+    # CSV and Parquet are written a stretch of rows at a time: the estimators run along (``stream_estimates``),
+    # so the export's memory does not grow with the session's length
+    stream = request.format in (".csv", ".parquet")
+    data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes,
+                stream_estimates=stream)
     decoding(1, 1)
     if request.filters is None:
         data = met(data)
@@ -126,6 +129,16 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
         rows = select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz)
         stretches = export_stretches(data, rows)
         first = next(stretches)
-        (write_csv if request.format == ".csv" else write_parquet)(itertools.chain([first], stretches), request.out, request.overwrite)
-        written = f"{len(rows)} rows, {len(first)} columns"
+        columns, chained = len(first), _first_then(first, stretches)
+        del first  # each stretch is freed once written
+        (write_csv if request.format == ".csv" else write_parquet)(chained, request.out, request.overwrite)
+        written = f"{len(rows)} rows, {columns} columns"
     return ExportResult(f"wrote {request.out}: {written}", data.warnings)
+
+
+def _first_then(first, rest):
+    """``first``, then the items of ``rest``, holding none once handed on (``itertools.chain([first], rest)``
+    would hold ``first`` to the end)."""
+    yield first
+    del first
+    yield from rest

@@ -29,6 +29,7 @@ def write_csv(columns: dict | Iterable[dict], path, overwrite: bool = False) -> 
                 out.write((",".join(batch.schema.names) + "\n").encode())  # pyarrow would quote the names
                 writer = pacsv.CSVWriter(out, batch.schema, write_options=pacsv.WriteOptions(include_header=False, quoting_style="none"))
             writer.write_batch(batch)
+            del batch
         writer.close()
 
 
@@ -36,15 +37,18 @@ def write_parquet(columns: dict | Iterable[dict], path, overwrite: bool = False)
     """Parquet straight from the arrays (no DataFrame copy), a row group per stretch of rows
     (``columns.export_stretches``), so the writer holds one stretch at a time; NaN is stored as null, as
     pandas' writer did. The same bytes as ``pyarrow.parquet.write_table`` of the whole table with that
-    row-group size (tests/export/test_tabular_stretches.py)."""
+    row-group size (tests/export/test_tabular_stretches.py). No dictionary encoding: a session's columns are
+    floats that rarely repeat, and trying a dictionary on each took 4.5x the time of the whole write for a
+    larger file (bench/bench_export_memory.out.md)."""
     import pyarrow.parquet as pq
 
     with atomic_output(path, overwrite) as temporary:
         writer = None
         for batch in record_batches(columns, empty_nan=True):
             if writer is None:
-                writer = pq.ParquetWriter(temporary, batch.schema)
+                writer = pq.ParquetWriter(temporary, batch.schema, use_dictionary=False)
             writer.write_batch(batch, row_group_size=max(batch.num_rows, 1))
+            del batch  # freed before the next stretch is made: one stretch in memory at a time
         writer.close()
 
 
@@ -60,5 +64,8 @@ def record_batches(columns: dict | Iterable[dict], empty_nan: bool | None):
             if v.dtype.kind not in "fiub":
                 raise TypeError(f"export: column {name!r} has dtype {v.dtype}, not a number")
         as_null = len(values) > 1 if empty_nan is None else empty_nan
-        yield pa.RecordBatch.from_arrays([pa.array(v, from_pandas=as_null and v.dtype.kind == "f") for v in values],
-                                         names=list(stretch))
+        batch = pa.RecordBatch.from_arrays([pa.array(v, from_pandas=as_null and v.dtype.kind == "f") for v in values],
+                                           names=list(stretch))
+        del stretch, values  # nothing of this stretch held here while the next one is made
+        yield batch
+        del batch

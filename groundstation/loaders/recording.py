@@ -11,9 +11,10 @@ from groundstation.session.load import SessionData, computed, from_pipeline, fro
 from groundstation.session.replay import check_forced, recorded_filters, recorded_settings
 
 
-def load(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False) -> SessionData:
+def load(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False,
+         stream_estimates: bool = False) -> SessionData:
     recording = open_recording(path)
-    if recording.samples and recording.chunk_count == 0:  # an imported dataset; otherwise samples are truth
+    if recording.chunk_count == 0 and recording.samples:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
         filters = filters or recorded_filters(recording)[0]
         check_forced(filters, forced)
@@ -32,4 +33,4 @@ def load(path, filters=None, forced=None, progress=None, accept_config_changes: 
         return data
     if recording.chunk_count == 0:
         raise UserError(f"{path}: the recording holds no data")
-    return from_pipeline(recording, computed(recording, filters, forced, progress, accept_config_changes))
+    return from_pipeline(recording, computed(recording, filters, forced, progress, accept_config_changes, stream_estimates))

@@ -58,7 +58,6 @@ class Recording:
     metadata: dict  # empty if the metadata record was lost (then ``damage`` says so)
     t_open_ns: int | None  # host monotonic clock when the writer opened the file (at metadata['start_utc'])
     events: list[tuple[int, dict]]  # (t_host_ns, event) in file order
-    samples: dict[str, np.ndarray]  # imported float64 columns, all blocks joined; empty if none
     damage: list[str]  # human-readable findings; empty for an intact file
     closed_cleanly: bool  # the END record is there: the writer was not killed
     record_counts: dict[str, int]  # intact records: chunks, events, sample_blocks
@@ -67,6 +66,21 @@ class Recording:
     _chunk_t_host_ns: array = field(repr=False)
     _chunk_offsets: array = field(repr=False)
     _chunk_lengths: array = field(repr=False)
+    _sample_blocks: list[memoryview] = field(repr=False)  # the intact samples records' payloads
+
+    @functools.cached_property
+    def samples(self) -> dict[str, np.ndarray]:
+        """Imported float64 columns, all blocks joined; empty if none. Decoded when first asked (they were
+        checked at opening): a link recording's truth is read after its session is computed, not beside it."""
+        return self.sample_columns()
+
+    def sample_columns(self, names=None) -> dict[str, np.ndarray]:
+        """``samples``, or only its columns ``names`` that it has, joined anew."""
+        blocks = [samples.decode_block(payload) for payload in self._sample_blocks]
+        names = list(blocks[0]) if blocks and names is None else [n for n in names or () if blocks and n in blocks[0]]
+        joined = {name: np.concatenate([b[name] for b in blocks]) for name in names}
+        release_pages(self._buffer)
+        return joined
 
     @property
     def chunk_count(self) -> int:
@@ -90,6 +104,8 @@ class Recording:
         for offset, length in zip(self._chunk_offsets, self._chunk_lengths):
             into[start:start + length] = source[offset:offset + length]
             start += length
+        del into, source
+        release_pages(self._buffer)
         return data, ends, self.chunk_t_host_ns
 
     def chunks(self, start: int = 0) -> Iterator[tuple[int, bytes]]:
@@ -113,7 +129,17 @@ def open_recording(path) -> Recording:
     damage += walk.damage + _chunk_time_jumps(walk.chunk_t_host_ns)
     if not walk.chunk_offsets and not walk.others:
         raise RecordingError(f"{path}: nothing could be read: " + "; ".join(damage))
-    return _assemble(path, version, buffer, walk, damage)
+    recording = _assemble(path, version, buffer, walk, damage)
+    release_pages(buffer)
+    return recording
+
+
+def release_pages(buffer) -> None:
+    """The file's pages that reading mapped into this process are let go (Linux, macOS): they stay in the
+    kernel's cache and come back when read again, but no longer count in this process's memory, which the
+    walk over every byte would otherwise grow by the file's size (bench/bench_export_memory.out.md)."""
+    if isinstance(buffer, mmap.mmap) and hasattr(mmap, "MADV_DONTNEED"):
+        buffer.madvise(mmap.MADV_DONTNEED)
 
 
 def _map(path: Path) -> mmap.mmap | bytes:
@@ -343,7 +369,7 @@ def _assemble(path: Path, version: int, buffer: bytes, walk: _Walk, damage: list
     metadata: dict | None = None
     t_open_ns = None
     events: list[tuple[int, dict]] = []
-    blocks: list[dict[str, np.ndarray]] = []
+    blocks: list[tuple[memoryview, list[str]]] = []
     closed_cleanly = False
     for kind, t_host_ns, start, end in walk.others:
         payload = walk.view[start:end]
@@ -369,7 +395,6 @@ def _assemble(path: Path, version: int, buffer: bytes, walk: _Walk, damage: list
         metadata=metadata or {},
         t_open_ns=t_open_ns,
         events=events,
-        samples={name: np.concatenate([b[name] for b in blocks]) for name in blocks[0]} if blocks else {},
         damage=damage,
         closed_cleanly=closed_cleanly,
         record_counts={"chunks": len(walk.chunk_offsets), "events": len(events), "sample_blocks": len(blocks)},
@@ -377,6 +402,7 @@ def _assemble(path: Path, version: int, buffer: bytes, walk: _Walk, damage: list
         _chunk_t_host_ns=walk.chunk_t_host_ns,
         _chunk_offsets=walk.chunk_offsets,
         _chunk_lengths=walk.chunk_lengths,
+        _sample_blocks=[payload for payload, _ in blocks],
     )
 
 
@@ -391,13 +417,14 @@ def _json_object(payload: memoryview, what: str, damage: list[str]) -> dict | No
     return value
 
 
-def _add_block(payload: memoryview, where: str, blocks: list[dict[str, np.ndarray]], damage: list[str]) -> None:
+def _add_block(payload: memoryview, where: str, blocks: list[tuple[memoryview, list[str]]], damage: list[str]) -> None:
+    """A samples record's payload with its column names, once it decodes (its columns are not kept)."""
     try:
-        block = samples.decode_block(payload)
+        names = list(samples.decode_block(payload))
     except ValueError as error:
         damage.append(f"samples record {where}: {error}; skipped")
         return
-    if blocks and list(block) != list(blocks[0]):
+    if blocks and names != blocks[0][1]:
         damage.append(f"samples record {where} has other columns than the first block; skipped")
         return
-    blocks.append(block)
+    blocks.append((payload, names))

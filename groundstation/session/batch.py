@@ -35,8 +35,9 @@ from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_batch
 from firmware_protocol.decoder import DecoderStats
 from groundstation.recording import Recording
 from groundstation.session import aiding
-from groundstation.session.catalogue import session_catalogue
+from groundstation.session.catalogue import IMU, estimator_columns, session_catalogue
 from groundstation.session.clock import SessionClock
+from groundstation.session.estimate_run import Break, EstimateRun, SampleColumns, Streamed
 from groundstation.session.estimators import EstimatorBank
 from groundstation.session.link import LinkStats
 from groundstation.session.pipeline import (
@@ -45,6 +46,7 @@ from groundstation.session.pipeline import (
     period_s, sample_dt_s, schema_message, sensor_of, stage_key, unexpected_frame_event,
 )
 from groundstation.session.replay import CONFIG_ANSWERS, RecordedSetup, SettingsSchedule, apply_event, recorded_setup
+from groundstation.session.product import estimate_columns
 from groundstation.session.table import Table
 
 # Shares of the whole job reported through ``progress``: reading and decoding, then the estimators.
@@ -54,12 +56,16 @@ _DECODE_SHARE = 0.4
 class BatchSession:
     """What ``load.from_pipeline`` reads from a replayed ``Pipeline``, computed on the batch path."""
 
-    def __init__(self, setup: RecordedSetup):
+    def __init__(self, setup: RecordedSetup, stream_estimates: bool = False):
+        self.setup = setup
         self.bank = EstimatorBank(setup.filters, setup.settings, setup.forced, setup.aiding)
+        # True: the estimators' imu columns (but the aiding one's) are not held, ``streamed`` makes them
+        # for an export a stretch at a time (``estimate_run.Streamed``)
+        self.stream_estimates = stream_estimates
+        self.streamed: Streamed | None = None
         self.filters = self.bank.filters
         self.catalogue = session_catalogue(self.bank.diagnostics(), SPEC)
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
-        self.imu, self.onboard = self.tables["imu"], self.tables["onboard"]
         self.link = LinkStats()
         self.config: dict | None = None
         self.sensor: SensorConfig | None = None
@@ -70,6 +76,9 @@ class BatchSession:
         self.decoder: BatchDecode | None = None  # ``decoder.stats``: the link's counters
         self._keyed_events: list[tuple[float, dict]] = [(-math.inf, e) for e in setup.warnings]
         self._key = math.inf  # where the settings change being applied happens (see _Builder)
+
+    imu = property(lambda self: self.tables["imu"])
+    onboard = property(lambda self: self.tables["onboard"])
 
     @property
     def estimators(self):
@@ -87,10 +96,10 @@ class BatchSession:
         self._keyed_events.append((key, event))
 
 
-def batch_replay(recording: Recording, filters=None, forced=None,
-                 progress: Callable[[int, int], None] | None = None, accept_config_changes: bool = False) -> BatchSession:
+def batch_replay(recording: Recording, filters=None, forced=None, progress: Callable[[int, int], None] | None = None,
+                 accept_config_changes: bool = False, stream_estimates: bool = False) -> BatchSession:
     """``replay(recording, filters, forced, accept_config_changes=...)`` on the batch path (the project's own
-    protocol only)."""
+    protocol only); ``stream_estimates``: ``BatchSession.stream_estimates``."""
     setup = recorded_setup(recording, filters, forced)
     if setup.protocol != "gs":
         raise ValueError(f"the batch path decodes the project's frames, not {setup.protocol!r}")
@@ -104,7 +113,7 @@ def batch_replay(recording: Recording, filters=None, forced=None,
         if progress is not None:
             progress(int(total * (_DECODE_SHARE + (1 - _DECODE_SHARE) * done / max(samples, 1))), total)
 
-    session = BatchSession(setup)
+    session = BatchSession(setup, stream_estimates)
     decoded = decode_batch(*recording.stream(), progress=decoding)
     _Builder(session, decoded, SettingsSchedule(recording).changes(), estimating, ConfigGuard(accept_config_changes)).build()
     if progress is not None:
@@ -144,7 +153,7 @@ class _Builder:
             del parts
             if (np.diff(keys) < 0).any():
                 rows = rows[np.argsort(keys, kind="stable")]
-            s.tables[name].extend(rows)
+            s.tables[name] = Table.holding(s.tables[name].columns, rows)
             del rows
         order = sorted(range(len(s._keyed_events)), key=lambda i: s._keyed_events[i][0])
         s.events = [s._keyed_events[i][1] for i in order]
@@ -307,12 +316,61 @@ class _Builder:
         first[1:] = segment[1:] != segment[:-1]
         dt = np.where(first, first_dt, sample_dt_s(device_us, np.concatenate(([0], device_us[:-1]))))
         readings = _Readings(self, keys)
+        time_s, t_host = self.time_s[positions], self.t_host[positions]
+        temperature_c = raw["temperature"] * TEMPERATURE_SCALE
+        # Every frame is in its table or among these now: the decoder's columns and the per-frame times go
+        # before the estimators run (memory: an hour's frames are ~90 MB of them)
+        del columns, raw, positions
+        self.d.frames = {}
+        self.time_s = self.device_us = self.t_host = self.chunk = None
         mag, gps = readings.for_estimators()
-        q, estimated = self._estimate(keys, gyr, acc, dt, mag, gps, self.t_host[positions])
-        self.add("imu", keys, np.column_stack([self.time_s[positions], device_us, (self.t_host[positions] - s.t0_host_ns) * 1e-9,
-                                               *acc.T, *gyr.T, raw["temperature"] * TEMPERATURE_SCALE, *estimated]))
-        del estimated, mag, gps
-        readings.stage(acc, dt, q, self.time_s[positions])
+        run = self._estimate_run(keys, gyr, acc, dt, mag, gps, t_host)
+        del mag, gps
+
+        def sensors():  # the table's columns before the estimators', made one at a time (``IMU``)
+            yield from (time_s, device_us, (t_host - s.t0_host_ns) * 1e-9, *acc.T, *gyr.T, temperature_c)
+
+        aiding_q = self._imu_table(keys, sensors(), run, readings.any)
+        readings.stage(acc, dt, aiding_q, time_s)
+
+    def _imu_table(self, keys: np.ndarray, sensors, run: EstimateRun, aided: bool) -> np.ndarray:
+        """The ``imu`` table made in one array: the samples' sensor columns and a gap row at each restart after
+        the first sample, in the pipeline's order, then each estimator's columns written into it a stretch
+        of samples at a time (``EstimateRun``). Streaming (``BatchSession.stream_estimates``), only the aiding
+        estimator's columns are held, if the session has readings it aids (``aided``: the compass heading
+        and the position need its attitude at every sample); the others are left to ``Streamed``. Returns
+        the aiding estimator's quaternions (none if not held)."""
+        s, n = self.s, len(keys)
+        bank = s.bank
+        held = s.filters if not s.stream_estimates else tuple(name for name in s.filters if name == bank.aiding and aided)
+        diagnostics = bank.diagnostics()
+        columns = IMU.column_names + tuple(c.name for name in held for c in estimator_columns(name, diagnostics[name]))
+        gaps = [(key, event) for key, (_, event) in zip(self.disc_keys.tolist(), self.discontinuities) if n and keys[0] < key]
+        gap_at = np.searchsorted(keys, [key for key, _ in gaps], side="right")  # each gap row after the samples before it
+        sample_rows = np.arange(n) + np.searchsorted(gap_at, np.arange(n), side="right")
+        table = np.empty((n + len(gaps), len(columns)))
+        for j, values in enumerate(sensors):
+            table[sample_rows, j] = values
+            del values
+        for row, (_, event) in zip(gap_at + np.arange(len(gaps)), gaps):
+            table[row] = gap_row(event, len(columns))
+        index = {column: j for j, column in enumerate(columns)}
+        run.gyr_rad_s, run.acc_g = (SampleColumns(table, sample_rows, [index[f"{quantity}_{a}_{unit}"] for a in "xyz"])
+                                    for quantity, unit in (("gyr", "rad_s"), ("acc", "g")))
+        for start, end, values in run.stretches(held):
+            rows = sample_rows[start:end]
+            for name, (q, diagnostic_values) in values.items():
+                for column, values_of in estimate_columns(name, q, diagnostic_values).items():
+                    table[rows, index[column]] = values_of
+            self.progress(end, n)
+        s.tables["imu"] = Table.holding(columns, table)
+        if s.stream_estimates:
+            streamed = tuple(name for name in s.filters if name not in held)
+            s.streamed = Streamed(run, streamed, sample_rows, tuple(
+                c.name for name in streamed for c in estimator_columns(name, diagnostics[name])))
+        if bank.aiding not in held or not n:
+            return np.zeros((0, 4))
+        return table[sample_rows[:, None], [index[f"{bank.aiding}_q{c}"] for c in "wxyz"]]
 
     def _hold(self, columns, keys: np.ndarray) -> None:
         """IMU samples before the first usable CONFIG wait for it (``ConfigWait``, as the pipeline's do);
@@ -347,50 +405,31 @@ class _Builder:
             body[rows] = np.column_stack(in_body_axes(mag_m, *(c[rows] for c in counts)))
         return body
 
-    def _estimate(self, keys, gyr, acc, dt, mag, gps, t_host):
-        """Every estimator over the samples, in stretches between restarts and settings changes; the
-        rest-bias calibrator first. Returns the aiding estimator's quaternions and the table columns."""
+    def _estimate_run(self, keys, gyr, acc, dt, mag, gps, t_host) -> EstimateRun:
+        """The estimators' run over the samples (``EstimateRun``): the rest-bias calibrator first (its event),
+        then the breaks between stretches, restarts and recorded settings changes, each change also applied
+        to the session's estimators (their settings at the end, its event) where it happens."""
         s, bank = self.s, self.s.bank
-        n = len(keys)
         calibrator = bank.gyro_calibration
         measured_at = calibrator.measure(gyr, acc, dt, None, mag, gps)
-        unbiased = gyr
+        bias = None
         if measured_at is not None:
-            bias = calibrator.bias_rad_s
-            unbiased = gyr.copy()
-            unbiased[measured_at:] = gyr[measured_at:] - np.array(bias)
-            s.event(keys[measured_at], {"t_host_ns": int(t_host[measured_at]), "kind": "gyro_bias", "bias_rad_s": list(bias)})
+            bias = (measured_at, calibrator.bias_rad_s)
+            s.event(keys[measured_at], {"t_host_ns": int(t_host[measured_at]), "kind": "gyro_bias", "bias_rad_s": list(bias[1])})
         settings = [(k, 0, i) for i, k in enumerate(self.change_keys) if self.changes[i][1]["kind"] == "settings"]
-        breaks = sorted(settings + [(k, 1, i) for i, k in enumerate(self.disc_keys.tolist())])
-        outputs = {name: ([], []) for name in bank.filters}
-        start = 0
-        for key, kind, index in breaks + [(math.inf, 2, -1)]:
-            end = int(np.searchsorted(keys, key))
-            if end > start:
-                for name, estimator in bank.estimators.items():
-                    q, diag = estimator.run(gyr[start:end] if estimator.estimates_gyro_bias else unbiased[start:end],
-                                            acc[start:end], dt[start:end], None if mag is None else mag[start:end],
-                                            None if gps is None else gps[start:end])
-                    outputs[name][0].append(q)
-                    outputs[name][1].append(diag)
-                    bank.last_q[name] = tuple(q[-1].tolist())
-                self.progress(end, n)
-                start = end
-            if kind == 0:
-                s._key = key
-                apply_event(s, self.changes[index][1])
-            elif kind == 1:
-                bank.restart()
-        columns, aiding_q = [], np.zeros((0, 4))
-        for name in bank.filters:
-            qs, diags = outputs[name]
-            q = np.concatenate(qs) if qs else np.zeros((0, 4))
-            if name == bank.aiding:
-                aiding_q = q
-            columns += list(q.T)
-            for field in bank.diagnostics()[name]:
-                columns.append(np.concatenate([d[field] for d in diags]).astype(float) if diags else np.zeros(0))
-        return aiding_q, columns
+        breaks = []
+        for key, kind, index in sorted(settings + [(k, 1, i) for i, k in enumerate(self.disc_keys.tolist())]):
+            sample = int(np.searchsorted(keys, key))
+            if kind == 1:
+                breaks.append(Break(sample, None))
+                continue
+            event = self.changes[index][1]
+            s._key = key
+            apply_event(s, event)
+            if event.get("name") in bank.estimators:
+                breaks.append(Break(sample, event))
+        setup = s.setup
+        return EstimateRun(bank.filters, setup.settings, setup.forced, bank.aiding, gyr, bias, acc, dt, mag, gps, breaks)
 
     # -- gaps and link ----------------------------------------------------------------------------
 
@@ -430,6 +469,7 @@ class _Readings:
         self.b = builder
         frames = builder.d.frames
         self.mag, self.baro, self.gps = frames["MAG_RAW"], frames["BARO"], frames["GPS"]
+        self.mag_time_s = builder.time_s[self.mag.order]
         self.mag_body = builder.mag_body(self.mag).tolist()
         self.pressure_pa = self.baro.scaled("pressure").tolist()
         names = self.gps.type.field_names
@@ -457,6 +497,6 @@ class _Readings:
                                                         aiding_q if driven else None, acc, dt)
         if len(self.mag):
             shown = [self.mag.scaled(f) for f in MAG_FIELDS]
-            b.add("mag_raw", b.key(self.mag.order), np.column_stack([b.time_s[self.mag.order], *shown, heading]))
+            b.add("mag_raw", b.key(self.mag.order), np.column_stack([self.mag_time_s, *shown, heading]))
         if at:
             b.add("position", self.sample_keys[at], np.column_stack([time_s[at], np.array(rows)]))

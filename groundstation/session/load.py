@@ -31,13 +31,16 @@ from groundstation.units import STANDARD_GRAVITY_M_S2
 
 
 def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False,
-                 imu: str = IMU_STREAMS[0]) -> SessionData:
+                 imu: str = IMU_STREAMS[0], stream_estimates: bool = False) -> SessionData:
     """Decode, import or read ``path`` by its format (``formats``) and run the estimators (``filters``; None:
     ``estimators_for``); UserError with a
     clear message on bad input. A file of no known format is tried as a recording, whose reader says
     what the file looks like instead. ``accept_config_changes``: a recording's CONFIG that changes the
     scales without a device restart applies (else the first scales are kept, and said; ``ConfigGuard``).
-    ``imu``: the stream the estimators run on (``IMU_STREAMS``): "fast", a flight log's full-rate IMU."""
+    ``imu``: the stream the estimators run on (``IMU_STREAMS``): "fast", a flight log's full-rate IMU.
+    ``stream_estimates``: a recording's estimators are not run whole but a stretch at a time for whoever reads
+    ``SessionData.attitudes(rows)`` forward (an export: its memory then does not grow with the session's
+    length); other files are computed whole in any case."""
     file_format = formats.sniff(path) or formats.FORMATS["recording"]
     filters = estimators_for(path) if filters is None else filters
     if imu != IMU_STREAMS[0]:
@@ -45,20 +48,21 @@ def load_session(path, filters=None, forced=None, progress=None, accept_config_c
             raise UserError(f"{path}: --imu {imu}: a {file_format.description} has no full-rate IMU stream (only "
                             f"{formats.described([formats.FORMATS[name] for name in FAST_IMU_FORMATS])} have one)")
         return file_format.loader()(Path(path), filters, forced, progress, imu=imu)
-    if not accept_config_changes:
-        return file_format.loader()(Path(path), filters, forced, progress)
     if file_format.name != "recording":
-        raise UserError(f"{path}: a {file_format.description} has no CONFIG frames whose changes could be accepted")
-    return file_format.loader()(Path(path), filters, forced, progress, accept_config_changes=True)
+        if accept_config_changes:
+            raise UserError(f"{path}: a {file_format.description} has no CONFIG frames whose changes could be accepted")
+        return file_format.loader()(Path(path), filters, forced, progress)
+    return file_format.loader()(Path(path), filters, forced, progress, accept_config_changes, stream_estimates)
 
 
-def computed(recording: Recording, filters=None, forced=None, progress=None,
-             accept_config_changes: bool = False) -> Pipeline | BatchSession:
+def computed(recording: Recording, filters=None, forced=None, progress=None, accept_config_changes: bool = False,
+             stream_estimates: bool = False) -> Pipeline | BatchSession:
     """A recording's session computed whole: the project's frames on the batch path (the same tables as
-    a replay, tests/session/test_batch.py); an autopilot's MAVLink through the incremental pipeline
-    (its front-end turns messages into stage calls one by one; it has no batch form)."""
+    a replay, tests/session/test_batch.py; its estimators streamed if asked, ``load_session``); an
+    autopilot's MAVLink through the incremental pipeline (its front-end turns messages into stage calls
+    one by one; it has no batch form)."""
     if recording.metadata.get("protocol", "gs") == "gs":
-        return batch_replay(recording, filters, forced, progress, accept_config_changes)
+        return batch_replay(recording, filters, forced, progress, accept_config_changes, stream_estimates)
     return replay(recording, filters, forced, progress, accept_config_changes)
 
 
@@ -92,16 +96,19 @@ def from_trial(trial: Trial, filters, settings_used, metadata: dict, origin_s: f
 
 def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> SessionData:
     """A recording's product: what the pipeline (or the batch path) computed, as it computed it."""
-    data = pipeline_product(recording.metadata, pipeline, list(recording.damage))
-    if "true_qw" in recording.samples:
-        device_us = data.tables[data.sample_table]["device_time_us"]
-        attach_sensor_truth(data, recording.samples, device_us, pipeline)
+    streamed = pipeline.streamed if isinstance(pipeline, BatchSession) else None
+    data = pipeline_product(recording.metadata, pipeline, list(recording.damage), streamed)
+    if recording.record_counts["sample_blocks"]:
+        truth = recording.sample_columns([*TRUE_Q, "moving", "board_epoch", "board_clock_us", "time_s"])
+        if "true_qw" in truth:
+            attach_sensor_truth(data, truth, data.tables[data.sample_table]["device_time_us"], pipeline)
     return data
 
 
-def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: list) -> SessionData:
+def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: list, estimates=None) -> SessionData:
     """A decoded session's product (a recording's, a ``.tlog``'s): the pipeline's tables, link, events and
-    settings; an autopilot simulator's SIMSTATE as its truth (``attach_simstate_truth``)."""
+    settings (``estimates``: the streamed ones, ``SessionData.estimates``); an autopilot simulator's
+    SIMSTATE as its truth (``attach_simstate_truth``)."""
     t0_ns = pipeline.t0_host_ns or 0
     data = build_product(
         metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
@@ -109,7 +116,7 @@ def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: 
         link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
         events=[{**event, "t_s": (event["t_host_ns"] - t0_ns) / 1e9} for event in pipeline.events],
         settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=damage,
-        parameters=dict(pipeline.parameters), magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0,
+        parameters=dict(pipeline.parameters), magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0, estimates=estimates,
     )
     if data.protocol == "mavlink":
         attach_simstate_truth(data)
@@ -134,12 +141,12 @@ def attach_sensor_truth(data: SessionData, samples: dict[str, np.ndarray], devic
     sample_key = np.searchsorted(restarts, data.time_s, side="right") * wrap + np.mod(device_us, wrap)
     order = np.argsort(truth_key, kind="stable")
     truth_key = truth_key[order]
-    q_sensor = aligned(sample_key, truth_key, np.column_stack([samples[c] for c in TRUE_Q])[order])
+    q_sensor = aligned(sample_key, truth_key, [samples[c][order] for c in TRUE_Q])
     q_body_from_sensor = quaternion.from_matrix(mounting.matrix(pipeline.sensor.mounting))
     data.true_q = quaternion.multiply(q_sensor, quaternion.conjugate(q_body_from_sensor))
     data.true_frame = "ENU"
     if "moving" in samples:
-        data.moving = aligned(sample_key, truth_key, samples["moving"][order][:, None])[:, 0] == 1.0
+        data.moving = aligned(sample_key, truth_key, [samples["moving"][order]])[:, 0] == 1.0
 
 
 

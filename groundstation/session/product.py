@@ -52,6 +52,9 @@ class SessionData:
     true_frame: str = "ENU"
     moving: np.ndarray | None = None  # (N,) bool on the sample rows: the samples an evaluation scores
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)  # an autopilot's: name -> last value
+    # Host estimators whose ``imu`` columns are not in ``tables`` but made a stretch of rows at a time, forward
+    # only (an export's: ``session.estimate_run.Streamed``); read through ``attitudes(rows)``
+    estimates: object | None = None
 
     @property
     def sample_table(self) -> str:
@@ -74,14 +77,15 @@ class SessionData:
         slow = [self.metadata["imu_warning"]] if self.metadata.get("imu_warning") else []
         return [*self.damage, *slow, *(str(e["message"]) for e in self.events if e.get("kind") in ("warning", "config_conflict"))]
 
-    def quaternion(self, name: str) -> np.ndarray:
-        """(N, 4) w-first, body -> NED, on the sample rows: a host estimator's, or ``onboard`` (its rows
-        at the same session time; NaN on the others: device time repeats after a reboot)."""
+    def quaternion(self, name: str, rows: np.ndarray | None = None) -> np.ndarray:
+        """(N, 4) w-first, body -> NED, on the sample rows (those of ``rows``): a host estimator's, or
+        ``onboard`` (its rows at the same session time; NaN on the others: device time repeats after a reboot)."""
+        at = slice(None) if rows is None else rows
         if name != ONBOARD:
             imu = self.tables["imu"]
-            return np.column_stack([imu[f"{name}_q{c}"] for c in "wxyz"])
+            return np.column_stack([imu[f"{name}_q{c}"][at] for c in "wxyz"])
         board = self.tables[ONBOARD]
-        return aligned(self.time_s, board["time_s"], np.column_stack([board[f"q{c}"] for c in "wxyz"]))
+        return aligned(self.time_s[at], board["time_s"], [board[f"q{c}"] for c in "wxyz"])
 
     @property
     def estimated(self) -> tuple[str, ...]:
@@ -96,11 +100,19 @@ class SessionData:
     def has_onboard(self) -> bool:
         return ONBOARD in self.tables and bool(np.isfinite(self.tables[ONBOARD]["qw"]).any())
 
-    def attitudes(self) -> dict[str, np.ndarray]:
-        """Every estimate on the sample rows: the host estimators, then the aircraft's own when it sent one."""
-        out = {name: self.quaternion(name) for name in self.estimated}
+    def attitudes(self, rows: np.ndarray | None = None) -> dict[str, np.ndarray]:
+        """Every estimate on the sample rows (those of ``rows``): the host estimators, then the aircraft's own
+        when it sent one. Streamed estimates (``estimates``) are made for ``rows``, which must then follow the
+        rows asked before."""
+        streamed = {}
+        if self.estimates is not None and self.estimated:
+            if rows is None:
+                raise ValueError("streamed estimates are made a stretch of rows at a time: name the rows")
+            columns = self.estimates.at(rows)
+            streamed = {name: np.column_stack([columns[f"{name}_q{c}"] for c in "wxyz"]) for name in self.estimates.names}
+        out = {name: streamed[name] if name in streamed else self.quaternion(name, rows) for name in self.estimated}
         if self.has_onboard():
-            out[ONBOARD] = self.quaternion(ONBOARD)
+            out[ONBOARD] = self.quaternion(ONBOARD, rows)
         return out
 
     def evaluate(self) -> dict[str, dict[str, float]]:
@@ -125,17 +137,20 @@ def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[s
                   **rest) -> SessionData:
     """The one way a ``SessionData`` is made: every table the catalogue names, with exactly its columns
     in its order (NaN for a column the maker has no values for; an empty table for one it never
-    filled); ``rest``: the other fields. ValueError for a table the catalogue does not describe or
-    columns of different lengths (a maker's bug, not bad input)."""
+    filled; none for the ``imu`` columns of streamed estimators, ``rest["estimates"]``); ``rest``: the
+    other fields. ValueError for a table the catalogue does not describe or columns of different lengths
+    (a maker's bug, not bad input)."""
     unknown = sorted(set(tables) - set(catalogue.tables))
     if unknown:
         raise ValueError(f"tables {unknown} are not in the catalogue")
+    streamed = set(rest["estimates"].columns) if rest.get("estimates") is not None else set()
     filled = {}
     for info in catalogue:
         columns = tables.get(info.name, {})
         rows = len(columns["time_s"]) if "time_s" in columns else 0
         nan = np.full(rows, np.nan)
-        filled[info.name] = {c: np.asarray(columns.get(c, nan), dtype=float) for c in info.column_names}
+        filled[info.name] = {c: np.asarray(columns.get(c, nan), dtype=float) for c in info.column_names
+                             if info.name != "imu" or c not in streamed}
         lengths = {len(v) for v in filled[info.name].values()}
         if len(lengths) > 1:
             raise ValueError(f"table {info.name}: columns of different lengths {sorted(lengths)}")
@@ -147,11 +162,14 @@ def estimate_columns(name: str, q: np.ndarray, diagnostics: dict[str, np.ndarray
     return {**{f"{name}_q{c}": q[:, i] for i, c in enumerate("wxyz")}, **{f"{name}_{d}": v for d, v in diagnostics.items()}}
 
 
-def aligned(times: np.ndarray, other_times: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """``values`` (rows at ``other_times``, sorted) at the rows of ``times``; NaN where no row has that time."""
-    out = np.full((len(times), values.shape[1]), np.nan)
+def aligned(times: np.ndarray, other_times: np.ndarray, columns) -> np.ndarray:
+    """``columns`` (each with a row at each of ``other_times``, sorted; or an (M, k) array) at the rows of
+    ``times``: (N, k), NaN where no row has that time. Only the rows found are read."""
+    columns = list(columns.T) if isinstance(columns, np.ndarray) else list(columns)
+    out = np.full((len(times), len(columns)), np.nan)
     index = np.searchsorted(other_times, times)
     index = np.clip(index, 0, max(len(other_times) - 1, 0))
     hit = other_times[index] == times if len(other_times) else np.zeros(len(times), dtype=bool)
-    out[hit] = values[index[hit]]
+    for i, column in enumerate(columns):
+        out[hit, i] = column[index[hit]]
     return out

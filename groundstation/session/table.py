@@ -44,6 +44,18 @@ class Table:
         self._state: tuple[tuple[np.ndarray, ...], array] = ((), array("d"))
         self._sealed_rows = 0
 
+    @classmethod
+    def holding(cls, columns, rows: np.ndarray) -> Table:
+        """A table of ``rows``, an (N, len(columns)) array taken as it is when it is C-ordered float64 (the
+        caller gives it up: no copy, and it becomes read-only), else copied once."""
+        table = cls(columns)
+        rows = np.ascontiguousarray(rows, dtype=float).reshape(-1, len(table.columns))
+        if len(rows):
+            rows.flags.writeable = False
+            table._state = ((rows,), array("d"))
+            table._sealed_rows = len(rows)
+        return table
+
     def append(self, row) -> None:
         """Add one row: a sequence of len(columns) numbers."""
         growing = self._state[1]
@@ -110,5 +122,8 @@ class Table:
         return np.concatenate([part[:, i] for part in self._parts()])
 
     def to_dict(self) -> dict[str, np.ndarray]:
-        data = self.array()
+        """Every column: views of the one block when the rows are in one (a table made whole: read-only, no
+        copy), else of a copy of them."""
+        parts = [part for part in self._parts() if len(part)]
+        data = parts[0] if len(parts) == 1 and not parts[0].flags.writeable else self.array()
         return {name: data[:, i] for i, name in enumerate(self.columns)}

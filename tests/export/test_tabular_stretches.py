@@ -32,9 +32,10 @@ def test_the_stretches_are_the_whole_columns_cut(sim_session, rows):
 def test_parquet_by_stretches_is_the_whole_table_written_at_once(sim_session, rows, tmp_path):
     write_parquet(export_stretches(sim_session, rows, STRETCH), tmp_path / "stretches.parquet")
     whole = export_columns(sim_session, rows)
-    # pyarrow's own whole-table write, NaN as null (as pandas' writer stored it), row groups of the stretch's size
+    # pyarrow's own whole-table write, NaN as null (as pandas' writer stored it), row groups of the stretch's
+    # size, no dictionary encoding (``write_parquet``'s choice)
     table = pa.table({name: pa.array(v, from_pandas=v.dtype.kind == "f") for name, v in whole.items()})
-    pq.write_table(table, tmp_path / "whole.parquet", row_group_size=STRETCH)
+    pq.write_table(table, tmp_path / "whole.parquet", row_group_size=STRETCH, use_dictionary=False)
     assert (tmp_path / "stretches.parquet").read_bytes() == (tmp_path / "whole.parquet").read_bytes()
     assert pq.ParquetFile(tmp_path / "stretches.parquet").metadata.num_row_groups == len(list(range(0, len(rows), STRETCH)))
 

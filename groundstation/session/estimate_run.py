@@ -1,0 +1,139 @@
+"""The host estimators over a session's samples, run forward a stretch at a time (the batch path's
+estimator stage, ``session.batch``).
+
+``EstimateRun`` holds what the estimators are fed (each sample's gyro, accelerometer, interval and aiding,
+in body axes and physical units) and where their run breaks (a recorded settings change, a device restart),
+and runs them from the first sample in stretches of at most ``STRETCH_SAMPLES``, each estimator's state
+carried from one stretch to the next: ``Estimator.run`` is ``step`` in a loop, so where a stretch ends
+changes no number (tests/session/test_estimate_run.py). Each run starts from a fresh ``EstimatorBank``
+and repeats the breaks, so the run can be made again: whole, it fills the ``imu`` table once; for an
+export its columns are made a stretch at a time and never held whole (``Streamed``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Iterator
+
+import numpy as np
+
+from groundstation.session.estimators import EstimatorBank
+from groundstation.session.product import estimate_columns
+
+STRETCH_SAMPLES = 65_536  # what one stretch holds: 10 estimators' columns over it are ~37 MB
+
+
+@dataclasses.dataclass(frozen=True)
+class Break:
+    """Before sample ``sample``: a recorded settings change (``event``) or, when ``event`` is None, a
+    device restart or clock jump (``EstimatorBank.restart``)."""
+
+    sample: int
+    event: dict | None
+
+
+@dataclasses.dataclass
+class EstimateRun:
+    filters: tuple[str, ...]
+    settings: dict
+    forced: dict | None
+    aiding: str | None
+    gyr_rad_s: np.ndarray | SampleColumns  # (n, 3) as measured: for the estimators that estimate their own gyro bias
+    # the rest bias (``RestBiasCalibrator``) and the first sample it is removed from, for the others; None: none
+    bias: tuple[int, tuple[float, float, float]] | None
+    acc_g: np.ndarray | SampleColumns  # (n, 3)
+    dt_s: np.ndarray  # (n,)
+    mag_uT: np.ndarray | None  # (n, 3) the reading each sample hands the estimators, NaN for none
+    gps: np.ndarray | None  # (n, 4) likewise
+    breaks: list[Break]  # in sample order
+
+    def __len__(self) -> int:
+        return len(self.dt_s)
+
+    def stretches(self, names=None) -> Iterator[tuple[int, int, dict]]:
+        """``(start, end, {name: (q, diagnostics)})`` for consecutive stretches of samples from the first to
+        the last, each estimator of ``names`` (default: all) run over it as the session ran it."""
+        names = self.filters if names is None else tuple(names)
+        stretch_samples = STRETCH_SAMPLES
+        bank = EstimatorBank(self.filters, self.settings, self.forced, self.aiding)
+        bounds = sorted({0, len(self), *(b.sample for b in self.breaks), *range(0, len(self), stretch_samples)})
+        pending = iter(self.breaks)
+        upcoming = next(pending, None)
+        for start, end in zip(bounds, bounds[1:] + [len(self)]):
+            while upcoming is not None and upcoming.sample <= start:
+                if upcoming.event is None:
+                    bank.restart()
+                else:
+                    bank.change(upcoming.event["name"], upcoming.event.get("settings", {}))
+                upcoming = next(pending, None)
+            if end <= start:
+                continue
+            out = {}
+            gyr = self.gyr_rad_s[start:end]
+            unbiased = self._unbiased(gyr, start, end)
+            for name in names:
+                estimator = bank.estimators[name]
+                q, diagnostics = estimator.run(gyr if estimator.estimates_gyro_bias else unbiased, self.acc_g[start:end], self.dt_s[start:end],
+                                               None if self.mag_uT is None else self.mag_uT[start:end],
+                                               None if self.gps is None else self.gps[start:end])
+                bank.last_q[name] = tuple(q[-1].tolist())
+                out[name] = (q, diagnostics)
+            yield start, end, out
+
+    def _unbiased(self, gyr: np.ndarray, start: int, end: int) -> np.ndarray:
+        """``gyr``, samples ``start:end``, with the rest bias removed from where it was measured."""
+        if self.bias is None or self.bias[0] >= end:
+            return gyr
+        first, bias = self.bias
+        unbiased = gyr.copy()
+        unbiased[max(first - start, 0):] -= np.array(bias)
+        return unbiased
+
+
+class SampleColumns:
+    """Columns of a table on its sample rows, read a stretch at a time as an (n, k) array's rows would be
+    (``[start:end]``, a copy): the estimators' inputs read from the ``imu`` table instead of kept twice."""
+
+    def __init__(self, table: np.ndarray, sample_rows: np.ndarray, columns: list[int]):
+        self._table, self._sample_rows, self._columns = table, sample_rows, columns
+
+    def __getitem__(self, rows: slice) -> np.ndarray:
+        return self._table[self._sample_rows[rows, None], self._columns]
+
+
+class Streamed:
+    """The ``imu`` table's columns of the estimators ``names``, not held: made for the rows an export asks,
+    in order (``SessionData.estimates``). ``sample_rows``: the table row of each sample (the others are
+    gap rows, NaN)."""
+
+    def __init__(self, run: EstimateRun, names: tuple[str, ...], sample_rows: np.ndarray, columns: tuple[str, ...]):
+        self.names = names
+        self.columns = columns  # their imu columns, in the catalogue's order (``catalogue.estimator_columns``)
+        self._sample_rows = sample_rows
+        self._stretches = run.stretches(names)
+        self._held: tuple[int, int, dict] = (0, 0, {})
+        self._next_row = 0
+
+    def at(self, rows: np.ndarray) -> dict[str, np.ndarray]:
+        """Every streamed column at table ``rows`` (ascending, after every row asked before: the run only
+        goes forward); NaN on the gap rows."""
+        rows = np.asarray(rows, dtype=np.int64)
+        if len(rows) and rows[0] < self._next_row:
+            raise ValueError("the streamed estimates go forward only: rows were asked again or out of order")
+        sample = np.searchsorted(self._sample_rows, rows)
+        is_sample = sample < len(self._sample_rows)
+        is_sample[is_sample] = self._sample_rows[sample[is_sample]] == rows[is_sample]
+        out = {c: np.full(len(rows), np.nan) for c in self.columns}
+        wanted = np.flatnonzero(is_sample)
+        while len(wanted):
+            start, end, values = self._held
+            here = wanted[(sample[wanted] >= start) & (sample[wanted] < end)]
+            for name, (q, diagnostics) in values.items():
+                for column, values_of in estimate_columns(name, q, diagnostics).items():
+                    out[column][here] = values_of[sample[here] - start]
+            wanted = wanted[sample[wanted] >= end]
+            if len(wanted):
+                self._held = next(self._stretches)
+        if len(rows):
+            self._next_row = int(rows[-1]) + 1
+        return out
