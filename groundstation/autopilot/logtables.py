@@ -23,6 +23,7 @@ with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time):
 
 from __future__ import annotations
 
+import functools
 import operator
 import re
 from collections import defaultdict
@@ -154,8 +155,11 @@ def fifo_series(data: dict, kind: str) -> Series:
 
 
 def in_order(time_us, columns: dict, source: str) -> Series:
-    """A table's rows sorted by time (stable: rows sharing a time, a burst of parameters, keep theirs)."""
+    """A table's rows sorted by time (stable: rows sharing a time, a burst of parameters, keep theirs);
+    rows already in order (a log's usual) are taken as they are, float columns without a copy."""
     time_us = np.asarray(time_us)
+    if len(time_us) < 2 or (time_us[1:] >= time_us[:-1]).all():
+        return Series(time_us, {n: np.asarray(v, dtype=float) for n, v in columns.items()}, source)
     order = np.argsort(time_us, kind="stable")
     return Series(time_us[order], {n: np.asarray(v, dtype=float)[order] for n, v in columns.items()}, source)
 
@@ -163,6 +167,7 @@ def in_order(time_us, columns: dict, source: str) -> Series:
 _INDEX = re.compile(r"\[(\d+)\]")
 
 
+@functools.cache  # the same fields in every instance of a topic, in every log
 def _flat(field: str) -> str:
     """A ULog field as a column name: ``gyro_rad[0]`` -> ``gyro_rad_0``."""
     return _INDEX.sub(r"_\1", field)
