@@ -128,8 +128,7 @@ def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]
     """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked) as a table, and the fifo topics' full-rate tables."""
     tables, units = {}, {}
     for data in data_list:
-        columns = {_flat(name): np.asarray(values, dtype=float) for name, values in data.data.items()
-                   if name != "timestamp" and np.asarray(values).dtype.kind in "biuf"}
+        columns = {_flat(name): values for name, values in data.data.items() if name != "timestamp" and values.dtype.kind in "biuf"}
         if not len(data.data["timestamp"]) or not columns:
             continue
         name = table_name(data.name, data.multi_id or None)

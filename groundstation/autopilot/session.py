@@ -100,15 +100,16 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     readings = _Readings(log, t_us)
     mag, gps = aiding.handed_to_samples(readings.stream, len(t_us), readings.mag_body, readings.gps_values)
     dt_s = sample_periods_s(t_us / 1e6)
-    names, runs = list(dict.fromkeys(filters)), {}
+    names, runs, settings = list(dict.fromkeys(filters)), {}, {}
     try:
         for i, name in enumerate(names, start=1):
-            runs[name] = create(name, forced.get(name)).run(gyr, acc, dt_s, mag, gps)
+            estimator = create(name, forced.get(name))
+            runs[name] = estimator.run(gyr, acc, dt_s, mag, gps)
+            settings[name] = dataclasses.asdict(estimator.settings)  # frozen: what it ran with
             if share is not None:
                 share(READ_SHARE + (1.0 - READ_SHARE) * i / len(names))
     except ValueError as error:
         raise UserError(str(error)) from None
-    settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
     imu_table = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
     for name, (q, diagnostics) in runs.items():
         imu_table.update(estimate_columns(name, q, diagnostics))

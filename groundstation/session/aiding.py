@@ -7,9 +7,11 @@ the aiding estimator's attitude (``EstimatorBank.aiding``): NED metres from the 
 from the first barometer reading (docs/conventions.md).
 
 The pipeline calls it per frame; the batch path (``batch._Readings``) and a flight log
-(``autopilot/session.py``) drive the same object over their columns merged in the pipeline's order
-(``merged``, ``handed_to_samples``, ``heading_and_position``), so the hand-over, the heading and the
-position are one code.
+(``autopilot/session.py``) run its rules on whole columns merged in the pipeline's order (``merged``,
+``handed_to_samples``, ``heading_and_position``), with no Python call per sample: the same heading
+(``reading_heading_rad``'s rotation compiled), barometer altitude, GPS fix and position filter
+(``DualChannel.run``: ``step``'s ``advance`` compiled), the same numbers bit for bit
+(tests/session/test_one_rule_each.py, tests/autopilot/test_ulog_open_work.py).
 """
 
 from __future__ import annotations
@@ -124,11 +126,10 @@ def _handed(stream, kind: int, valid: np.ndarray | None = None) -> tuple[np.ndar
     return samples_at[taker[last]], index[at[last]]
 
 
-def _fixes(gps: dict[str, np.ndarray]) -> np.ndarray:
-    """``gps_fix`` of each GPS reading, as (n, 4) rows."""
-    heading_deg = np.asarray(gps["heading"], dtype=float)
-    heading = np.where((0.0 <= heading_deg) & (heading_deg <= 360.0), np.radians(heading_deg), math.nan)
-    return np.column_stack([gps["vel_n"], gps["vel_e"], gps["vel_d"], wrap_pi(heading)])
+def _fixes(gps: dict[str, np.ndarray], taken: np.ndarray) -> np.ndarray:
+    """``gps_fix`` of the GPS readings ``taken``, as (n, 4) rows (a few a second: one by one, as live)."""
+    rows = zip(*(np.asarray(values)[taken].tolist() for values in gps.values()))
+    return np.array([gps_fix(dict(zip(gps, row))) for row in rows]).reshape(-1, 4)
 
 
 def _fixed(gps: dict[str, np.ndarray]) -> np.ndarray:
@@ -148,7 +149,7 @@ def handed_to_samples(stream, samples: int, mag_body: np.ndarray, gps: dict[str,
     mag[index[taking]] = np.asarray(mag_body, dtype=float).reshape(-1, 3)[taken]
     with_mag = len(taking) > 0
     taking, taken = _handed(stream, GPS, _fixed(gps))
-    fix[index[taking]] = _fixes(gps)[taken]
+    fix[index[taking]] = _fixes(gps, taken)
     return (mag if with_mag else None), (fix if len(taking) else None)
 
 
