@@ -8,6 +8,10 @@ after), ``vehicle_gps_position`` (``lat``/``lon`` 1e-7 degrees and ``alt`` mm, o
 ``longitude_deg``/``altitude_msl_m`` from PX4 1.14; ``vel_{n,e,d}_m_s``), and in SITL logs
 ``vehicle_attitude_groundtruth`` (the simulator's true attitude, kept as truth); ``vehicle_status``
 (``nav_state``, ``arming_state``), the logged messages and parameters: ``messages.ulog_said``.
+
+pyulog parses the file once. A plain file (``plain_chain``: the usual one) it reads through its own
+buffered file, at its own speed; a damaged one, or one cut inside a message, through ``LastRead``,
+which says what of the last message there is. Every topic becomes a table (``logtables``).
 """
 
 from __future__ import annotations
@@ -44,7 +48,7 @@ def read_ulog(path, progress=None) -> FlightLog:
     handle = None
     try:
         with chatter.caught(descriptors=False):
-            if plain_chain(np.fromfile(path, dtype=np.uint8)):
+            if plain_chain(np.fromfile(path, dtype=np.uint8)):  # (numba caches no kernel for a read-only mapping)
                 ulog = ULog(str(path))  # every topic: each is a table (``logtables``)
             else:
                 with open(path, "rb") as raw:

@@ -192,30 +192,30 @@ def advance(s, g, acc, dt_s, baro_alt_m, gps_pos, gps_vel):
         vertical = _G_DOWN
     for i in range(3):
         z = down if i == 2 else gps_pos[i]
-        k = vertical if i == 2 else _G_GPS
         if z - z == 0.0:
-            delta_s = s[_SINCE_P + i]
-            s[_SINCE_P + i] = 0.0
-            # First reading, or a gap the loop cannot close in one correction (kp Δ > 1 overshoots): re-set.
-            if delta_s > g[_G_MAX_GAP] or g[k] * delta_s > 1.0:
-                s[_P + i] = z
-            else:
-                e = z - s[_P + i]
-                s[_P + i] += g[k] * e * delta_s
-                s[_V + i] += g[k + 1] * e * delta_s
-                s[_B + i] -= g[k + 2] * e * delta_s
+            _correct(s, g, i, _P, _SINCE_P, z, vertical if i == 2 else _G_GPS, _V)
     if g[_G_HAS_VEL] != 0.0:
         for i in range(3):
-            u = gps_vel[i]
-            if u - u == 0.0:
-                delta_s = s[_SINCE_V + i]
-                s[_SINCE_V + i] = 0.0
-                if delta_s > g[_G_MAX_GAP] or g[_G_VEL] * delta_s > 1.0:
-                    s[_V + i] = u
-                else:
-                    e = u - s[_V + i]
-                    s[_V + i] += g[_G_VEL] * e * delta_s
-                    s[_B + i] -= g[_G_VEL + 1] * e * delta_s
+            if gps_vel[i] - gps_vel[i] == 0.0:
+                _correct(s, g, i, _V, _SINCE_V, gps_vel[i], _G_VEL, -1)
+
+
+@register_jitable
+def _correct(s, g, i, value, since, z, k, rate):
+    """Axis ``i`` of the state's ``value`` (position or velocity) corrected by the reading ``z`` with the
+    gains from ``g[k]``: into the value, into its ``rate`` (velocity; -1 for none), out of the bias."""
+    delta_s = s[since + i]
+    s[since + i] = 0.0
+    # First reading, or a gap the loop cannot close in one correction (k Δ > 1 overshoots): re-set.
+    if delta_s > g[_G_MAX_GAP] or g[k] * delta_s > 1.0:
+        s[value + i] = z
+        return
+    e = z - s[value + i]
+    s[value + i] += g[k] * e * delta_s
+    if rate >= 0:
+        s[rate + i] += g[k + 1] * e * delta_s
+        k += 1
+    s[_B + i] -= g[k + 1] * e * delta_s
 
 
 @njit(cache=True)
