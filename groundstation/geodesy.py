@@ -23,7 +23,11 @@ def pressure_altitude_m(pressure_pa, ground_pressure_pa: float, ground_temperatu
     """Height (m) above the point where the pressure is ``ground_pressure_pa``: ``pressure_pa`` inverted."""
     t0_k = ground_temperature_c + 273.15
     ratio = np.asarray(pressure_pa, dtype=float) / ground_pressure_pa
-    return t0_k / ISA_LAPSE_K_PER_M * (1.0 - ratio ** (1.0 / ISA_EXPONENT))
+    # libm's pow on each value (Python's float ``**``), not NumPy's, whose AVX-512 vector code differs in the
+    # last bit on some inputs: one reading at a time (live) and a file's all at once give the same heights
+    exponent = 1.0 / ISA_EXPONENT
+    powered = [r**exponent if r >= 0.0 else math.nan for r in ratio.ravel().tolist()]
+    return t0_k / ISA_LAPSE_K_PER_M * (1.0 - np.array(powered).reshape(ratio.shape))
 
 
 def ned_from_geodetic(lat_deg, lon_deg, alt_m, origin: tuple[float, float, float]) -> np.ndarray:

@@ -65,8 +65,8 @@ def implausible_times(time_us) -> np.ndarray:
     times, which a few damaged rows cannot move; a time more than the span and a minute beyond it is
     implausible (a logging pause of that length would be one too)."""
     time_us = np.asarray(time_us, dtype=np.float64)
-    if len(time_us) == 0:
-        return np.zeros(0, dtype=bool)
+    if len(time_us) == 0 or time_us.max() - time_us.min() <= PLAUSIBLE_MARGIN_US:
+        return np.zeros(len(time_us), dtype=bool)  # within a minute of each other: none beyond the reach below
     lo, hi = np.percentile(time_us, [1.0, 99.0])
     reach = (hi - lo) + PLAUSIBLE_MARGIN_US
     return (time_us < lo - reach) | (time_us > hi + reach)

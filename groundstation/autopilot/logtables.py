@@ -23,6 +23,7 @@ with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time):
 
 from __future__ import annotations
 
+import functools
 import operator
 import re
 from collections import defaultdict
@@ -127,8 +128,7 @@ def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]
     """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked) as a table, and the fifo topics' full-rate tables."""
     tables, units = {}, {}
     for data in data_list:
-        columns = {_flat(name): np.asarray(values, dtype=float) for name, values in data.data.items()
-                   if name != "timestamp" and np.asarray(values).dtype.kind in "biuf"}
+        columns = {_flat(name): values for name, values in data.data.items() if name != "timestamp" and values.dtype.kind in "biuf"}
         if not len(data.data["timestamp"]) or not columns:
             continue
         name = table_name(data.name, data.multi_id or None)
@@ -154,8 +154,11 @@ def fifo_series(data: dict, kind: str) -> Series:
 
 
 def in_order(time_us, columns: dict, source: str) -> Series:
-    """A table's rows sorted by time (stable: rows sharing a time, a burst of parameters, keep theirs)."""
+    """A table's rows sorted by time (stable: rows sharing a time, a burst of parameters, keep theirs);
+    rows already in order (a log's usual) are taken as they are, float columns without a copy."""
     time_us = np.asarray(time_us)
+    if len(time_us) < 2 or (time_us[1:] >= time_us[:-1]).all():
+        return Series(time_us, {n: np.asarray(v, dtype=float) for n, v in columns.items()}, source)
     order = np.argsort(time_us, kind="stable")
     return Series(time_us[order], {n: np.asarray(v, dtype=float)[order] for n, v in columns.items()}, source)
 
@@ -163,6 +166,7 @@ def in_order(time_us, columns: dict, source: str) -> Series:
 _INDEX = re.compile(r"\[(\d+)\]")
 
 
+@functools.cache  # the same fields in every instance of a topic, in every log
 def _flat(field: str) -> str:
     """A ULog field as a column name: ``gyro_rad[0]`` -> ``gyro_rad_0``."""
     return _INDEX.sub(r"_\1", field)

@@ -50,6 +50,9 @@ READINGS = {
     "baro": ("baro", {"pressure_Pa": ("pressure_hpa", 100.0), "temperature_degC": ("temperature_c", 1.0)}),
     "gps": ("gps", {c: (c, 1.0) for c in GPS_COLUMNS}),
 }
+# A GPS reading as the aiding stage takes it (``Aiding.gps``) -> the log's GPS column
+GPS_READING = {"lat": "lat_deg", "lon": "lon_deg", "alt": "alt_m", "vel_n": "vel_n_m_s", "vel_e": "vel_e_m_s",
+               "vel_d": "vel_d_m_s", "fix_type": "fix_type"}
 AUTOPILOT_PROTOCOL = "mavlink"  # what the window treats a flight log's aircraft as speaking: no commands of ours
 
 
@@ -84,10 +87,11 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     the aiding estimator's attitude."""
     if imu == "fast":
         log = dataclasses.replace(log, imu=fast_imu(log))
+    messages = _message_tables(log)
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
-        tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0])}
-        return build_product(describe(log), log_catalogue(log, {}), tables, (), protocol=AUTOPILOT_PROTOCOL,
+        tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0], messages)}
+        return build_product(describe(log), log_catalogue(log, {}, messages), tables, (), protocol=AUTOPILOT_PROTOCOL,
                              true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage),
                              magnetometer=log.mag is not None, events=log_events(log, t_us[0]),
                              parameters=dict(log.parameters))
@@ -96,30 +100,31 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     readings = _Readings(log, t_us)
     mag, gps = aiding.handed_to_samples(readings.stream, len(t_us), readings.mag_body, readings.gps_values)
     dt_s = sample_periods_s(t_us / 1e6)
-    names, runs = list(dict.fromkeys(filters)), {}
+    names, runs, settings = list(dict.fromkeys(filters)), {}, {}
     try:
         for i, name in enumerate(names, start=1):
-            runs[name] = create(name, forced.get(name)).run(gyr, acc, dt_s, mag, gps)
+            estimator = create(name, forced.get(name))
+            runs[name] = estimator.run(gyr, acc, dt_s, mag, gps)
+            settings[name] = dataclasses.asdict(estimator.settings)  # frozen: what it ran with
             if share is not None:
                 share(READ_SHARE + (1.0 - READ_SHARE) * i / len(names))
     except ValueError as error:
         raise UserError(str(error)) from None
-    settings = {name: dataclasses.asdict(create(name, forced.get(name)).settings) for name in runs}
     imu_table = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
     for name, (q, diagnostics) in runs.items():
         imu_table.update(estimate_columns(name, q, diagnostics))
-    tables = {"imu": imu_table, **reading_tables(log, t_us[0])}
+    tables = {"imu": imu_table, **reading_tables(log, t_us[0], messages)}
     aiding_name = aiding_estimator(tuple(runs))
     heading, at, rows = aiding.heading_and_position(readings.stream, readings.mag_body, readings.pressure_pa,
                                                     readings.gps_values, runs[aiding_name][0] if aiding_name else None,
                                                     acc, dt_s)  # fmt: skip
     if log.mag is not None:
-        tables["mag_raw"]["heading_deg"] = np.asarray(heading)
-    if at:
-        tables["position"] = {"time_s": tables["imu"]["time_s"][at], **dict(zip(POSITION.column_names[1:], np.array(rows).T))}
+        tables["mag_raw"]["heading_deg"] = heading
+    if len(at):
+        tables["position"] = {"time_s": tables["imu"]["time_s"][at], **dict(zip(POSITION.column_names[1:], rows.T))}
     if log.onboard is not None:
         tables[ONBOARD] = onboard_columns(t_us, t_us[0], interpolated(t_us, log.onboard))
-    catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()})
+    catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()}, messages)
     return build_product(describe(log), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
                          true_q=interpolated(t_us, log.truth), true_frame="NED", magnetometer=mag is not None,
                          settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
@@ -139,15 +144,14 @@ class _Readings:
 
     def __init__(self, log: FlightLog, t_us: np.ndarray):
         empty = np.zeros(0)
-        self.mag_body = [] if log.mag is None else log.mag.stack(MAG_COLUMNS).tolist()
-        self.pressure_pa = [] if log.baro is None else (log.baro.columns["pressure_hpa"] * 100.0).tolist()
-        gps_t, self.gps_values = empty, []
+        self.mag_body = np.zeros((0, 3)) if log.mag is None else log.mag.stack(MAG_COLUMNS)
+        self.pressure_pa = empty if log.baro is None else log.baro.columns["pressure_hpa"] * 100.0
+        gps_t, self.gps_values = empty, {name: empty for name in (*GPS_READING, "heading")}
         if log.gps is not None:
             aids = np.isfinite(log.gps.stack(GPS_COLUMNS[3:6])).all(axis=1)
             gps_t = log.gps.time_us[aids]
-            self.gps_values = [{"lat": lat, "lon": lon, "alt": alt, "vel_n": vn, "vel_e": ve, "vel_d": vd,
-                                "heading": math.nan, "fix_type": fix}  # one antenna: no heading
-                               for lat, lon, alt, vn, ve, vd, fix in log.gps.stack(GPS_COLUMNS[:7])[aids].tolist()]
+            self.gps_values = {name: log.gps.columns[c][aids] for name, c in GPS_READING.items()}
+            self.gps_values["heading"] = np.full(len(gps_t), math.nan)  # one antenna: no heading
         self.stream = aiding.merged([(empty if log.mag is None else log.mag.time_us, aiding.MAG),
                                      (empty if log.baro is None else log.baro.time_us, aiding.BARO),
                                      (gps_t, aiding.GPS), (t_us, aiding.SAMPLE)])
@@ -201,9 +205,9 @@ def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np
             **{c: q[:, i] for i, c in enumerate(Q_COLUMNS)}}
 
 
-def reading_tables(log: FlightLog, t0_us: int) -> dict[str, dict[str, np.ndarray]]:
-    """The slower sensors, the truth, and every other table of the log (each DataFlash message type or ULog
-    topic, a tlog's VFR_HUD, SYS_STATUS, ...: "plot any channel"), each on its own rows in session time."""
+def reading_tables(log: FlightLog, t0_us: int, messages: list[tuple]) -> dict[str, dict[str, np.ndarray]]:
+    """The slower sensors, the truth, and every other table of the log (``messages``: each DataFlash message
+    type or ULog topic, a tlog's VFR_HUD, SYS_STATUS, ...: "plot any channel"), each on its own rows in session time."""
     out = {}
     for key, (name, columns) in READINGS.items():
         stream: Series | None = getattr(log, key)
@@ -212,12 +216,12 @@ def reading_tables(log: FlightLog, t0_us: int) -> dict[str, dict[str, np.ndarray
                          **{c: stream.columns[source] * factor for c, (source, factor) in columns.items()}}
     if log.truth is not None:
         out[TRUTH.name] = {"time_s": (log.truth.time_us - t0_us) / 1e6, **log.truth.columns}
-    for info, stream in _message_tables(log):
+    for info, stream in messages:
         out[info.name] = {"time_s": (stream.time_us - t0_us) / 1e6, **dict(zip(info.column_names[1:], stream.columns.values()))}
     return out
 
 
-def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]]) -> Catalogue:
+def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]], messages: list[tuple]) -> Catalogue:
     """The log's tables: ``imu`` with the estimators' columns (no host arrival time: a log has none),
     ``onboard``, the slower sensors and the position as the live session describes them, the truth; one
     per other message type or topic, columns named ``<field>_<unit>`` from the log's units."""
@@ -227,7 +231,7 @@ def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]]) -> Ca
     aided = ["position"] if diagnostics and (log.baro is not None or log.gps is not None) else []
     truth = {TRUTH.name: TRUTH} if log.truth is not None else {}
     return Catalogue({"imu": imu} | {name: tables[name] for name in (ONBOARD, *readings, *aided)} | truth
-                     | {i.name: i for i, _ in _message_tables(log)})
+                     | {i.name: i for i, _ in messages})
 
 
 def _message_tables(log: FlightLog) -> list[tuple]:

@@ -8,6 +8,10 @@ after), ``vehicle_gps_position`` (``lat``/``lon`` 1e-7 degrees and ``alt`` mm, o
 ``longitude_deg``/``altitude_msl_m`` from PX4 1.14; ``vel_{n,e,d}_m_s``), and in SITL logs
 ``vehicle_attitude_groundtruth`` (the simulator's true attitude, kept as truth); ``vehicle_status``
 (``nav_state``, ``arming_state``), the logged messages and parameters: ``messages.ulog_said``.
+
+pyulog parses the file once. A plain file (``plain_chain``: the usual one) it reads through its own
+buffered file, at its own speed; a damaged one, or one cut inside a message, through ``LastRead``,
+which says what of the last message there is. Every topic becomes a table (``logtables``).
 """
 
 from __future__ import annotations
@@ -16,6 +20,11 @@ import io
 
 import numpy as np
 from pyulog import ULog
+
+from groundstation.estimation.compiled_cache import use_user_cache
+
+use_user_cache()  # before numba is imported: the walk below is compiled once per user, as the estimators are
+from numba import njit  # noqa: E402
 
 from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.flightlog import (
@@ -36,17 +45,22 @@ def read_ulog(path, progress=None) -> FlightLog:
         if f.read(7) != MAGIC:
             raise UserError(f"{path}: not a PX4 ULog file (it does not start with 'ULog')")
     chatter = Chatter()  # pyulog prints what it finds damaged: kept as a note
+    handle = None
     try:
-        with open(path, "rb") as raw, chatter.caught(descriptors=False):
-            handle = LastRead(raw)
-            ulog = ULog(handle)  # every topic: each is a table (``logtables``)
+        with chatter.caught(descriptors=False):
+            if plain_chain(np.fromfile(path, dtype=np.uint8)):  # (numba caches no kernel for a read-only mapping)
+                ulog = ULog(str(path))  # every topic: each is a table (``logtables``)
+            else:
+                with open(path, "rb") as raw:
+                    handle = LastRead(raw)
+                    ulog = ULog(handle)
     except Exception as error:  # pyulog raises ULogException and struct/index errors on damaged files
         raise UserError(f"{path}: cannot read this ULog file ({error})") from None
     log = FlightLog(path, "ulog", ulog.msg_info_dict.get("sys_name", "PX4"))
     if ulog.file_corruption:
         log.damage.append("damaged bytes: pyulog found records it could not read and skipped to the next sync; "
                           "the messages in them are missing")
-    if handle.unfinished_bytes:
+    if handle is not None and handle.unfinished_bytes:
         log.damage.append(cut_message(handle.unfinished_bytes))
     topics = {}
     for data in ulog.data_list:
@@ -100,6 +114,45 @@ def _gps(gps):
     fix = gps["fix_type"] >= 2
     columns = [lat, lon, alt, gps["vel_n_m_s"], gps["vel_e_m_s"], gps["vel_d_m_s"], gps["fix_type"], gps["satellites_used"]]
     return series(gps["timestamp"][fix], {c: np.asarray(v, dtype=float)[fix] for c, v in zip(GPS_COLUMNS, columns)}, "vehicle_gps_position")
+
+
+HEADER_BYTES = 16  # the file header: magic, version, start time
+APPENDED_DATA = 1  # bit 0 of the flag bits' first incompatible byte: data appended at given offsets
+# Message types pyulog reads where they stand, without seeking: in the definitions (any type whose
+# header is sound: unknown ones are skipped whole) and after them (``_read_file_data``: any other
+# type makes it search for a sync sequence). The definitions end at the first of ``DATA_START``.
+DATA_START = np.zeros(256, dtype=np.bool_)
+DATA_START[[ord(c) for c in "ALC"]] = True
+DATA_TYPES = np.zeros(256, dtype=np.bool_)
+DATA_TYPES[[ord(c) for c in "IMPQALCDOS"]] = True
+MAX_SOUND_SIZE = 10000  # a larger message, or one of size or type 0, is corruption to pyulog
+
+
+def plain_chain(data: np.ndarray) -> bool:
+    """Whether pyulog reads the file ``data`` (its bytes) message after message to its very end: every
+    header sound, no type that makes it search for a sync sequence, no data appended, and the last
+    message ending with the file. Only then does its reading end on an empty header read, with nothing
+    unfinished; so a plain file needs no ``LastRead`` (a Python call per read, a third of pyulog's own
+    time) and pyulog reads it through its own buffered file."""
+    first = HEADER_BYTES
+    if len(data) >= first + 3 + 9 and data[first + 2] == ord("B") and data[first + 3 + 8] & APPENDED_DATA:
+        return False
+    return _walk(data, first, DATA_START, DATA_TYPES, MAX_SOUND_SIZE)
+
+
+@njit(cache=True)
+def _walk(data, position, data_start, data_types, max_size):  # pragma: no cover - compiled
+    in_data = False
+    while position + 3 <= len(data):
+        size = data[position] | (np.int64(data[position + 1]) << 8)
+        kind = data[position + 2]
+        if kind == 0 or size == 0 or size > max_size:
+            return False
+        in_data = in_data or data_start[kind]
+        if in_data and not data_types[kind]:
+            return False
+        position += 3 + size
+    return position == len(data)
 
 
 class LastRead(io.RawIOBase):

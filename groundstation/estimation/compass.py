@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 from numba.extending import register_jitable
 
 from groundstation import quaternion
@@ -39,12 +40,32 @@ def reading_heading_rad(q_body_to_ned, mag_body) -> float:
     The same eq. 14-15, written through the whole rotation: ``m_h = Rz(ψ)ᵀ R(q) m_b``, so the heading
     is the attitude's yaw ψ minus the direction of the field turned into NED, ``atan2(m_n,y, m_n,x)``.
     """
-    w, x, y, z = q_body_to_ned
-    mx, my, mz = mag_body
+    return math.remainder(_unwrapped_heading_rad(q_body_to_ned, mag_body), 2 * math.pi)
+
+
+def reading_headings_deg(q_rows: np.ndarray, mag_rows: np.ndarray) -> np.ndarray:
+    """``reading_heading_rad`` in degrees of each row of ``q_rows`` (n, 4) and ``mag_rows`` (n, 3): the
+    same floats, the rotation compiled (numba has no ``math.remainder``: that and the degrees per row)."""
+    unwrapped = np.empty(len(q_rows))
+    _unwrapped_each(np.ascontiguousarray(q_rows, dtype=float), np.ascontiguousarray(mag_rows, dtype=float), unwrapped)
+    return np.array([math.degrees(math.remainder(u, 2 * math.pi)) for u in unwrapped.tolist()])
+
+
+@register_jitable
+def _unwrapped_heading_rad(q_body_to_ned, mag_body):
+    """``reading_heading_rad`` before its wrap into [-π, π]."""
+    w, x, y, z = q_body_to_ned[0], q_body_to_ned[1], q_body_to_ned[2], q_body_to_ned[3]
+    mx, my, mz = mag_body[0], mag_body[1], mag_body[2]
     north = (1 - 2 * (y * y + z * z)) * mx + 2 * (x * y - w * z) * my + 2 * (x * z + w * y) * mz
     east = 2 * (x * y + w * z) * mx + (1 - 2 * (x * x + z * z)) * my + 2 * (y * z - w * x) * mz
     yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return math.remainder(yaw - math.atan2(east, north), 2 * math.pi)
+    return yaw - math.atan2(east, north)
+
+
+@njit(cache=True)
+def _unwrapped_each(q_rows, mag_rows, out):  # pragma: no cover - compiled (tests compare it with reading_heading_rad)
+    for k in range(len(q_rows)):
+        out[k] = _unwrapped_heading_rad(q_rows[k], mag_rows[k])
 
 
 @register_jitable  # also compiled: the compiled MARG filters' yaw on initialising (base.py)

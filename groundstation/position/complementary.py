@@ -29,8 +29,13 @@ import math
 
 import numpy as np
 
-from groundstation.position import design
-from groundstation.readings import optional_rows
+from groundstation.estimation.compiled_cache import use_user_cache
+
+use_user_cache()  # before numba is imported: ``_run`` is compiled once per user, as the estimators are
+from numba import njit  # noqa: E402
+from numba.extending import register_jitable  # noqa: E402
+
+from groundstation.position import design  # noqa: E402
 
 # The design inputs of the defaults (design.crossover_rad_s). Accelerometer error in NED, below
 # 0.1 Hz (variance of 10-s means × 10 s), of AHF's attitude on the simulated flight (seeds 11-12, not
@@ -97,17 +102,17 @@ class PositionFilter:
 
     def reset(self) -> None:
         """Forget everything: rest at the origin, no bias, no reading seen."""
-        self._p = [0.0, 0.0, 0.0]
-        self._v = [0.0, 0.0, 0.0]
-        self._b = [0.0, 0.0, 0.0]
-        self._since_pos_s = [math.inf] * 3  # time since each axis's last position reading
-        self._since_vel_s = [math.inf] * 3
-        self._baro_offset_m = None  # altitude reading that corresponds to 0 m down
+        self._state = [0.0] * 9 + [math.inf] * 6 + [math.nan]  # ``advance``'s layout; a list: cheapest per ``step``
 
     @property
     def bias_ned_m_s2(self) -> tuple[float, float, float]:
         """The accelerometer bias estimate b̂ (NED, m/s²); zero for the single channel."""
-        return tuple(self._b)
+        return tuple(self._state[_B : _B + 3])
+
+    def _gains_row(self) -> list[float]:
+        velocity = self.vel_gains if self.vel_gains is not None else (0.0, 0.0)
+        return [*self.baro_gains, *self.gps_gains, *self.gps_down_gains, *velocity,
+                float(self.vel_gains is not None), self.settings.max_gap_s]  # fmt: skip
 
     def step(self, acc_ned_m_s2, dt_s, baro_alt_m=None, gps_pos_ned_m=None, gps_vel_ned_m_s=None):
         """One sample: returns ``(pos_ned_m, vel_ned_m_s)``, each a tuple of 3 floats.
@@ -115,82 +120,110 @@ class PositionFilter:
         ``acc_ned_m_s2`` NED linear acceleration (``acceleration.linear_acc_ned_m_s2``); ``dt_s`` since
         the previous sample; the readings that arrived on this sample, or None.
         """
-        p, v, b = self._p, self._v, self._b
-        if not 0.0 < dt_s < math.inf:
-            return tuple(p), tuple(v)
-        if dt_s <= self.settings.max_gap_s:
-            acc = acc_ned_m_s2 if _finite(acc_ned_m_s2) else b  # no acceleration: constant velocity
-            half = 0.5 * dt_s * dt_s
-            for i in range(3):
-                a = acc[i] - b[i]
-                p[i] += v[i] * dt_s + a * half
-                v[i] += a * dt_s
-        since_p, since_v = self._since_pos_s, self._since_vel_s
-        for i in range(3):
-            since_p[i] += dt_s
-            since_v[i] += dt_s
-        down = None
-        if baro_alt_m is not None and _finite((baro_alt_m,)):
-            if self._baro_offset_m is None:
-                self._baro_offset_m = baro_alt_m + (p[2] if since_p[2] < math.inf else 0.0)
-            down = self._baro_offset_m - baro_alt_m
-        gps = gps_pos_ned_m if gps_pos_ned_m is not None else (None, None, None)
-        if self._baro_offset_m is None:
-            down = gps[2]
-        for i, z, gains in ((0, gps[0], self.gps_gains), (1, gps[1], self.gps_gains), (2, down, self._vertical_gains())):
-            if z is not None and z - z == 0.0:
-                self._correct_position(i, z, gains)
-        if gps_vel_ned_m_s is not None and self.vel_gains is not None:
-            for i, u in enumerate(gps_vel_ned_m_s):
-                if u - u == 0.0:
-                    self._correct_velocity(i, u)
-        return tuple(p), tuple(v)
-
-    def _vertical_gains(self) -> design.Gains:
-        return self.gps_down_gains if self._baro_offset_m is None else self.baro_gains
-
-    def _correct_position(self, i: int, z: float, gains: design.Gains) -> None:
-        delta_s = self._since_pos_s[i]
-        self._since_pos_s[i] = 0.0
-        # First reading, or a gap the loop cannot close in one correction (kp Δ > 1 overshoots): re-set.
-        if delta_s > self.settings.max_gap_s or gains.kp_1_s * delta_s > 1.0:
-            self._p[i] = z
-            return
-        e = z - self._p[i]
-        self._p[i] += gains.kp_1_s * e * delta_s
-        self._v[i] += gains.kv_1_s2 * e * delta_s
-        self._b[i] -= gains.ki_1_s3 * e * delta_s
-
-    def _correct_velocity(self, i: int, u: float) -> None:
-        delta_s = self._since_vel_s[i]
-        self._since_vel_s[i] = 0.0
-        if delta_s > self.settings.max_gap_s or self.vel_gains.kv_1_s * delta_s > 1.0:
-            self._v[i] = u
-            return
-        e = u - self._v[i]
-        self._v[i] += self.vel_gains.kv_1_s * e * delta_s
-        self._b[i] -= self.vel_gains.ki_1_s2 * e * delta_s
+        s = self._state
+        advance(s, self._gains_row(), acc_ned_m_s2, dt_s, math.nan if baro_alt_m is None else baro_alt_m,
+                _NONE if gps_pos_ned_m is None else gps_pos_ned_m, _NONE if gps_vel_ned_m_s is None else gps_vel_ned_m_s)
+        return (s[0], s[1], s[2]), (s[3], s[4], s[5])
 
     def run(self, acc_ned_m_s2, dt_s, baro_alt_m=None, gps_pos_ned_m=None, gps_vel_ned_m_s=None):
         """Step through arrays: ``acc_ned_m_s2`` (N, 3), ``dt_s`` (N,) or a scalar, ``baro_alt_m`` (N,),
         ``gps_pos_ned_m`` and ``gps_vel_ned_m_s`` (N, 3), NaN on samples without a reading.
 
         Continues from the current state (``reset()`` first for a fresh start). Returns ``(pos_ned_m,
-        vel_ned_m_s)``, two (N, 3) arrays whose row k is exactly what ``step`` returns for sample k.
+        vel_ned_m_s)``, two (N, 3) arrays whose row k is exactly what ``step`` returns for sample k: the
+        same ``advance``, compiled.
         """
-        acc = np.asarray(acc_ned_m_s2, dtype=float).reshape(-1, 3)
+        acc = np.ascontiguousarray(acc_ned_m_s2, dtype=float).reshape(-1, 3)
         n = len(acc)
-        dt = np.broadcast_to(np.asarray(dt_s, dtype=float), (n,)).tolist()
-        baro = optional_rows(baro_alt_m, n, 1, "baro_alt_m")
-        gps_pos = optional_rows(gps_pos_ned_m, n, 3, "gps_pos_ned_m")
-        gps_vel = optional_rows(gps_vel_ned_m_s, n, 3, "gps_vel_ned_m_s")
+        dt = np.ascontiguousarray(np.broadcast_to(np.asarray(dt_s, dtype=float), (n,)))
+        baro = _rows(baro_alt_m, n, 1, "baro_alt_m")[:, 0]
+        gps_pos = _rows(gps_pos_ned_m, n, 3, "gps_pos_ned_m")
+        gps_vel = _rows(gps_vel_ned_m_s, n, 3, "gps_vel_ned_m_s")
         out = np.empty((n, 6))
-        step = self.step
-        for k, (a, d, h, z, u) in enumerate(zip(acc.tolist(), dt, baro, gps_pos, gps_vel)):
-            p, v = step(a, d, None if h is None else h[0], z, u)
-            out[k, :3] = p
-            out[k, 3:] = v
+        state = np.array(self._state)
+        _run(state, np.array(self._gains_row()), acc, dt, baro, gps_pos, gps_vel, out)
+        self._state = state.tolist()
         return out[:, :3], out[:, 3:]
+
+
+def _rows(values, n: int, width: int, name: str) -> np.ndarray:
+    """(n, width) float rows of an optional input: all NaN (no reading) for None."""
+    if values is None:
+        return np.full((n, width), math.nan)
+    rows = np.ascontiguousarray(values, dtype=float).reshape(-1, width)
+    if len(rows) != n:
+        raise ValueError(f"{name} has {len(rows)} rows of {width}, expected {n}")
+    return rows
+
+
+# ``advance``'s state: position, velocity, bias (NED), the time since each axis's last position and
+# velocity reading, the barometer offset (NaN: none yet). Its gains: the barometer's, GPS position's
+# and GPS down's (kp, kv, ki each), GPS velocity's (kv, ki), whether that loop exists, max_gap_s.
+_P, _V, _B, _SINCE_P, _SINCE_V, _BARO_OFFSET = 0, 3, 6, 9, 12, 15
+_G_BARO, _G_GPS, _G_DOWN, _G_VEL, _G_HAS_VEL, _G_MAX_GAP = 0, 3, 6, 9, 11, 12
+_NONE = (math.nan, math.nan, math.nan)
+
+
+@register_jitable  # interpreted by ``step`` on lists (live, per sample), compiled in ``_run`` on arrays
+def advance(s, g, acc, dt_s, baro_alt_m, gps_pos, gps_vel):
+    """One sample of the filter on its state ``s`` (in place): prediction, then the corrections of the
+    readings given (NaN: none). The module's docstring has the equations."""
+    if not 0.0 < dt_s < math.inf:
+        return
+    if dt_s <= g[_G_MAX_GAP]:
+        total = acc[0] + acc[1] + acc[2]
+        measured = total - total == 0.0  # False for any NaN or Inf: no acceleration, constant velocity
+        half = 0.5 * dt_s * dt_s
+        for i in range(3):
+            a = (acc[i] if measured else s[_B + i]) - s[_B + i]
+            s[_P + i] += s[_V + i] * dt_s + a * half
+            s[_V + i] += a * dt_s
+    for i in range(3):
+        s[_SINCE_P + i] += dt_s
+        s[_SINCE_V + i] += dt_s
+    down = math.nan
+    if baro_alt_m - baro_alt_m == 0.0:
+        if math.isnan(s[_BARO_OFFSET]):  # the first reading is the current height (0 m before any)
+            s[_BARO_OFFSET] = baro_alt_m + (s[_P + 2] if s[_SINCE_P + 2] < math.inf else 0.0)
+        down = s[_BARO_OFFSET] - baro_alt_m
+    vertical = _G_BARO
+    if math.isnan(s[_BARO_OFFSET]):  # no barometer yet: GPS down aids the vertical
+        down = gps_pos[2]
+        vertical = _G_DOWN
+    for i in range(3):
+        z = down if i == 2 else gps_pos[i]
+        if z - z == 0.0:
+            _correct(s, g, i, _P, _SINCE_P, z, vertical if i == 2 else _G_GPS, _V)
+    if g[_G_HAS_VEL] != 0.0:
+        for i in range(3):
+            if gps_vel[i] - gps_vel[i] == 0.0:
+                _correct(s, g, i, _V, _SINCE_V, gps_vel[i], _G_VEL, -1)
+
+
+@register_jitable
+def _correct(s, g, i, value, since, z, k, rate):
+    """Axis ``i`` of the state's ``value`` (position or velocity) corrected by the reading ``z`` with the
+    gains from ``g[k]``: into the value, into its ``rate`` (velocity; -1 for none), out of the bias."""
+    delta_s = s[since + i]
+    s[since + i] = 0.0
+    # First reading, or a gap the loop cannot close in one correction (k Δ > 1 overshoots): re-set.
+    if delta_s > g[_G_MAX_GAP] or g[k] * delta_s > 1.0:
+        s[value + i] = z
+        return
+    e = z - s[value + i]
+    s[value + i] += g[k] * e * delta_s
+    if rate >= 0:
+        s[rate + i] += g[k + 1] * e * delta_s
+        k += 1
+    s[_B + i] -= g[k + 1] * e * delta_s
+
+
+@njit(cache=True)
+def _run(s, g, acc, dt, baro, gps_pos, gps_vel, out):  # pragma: no cover - compiled (tests compare it with step)
+    for k in range(len(acc)):
+        advance(s, g, acc[k], dt[k], baro[k], gps_pos[k], gps_vel[k])
+        for j in range(6):
+            out[k, j] = s[j]
 
 
 class SingleChannel(PositionFilter):
@@ -212,8 +245,3 @@ class DualChannel(PositionFilter):
 
     def _velocity_gains(self, settings):
         return design.velocity_gains(settings.gps_vel_crossover_rad_s, settings.damping)
-
-
-def _finite(values) -> bool:
-    total = sum(values)
-    return total - total == 0.0  # False for any NaN or Inf

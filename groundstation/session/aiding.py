@@ -7,9 +7,11 @@ the aiding estimator's attitude (``EstimatorBank.aiding``): NED metres from the 
 from the first barometer reading (docs/conventions.md).
 
 The pipeline calls it per frame; the batch path (``batch._Readings``) and a flight log
-(``autopilot/session.py``) drive the same object over their columns merged in the pipeline's order
-(``merged``, ``handed_to_samples``, ``heading_and_position``), so the hand-over, the heading and the
-position are one code.
+(``autopilot/session.py``) run its rules on whole columns merged in the pipeline's order (``merged``,
+``handed_to_samples``, ``heading_and_position``), with no Python call per sample: the same heading
+(``reading_heading_rad``'s rotation compiled), barometer altitude, GPS fix and position filter
+(``DualChannel.run``: ``step``'s ``advance`` compiled), the same numbers bit for bit
+(tests/session/test_one_rule_each.py, tests/autopilot/test_ulog_open_work.py).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import numpy as np
 from firmware_protocol import SPEC
 from groundstation import geodesy
 from groundstation.estimation.base import GpsFix
-from groundstation.estimation.compass import reading_heading_rad
+from groundstation.estimation.compass import reading_heading_rad, reading_headings_deg
 from groundstation.estimation.tilt import wrap_pi
 from groundstation.position import DualChannel, linear_acc_ned_m_s2
 
@@ -94,98 +96,110 @@ def gps_fix(values: dict) -> GpsFix:
 RESTART, MAG, BARO, GPS, SAMPLE = range(5)
 
 
-def merged(parts) -> Merged:
-    """``(kind, index)`` of every event of ``parts`` (``(keys, kind)`` each, keys sorted within a part) in
-    the order of their keys; events sharing a key keep the order of ``parts``, then their own."""
+def merged(parts) -> tuple[np.ndarray, np.ndarray]:
+    """``(kinds, indexes)``: the kind and index of every event of ``parts`` (``(keys, kind)`` each, keys
+    sorted within a part) in the order of their keys; events sharing a key keep the order of ``parts``,
+    then their own."""
     parts = list(parts)
     keys = np.concatenate([np.asarray(k, dtype=float) for k, _ in parts])
-    kinds = np.concatenate([np.full(len(k), kind, dtype=np.int8) for k, kind in parts])
+    kinds = np.concatenate([np.full(len(k), kind) for k, kind in parts])
     index = np.concatenate([np.arange(len(k)) for k, _ in parts])
     order = np.argsort(keys, kind="stable")
-    return Merged(kinds[order], index[order])
+    return kinds[order], index[order]
 
 
-class Merged:
-    """A merged stream as two arrays, iterated as ``(kind, index)`` Python ints a block at a time: an hour
-    at 100 Hz is 360,000 samples, 35 MB as a list of tuples and 3 MB as arrays."""
+def _handed(stream, kind: int, valid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Which reading of ``kind`` (those ``valid`` among them) each sample takes, as ``Aiding`` hands them:
+    a reading waits for the next sample, a later one before it replaces it, a restart drops it.
+    Returns (the samples' places in the stream, the readings' indexes), one pair per sample that takes one."""
+    kinds, index = stream
+    at = np.flatnonzero(kinds == kind)
+    if valid is not None:
+        at = at[valid[index[at]]]
+    samples_at = np.flatnonzero(kinds == SAMPLE)
+    taker = np.searchsorted(samples_at, at)  # the next sample's rank among the samples
+    restarts = np.cumsum(kinds == RESTART)
+    kept = taker < len(samples_at)
+    kept[kept] = restarts[samples_at[taker[kept]]] == restarts[at[kept]]
+    at, taker = at[kept], taker[kept]
+    last = np.append(taker[1:] != taker[:-1], True)[: len(taker)]  # the latest reading before each sample
+    return samples_at[taker[last]], index[at[last]]
 
-    BLOCK = 65_536
 
-    def __init__(self, kinds: np.ndarray, index: np.ndarray):
-        self.kinds, self.index = kinds, index
-
-    def __len__(self) -> int:
-        return len(self.kinds)
-
-    def __iter__(self):
-        for start in range(0, len(self.kinds), self.BLOCK):
-            yield from zip(self.kinds[start:start + self.BLOCK].tolist(), self.index[start:start + self.BLOCK].tolist())
+def _fixes(gps: dict[str, np.ndarray], taken: np.ndarray) -> np.ndarray:
+    """``gps_fix`` of the GPS readings ``taken``, as (n, 4) rows (a few a second: one by one, as live)."""
+    rows = zip(*(np.asarray(values)[taken].tolist() for values in gps.values()))
+    return np.array([gps_fix(dict(zip(gps, row))) for row in rows]).reshape(-1, 4)
 
 
-def handed_to_samples(stream, samples: int, mag_body: list, gps_values: list) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """What each of ``samples`` IMU samples hands the estimators (``take_for_estimators``) over a merged
-    ``stream``: the magnetometer reading (body axes, µT) and GPS fix, NaN rows for none; None when no
-    sample has one."""
-    if not len(mag_body) and not len(gps_values):
+def _fixed(gps: dict[str, np.ndarray]) -> np.ndarray:
+    """The GPS readings ``Aiding.gps`` takes: all but those below a 2D fix."""
+    return ~(np.asarray(gps["fix_type"]) < _FIX_2D)
+
+
+def handed_to_samples(stream, samples: int, mag_body: np.ndarray, gps: dict[str, np.ndarray]) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """What each of ``samples`` IMU samples hands the estimators (``Aiding.take_for_estimators``) over a
+    merged ``stream``: the magnetometer reading (body axes, µT; ``mag_body`` (n, 3)) and GPS fix (``gps``:
+    the readings' columns, as ``Aiding.gps`` takes them), NaN rows for none; None when no sample has one."""
+    if not len(mag_body) and not len(gps["fix_type"]):
         return None, None
-    aiding = Aiding()
-    mag, gps = np.full((samples, 3), math.nan), np.full((samples, 4), math.nan)
-    with_mag, with_gps = False, False
-    for kind, i in stream:
-        if kind == SAMPLE:
-            body, fix = aiding.take_for_estimators()
-            if body is not None:
-                mag[i], with_mag = body, True
-            if fix is not None:
-                gps[i], with_gps = fix, True
-        elif kind == MAG:
-            aiding.magnetometer(mag_body[i], None)
-        elif kind == GPS:
-            aiding.gps(gps_values[i])
-        elif kind == RESTART:
-            aiding.restart()
-    return (mag if with_mag else None), (gps if with_gps else None)
+    index = stream[1]
+    mag, fix = np.full((samples, 3), math.nan), np.full((samples, 4), math.nan)
+    taking, taken = _handed(stream, MAG)
+    mag[index[taking]] = np.asarray(mag_body, dtype=float).reshape(-1, 3)[taken]
+    with_mag = len(taking) > 0
+    taking, taken = _handed(stream, GPS, _fixed(gps))
+    fix[index[taking]] = _fixes(gps, taken)
+    return (mag if with_mag else None), (fix if len(taking) else None)
 
 
-def heading_and_position(stream, mag_body: list, pressure_pa: list, gps_values: list, aiding_q, acc_g, dt_s):
+def heading_and_position(stream, mag_body: np.ndarray, pressure_pa: np.ndarray, gps: dict[str, np.ndarray], aiding_q, acc_g, dt_s):
     """The compass heading of every magnetometer reading and the position rows, over a merged ``stream``,
     with the aiding estimator's attitude ``aiding_q`` at each sample (None: no estimator ran, so no
-    heading and no position). Returns (headings in degrees, the samples with a position row, the rows)."""
-    aiding = Aiding()
-    qs, accs, dts = (None if aiding_q is None else _Rows(aiding_q)), _Rows(acc_g), _Rows(dt_s)
-    heading = [math.nan] * len(mag_body)
-    at, rows = [], []
-    last = None  # the newest sample: its attitude is the one the compass and the position use
-    for kind, i in stream:
-        if kind == SAMPLE:
-            if qs is not None:
-                last = i
-                if aiding.position_on:
-                    at.append(i)
-                    rows.append(aiding.position_step(accs[i], qs[i], dts[i]))
-        elif kind == MAG:
-            heading[i] = aiding.magnetometer(mag_body[i], None if last is None else qs[last])
-        elif kind == BARO:
-            aiding.barometer(pressure_pa[i])
-        elif kind == GPS:
-            aiding.gps(gps_values[i])
-        elif kind == RESTART:
-            aiding.restart()  # the attitude stays: EstimatorBank.restart keeps each estimator's last one
+    heading and no position), as ``Aiding`` computes them reading by reading and sample by sample: the
+    heading on the attitude of the last sample before the reading; from the first barometer reading or
+    GPS fix on, every sample steps the position filter (``DualChannel.run``: its ``step`` compiled) with
+    the readings handed to it. Returns (headings in degrees, the samples with a position row, the rows (n, 6))."""
+    kinds, index = stream
+    mag_body = np.asarray(mag_body, dtype=float).reshape(-1, 3)
+    heading = np.full(len(mag_body), math.nan)
+    nothing = np.zeros(0, dtype=int), np.zeros((0, 6))
+    if aiding_q is None:
+        return heading, *nothing
+    q = np.asarray(aiding_q, dtype=float)
+    samples_at, mags_at = np.flatnonzero(kinds == SAMPLE), np.flatnonzero(kinds == MAG)
+    before = np.searchsorted(samples_at, mags_at) - 1  # the last sample before each reading (-1: none yet)
+    seen = before >= 0
+    heading[index[mags_at[seen]]] = reading_headings_deg(q[index[samples_at[before[seen]]]], mag_body[index[mags_at[seen]]])
+    fixed = _fixed(gps)
+    gps_events = kinds == GPS
+    fixes = np.zeros(len(kinds), dtype=bool)
+    fixes[gps_events] = fixed[index[gps_events]]
+    aids_at = np.flatnonzero((kinds == BARO) | fixes)
+    if not len(aids_at):
+        return heading, *nothing
+    stepping = samples_at[samples_at > aids_at[0]]  # the position is on from the first aiding reading
+    at, n = index[stepping], len(stepping)
+    baro_alt, gps_pos, gps_vel = np.full(n, math.nan), np.full((n, 3), math.nan), np.full((n, 3), math.nan)
+    if len(pressure_pa):
+        pressure_pa = np.asarray(pressure_pa, dtype=float)
+        taking, taken = _handed(stream, BARO)
+        ground_pa = pressure_pa[index[np.flatnonzero(kinds == BARO)[0]]]  # kept across restarts
+        baro_alt[np.searchsorted(stepping, taking)] = geodesy.pressure_altitude_m(pressure_pa[taken], ground_pa)
+    if fixes.any():
+        taking, taken = _handed(stream, GPS, fixed)
+        first = index[np.flatnonzero(fixes)[0]]
+        origin = (gps["lat"][first], gps["lon"][first], gps["alt"][first])  # kept across restarts
+        rows = np.searchsorted(stepping, taking)
+        gps_pos[rows] = geodesy.ned_from_geodetic(gps["lat"][taken], gps["lon"][taken], gps["alt"][taken], origin)
+        gps_vel[rows] = np.column_stack([gps["vel_n"][taken], gps["vel_e"][taken], gps["vel_d"][taken]])
+    acc_ned = linear_acc_ned_m_s2(np.asarray(acc_g, dtype=float)[at], q[at])
+    dt = np.asarray(dt_s, dtype=float)[at]
+    restarts = np.cumsum(kinds == RESTART)[stepping]
+    position, rows = DualChannel(), np.empty((n, 6))
+    for segment in np.split(np.arange(n), np.flatnonzero(np.diff(restarts)) + 1):
+        if len(segment) and restarts[segment[0]]:  # a restart forgets the position's state (``Aiding.restart``)
+            position.reset()
+        pos, vel = position.run(acc_ned[segment], dt[segment], baro_alt[segment], gps_pos[segment], gps_vel[segment])
+        rows[segment] = np.column_stack([pos, vel])
     return heading, at, rows
-
-
-class _Rows:
-    """An array's rows (or values) as Python floats, converted a block at a time as they are read in order:
-    the whole array as lists would be ~150 bytes a row."""
-
-    BLOCK = 65_536
-
-    def __init__(self, values):
-        self._values = np.asarray(values)
-        self._first, self._rows = 0, []
-
-    def __getitem__(self, i: int):
-        if not self._first <= i < self._first + len(self._rows):
-            self._first = i - i % self.BLOCK
-            self._rows = self._values[self._first:self._first + self.BLOCK].tolist()
-        return self._rows[i - self._first]

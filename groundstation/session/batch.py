@@ -470,10 +470,9 @@ class _Readings:
         frames = builder.d.frames
         self.mag, self.baro, self.gps = frames["MAG_RAW"], frames["BARO"], frames["GPS"]
         self.mag_time_s = builder.time_s[self.mag.order]
-        self.mag_body = builder.mag_body(self.mag).tolist()
-        self.pressure_pa = self.baro.scaled("pressure").tolist()
-        names = self.gps.type.field_names
-        self.gps_values = [dict(zip(names, row)) for row in zip(*(self.gps.scaled(f).tolist() for f in names))]
+        self.mag_body = builder.mag_body(self.mag)
+        self.pressure_pa = self.baro.scaled("pressure")
+        self.gps_values = {f: self.gps.scaled(f) for f in self.gps.type.field_names}
         self.sample_keys = sample_keys
         self.n = len(sample_keys)
         self.stream = aiding.merged([(sample_keys, aiding.SAMPLE), (builder.disc_keys, aiding.RESTART),
@@ -498,5 +497,5 @@ class _Readings:
         if len(self.mag):
             shown = [self.mag.scaled(f) for f in MAG_FIELDS]
             b.add("mag_raw", b.key(self.mag.order), np.column_stack([self.mag_time_s, *shown, heading]))
-        if at:
-            b.add("position", self.sample_keys[at], np.column_stack([time_s[at], np.array(rows)]))
+        if len(at):
+            b.add("position", self.sample_keys[at], np.column_stack([time_s[at], rows]))

@@ -16,6 +16,7 @@ simulator's attitude, in a flight log that has one) and the compass heading colu
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 
@@ -56,7 +57,7 @@ class TableInfo:
     frame: str | None = None  # the spec frame its rows come from
     timestamped: bool = True  # False: rows carry the time of the last timestamped frame (CONFIG, ACK)
 
-    @property
+    @functools.cached_property  # asked for every table of every product (a log has hundreds)
     def column_names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.columns)
 
@@ -106,13 +107,13 @@ def message_table(name: str, label: str, fields, units: dict[str, str]) -> Table
     """The table of a message of another protocol (an autopilot's MAVLink message, live or logged):
     ``time_s``, then one column per field named ``<field>_<unit>`` with the unit its definition gives
     (``m/s`` -> ``_m_s``, ``%`` -> ``_pct``; none -> the bare field name)."""
+    return TableInfo(name.lower(), label, (TIME, *(_message_column(field, units.get(field) or "") for field in fields)))
 
-    def column(field: str) -> Column:
-        unit = units.get(field) or ""
-        slug = _UNIT_SLUG.sub("_", unit.replace("%", "pct").replace("µ", "u").replace("μ", "u")).strip("_")
-        return Column(f"{field}_{slug}" if slug else field, unit or "1", field, 3)
 
-    return TableInfo(name.lower(), label, (TIME, *map(column, fields)))
+@functools.cache  # the same fields in every instance of a topic or message type, in every log
+def _message_column(field: str, unit: str) -> Column:
+    slug = _UNIT_SLUG.sub("_", unit.replace("%", "pct").replace("µ", "u").replace("μ", "u")).strip("_")
+    return Column(f"{field}_{slug}" if slug else field, unit or "1", field, 3)
 
 
 def _columns(*specs: tuple) -> tuple[Column, ...]:

@@ -190,3 +190,37 @@ def pty_session(aircraft, seconds: float, **session_options):
         thread.join()
         bridge.close()
     return session
+
+
+def live_aiding_stage(stream, readings, q, acc_g, dt_s, samples: int):
+    """The live session's aiding stage (``Aiding``, driven as ``pipeline`` drives it, one call per reading
+    and sample) over a log's merged events (``stream``, ``readings``: ``autopilot.session._Readings``)
+    with the aiding estimator's attitudes ``q``: what each sample hands the estimators (mag, GPS fix
+    rows, NaN for none), the headings, the samples with a position row and the rows."""
+    from groundstation.session import aiding
+
+    stage = aiding.Aiding()
+    mag, fix = np.full((samples, 3), np.nan), np.full((samples, 4), np.nan)
+    heading, at, rows = [np.nan] * len(readings.mag_body), [], []
+    latest = None
+    gps = [dict(zip(readings.gps_values, row)) for row in zip(*(v.tolist() for v in readings.gps_values.values()))]
+    for kind, i in zip(*(part.tolist() for part in stream)):
+        if kind == aiding.SAMPLE:
+            body, taken = stage.take_for_estimators()
+            if body is not None:
+                mag[i] = body
+            if taken is not None:
+                fix[i] = taken
+            latest = q[i].tolist()
+            if stage.position_on:
+                at.append(i)
+                rows.append(stage.position_step(acc_g[i].tolist(), latest, float(dt_s[i])))
+        elif kind == aiding.MAG:
+            heading[i] = stage.magnetometer(tuple(readings.mag_body[i].tolist()), latest)
+        elif kind == aiding.BARO:
+            stage.barometer(float(readings.pressure_pa[i]))
+        elif kind == aiding.GPS:
+            stage.gps(gps[i])
+        elif kind == aiding.RESTART:
+            stage.restart()
+    return mag, fix, np.array(heading), np.array(at, dtype=int), np.array(rows).reshape(-1, 6)

@@ -1,6 +1,7 @@
-"""Each session rule exists once and both paths call it (issue 20): the batch path drives the
-pipeline's own aiding stage (hand-over of readings to the IMU samples, compass heading, position) and
-its own CONFIG wait, with the same arguments in the same order as the incremental pipeline; and the
+"""Each session rule exists once and both paths call it (issue 20): the batch path runs the pipeline's
+aiding stage's rules (hand-over of readings to the IMU samples, compass heading, position) on whole
+columns and gives what the pipeline's calls return, call for call (issue 25: no Python call per sample);
+it waits for CONFIG through the pipeline's own rule, with the same arguments in the same order; and the
 pipeline reads frames by field name, so a spec that orders the fields otherwise gives the same session.
 """
 
@@ -15,6 +16,7 @@ from groundstation.recording import open_recording
 from groundstation.session import aiding as aiding_module
 from groundstation.session import pipeline as pipeline_module
 from groundstation.session.batch import batch_replay
+from groundstation.session.catalogue import POSITION
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import replay
 from tests.simulated import simulated_chunks, write_recording
@@ -48,25 +50,32 @@ def recording_calls(monkeypatch, cls, names):
     return calls
 
 
-def test_the_batch_path_drives_the_pipelines_aiding_stage_with_the_same_calls(tmp_path, monkeypatch):
-    """With a reboot: restarts, readings waiting for samples, heading and position, call for call."""
+def test_the_batch_path_gives_what_the_pipelines_aiding_stage_gives_call_for_call(tmp_path, monkeypatch):
+    """With a reboot: restarts, readings waiting for samples, heading and position. The batch path runs
+    the stage's rules on whole columns (the hand-over, ``reading_heading_rad``, the position filter's
+    ``advance`` compiled): what each of the pipeline's calls returned, it gives, to the last bit."""
     path = tmp_path / "aided.gsrec"
     write_recording(path, simulated_chunks(8.0, reboot_after_s=4.0, **SENSORS), {"filters": ["ahf", "hf"]})
     recording = open_recording(path)
-    stage = ("restart", "magnetometer", "barometer", "gps", "position_step")
-    calls = recording_calls(monkeypatch, aiding_module.Aiding, (*stage, "take_for_estimators"))
+    calls = recording_calls(monkeypatch, aiding_module.Aiding, ("restart", "magnetometer", "position_step", "take_for_estimators"))
     replay(recording, ("ahf", "hf"))
-    live, calls[:] = list(calls), []
-    batch_replay(recording, ("ahf", "hf"))
-    batch = list(calls)
-    # The pipeline's one Aiding; the batch path's first (the hand-over to the estimators, before they
-    # run) and second (heading and position, on their attitudes).
-    live_stage = [c[1:] for c in live if c[1] in stage and c[0] == 0]
-    batch_stage = [c[1:] for c in batch if c[1] in stage and c[0] == 2]
-    assert len([c for c in live_stage if c[0] == "position_step"]) > 300
-    assert batch_stage == live_stage
+    live = list(calls)
+    handed_in_batch = []
+    handed_to_samples = aiding_module.handed_to_samples
+    monkeypatch.setattr(aiding_module, "handed_to_samples", lambda *args: handed_in_batch.append(handed_to_samples(*args)) or handed_in_batch[-1])
+    batch = batch_replay(recording, ("ahf", "hf"))
+    assert len([c for c in live if c[1] == "restart"]) >= 1
+    position = [c[3] for c in live if c[1] == "position_step"]
+    assert len(position) > 300
+    rows = np.column_stack([batch.tables["position"].column(c) for c in POSITION.column_names[1:]])
+    assert plain(rows[~np.isnan(rows).all(axis=1)]) == tuple(position)  # not the reboot's gap row
+    headings = [c[3] for c in live if c[1] == "magnetometer"]
+    read = np.isfinite(batch.tables["mag_raw"].column("mag_x_uT"))
+    assert plain(batch.tables["mag_raw"].column("heading_deg")[read]) == tuple(headings)
     handed = [c[3] for c in live if c[1] == "take_for_estimators"]
-    assert [c[3] for c in batch if c[1] == "take_for_estimators" and c[0] == 1] == handed
+    (mag, gps), = handed_in_batch
+    taken = lambda values: [None if np.isnan(row).all() else tuple(row) for row in values.tolist()]  # noqa: E731
+    assert plain(list(zip(taken(mag), taken(gps)))) == tuple(handed)
     assert sum(m is not None for m, _ in handed) > 100 and sum(g is not None for _, g in handed) > 10
 
 
