@@ -1,12 +1,23 @@
-"""Memory of a whole export (``load_session`` -> product -> Parquet) against the session's length.
+"""An hour of the app's own flight: opening it, exporting it, and the memory that takes against its length.
 
-    python bench/bench_export_memory.py [--minutes 10,60] [--filters ahf,hf,ecf] [--out parquet]
+    python bench/bench_export_memory.py [--minutes 10,60,240] [--live-minutes 60]
 
-Each length is simulated once (``groundstation simulate --scenario flight``), then exported in a
-fresh process that first imports everything the export uses (numpy, numba and the estimators' compiled
-kernels, pyarrow, the loaders) and resets the kernel's peak-RSS mark (/proc/self/clear_refs, Linux):
-"beyond the libraries" is the export's peak RSS minus the RSS after those imports. MB per hour is the
-slope between the shortest and the longest length.
+Each length is simulated once (``groundstation simulate --scenario flight``). Every case runs in a fresh
+process that first imports what it uses (numpy, numba and the estimators' compiled kernels from numba's
+cache, pyarrow, the loaders) and then resets the kernel's peak-RSS mark (/proc/self/clear_refs, Linux):
+"beyond the libraries" is the case's peak RSS minus the RSS after those imports; CPU is the case's
+process time, imports excluded. The cases, all in the same run:
+
+- ``decode``: the baseline, the recording read and its link decoded (``decode_batch``), nothing computed;
+- ``bare``: the baseline of an export, that decode and a bare ``pyarrow.parquet.write_table`` of the
+  decoded IMU frames (raw columns as float64);
+- ``open``: ``load_session`` as File > Open computes it, the estimators run whole (their columns held);
+- ``export``: ``groundstation export X.parquet`` as the command runs it (``run_export``: the estimators
+  streamed a stretch at a time beside the writer).
+
+``open`` and ``export`` run with the three filters of the issue's table (ahf,hf,ecf) at every length and
+with the app's live set of ten at ``--live-minutes``. MB per hour is the slope of the export's peak
+between the shortest and the longest length.
 """
 
 from __future__ import annotations
@@ -20,6 +31,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+THREE = "ahf,hf,ecf"
 
 
 def memory_kb(field: str) -> int:
@@ -27,56 +40,81 @@ def memory_kb(field: str) -> int:
         return next(int(line.split()[1]) for line in status if line.startswith(field))
 
 
-def child(recording: str, out: str, filters: str) -> None:
-    """One export in this process; prints "baseline_kb peak_kb cpu_s"."""
+def child(case: str, recording: str, out: str, filters: str) -> None:
+    """One case in this process; prints "baseline_kb peak_kb cpu_s"."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from firmware_protocol.batch import decode_batch
     from groundstation.estimation import create
     from groundstation.export.request import export_request, run_export
+    from groundstation.recording import open_recording
     from groundstation.session.load import load_session
 
     for name in filters.split(","):
         create(name)  # the compiled kernels are loaded (from numba's cache) before the baseline
-    import pyarrow.csv  # noqa: F401  the writers' libraries, imported before the baseline too
-    import pyarrow.parquet  # noqa: F401
-
     with open("/proc/self/clear_refs", "w") as clear:
         clear.write("5")  # the peak-RSS mark from here
     baseline = memory_kb("VmRSS")
     cpu_started = time.process_time()
-    run_export(export_request(recording, out, filters=filters.split(","), overwrite=True), load_session)
+    if case in ("decode", "bare"):
+        decoded = decode_batch(*open_recording(recording).stream())
+        if case == "bare":
+            imu = decoded.frames["IMU_RAW"].raw
+            pq.write_table(pa.table({f: np.asarray(imu[f], dtype=float) for f in imu.dtype.names}), out)
+    elif case == "open":
+        load_session(recording, filters.split(","))
+    else:
+        run_export(export_request(recording, out, filters=filters.split(","), overwrite=True), load_session)
     print(baseline, memory_kb("VmHWM"), time.process_time() - cpu_started)
+
+
+def measure(case: str, recording: Path, folder: str, filters: str) -> tuple[float, float, float]:
+    out = Path(folder) / "out.parquet"
+    result = subprocess.run([sys.executable, __file__, "--child", case, str(recording), str(out), filters], check=True,
+                            env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True)
+    out.unlink(missing_ok=True)
+    baseline_kb, peak_kb, cpu_s = result.stdout.split()
+    return int(baseline_kb) / 1024, (int(peak_kb) - int(baseline_kb)) / 1024, float(cpu_s)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--minutes", default="10,60", help="session lengths in minutes (default 10,60)")
-    parser.add_argument("--filters", default="ahf,hf,ecf")
-    parser.add_argument("--out", default="parquet", choices=["parquet", "csv", "xlsx"])
-    parser.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
+    parser.add_argument("--minutes", default="10,60,240", help="session lengths in minutes (default 10,60,240)")
+    parser.add_argument("--live-minutes", type=float, default=60.0, help="the length opened with the live set too")
+    parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         child(*args.child)
         return
+    from groundstation.estimation import live_estimators
+
+    live = ",".join(live_estimators())
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     rows = []
+    print(f"python {sys.version.split()[0]}, load average {os.getloadavg()[0]:.1f} at the start\n")
     with tempfile.TemporaryDirectory(prefix="bench_export_memory.") as folder:
         for minutes in [float(m) for m in args.minutes.split(",")]:
             recording = Path(folder) / f"{minutes:g}min.gsrec"
             subprocess.run([sys.executable, "-m", "groundstation", "simulate", "--scenario", "flight", "--duration",
                             str(60 * minutes), "--out", str(recording)], check=True, env=env, capture_output=True)
-            out = Path(folder) / f"{minutes:g}min.{args.out}"
-            result = subprocess.run([sys.executable, __file__, "--filters", args.filters, "--child", str(recording), str(out),
-                                     args.filters], check=True, env=env, capture_output=True, text=True)
-            baseline_kb, peak_kb, cpu_s = result.stdout.split()
-            rows.append((minutes, int(baseline_kb) / 1024, (int(peak_kb) - int(baseline_kb)) / 1024, float(cpu_s)))
+            cases = [("decode", THREE), ("bare", THREE), ("open", THREE), ("export", THREE)]
+            if minutes == args.live_minutes:
+                cases += [("open", live), ("export", live)]
+            for case, filters in cases:
+                rows.append((minutes, case, "live set" if filters == live else filters, *measure(case, recording, folder, filters)))
+                print("| {:g} min | {} | {} | {:.0f} | {:.0f} | {:.1f} |".format(*rows[-1]), flush=True)
             recording.unlink()
-            out.unlink()
-    print(f"Export to {args.out} with --filters {args.filters}\n")
-    print("| session | RSS after imports (MB) | peak beyond the libraries (MB) | export CPU s |\n|---|---:|---:|---:|")
-    for minutes, baseline_mb, beyond_mb, cpu_s in rows:
-        print(f"| {minutes:g} min | {baseline_mb:.0f} | {beyond_mb:.0f} | {cpu_s:.1f} |")
-    if len(rows) > 1:
-        (m0, _, b0, _), (m1, _, b1, _) = rows[0], rows[-1]
-        print(f"\nMB per hour of session (slope {m0:g} -> {m1:g} min): {(b1 - b0) / ((m1 - m0) / 60):.0f}")
+    print("\n| session | case | filters | RSS after imports (MB) | peak beyond the libraries (MB) | CPU s |\n|---|---|---|---:|---:|---:|")
+    for row in rows:
+        print("| {:g} min | {} | {} | {:.0f} | {:.0f} | {:.1f} |".format(*row))
+    exports = [(m, beyond) for m, case, filters, _, beyond, _ in rows if case == "export" and filters == THREE]
+    if len(exports) > 1:
+        (m0, b0), (m1, b1) = exports[0], exports[-1]
+        print(f"\nexport ({THREE}): MB per hour of session (slope {m0:g} -> {m1:g} min): {(b1 - b0) / ((m1 - m0) / 60):.0f}")
+        for (ma, ba), (mb, bb) in zip(exports, exports[1:]):
+            print(f"  {ma:g} -> {mb:g} min: {(bb - ba) / ((mb - ma) / 60):.0f} MB per hour")
 
 
 if __name__ == "__main__":

@@ -348,9 +348,10 @@ class _Builder:
         gaps = [(key, event) for key, (_, event) in zip(self.disc_keys.tolist(), self.discontinuities) if n and keys[0] < key]
         gap_at = np.searchsorted(keys, [key for key, _ in gaps], side="right")  # each gap row after the samples before it
         sample_rows = np.arange(n) + np.searchsorted(gap_at, np.arange(n), side="right")
-        table = np.empty((n + len(gaps), len(columns)))
+        table = np.empty((n + len(gaps), len(columns)), order="F")  # each column written and read whole
+        every_sample = _as_slice(sample_rows)
         for j, values in enumerate(sensors):
-            table[sample_rows, j] = values
+            table[every_sample, j] = values
             del values
         for row, (_, event) in zip(gap_at + np.arange(len(gaps)), gaps):
             table[row] = gap_row(event, len(columns))
@@ -358,7 +359,7 @@ class _Builder:
         run.gyr_rad_s, run.acc_g = (SampleColumns(table, sample_rows, [index[f"{quantity}_{a}_{unit}"] for a in "xyz"])
                                     for quantity, unit in (("gyr", "rad_s"), ("acc", "g")))
         for start, end, values in run.stretches(held):
-            rows = sample_rows[start:end]
+            rows = _as_slice(sample_rows[start:end])
             for name, (q, diagnostic_values) in values.items():
                 for column, values_of in estimate_columns(name, q, diagnostic_values).items():
                     table[rows, index[column]] = values_of
@@ -454,6 +455,12 @@ class _Builder:
         for c in np.flatnonzero(new).tolist():
             stats = DecoderStats(**{name: int(values[c]) for name, values in counters.items()})
             link.on_chunk(int(times[c]), stats, 0)
+
+
+def _as_slice(rows: np.ndarray) -> np.ndarray | slice:
+    """``rows`` (ascending, distinct) as a slice when they are consecutive: a copy through a slice is a
+    block copy, through an index array one element at a time."""
+    return slice(int(rows[0]), int(rows[-1]) + 1) if len(rows) and rows[-1] - rows[0] == len(rows) - 1 else rows
 
 
 class _Readings:

@@ -98,7 +98,10 @@ class SampleColumns:
         self._table, self._sample_rows, self._columns = table, sample_rows, columns
 
     def __getitem__(self, rows: slice) -> np.ndarray:
-        return self._table[self._sample_rows[rows, None], self._columns]
+        at = self._sample_rows[rows]
+        if len(at) and at[-1] - at[0] == len(at) - 1:  # consecutive rows (no gap row among them): a block copy
+            return self._table[at[0]:at[-1] + 1, self._columns]
+        return self._table[at[:, None], self._columns]
 
 
 class Streamed:

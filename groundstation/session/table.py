@@ -46,10 +46,12 @@ class Table:
 
     @classmethod
     def holding(cls, columns, rows: np.ndarray) -> Table:
-        """A table of ``rows``, an (N, len(columns)) array taken as it is when it is C-ordered float64 (the
-        caller gives it up: no copy, and it becomes read-only), else copied once."""
+        """A table of ``rows``, an (N, len(columns)) array taken as it is when it is float64 in rows or in
+        columns (the caller gives it up: no copy, and it becomes read-only), else copied once."""
         table = cls(columns)
-        rows = np.ascontiguousarray(rows, dtype=float).reshape(-1, len(table.columns))
+        rows = np.asarray(rows, dtype=float)
+        if rows.ndim != 2 or rows.shape[1] != len(table.columns) or not (rows.flags.c_contiguous or rows.flags.f_contiguous):
+            rows = np.ascontiguousarray(rows).reshape(-1, len(table.columns))
         if len(rows):
             rows.flags.writeable = False
             table._state = ((rows,), array("d"))
