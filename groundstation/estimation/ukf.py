@@ -252,19 +252,22 @@ def _tilt_measurement(state, p, q_pred, gx, gy, gz, ax, ay, az, dt_s):
 
 
 @register_jitable
-def _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
-    """One predict + update (seed 001 §2.2): ``(ok, x, cov, measurement flags)``, x and cov views of the
-    work space; not ok when a factorisation failed."""
-    square_root = p[_SQUARE_ROOT] != 0.0
+def _sigma_set(p):
+    """The filter's set: ``(count, wm, wc, sqrt_wc, z)``."""
     count = int(p[_COUNT])
-    wm, wc, sqrt_wc = p[_WM : _WM + count], p[_WC : _WC + count], p[_SQRT_WC : _SQRT_WC + count - 1]
-    z = p[_Z : _Z + _N * count].reshape((_N, count))
-    flags = 0
-    state[_INNOVATION] = 0.0
+    return count, p[_WM : _WM + count], p[_WC : _WC + count], p[_SQRT_WC : _SQRT_WC + count - 1], p[_Z : _Z + _N * count].reshape((_N, count))
+
+
+@register_jitable
+def _predict(state, p, gx, gy, gz, dt_s):
+    """The time update (seed 001 §2.2): ``(ok, x⁻, P⁻ or S⁻)``, views of the work space; not ok when a
+    factorisation failed."""
+    square_root = p[_SQUARE_ROOT] != 0.0
+    count, wm, wc, sqrt_wc, z = _sigma_set(p)
     cov = _matrix(state, _COV, _N, _N)
     ok, factor = (True, cov) if square_root else sl.cholesky(cov, _matrix(state, _FACTOR, _N, _N))
     if not ok:
-        return False, state[0:4], cov, flags
+        return False, state[0:4], cov
     chi = sp.points(state[0:4], factor, z, _matrix(state, _CHI, count, _N))
     for k in range(count):
         chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3] = integrate_rate((chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3]), gx, gy, gz, dt_s)  # eq. 2
@@ -274,13 +277,20 @@ def _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
     if square_root:
         for i in range(_N):
             noise[i] = q_noise
-        ok, x, cov = sp.sqrt_time_update(chi, wm, wc, sqrt_wc, noise, time_work)
-        if not ok:
-            return False, x, cov, flags
-    else:
-        for i in range(_N):
-            noise[i] = q_noise * q_noise
-        x, cov = sp.time_update(chi, wm, wc, noise, time_work)
+        return sp.sqrt_time_update(chi, wm, wc, sqrt_wc, noise, time_work)
+    for i in range(_N):
+        noise[i] = q_noise * q_noise
+    x, cov = sp.time_update(chi, wm, wc, noise, time_work)
+    return True, x, cov
+
+
+@register_jitable
+def _correct(state, p, x, cov, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
+    """The measurement update (seed 001 §2.2) of the prediction ``x``, ``cov``: ``(ok, x, cov, measurement
+    flags)``, views of the work space; not ok when a factorisation failed."""
+    square_root = p[_SQUARE_ROOT] != 0.0
+    count, wm, wc, sqrt_wc, z = _sigma_set(p)
+    flags = 0
     r = math.sqrt(_dot(x))
     q_pred = (x[0] / r, x[1] / r, x[2] / r, x[3] / r)
     # The measurements: pitch and roll (rows 0, 1 of euler_angles), then yaw (row 2); y[i] is row first + i
@@ -302,7 +312,7 @@ def _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
     ok, factor = (True, cov) if square_root else sl.cholesky(cov, _matrix(state, _FACTOR, _N, _N))
     if not ok:
         return False, x, cov, flags
-    chi = sp.points(x, factor, z, chi)
+    chi = sp.points(x, factor, z, _matrix(state, _CHI, count, _N))
     with_yaw = first + m - 1 == 2
     y_sigma = _matrix(state, _Y_SIGMA, m, count)
     for k in range(count):
@@ -341,16 +351,24 @@ def ukf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, vn, ve, vd, h
         _initial_cov(state, p, state[0], state[1], state[2], state[3])
         state[_STARTING] = 0.0
     if not status & NO_UPDATE:
-        status = _update(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status, vn, ve, vd, heading_rad)
+        state[_SINCE_FIX] += dt_s
+        _take_fix(state, p, vn, ve, vd)
+        state[_INNOVATION] = 0.0
+        # The steps are called from here, not from one function calling the next: numba compiles each
+        # caller with all its callees again (linked in), so a shallow call tree compiles faster.
+        ok, x, cov = _predict(state, p, gx, gy, gz, dt_s)
+        if ok:
+            ok, x, cov, flags = _correct(state, p, x, cov, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad)
+            status |= flags
+        status = _settle(state, p, ok, x, cov, status, gx, gy, gz, dt_s, heading_rad)
     state[_TRACE] = _trace(state, p)
     return status
 
 
 @register_jitable
-def _update(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status, vn, ve, vd, heading_rad):
-    state[_SINCE_FIX] += dt_s
-    _take_fix(state, p, vn, ve, vd)
-    ok, x, cov, flags = _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad)
+def _settle(state, p, ok, x, cov, status, gx, gy, gz, dt_s, heading_rad):
+    """The estimate and covariance after a sample's filter step (``ok``: its ``x``, ``cov``; else restarted
+    from the gyro's prediction): the filter restarted when lost, yaw set by the first heading."""
     if ok:
         w, qx, qy, qz = x[0], x[1], x[2], x[3]
         for i in range(_N):
@@ -360,7 +378,6 @@ def _update(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status, vn, ve, vd, 
         w, qx, qy, qz = integrate_rate((state[0], state[1], state[2], state[3]), gx, gy, gz, dt_s)
         _initial_cov(state, p, w, qx, qy, qz)
         status |= COVARIANCE_RESET
-    status |= flags
     state[_LOST] = state[_LOST] + dt_s if state[_INNOVATION] > p[_LOST_INNOVATION] else 0.0
     if state[_LOST] >= p[_LOST_TIME]:
         # Lost: the covariance no longer describes the error (settings): start it again
