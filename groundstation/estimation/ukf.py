@@ -174,6 +174,12 @@ def _dot(a):
 
 
 @register_jitable
+def _norm(w, x, y, z):
+    """``|q|``, summed as ``_dot``."""
+    return math.sqrt(w * w + x * x + y * y + z * z)
+
+
+@register_jitable
 def _matrix(state, start, rows, cols):
     """A (rows, cols) view of the state from ``start``."""
     return state[start : start + rows * cols].reshape((rows, cols))
@@ -195,12 +201,23 @@ def _initial_cov(state, p, w, x, y, z):
 
 
 @register_jitable
+def _start(state, p):
+    """The initial covariance about the attitude from gravity, once. (Called from the kernel through here:
+    numba compiles a helper called both from a kernel and from another helper twice.)"""
+    _initial_cov(state, p, state[0], state[1], state[2], state[3])
+    state[_STARTING] = 0.0
+
+
+@register_jitable
 def _trace(state, p):
     """tr P, from P or from S (the sum of S's squares)."""
     total = 0.0
     for i in range(_N):
         if p[_SQUARE_ROOT] != 0.0:
-            total += _dot(state[_COV + _N * i : _COV + _N * i + _N])
+            row = 0.0  # a loop of constant length: compiled to a few instructions, not a vectorised loop
+            for j in range(_N):
+                row += state[_COV + _N * i + j] * state[_COV + _N * i + j]
+            total += row
         else:
             total += state[_COV + (_N + 1) * i]
     return total
@@ -291,7 +308,7 @@ def _correct(state, p, x, cov, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad
     square_root = p[_SQUARE_ROOT] != 0.0
     count, wm, wc, sqrt_wc, z = _sigma_set(p)
     flags = 0
-    r = math.sqrt(_dot(x))
+    r = _norm(x[0], x[1], x[2], x[3])
     q_pred = (x[0] / r, x[1] / r, x[2] / r, x[3] / r)
     # The measurements: pitch and roll (rows 0, 1 of euler_angles), then yaw (row 2); y[i] is row first + i
     y, var = state[_Y : _Y + 3], state[_NOISE : _NOISE + 3]
@@ -348,8 +365,7 @@ def ukf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, vn, ve, vd, h
     # restarted covariance let the next noisy GPS-compensated measurements swing a still estimate by
     # 1.7° (test_intervals.py).
     if status & (INITIALISED | REINITIALISED) and state[_STARTING] != 0.0:
-        _initial_cov(state, p, state[0], state[1], state[2], state[3])
-        state[_STARTING] = 0.0
+        _start(state, p)
     if not status & NO_UPDATE:
         state[_SINCE_FIX] += dt_s
         _take_fix(state, p, vn, ve, vd)
@@ -381,7 +397,7 @@ def _settle(state, p, ok, x, cov, status, gx, gy, gz, dt_s, heading_rad):
     state[_LOST] = state[_LOST] + dt_s if state[_INNOVATION] > p[_LOST_INNOVATION] else 0.0
     if state[_LOST] >= p[_LOST_TIME]:
         # Lost: the covariance no longer describes the error (settings): start it again
-        r = math.sqrt(w * w + qx * qx + qy * qy + qz * qz)
+        r = _norm(w, qx, qy, qz)
         _initial_cov(state, p, w / r, qx / r, qy / r, qz / r)
         status |= COVARIANCE_RESET
         state[_LOST] = 0.0
@@ -390,7 +406,7 @@ def _settle(state, p, ok, x, cov, status, gx, gy, gz, dt_s, heading_rad):
         w, qx, qy, qz = _with_yaw(w, qx, qy, qz, heading_rad)
         state[_YAW_KNOWN] = 1.0
         status |= HEADING_USED
-    norm = math.sqrt(w * w + qx * qx + qy * qy + qz * qz)
+    norm = _norm(w, qx, qy, qz)
     state[0], state[1], state[2], state[3] = w / norm, qx / norm, qy / norm, qz / norm
     return status
 
