@@ -32,6 +32,9 @@ Python on numpy arrays elsewhere; on n = 4 LAPACK's per-call cost (``qr`` ~20-50
 operation counts. Points are rows ``chi`` (L, n), outputs rows (m, L), noises their diagonals (the
 filters' Q and R are diagonal). A failed factorisation is ``ok`` False (a kernel cannot catch
 ``LinAlgError``). Both sets are treated alike: ``χ = x + S z`` skips the zero entries of each set's z.
+Each step takes an optional ``work``, a flat float array of ``work_size`` floats that holds its
+intermediate matrices and its results (views of it, valid until ``work`` is used again): the kernel
+passes a part of its state, so a sample allocates nothing; without it a new one is allocated.
 """
 
 from __future__ import annotations

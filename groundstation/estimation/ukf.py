@@ -40,7 +40,9 @@ Compiled (base.py's ``CompiledEstimator``, ``gps_aided``): one kernel for both, 
 the dense steps (P, two Choleskys a sample) or the square-root ones (S by QR and rank-1 updates, never
 re-factorised), each with its own sigma set, so their run-time ratio is the algorithms' (seed 001: 42 %;
 measured in bench/bench_estimator_costs.out.md). A failed factorisation or downdate (``ok`` False, a
-kernel cannot catch ``LinAlgError``) restarts the covariance (``COVARIANCE_RESET``).
+kernel cannot catch ``LinAlgError``) restarts the covariance (``COVARIANCE_RESET``). The steps work in a
+part of the state (the sigma points, the steps' matrices), so neither ``step`` nor ``run`` allocates per
+sample; the operations of each step are counted in bench/bench_estimator_costs.py (``ukf_step_costs``).
 """
 
 from __future__ import annotations
