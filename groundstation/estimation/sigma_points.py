@@ -232,11 +232,12 @@ def sqrt_time_update(chi_f, wm, wc, sqrt_wc, sqrt_q, work=None):
 
 @register_jitable
 def _output_spread(x, chi, y_sigma, y, wm, work):
-    """``(dy, dx, innovation, offset)`` of angle outputs ``h(χ)`` (m, L), each row unwrapped around its
-    centre point's when it spans π or more, and the innovation wrapped into [-π, π); in ``work``
-    (``offset``: what they use of it)."""
+    """``(dy, dx, innovation, work, offset)`` of angle outputs ``h(χ)`` (m, L), each row unwrapped around
+    its centre point's when it spans π or more, and the innovation wrapped into [-π, π); in ``work`` (a new
+    one for None; ``offset``: what they use of it), the measurement updates' first step."""
     m, count = y_sigma.shape
     n = x.shape[0]
+    work = _work(work, work_size(n, count, m))
     y_hat, innovation = work[0:m], work[m : 2 * m]
     dy, offset = _take(work, 2 * m, m, count)
     dx, offset = _take(work, offset, n, count)
@@ -254,7 +255,7 @@ def _output_spread(x, chi, y_sigma, y, wm, work):
             dx[i, point] = chi[point, i] - x[i]
     for i in range(m):
         innovation[i] = wrap_pi(y[i] - y_hat[i])
-    return dy, dx, innovation, offset
+    return dy, dx, innovation, work, offset
 
 
 @register_jitable
@@ -273,10 +274,8 @@ def measurement_update(x, p, chi, y_sigma, y, r_diag, wm, wc, work=None):
     """Dense: prior ``(x, P)``, its points ``χ`` (L, n), their angle outputs ``h(χ)`` (m, L), the
     measured angles ``y`` and the noise's diagonal -> ``(ok, x, P, innovation)`` (views of ``work``
     when given)."""
-    m, count = y_sigma.shape
-    n = x.shape[0]
-    work = _work(work, work_size(n, count, m))
-    dy, dx, innovation, offset = _output_spread(x, chi, y_sigma, y, wm, work)
+    n, m = x.shape[0], y.shape[0]
+    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work)
     p_yy, offset = _take(work, offset, m, m)
     p_xy, offset = _take(work, offset, n, m)
     low, offset = _take(work, offset, m, m)
@@ -297,10 +296,8 @@ def sqrt_measurement_update(x, s, chi, y_sigma, y, sqrt_r, wm, wc, sqrt_wc, work
     """Square root: as ``measurement_update`` with the factor ``S`` and √R's diagonal -> ``(ok, x, S,
     innovation)``: ``Sy`` by QR and cholupdate, ``K = Pxy (Sy Syᵀ)⁻¹``, ``S`` downdated by each column of
     ``K Sy``."""
-    m, count = y_sigma.shape
-    n = x.shape[0]
-    work = _work(work, work_size(n, count, m))
-    dy, dx, innovation, offset = _output_spread(x, chi, y_sigma, y, wm, work)
+    n, m = x.shape[0], y.shape[0]
+    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work)
     k, offset = _take(work, offset, n, m)
     s_new, offset = _take(work, offset, n, n)
     x_new = work[offset : offset + n]
