@@ -9,7 +9,9 @@
    Python per sample (it has no batch call) and ``vqf.VQF.updateBatch`` with the period fixed (C++).
    Medians of R rounds, the estimators and baselines interleaved round by round so that the machine's
    load falls on all alike; process time, not wall time (the machine is shared). The SSSRUKF/UKF ratio
-   of the same medians, against seed 001's 42 % (6.84 s vs 16.30 s).
+   of the same medians, against seed 001's 42 % (6.84 s vs 16.30 s), and why: the operations of each
+   step of the two filters at n = 4 (``ukf_step_costs``: flops, divisions and square roots, libm calls),
+   counted from the loops of estimation/sigma_points.py and small_linalg.py.
 2. numba's compile time: a fresh process creates every estimator and runs one batch, with an empty
    cache directory (the first start on a machine: compile, write) and again with that directory (every
    later start: load); imports apart.
@@ -49,6 +51,78 @@ def inputs(n: int, seed: int = 1):
     gps = np.full((n, 4), np.nan)
     gps[::10] = np.column_stack([np.cumsum(rng.normal(0.0, 0.1, (len(gps[::10]), 3)), axis=0), rng.uniform(-np.pi, np.pi, len(gps[::10]))])
     return gyr, acc, dt, mag, gps
+
+
+def _cholesky(n):
+    """(flops, div, sqrt) of small_linalg.cholesky on n x n."""
+    return sum(2 * j + (n - 1 - j) * 2 * j for j in range(n)), n * (n - 1) // 2, n
+
+
+def _tria(rows, cols):
+    """(flops, div, sqrt) of small_linalg.tria on rows x cols (Householder, one vector per row)."""
+    flops = sum(2 * (cols - k) + 4 + (rows - 1 - k) * (4 * (cols - k) + 2) for k in range(rows))
+    return flops, rows, rows
+
+
+def _cholupdate(n):
+    """(flops, div, sqrt) of small_linalg.cholupdate of an n x n factor."""
+    return n + sum(5 + 5 * (n - 1 - k) for k in range(n)), sum(2 + (n - 1 - k) for k in range(n)), n + 1
+
+
+def _solve_right(m, rows):
+    return 2 * rows * m * (m - 1), 2 * rows * m, 0
+
+
+def _add(*costs):
+    return tuple(sum(c[i] for c in costs) for i in range(3))
+
+
+def ukf_step_costs(square_root: bool, n: int = 4, m: int = 2) -> dict[str, tuple]:
+    """Per step of one sample of ukf (dense, symmetric set, 2n + 1 points) or sssrukf (square root,
+    spherical simplex, n + 2 points) with m angle measurements: (flops, divisions, square roots, libm
+    calls), counted from the loops of sigma_points.py and small_linalg.py (adds and multiplies; a
+    compare is not counted)."""
+    count = n + 2 if square_root else 2 * n + 1
+    nnz = n * (n + 3) // 2 if square_root else 2 * n  # nonzero unit-set entries: χ = x + S z skips the zeros
+    points = (2 * n * nnz, 0, 0)
+    no_libm = 0
+    steps = {}
+    steps["factor P (ukf: Cholesky; sssrukf: carried)"] = (*(0, 0, 0), no_libm) if square_root else (*_cholesky(n), no_libm)
+    steps["sigma points x + S z"] = (*points, no_libm)
+    steps["propagate the points (integrate_rate: pow)"] = (40 * count, 0, 0, count)
+    spread = (3 * n * count, 0, 0)
+    if square_root:  # QR of [√wc (χ - x), √Q], one cholupdate with the centre point
+        time = _add(spread, (n * (count - 1), 0, 0), _tria(n, count - 1 + n), _cholupdate(n))
+    else:  # Σ wc (χ - x)(χ - x)ᵀ + Q, its upper triangle
+        time = _add(spread, (3 * count * n * (n + 1) // 2 + n, 0, 0))
+    steps["time update"] = (*time, no_libm)
+    steps["factor P⁻ (ukf: Cholesky; sssrukf: carried)"] = (*(0, 0, 0), no_libm) if square_root else (*_cholesky(n), no_libm)
+    steps["sigma points again"] = (*points, no_libm)
+    steps["angles of the points (asin, atan2)"] = (count * (7 + 5 + 10), count, 0, 2 * count)
+    outputs = (3 * m * count + n * count + m, 0, 0)
+    p_xy = (3 * count * n * m, 0, 0)
+    corrected = (2 * n * m + n, 0, 0)
+    if square_root:  # Sy by QR and cholupdate, K = Pxy / Syᵀ / Sy, S downdated by the m columns of K Sy
+        update = _add(outputs, (m * (count - 1), 0, 0), _tria(m, count - 1 + m), _cholupdate(m), p_xy, _solve_right(m, n),
+                      (2 * n * m * m, 0, 0), *[_cholupdate(n)] * m, corrected)
+    else:  # Pyy, Pxy, K = Pxy Pyy⁻¹ by Cholesky, P - K Pxyᵀ
+        update = _add(outputs, (3 * count * m * (m + 1) // 2 + m, 0, 0), p_xy, _cholesky(m), _solve_right(m, n), corrected,
+                      ((2 * m + 2) * n * (n + 1) // 2, 0, 0))
+    steps["measurement update"] = (*update, m)  # the innovation wrapped (fmod)
+    return steps
+
+
+def print_step_costs() -> None:
+    print("\n## ukf and sssrukf: operations per sample by step (n = 4, a tilt update: m = 2)\n")
+    print("| step | ukf flops / div / sqrt / libm | sssrukf flops / div / sqrt / libm |")
+    print("|---|---:|---:|")
+    dense, root = ukf_step_costs(False), ukf_step_costs(True)
+    for step in dense:
+        print(f"| {step} | " + " | ".join(" / ".join(str(v) for v in c[step]) for c in (dense, root)) + " |")
+    total = [tuple(sum(c[i] for c in costs.values()) for i in range(4)) for costs in (dense, root)]
+    print("| **total** | " + " | ".join(" / ".join(str(v) for v in t) for t in total) + " |")
+    print(f"\nsssrukf / ukf: flops {total[1][0] / total[0][0]:.0%}, divisions + square roots "
+          f"{(total[1][1] + total[1][2]) / (total[0][1] + total[0][2]):.0%}, libm calls {total[1][3] / total[0][3]:.0%}")
 
 
 def cpu_us_per_sample(function, n: int) -> float:
@@ -157,6 +231,7 @@ def main() -> None:
     for name, us in med.items():
         print(f"| {name} | {us:.2f} | {us / fusion:.1f} |")
     print(f"\nSSSRUKF / UKF run time: {med['sssrukf'] / med['ukf']:.0%} (seed 001: 42 %, 6.84 s vs 16.30 s)")
+    print_step_costs()
     print_compile_times(fresh, cached)
     if args.no_broad:
         return

@@ -32,6 +32,9 @@ Python on numpy arrays elsewhere; on n = 4 LAPACK's per-call cost (``qr`` ~20-50
 operation counts. Points are rows ``chi`` (L, n), outputs rows (m, L), noises their diagonals (the
 filters' Q and R are diagonal). A failed factorisation is ``ok`` False (a kernel cannot catch
 ``LinAlgError``). Both sets are treated alike: ``χ = x + S z`` skips the zero entries of each set's z.
+Each step takes an optional ``work``, a flat float array of ``work_size`` floats that holds its
+intermediate matrices and its results (views of it, valid until ``work`` is used again): the kernel
+passes a part of its state, so a sample allocates nothing; without it a new one is allocated.
 """
 
 from __future__ import annotations
@@ -89,15 +92,36 @@ def spherical_simplex(n: int, w0: float = 0.0, alpha: float = 1.0, beta: float =
     return _scaled(z, w0, w1, alpha, beta)  # steps 3 and 6
 
 
-_NO_NOISE = np.empty(0)
+@register_jitable
+def work_size(n, count, m):
+    """Floats of ``work`` that any step below needs for n states, ``count`` points and m <= n outputs."""
+    time = 2 * n + n * count + n * (count - 1 + n) + n * n
+    measurement = 4 * m + m * count + n * count + m * (count - 1 + m) + 2 * m * m + 2 * n * m + 2 * n + n * n
+    return max(time, measurement)
 
 
 @register_jitable
-def points(x, s, z):
-    """Sigma points ``x + S z`` (L, n) around ``x`` with covariance factor ``s``; each sum over the set's
-    nonzero z entries in row order."""
+def _work(work, size):
+    """The caller's work space (a flat float array), or a new one."""
+    if work is None:
+        work = np.empty(size)
+    return work
+
+
+@register_jitable
+def _take(work, offset, rows, cols):
+    """A (rows, cols) view of ``work`` at ``offset``, and the offset after it."""
+    end = offset + rows * cols
+    return work[offset:end].reshape((rows, cols)), end
+
+
+@register_jitable
+def points(x, s, z, chi=None):
+    """Sigma points ``x + S z`` (L, n) around ``x`` with covariance factor ``s`` (into ``chi`` when given);
+    each sum over the set's nonzero z entries in row order."""
     n, count = z.shape
-    chi = np.empty((count, n))
+    if chi is None:
+        chi = np.empty((count, n))
     for k in range(n):
         for point in range(count):
             p = x[k]
@@ -110,11 +134,10 @@ def points(x, s, z):
 
 
 @register_jitable
-def _spread(values, wm, by_rows):
-    """Weighted mean (m,) and deviations (m, L) of rows (m, L), or of points (L, m) unless ``by_rows``."""
+def _spread(values, wm, by_rows, mean, d):
+    """Weighted mean (m,) and deviations (m, L) of rows (m, L), or of points (L, m) unless ``by_rows``;
+    ``d`` may be ``values`` (rows)."""
     count, m = (values.shape[1], values.shape[0]) if by_rows else (values.shape[0], values.shape[1])
-    mean = np.empty(m)
-    d = np.empty((m, count))
     for i in range(m):
         acc = 0.0
         for point in range(count):
@@ -122,15 +145,13 @@ def _spread(values, wm, by_rows):
         mean[i] = acc
         for point in range(count):
             d[i, point] = (values[i, point] if by_rows else values[point, i]) - acc
-    return mean, d
 
 
 @register_jitable
-def _weighted_outer(a, w, b, noise, symmetric):
-    """``Σᵢ wᵢ aᵢ bᵢᵀ`` (+ diag(noise) when it has entries) of rows a (r, L) and b (c, L), each term as
-    ``a (w b)``; ``symmetric`` (b is a): the upper triangle, mirrored."""
+def _weighted_outer(a, w, b, symmetric, out):
+    """``Σᵢ wᵢ aᵢ bᵢᵀ`` of rows a (r, L) and b (c, L), each term as ``a (w b)``; ``symmetric`` (b is a):
+    the upper triangle, mirrored."""
     r, c, count = a.shape[0], b.shape[0], a.shape[1]
-    out = np.empty((r, c))
     for i in range(r):
         for j in range(i if symmetric else 0, c):
             acc = 0.0
@@ -139,16 +160,21 @@ def _weighted_outer(a, w, b, noise, symmetric):
             out[i, j] = acc
             if symmetric:
                 out[j, i] = acc
-    for i in range(noise.shape[0]):
-        out[i, i] = out[i, i] + noise[i]
     return out
 
 
 @register_jitable
-def _minus_product(p, k, b):
+def _add_diagonal(a, noise):
+    """``A + diag(noise)``, in place."""
+    for i in range(noise.shape[0]):
+        a[i, i] = a[i, i] + noise[i]
+    return a
+
+
+@register_jitable
+def _minus_product(p, k, b, out):
     """``P - K Bᵀ`` for a symmetric ``K Bᵀ`` (the dense update's ``K Pxyᵀ``): its lower triangle, mirrored."""
     n, m = k.shape
-    out = np.empty((n, n))
     for i in range(n):
         for j in range(i + 1):
             acc = 0.0
@@ -160,60 +186,81 @@ def _minus_product(p, k, b):
 
 
 @register_jitable
-def _compound(d, wc, sqrt_wc, sqrt_noise):
+def _compound(d, wc, sqrt_wc, sqrt_noise, work, offset):
     """``(ok, factor)`` of ``Σ wc dᵢ dᵢᵀ + diag(sqrt_noise)²`` from deviation rows (m, L): QR of
-    ``[√wc d₁.., √N]`` (``tria``), then a rank-1 ``cholupdate`` with d₀ of weight wc₀ (seed 001 §2.2)."""
+    ``[√wc d₁.., √N]`` (``tria``), then a rank-1 ``cholupdate`` with d₀ of weight wc₀ (seed 001 §2.2);
+    the factor and the QR's matrix in ``work`` from ``offset``."""
     m, count = d.shape
-    a = np.zeros((m, count - 1 + m))
+    a, offset = _take(work, offset, m, count - 1 + m)
+    s, offset = _take(work, offset, m, m)
+    d0 = work[offset : offset + m]
     for i in range(m):
+        for c in range(count - 1 + m):
+            a[i, c] = 0.0
         for point in range(1, count):
             a[i, point - 1] = sqrt_wc[point - 1] * d[i, point]
         a[i, count - 1 + i] = sqrt_noise[i]
-    return sl.cholupdate(sl.tria(a), d[:, 0].copy(), wc[0])
+        d0[i] = d[i, 0]
+    return sl.cholupdate(sl.tria(a, s), d0, wc[0], s)
 
 
 @register_jitable
-def time_update(chi_f, wm, wc, q_diag):
-    """Dense: propagated points ``f(χ)`` (L, n) and the process noise's diagonal -> ``(x⁻, P⁻)``."""
-    x, d = _spread(chi_f, wm, False)
-    return x, _weighted_outer(d, wc, d, q_diag, True)
+def time_update(chi_f, wm, wc, q_diag, work=None):
+    """Dense: propagated points ``f(χ)`` (L, n) and the process noise's diagonal -> ``(x⁻, P⁻)`` (views of
+    ``work`` when given)."""
+    count, n = chi_f.shape
+    work = _work(work, work_size(n, count, n))
+    x = work[0:n]
+    d, offset = _take(work, n, n, count)
+    p, _ = _take(work, offset, n, n)
+    _spread(chi_f, wm, False, x, d)
+    return x, _add_diagonal(_weighted_outer(d, wc, d, True, p), q_diag)
 
 
 @register_jitable
-def sqrt_time_update(chi_f, wm, wc, sqrt_wc, sqrt_q):
-    """Square root: propagated points and √Q's diagonal -> ``(ok, x⁻, S⁻)`` by QR and one cholupdate."""
-    x, d = _spread(chi_f, wm, False)
-    ok, s = _compound(d, wc, sqrt_wc, sqrt_q)
+def sqrt_time_update(chi_f, wm, wc, sqrt_wc, sqrt_q, work=None):
+    """Square root: propagated points and √Q's diagonal -> ``(ok, x⁻, S⁻)`` by QR and one cholupdate
+    (views of ``work`` when given)."""
+    count, n = chi_f.shape
+    work = _work(work, work_size(n, count, n))
+    x = work[0:n]
+    d, offset = _take(work, n, n, count)
+    _spread(chi_f, wm, False, x, d)
+    ok, s = _compound(d, wc, sqrt_wc, sqrt_q, work, offset)
     return ok, x, s
 
 
 @register_jitable
-def _output_spread(x, chi, y_sigma, y, wm):
-    """``(dy, dx, innovation)`` of angle outputs ``h(χ)`` (m, L), each row unwrapped around its centre
-    point's when it spans π or more, and the innovation wrapped into [-π, π)."""
+def _output_spread(x, chi, y_sigma, y, wm, work):
+    """``(dy, dx, innovation, work, offset)`` of angle outputs ``h(χ)`` (m, L), each row unwrapped around
+    its centre point's when it spans π or more, and the innovation wrapped into [-π, π); in ``work`` (a new
+    one for None; ``offset``: what they use of it), the measurement updates' first step."""
     m, count = y_sigma.shape
-    rows = y_sigma.copy()
-    for i in range(m):
-        r0 = rows[i, 0]
-        if not rows[i].max() - rows[i].min() < math.pi:
-            for point in range(count):
-                rows[i, point] = r0 + wrap_pi(rows[i, point] - r0)
-    y_hat, dy = _spread(rows, wm, True)
     n = x.shape[0]
-    dx = np.empty((n, count))
+    work = _work(work, work_size(n, count, m))
+    y_hat, innovation = work[0:m], work[m : 2 * m]
+    dy, offset = _take(work, 2 * m, m, count)
+    dx, offset = _take(work, offset, n, count)
+    for i in range(m):
+        r0 = y_sigma[i, 0]
+        low, high = r0, r0
+        for point in range(count):
+            v = y_sigma[i, point]
+            low, high = min(low, v), max(high, v)
+        for point in range(count):
+            dy[i, point] = y_sigma[i, point] if high - low < math.pi else r0 + wrap_pi(y_sigma[i, point] - r0)
+    _spread(dy, wm, True, y_hat, dy)
     for i in range(n):
         for point in range(count):
             dx[i, point] = chi[point, i] - x[i]
-    innovation = np.empty(m)
     for i in range(m):
         innovation[i] = wrap_pi(y[i] - y_hat[i])
-    return dy, dx, innovation
+    return dy, dx, innovation, work, offset
 
 
 @register_jitable
-def _corrected(x, k, innovation):
+def _corrected(x, k, innovation, out):
     """``x + K ν``."""
-    out = np.empty(x.shape[0])
     for i in range(x.shape[0]):
         acc = 0.0
         for c in range(innovation.shape[0]):
@@ -223,37 +270,50 @@ def _corrected(x, k, innovation):
 
 
 @register_jitable
-def measurement_update(x, p, chi, y_sigma, y, r_diag, wm, wc):
+def measurement_update(x, p, chi, y_sigma, y, r_diag, wm, wc, work=None):
     """Dense: prior ``(x, P)``, its points ``χ`` (L, n), their angle outputs ``h(χ)`` (m, L), the
-    measured angles ``y`` and the noise's diagonal -> ``(ok, x, P, innovation)``."""
-    dy, dx, innovation = _output_spread(x, chi, y_sigma, y, wm)
-    p_yy = _weighted_outer(dy, wc, dy, r_diag, True)
-    p_xy = _weighted_outer(dx, wc, dy, _NO_NOISE, False)
-    ok, low = sl.cholesky(p_yy)
+    measured angles ``y`` and the noise's diagonal -> ``(ok, x, P, innovation)`` (views of ``work``
+    when given)."""
+    n, m = x.shape[0], y.shape[0]
+    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work)
+    p_yy, offset = _take(work, offset, m, m)
+    p_xy, offset = _take(work, offset, n, m)
+    low, offset = _take(work, offset, m, m)
+    k, offset = _take(work, offset, n, m)
+    p_new, offset = _take(work, offset, n, n)
+    x_new = work[offset : offset + n]
+    _add_diagonal(_weighted_outer(dy, wc, dy, True, p_yy), r_diag)
+    _weighted_outer(dx, wc, dy, False, p_xy)
+    ok, low = sl.cholesky(p_yy, low)
     if not ok:
         return False, x, p, innovation
-    k = sl.solve_right(low, p_xy)  # Pxy Pyy⁻¹
-    return True, _corrected(x, k, innovation), _minus_product(p, k, p_xy), innovation  # P - K Pyy Kᵀ = P - K Pxyᵀ
+    sl.solve_right(low, p_xy, k)  # Pxy Pyy⁻¹
+    return True, _corrected(x, k, innovation, x_new), _minus_product(p, k, p_xy, p_new), innovation  # P - K Pyy Kᵀ = P - K Pxyᵀ
 
 
 @register_jitable
-def sqrt_measurement_update(x, s, chi, y_sigma, y, sqrt_r, wm, wc, sqrt_wc):
+def sqrt_measurement_update(x, s, chi, y_sigma, y, sqrt_r, wm, wc, sqrt_wc, work=None):
     """Square root: as ``measurement_update`` with the factor ``S`` and √R's diagonal -> ``(ok, x, S,
-    innovation)``: ``Sy`` by QR and cholupdate, ``K = Pxy (Sy Syᵀ)⁻¹``, ``S`` downdated by each column of ``K Sy``."""
-    dy, dx, innovation = _output_spread(x, chi, y_sigma, y, wm)
-    ok, s_y = _compound(dy, wc, sqrt_wc, sqrt_r)
+    innovation)``: ``Sy`` by QR and cholupdate, ``K = Pxy (Sy Syᵀ)⁻¹``, ``S`` downdated by each column of
+    ``K Sy``."""
+    n, m = x.shape[0], y.shape[0]
+    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work)
+    k, offset = _take(work, offset, n, m)
+    s_new, offset = _take(work, offset, n, n)
+    x_new = work[offset : offset + n]
+    u = work[offset + n : offset + 2 * n]
+    ok, s_y = _compound(dy, wc, sqrt_wc, sqrt_r, work, offset + 2 * n)
     if not ok:
         return False, x, s, innovation
-    k = sl.solve_right(s_y, _weighted_outer(dx, wc, dy, _NO_NOISE, False))
-    n, m = k.shape
-    u = np.empty(n)
+    sl.solve_right(s_y, _weighted_outer(dx, wc, dy, False, k), k)
+    down = s
     for j in range(m):
         for i in range(n):
             acc = 0.0
             for c in range(m):
                 acc += k[i, c] * s_y[c, j]
             u[i] = acc
-        ok, s = sl.cholupdate(s, u, -1.0)
+        ok, down = sl.cholupdate(down, u, -1.0, s_new)
         if not ok:
-            return False, x, s, innovation
-    return True, _corrected(x, k, innovation), s, innovation
+            return False, x, down, innovation
+    return True, _corrected(x, k, innovation, x_new), down, innovation

@@ -6,6 +6,9 @@ dwarfs the arithmetic, so these are plain loops whose cost follows the operation
 2-D float64 arrays; triangular factors are lower (``P = L Lᵀ``). A compiled kernel cannot catch an
 exception, so a failure is a returned flag: ``ok`` False where numpy would raise ``LinAlgError``.
 Every sum runs from 0 upward over its index, the order the filter's equations are written in.
+
+Outputs: a new array by default; the kernel passes its own (``low``, ``out``: views of its work space),
+so that a sample allocates nothing (an allocation, ~25 ns, costs about as much as a 4 x 4 Cholesky).
 """
 
 from __future__ import annotations
@@ -17,10 +20,20 @@ from numba.extending import register_jitable
 
 
 @register_jitable
-def cholesky(a):
-    """``(ok, L)``, ``L Lᵀ = a`` (symmetric; only its lower triangle is read), column by column."""
+def _zeroed(low):
+    for i in range(low.shape[0]):
+        for j in range(low.shape[1]):
+            low[i, j] = 0.0
+
+
+@register_jitable
+def cholesky(a, low=None):
+    """``(ok, L)``, ``L Lᵀ = a`` (symmetric; only its lower triangle is read), column by column, into
+    ``low`` when given."""
     n = a.shape[0]
-    low = np.zeros((n, n))
+    if low is None:
+        low = np.empty((n, n))
+    _zeroed(low)
     for j in range(n):
         d = a[j, j]
         for k in range(j):
@@ -38,17 +51,18 @@ def cholesky(a):
 
 
 @register_jitable
-def tria(a):
+def tria(a, low=None):
     """Lower ``L`` with ``L Lᵀ = A Aᵀ`` for A (n, m), m >= n: Householder QR of ``Aᵀ`` applied to the
     rows of A (``A H₁..Hₙ = [L 0]``), the diagonal made positive. The square-root filters' compound-matrix
-    QR. ``a`` is overwritten (its rows reduced column by column)."""
+    QR. ``a`` is overwritten (its rows reduced column by column; row k holds the k-th Householder vector)."""
     n, m = a.shape
-    low = np.zeros((n, n))
-    v = np.empty(m)
+    if low is None:
+        low = np.empty((n, n))
+    _zeroed(low)
     for k in range(n):
+        v = a[k]
         norm2 = 0.0
         for c in range(k, m):
-            v[c] = a[k, c]
             norm2 += v[c] * v[c]
         norm = math.sqrt(norm2)
         if norm == 0.0:
@@ -71,14 +85,20 @@ def tria(a):
 
 
 @register_jitable
-def cholupdate(s, v, weight):
+def cholupdate(s, v, weight, out=None):
     """``(ok, S')``, ``S' S'ᵀ = S Sᵀ + weight v vᵀ`` (a downdate for weight < 0): the classic rank-1
-    modification column by column; not ok when a downdate would leave the matrix indefinite."""
+    modification column by column; not ok when a downdate would leave the matrix indefinite. Into
+    ``out`` when given (it may be ``s``; ``v`` is then overwritten)."""
     n = v.shape[0]
     sign = 1.0 if weight >= 0.0 else -1.0
-    a = s.copy()
+    if out is None:
+        a, x = s.copy(), np.empty(n)
+    else:
+        a, x = out, v
+        for i in range(n):
+            for j in range(n):
+                a[i, j] = s[i, j]
     w = math.sqrt(abs(weight))
-    x = np.empty(n)
     for i in range(n):
         x[i] = w * v[i]
     for k in range(n):
@@ -99,12 +119,18 @@ def cholupdate(s, v, weight):
 
 
 @register_jitable
-def solve_right(low, b):
+def solve_right(low, b, out=None):
     """``X`` with ``X L Lᵀ = B`` (B (r, m), e.g. the gain ``Pxy (Sy Syᵀ)⁻¹``): two triangular
-    substitutions, column by column of B."""
+    substitutions, column by column of B; into ``out`` when given (it may be ``b``)."""
     m = low.shape[0]
-    x = b.copy()
     rows = b.shape[0]
+    if out is None:
+        x = b.copy()
+    else:
+        x = out
+        for r in range(rows):
+            for i in range(m):
+                x[r, i] = b[r, i]
     for i in range(m):  # Y Lᵀ = B
         for j in range(i):
             lij = low[i, j]

@@ -40,7 +40,9 @@ Compiled (base.py's ``CompiledEstimator``, ``gps_aided``): one kernel for both, 
 the dense steps (P, two Choleskys a sample) or the square-root ones (S by QR and rank-1 updates, never
 re-factorised), each with its own sigma set, so their run-time ratio is the algorithms' (seed 001: 42 %;
 measured in bench/bench_estimator_costs.out.md). A failed factorisation or downdate (``ok`` False, a
-kernel cannot catch ``LinAlgError``) restarts the covariance (``COVARIANCE_RESET``).
+kernel cannot catch ``LinAlgError``) restarts the covariance (``COVARIANCE_RESET``). The steps work in a
+part of the state (the sigma points, the steps' matrices), so neither ``step`` nor ``run`` allocates per
+sample; the operations of each step are counted in bench/bench_estimator_costs.py (``ukf_step_costs``).
 """
 
 from __future__ import annotations
@@ -131,6 +133,17 @@ _V_NED = _FIX_INTERVAL + 1
 _V_BODY = _V_NED + 3
 _DV_BODY = _V_BODY + 3
 _LOST = _DV_BODY + 3
+# Then the kernel's work space, rewritten on each sample before it is read (in the state so that neither
+# ``step`` nor ``run`` allocates per sample): the Cholesky factor of P (ukf), the sigma points, their
+# outputs, the noise's diagonal (Q's; then R's), the measurements, and the two steps' own work.
+_FACTOR = _LOST + 1
+_CHI = _FACTOR + _N * _N
+_Y_SIGMA = _CHI + _L_MAX * _N
+_NOISE = _Y_SIGMA + 3 * _L_MAX
+_Y = _NOISE + _N
+_TIME_WORK = _Y + 3
+_MEASUREMENT_WORK = _TIME_WORK + sp.work_size(_N, _L_MAX, _N)
+_STATE_END = _MEASUREMENT_WORK + sp.work_size(_N, _L_MAX, 3)
 
 
 @register_jitable
@@ -163,17 +176,38 @@ def _dot(a):
 
 
 @register_jitable
-def _initial_cov(state, p, q):
-    """State's covariance (ukf) or its factor (sssrukf) about the unit quaternion ``q``: the initial
-    attitude noise on the three rotation directions, a small radial variance along q (module docstring)."""
-    cov = np.empty((_N, _N))
+def _norm(w, x, y, z):
+    """``|q|``, summed as ``_dot``."""
+    return math.sqrt(w * w + x * x + y * y + z * z)
+
+
+@register_jitable
+def _matrix(state, start, rows, cols):
+    """A (rows, cols) view of the state from ``start``."""
+    return state[start : start + rows * cols].reshape((rows, cols))
+
+
+@register_jitable
+def _initial_cov(state, p, w, x, y, z):
+    """State's covariance (ukf) or its factor (sssrukf) about the unit quaternion ``(w, x, y, z)``: the
+    initial attitude noise on the three rotation directions, a small radial variance along q (module
+    docstring)."""
+    q = (w, x, y, z)
+    cov = _matrix(state, _FACTOR if p[_SQUARE_ROOT] != 0.0 else _COV, _N, _N)
     for i in range(_N):
         for j in range(_N):
             qq = q[i] * q[j]
             cov[i, j] = p[_INIT_VAR] * ((1.0 if i == j else 0.0) - qq) + p[_INIT_RADIAL_VAR] * qq
     if p[_SQUARE_ROOT] != 0.0:
-        cov = sl.cholesky(cov)[1]
-    state[_COV : _COV + _N * _N] = cov.reshape(_N * _N)
+        sl.cholesky(cov, _matrix(state, _COV, _N, _N))
+
+
+@register_jitable
+def _start(state, p):
+    """The initial covariance about the attitude from gravity, once. (Called from the kernel through here:
+    numba compiles a helper called both from a kernel and from another helper twice.)"""
+    _initial_cov(state, p, state[0], state[1], state[2], state[3])
+    state[_STARTING] = 0.0
 
 
 @register_jitable
@@ -182,7 +216,10 @@ def _trace(state, p):
     total = 0.0
     for i in range(_N):
         if p[_SQUARE_ROOT] != 0.0:
-            total += _dot(state[_COV + _N * i : _COV + _N * i + _N])
+            row = 0.0  # a loop of constant length: compiled to a few instructions, not a vectorised loop
+            for j in range(_N):
+                row += state[_COV + _N * i + j] * state[_COV + _N * i + j]
+            total += row
         else:
             total += state[_COV + (_N + 1) * i]
     return total
@@ -234,74 +271,91 @@ def _tilt_measurement(state, p, q_pred, gx, gy, gz, ax, ay, az, dt_s):
 
 
 @register_jitable
-def _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
-    """One predict + update (seed 001 §2.2): ``(ok, x, cov, measurement flags)``; not ok when a
+def _sigma_set(p):
+    """The filter's set: ``(count, wm, wc, sqrt_wc, z)``."""
+    count = int(p[_COUNT])
+    return count, p[_WM : _WM + count], p[_WC : _WC + count], p[_SQRT_WC : _SQRT_WC + count - 1], p[_Z : _Z + _N * count].reshape((_N, count))
+
+
+@register_jitable
+def _predict(state, p, gx, gy, gz, dt_s):
+    """The time update (seed 001 §2.2): ``(ok, x⁻, P⁻ or S⁻)``, views of the work space; not ok when a
     factorisation failed."""
     square_root = p[_SQUARE_ROOT] != 0.0
-    count = int(p[_COUNT])
-    wm, wc, sqrt_wc = p[_WM : _WM + count], p[_WC : _WC + count], p[_SQRT_WC : _SQRT_WC + count - 1]
-    z = p[_Z : _Z + _N * count].reshape((_N, count))
-    flags = 0
-    state[_INNOVATION] = 0.0
-    cov = state[_COV : _COV + _N * _N].reshape((_N, _N))
-    ok, factor = (True, cov) if square_root else sl.cholesky(cov)
+    count, wm, wc, sqrt_wc, z = _sigma_set(p)
+    cov = _matrix(state, _COV, _N, _N)
+    ok, factor = (True, cov) if square_root else sl.cholesky(cov, _matrix(state, _FACTOR, _N, _N))
     if not ok:
-        return False, state[0:4], cov, flags
-    chi = sp.points(state[0:4], factor, z)
+        return False, state[0:4], cov
+    chi = sp.points(state[0:4], factor, z, _matrix(state, _CHI, count, _N))
     for k in range(count):
         chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3] = integrate_rate((chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3]), gx, gy, gz, dt_s)  # eq. 2
     q_noise = 0.5 * p[_GYRO_NOISE] * dt_s
+    noise = state[_NOISE : _NOISE + _N]
+    time_work = state[_TIME_WORK:_MEASUREMENT_WORK]
     if square_root:
-        ok, x, cov = sp.sqrt_time_update(chi, wm, wc, sqrt_wc, np.full(_N, q_noise))
-        if not ok:
-            return False, x, cov, flags
-    else:
-        x, cov = sp.time_update(chi, wm, wc, np.full(_N, q_noise * q_noise))
-    q_pred = x / math.sqrt(_dot(x))
-    y, var, rows = np.empty(3), np.empty(3), np.empty(3, np.int64)
-    m = 0
+        for i in range(_N):
+            noise[i] = q_noise
+        return sp.sqrt_time_update(chi, wm, wc, sqrt_wc, noise, time_work)
+    for i in range(_N):
+        noise[i] = q_noise * q_noise
+    x, cov = sp.time_update(chi, wm, wc, noise, time_work)
+    return True, x, cov
+
+
+@register_jitable
+def _correct(state, p, x, cov, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad):
+    """The measurement update (seed 001 §2.2) of the prediction ``x``, ``cov``: ``(ok, x, cov, measurement
+    flags)``, views of the work space; not ok when a factorisation failed."""
+    square_root = p[_SQUARE_ROOT] != 0.0
+    count, wm, wc, sqrt_wc, z = _sigma_set(p)
+    flags = 0
+    r = _norm(x[0], x[1], x[2], x[3])
+    q_pred = (x[0] / r, x[1] / r, x[2] / r, x[3] / r)
+    # The measurements: pitch and roll (rows 0, 1 of euler_angles), then yaw (row 2); y[i] is row first + i
+    y, var = state[_Y : _Y + 3], state[_NOISE : _NOISE + 3]
+    m, first = 0, 2
     if acc_ok:
         usable, pitch, roll, var_pitch, var_roll, compensated = _tilt_measurement(state, p, q_pred, gx, gy, gz, ax, ay, az, dt_s)
         if usable:
-            y[0], y[1], var[0], var[1], rows[0], rows[1] = pitch, roll, var_pitch, var_roll, 0, 1
-            m = 2
+            y[0], y[1], var[0], var[1] = pitch, roll, var_pitch, var_roll
+            m, first = 2, 0
             if compensated:
                 flags |= GPS_COMPENSATED
     if state[_YAW_KNOWN] != 0.0 and math.isfinite(heading_rad):
-        y[m], var[m], rows[m] = heading_rad, p[_HEADING_VAR], 2
+        y[m], var[m] = heading_rad, p[_HEADING_VAR]
         m += 1
         flags |= HEADING_USED
     if m == 0:
         return True, x, cov, flags
-    ok, factor = (True, cov) if square_root else sl.cholesky(cov)
+    ok, factor = (True, cov) if square_root else sl.cholesky(cov, _matrix(state, _FACTOR, _N, _N))
     if not ok:
         return False, x, cov, flags
-    chi = sp.points(x, factor, z)
-    with_yaw = rows[m - 1] == 2
-    y_sigma = np.empty((m, count))
+    chi = sp.points(x, factor, z, _matrix(state, _CHI, count, _N))
+    with_yaw = first + m - 1 == 2
+    y_sigma = _matrix(state, _Y_SIGMA, m, count)
     for k in range(count):
         angles = euler_angles(chi[k, 0], chi[k, 1], chi[k, 2], chi[k, 3], with_yaw)
         for i in range(m):
-            y_sigma[i, k] = angles[rows[i]]
+            y_sigma[i, k] = angles[first + i]
+    measurement_work = state[_MEASUREMENT_WORK:_STATE_END]
     if square_root:
-        sqrt_r = np.empty(m)
         for i in range(m):
-            sqrt_r[i] = math.sqrt(var[i])
-        ok, x, cov, innovation = sp.sqrt_measurement_update(x, cov, chi, y_sigma, y[:m], sqrt_r, wm, wc, sqrt_wc)
+            var[i] = math.sqrt(var[i])
+        ok, x, cov, innovation = sp.sqrt_measurement_update(x, cov, chi, y_sigma, y[:m], var[:m], wm, wc, sqrt_wc, measurement_work)
     else:
-        ok, x, cov, innovation = sp.measurement_update(x, cov, chi, y_sigma, y[:m], var[:m], wm, wc)
+        ok, x, cov, innovation = sp.measurement_update(x, cov, chi, y_sigma, y[:m], var[:m], wm, wc, measurement_work)
     if ok:
         state[_INNOVATION] = math.sqrt(_dot(innovation))
     return ok, x, cov, flags
 
 
 @register_jitable
-def _with_yaw(x, heading_rad):
-    """``x`` turned about NED z so that its yaw is ``heading_rad``."""
-    half = 0.5 * wrap_pi(heading_rad - euler_angles(x[0], x[1], x[2], x[3], True)[2])
+def _with_yaw(w, qx, qy, qz, heading_rad):
+    """``(w, qx, qy, qz)`` turned about NED z so that its yaw is ``heading_rad``."""
+    half = 0.5 * wrap_pi(heading_rad - euler_angles(w, qx, qy, qz, True)[2])
     c, s = math.cos(half), math.sin(half)
-    w, qx, qy, qz = x[0], x[1], x[2], x[3]
-    return np.array([c * w - s * qz, c * qx - s * qy, c * qy + s * qx, c * qz + s * w])
+    return c * w - s * qz, c * qx - s * qy, c * qy + s * qx, c * qz + s * w
 
 
 @njit(cache=True)
@@ -313,40 +367,49 @@ def ukf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, vn, ve, vd, h
     # restarted covariance let the next noisy GPS-compensated measurements swing a still estimate by
     # 1.7° (test_intervals.py).
     if status & (INITIALISED | REINITIALISED) and state[_STARTING] != 0.0:
-        _initial_cov(state, p, state[0:4].copy())
-        state[_STARTING] = 0.0
+        _start(state, p)
     if not status & NO_UPDATE:
-        status = _update(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status, vn, ve, vd, heading_rad)
+        state[_SINCE_FIX] += dt_s
+        _take_fix(state, p, vn, ve, vd)
+        state[_INNOVATION] = 0.0
+        # The steps are called from here, not from one function calling the next: numba compiles each
+        # caller with all its callees again (linked in), so a shallow call tree compiles faster.
+        ok, x, cov = _predict(state, p, gx, gy, gz, dt_s)
+        if ok:
+            ok, x, cov, flags = _correct(state, p, x, cov, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad)
+            status |= flags
+        status = _settle(state, p, ok, x, cov, status, gx, gy, gz, dt_s, heading_rad)
     state[_TRACE] = _trace(state, p)
     return status
 
 
 @register_jitable
-def _update(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, status, vn, ve, vd, heading_rad):
-    state[_SINCE_FIX] += dt_s
-    _take_fix(state, p, vn, ve, vd)
-    ok, x, cov, flags = _filter(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s, heading_rad)
+def _settle(state, p, ok, x, cov, status, gx, gy, gz, dt_s, heading_rad):
+    """The estimate and covariance after a sample's filter step (``ok``: its ``x``, ``cov``; else restarted
+    from the gyro's prediction): the filter restarted when lost, yaw set by the first heading."""
     if ok:
-        state[_COV : _COV + _N * _N] = cov.reshape(_N * _N)
+        w, qx, qy, qz = x[0], x[1], x[2], x[3]
+        for i in range(_N):
+            for j in range(_N):
+                state[_COV + _N * i + j] = cov[i, j]
     else:
-        x = np.array(integrate_rate((state[0], state[1], state[2], state[3]), gx, gy, gz, dt_s))
-        _initial_cov(state, p, x)
+        w, qx, qy, qz = integrate_rate((state[0], state[1], state[2], state[3]), gx, gy, gz, dt_s)
+        _initial_cov(state, p, w, qx, qy, qz)
         status |= COVARIANCE_RESET
-    status |= flags
     state[_LOST] = state[_LOST] + dt_s if state[_INNOVATION] > p[_LOST_INNOVATION] else 0.0
     if state[_LOST] >= p[_LOST_TIME]:
         # Lost: the covariance no longer describes the error (settings): start it again
-        _initial_cov(state, p, x / math.sqrt(_dot(x)))
+        r = _norm(w, qx, qy, qz)
+        _initial_cov(state, p, w / r, qx / r, qy / r, qz / r)
         status |= COVARIANCE_RESET
         state[_LOST] = 0.0
     if state[_YAW_KNOWN] == 0.0 and math.isfinite(heading_rad):
         # The first heading sets yaw outright (module docstring)
-        x = _with_yaw(x, heading_rad)
+        w, qx, qy, qz = _with_yaw(w, qx, qy, qz, heading_rad)
         state[_YAW_KNOWN] = 1.0
         status |= HEADING_USED
-    norm = math.sqrt(_dot(x))
-    for i in range(_N):
-        state[i] = x[i] / norm
+    norm = _norm(w, qx, qy, qz)
+    state[0], state[1], state[2], state[3] = w / norm, qx / norm, qy / norm, qz / norm
     return status
 
 
@@ -383,14 +446,14 @@ class _GpsUkf(CompiledEstimator):
 
     def _initial_state(self):
         # the diagnostics, a covariance filled in by reset, starting, yaw unknown, no fix, not lost
-        return [0.0, 0.0, 0.0, 0.0, 0.0, *[0.0] * (_N * _N), 1.0, 0.0, math.inf, math.inf, *[math.nan] * 9, 0.0]
+        return [0.0, 0.0, 0.0, 0.0, 0.0, *[0.0] * (_N * _N), 1.0, 0.0, math.inf, math.inf, *[math.nan] * 9, 0.0, *[0.0] * (_STATE_END - _FACTOR)]
 
     def reset(self, q0=None) -> None:
         super().reset(q0)
         # the kernel reads the sigma set as arrays, also where it runs interpreted
         self._params = np.asarray(self._params, dtype=self._dtype)
         q = (1.0, 0.0, 0.0, 0.0) if q0 is None else quaternion.normalise(q0).tolist()
-        _initial_cov(self._state, self._params, np.array(q, dtype=self._dtype))
+        _initial_cov(self._state, self._params, *q)
         self._state[_STARTING] = float(q0 is None)  # a given q0 is the start
         self._state[_TRACE] = _trace(self._state, self._params)
 
