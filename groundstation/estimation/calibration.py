@@ -113,7 +113,7 @@ class RestBiasCalibrator:
         ``step`` does) from the window's first sample."""
         if self._imu.n or self.bias_rad_s is not None:
             raise ValueError("measure() starts from a fresh calibrator")
-        imu = np.column_stack([gyr_rad_s, acc_g]).astype(float)
+        imu = np.column_stack([gyr_rad_s, acc_g]).astype(float, copy=False)
         dt = np.asarray(dt_s, dtype=float)
         n = len(dt)
         with np.errstate(invalid="ignore"):
