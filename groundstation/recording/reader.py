@@ -40,6 +40,7 @@ from groundstation.recording.format import (
 )
 
 HEADER_BYTES = RECORD_HEADER.size
+INTACT_BLOCK_BYTES = 1 << 19  # ``_Walk.run_intact`` looks at the file this much at a time (memory: ~2x this)
 MARKER_BYTES = len(MARKER)
 # A recording whose identification (or first record) is damaged still has an intact record within
 # one longest record of its start; a file without one there is not a recording.
@@ -124,7 +125,7 @@ def open_recording(path) -> Recording:
     damage: list[str] = []
     version, start = _read_preamble(path, buffer, damage)
     walk = _Walk(buffer)
-    walk.run(start)
+    walk.run(walk.run_intact(start))
     walk.drop_repeats()
     damage += walk.damage + _chunk_time_jumps(walk.chunk_t_host_ns)
     if not walk.chunk_offsets and not walk.others:
@@ -228,6 +229,50 @@ class _Walk:
         self._searched_from = self._searched_until = 0
         self._intact: set[int] = set()
         self._intact_sorted = np.zeros(0, dtype=np.int64)
+
+    def run_intact(self, position: int) -> int:
+        """The intact records from ``position`` on, found with array operations a block of the file at a time:
+        the record markers are located, each record's end computed from its header, and the records that
+        follow one another from ``position`` with sound lengths and CRCs are taken, as ``run`` takes them
+        (``run`` walks one record at a time, ~3 µs each: a second for an hour of chunks). Returns where they
+        end: ``run`` goes on from there (damage, a false marker, a resynchronisation, the end). Only from a
+        walk's start, before any search."""
+        data = np.frombuffer(self.buffer, dtype=np.uint8)
+        if self._intact or len(data) - position < RECORD_OVERHEAD_BYTES:
+            return position
+        for block in range(position - position % INTACT_BLOCK_BYTES, len(data), INTACT_BLOCK_BYTES):
+            starts = _marker_positions(data, block, block + INTACT_BLOCK_BYTES)
+            starts = starts[starts >= position]  # markers inside the records taken start none
+            n, position = self._take_intact(data, starts, position)
+            if n < len(starts):
+                break  # a record that is not intact, a marker that starts none: ``run`` decides there
+        return position
+
+    def _take_intact(self, data: np.ndarray, starts: np.ndarray, position: int) -> tuple[int, int]:
+        """Of the records at marker ``starts`` (sorted), those that follow one another from ``position``,
+        are sound and pass their CRC, up to the first that does not: taken. Returns (how many, where they end)."""
+        size = len(data)
+        starts = starts[starts + RECORD_OVERHEAD_BYTES <= size]
+        header = np.lib.stride_tricks.sliding_window_view(data, RECORD_HEADER.size)[starts]
+        kinds = header[:, MARKER_BYTES].astype(np.int64)
+        lengths = header[:, MARKER_BYTES + 1:MARKER_BYTES + 5].copy().view("<u4").reshape(-1).astype(np.int64)
+        t_host_ns = header[:, MARKER_BYTES + 5:].copy().view("<i8").reshape(-1)
+        ends = starts + HEADER_BYTES + lengths  # each record's payload end, where its CRC is
+        follows = starts == np.concatenate(([position], ends[:-1] + CRC.size))
+        n = int(np.cumprod(follows & (lengths <= MAX_PAYLOAD_BYTES) & (ends + CRC.size <= size)).sum())
+        crcs = np.lib.stride_tricks.sliding_window_view(data, CRC.size)[ends[:n]].copy().view("<u4").reshape(-1)
+        view, crc32 = self.view, zlib.crc32
+        intact = np.fromiter((crc32(view[a + MARKER_BYTES:b]) for a, b in zip(starts[:n].tolist(), ends[:n].tolist())),
+                             dtype=np.uint32, count=n) == crcs
+        n = n if intact.all() else int(np.argmin(intact))  # up to the first record whose CRC fails
+        chunk = kinds[:n] == Kind.CHUNK.value
+        self.chunk_t_host_ns.frombytes(t_host_ns[:n][chunk].astype("<i8").tobytes())
+        self.chunk_offsets.frombytes((starts[:n][chunk] + HEADER_BYTES).astype("<i8").tobytes())
+        self.chunk_lengths.frombytes(lengths[:n][chunk].astype("<i8").tobytes())
+        others = np.flatnonzero(~chunk)
+        self.others += zip(kinds[others].tolist(), t_host_ns[others].tolist(), (starts[others] + HEADER_BYTES).tolist(),
+                           ends[others].tolist())
+        return n, int(ends[n - 1]) + CRC.size if n else position
 
     def run(self, position: int) -> None:
         buffer, view, size = self.buffer, self.view, len(self.buffer)
@@ -350,6 +395,15 @@ class _Walk:
             return None
         _, _, length, _ = RECORD_HEADER.unpack_from(self.buffer, position)
         return position + RECORD_OVERHEAD_BYTES + length
+
+
+def _marker_positions(data: np.ndarray, start: int, stop: int) -> np.ndarray:
+    """Where ``MARKER`` starts in ``data[start:stop]``."""
+    block = data[start:stop + MARKER_BYTES - 1]
+    at = np.flatnonzero(block[: max(len(block) - MARKER_BYTES + 1, 0)] == MARKER[0])
+    for i in range(1, MARKER_BYTES):
+        at = at[block[at + i] == MARKER[i]]
+    return at + start
 
 
 def _chunk_time_jumps(chunk_t_host_ns) -> list[str]:
