@@ -25,6 +25,7 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
     import pyqtgraph as pg
     from PySide6 import QtCore, QtWidgets
 
+    from groundstation.ui import first_frame
     from groundstation.ui.main_window import MainWindow
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
@@ -33,6 +34,7 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
     pg.setConfigOptions(antialias=False)  # antialiased lines cost several times more per frame
     splash = prepare_estimators(app)
     window = MainWindow(QtCore.QSettings(), sessions)
+    first_frame.watch(app, window)  # the benchmark's stopwatch, when asked for
     # Ctrl-C or a kill closes the window as its close button does: the session stops, the recording
     # is closed and the settings saved. (Python runs the handler at the redraw timer's next tick.)
     for signum in (signal.SIGINT, signal.SIGTERM):
