@@ -22,7 +22,6 @@ import dataclasses
 from fractions import Fraction
 
 import numpy as np
-from scipy.signal import resample_poly
 
 from groundstation import quaternion
 from groundstation.estimation import ESTIMATORS, create
@@ -106,6 +105,8 @@ def resampled(trial, rate_hz: float):
     if abs(ratio - rate_hz * period_s) > 1e-3 * rate_hz * period_s:
         raise ValueError(f"{rate_hz:g} Hz is not a small rational multiple of the trial's {1.0 / period_s:g} Hz")
     up, down = ratio.numerator, ratio.denominator
+
+    from scipy.signal import resample_poly  # here: scipy.signal costs the app's start a second (bench/bench_first_frame.py)
 
     def sensor(values):
         return None if values is None else resample_poly(values, up, down, axis=0)

@@ -1,12 +1,14 @@
-"""The start's two moments, for ``bench/bench_first_frame.py``: with ``GROUNDSTATION_FIRST_FRAME=1`` in the
-environment the app prints the process's CPU seconds (every thread's, since the process started) at
+"""The window's first paint: what the app waits for before it loads the estimators' compiled kernels
+(``ui.app.run``), and the benchmark's stopwatch (``bench/bench_first_frame.py``).
+
+With ``GROUNDSTATION_FIRST_FRAME=1`` in the environment the app prints the process's CPU seconds (every
+thread's, since the process started) at
 
 - ``first paint``: the main window's first paint event (the window on screen, its plots still empty);
 - ``first data``: the first paint of any of its widgets after the live view drew a sample
   (``LiveView.frames_drawn``): a curve with data on screen;
 
 then closes the window (the session stops, the recording closes, as at the close button) and so quits.
-Without the variable nothing here runs.
 """
 
 from __future__ import annotations
@@ -19,8 +21,26 @@ from PySide6 import QtCore, QtWidgets
 ENV = "GROUNDSTATION_FIRST_FRAME"
 
 
+class _FirstPaint(QtCore.QObject):
+    def __init__(self, widget: QtWidgets.QWidget, callback):
+        super().__init__(widget)
+        self.callback = callback
+        widget.installEventFilter(self)
+
+    def eventFilter(self, watched, event) -> bool:
+        if event.type() == QtCore.QEvent.Paint:
+            watched.removeEventFilter(self)
+            self.callback()
+        return False
+
+
+def on_first_paint(widget: QtWidgets.QWidget, callback) -> None:
+    """``callback()`` at ``widget``'s first paint event, just before it paints (so it must not take long)."""
+    _FirstPaint(widget, callback)
+
+
 class FirstFrame(QtCore.QObject):
-    """Watches ``window``'s paint events; ``moments`` holds what it printed. The whole application's
+    """Notes ``window``'s first paint and first data (``moments``, and printed). The whole application's
     events are watched only once the live view has drawn (for the first paint of a plot's viewport):
     before that, a filter on every event would add its own cost to what is measured."""
 
@@ -29,7 +49,7 @@ class FirstFrame(QtCore.QObject):
         self.app = app
         self.window = window
         self.moments: dict[str, float] = {}
-        window.installEventFilter(self)
+        on_first_paint(window, lambda: self._note("first paint"))
         window.timer.timeout.connect(self._drawn)  # after the window's own redraw tick
 
     def _drawn(self) -> None:
@@ -38,13 +58,9 @@ class FirstFrame(QtCore.QObject):
             self.app.installEventFilter(self)
 
     def eventFilter(self, watched, event) -> bool:
-        if event.type() != QtCore.QEvent.Paint or not isinstance(watched, QtWidgets.QWidget) or watched.window() is not self.window:
-            return False
-        if "first paint" not in self.moments:
-            self._note("first paint")
-        elif self.window.live_view.frames_drawn and "first data" not in self.moments:
-            self._note("first data")
+        if event.type() == QtCore.QEvent.Paint and isinstance(watched, QtWidgets.QWidget) and watched.window() is self.window:
             self.app.removeEventFilter(self)
+            self._note("first data")
             QtCore.QTimer.singleShot(0, self.window.close)
         return False
 

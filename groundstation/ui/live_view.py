@@ -49,8 +49,8 @@ def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | Non
 
 def colour(name: str) -> str:
     """An estimator's colour (grey if it names none of the palette's)."""
-    cls = estimation.ESTIMATORS.get(name)
-    return PALETTE.get(cls.colour, "#444444") if cls else "#444444"
+    facts = estimation.about(name)
+    return PALETTE.get(facts.colour, "#444444") if facts else "#444444"
 
 
 def attitude_plots(filters: tuple[str, ...], truth: bool = False) -> tuple[Plot, ...]:
