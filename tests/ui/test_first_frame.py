@@ -1,0 +1,46 @@
+"""The app's start (issue 25): the window paints before numba and the estimators' kernels load, and the
+simulated bridge's data follows once they are ready. A real ``groundstation app --demo`` process, Qt
+offscreen, stopped by its own first-frame stopwatch (``ui/first_frame.py``)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def start_app(tmp_path: Path) -> list[str]:
+    """stdout and stderr of ``python -X importtime -m groundstation app --demo`` in one stream, in order:
+    the imports (stderr, unbuffered) and the stopwatch's moments (flushed) as they happened."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "QT_QPA_PLATFORM": "offscreen", "GROUNDSTATION_FIRST_FRAME": "1",
+           "XDG_CONFIG_HOME": str(tmp_path / "config"), "GROUNDSTATION_RECORDINGS": str(tmp_path / "recordings")}
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "groundstation", "app", "--demo"], env=env, cwd=tmp_path,
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=900)
+    assert done.returncode == 0, done.stdout[-2000:]
+    return done.stdout.splitlines()
+
+
+def position(lines: list[str], predicate) -> int:
+    return next(i for i, line in enumerate(lines) if predicate(line))
+
+
+def test_the_window_paints_before_numba_loads_and_the_data_follows(tmp_path):
+    lines = start_app(tmp_path)
+    paint = position(lines, lambda line: line.startswith("first paint "))
+    data = position(lines, lambda line: line.startswith("first data "))
+    numba = position(lines, lambda line: line.rstrip().endswith("| numba"))
+    kernels = position(lines, lambda line: line.rstrip().endswith("groundstation.estimation.base"))  # the kernels' module
+    assert paint < numba < data and paint < kernels < data
+    paint_s, data_s = (float(lines[i].split()[-1]) for i in (paint, data))
+    assert 0 < paint_s <= data_s
+    assert list((tmp_path / "recordings").glob("*.gsrec")), "the demo's session was recorded"
+
+
+def test_the_first_paint_comes_before_scipy_pandas_pyarrow_and_openpyxl(tmp_path):
+    lines = start_app(tmp_path)
+    paint = position(lines, lambda line: line.startswith("first paint "))
+    before = {line.split("|")[-1].strip() for line in lines[:paint] if line.startswith("import time:")}
+    assert not before & {"numba", "scipy", "pandas", "pyarrow", "openpyxl"}
