@@ -1,4 +1,4 @@
-"""Start-up cost of the command line: ``groundstation --help`` and ``export --help`` against ``python -c pass``.
+"""Start-up cost of the command line: ``groundstation --help`` and every command's ``--help`` against ``python -c pass``.
 
 CPU seconds (user + system) of each child process, median of ``--repeats`` runs, so other work on the
 machine weighs less than on a wall clock. Run from the worktree root: ``python bench/bench_help.py``.
@@ -13,12 +13,12 @@ import statistics
 import subprocess
 import sys
 
+from groundstation.cli import COMMANDS
+
 CASES = {
     "python -c pass (baseline)": ["-c", "pass"],
     "groundstation --help": ["-m", "groundstation", "--help"],
-    "groundstation export --help": ["-m", "groundstation", "export", "--help"],
-    "groundstation replay --help": ["-m", "groundstation", "replay", "--help"],
-    "groundstation app --help": ["-m", "groundstation", "app", "--help"],
+    **{f"groundstation {name} --help": ["-m", "groundstation", name, "--help"] for name in COMMANDS},
 }
 
 
