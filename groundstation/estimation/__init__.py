@@ -104,9 +104,9 @@ class _Registry(MutableMapping):
     def about(self, name: str) -> About:
         """An estimator's facts (KeyError for an unknown name): a built-in one's from ``BUILT_IN``, a
         registered class's from its attributes."""
-        entry = self._entries[name]
-        if isinstance(entry, str) or BUILT_IN.get(name) is _BY_CLASS.get(entry.__name__):
-            return BUILT_IN[name]
+        entry, facts = self._entries[name], BUILT_IN.get(name)
+        if isinstance(entry, str) or (facts is not None and entry.__name__ == facts.class_name):
+            return facts
         return About(entry.__module__, entry.__name__, entry.label, entry.colour, entry.needs, entry.live, entry.tunable)
 
 
