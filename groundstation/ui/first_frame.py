@@ -5,8 +5,8 @@ With ``GROUNDSTATION_FIRST_FRAME=1`` in the environment the app prints the proce
 thread's, since the process started) at
 
 - ``first paint``: the main window's first paint event (the window on screen, its plots still empty);
-- ``first data``: the first paint of any of its widgets after the live view drew a sample
-  (``LiveView.frames_drawn``): a curve with data on screen;
+- ``first data``: the first paint of any of its widgets after the live view drew with rows of the
+  session taken (``LiveView.frames_drawn``, ``Series.taken``): a curve with data on screen;
 
 then closes the window (the session stops, the recording closes, as at the close button) and so quits.
 """
@@ -49,11 +49,15 @@ class FirstFrame(QtCore.QObject):
         self.app = app
         self.window = window
         self.moments: dict[str, float] = {}
+        self._frames_drawn = 0
         on_first_paint(window, lambda: self._note("first paint"))
         window.timer.timeout.connect(self._drawn)  # after the window's own redraw tick
 
     def _drawn(self) -> None:
-        if self.window.live_view.frames_drawn and "first paint" in self.moments:
+        view = self.window.live_view
+        # A draw counts once rows were taken: a new session's plots are drawn empty too (``stale``).
+        drew, self._frames_drawn = view.frames_drawn > self._frames_drawn, view.frames_drawn
+        if drew and any(series.taken for series in view.series.values()) and "first paint" in self.moments:
             self.window.timer.timeout.disconnect(self._drawn)
             self.app.installEventFilter(self)
 

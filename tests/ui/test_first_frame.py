@@ -9,6 +9,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from groundstation.estimation import live_estimators
+from groundstation.session.load import load_session
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -36,7 +41,12 @@ def test_the_window_paints_before_numba_loads_and_the_data_follows(tmp_path):
     assert paint < numba < data and paint < kernels < data
     paint_s, data_s = (float(lines[i].split()[-1]) for i in (paint, data))
     assert 0 < paint_s <= data_s
-    assert list((tmp_path / "recordings").glob("*.gsrec")), "the demo's session was recorded"
+    # The source opened once its estimators existed: the recording, replayed, has every live estimator's
+    # attitude on every sample, from the first.
+    (recording,) = (tmp_path / "recordings").glob("*.gsrec")
+    data = load_session(recording)
+    assert len(data) > 0 and data.estimated == live_estimators()
+    assert all(np.isfinite(data.quaternion(name)).all() for name in data.estimated)
 
 
 def test_the_first_paint_comes_before_scipy_pandas_pyarrow_and_openpyxl(tmp_path):
