@@ -112,8 +112,12 @@ class LiveView(QtWidgets.QWidget):
         controls.addStretch(1)
         self.tabs = QtWidgets.QTabWidget()
         self._hidden = hidden  # remembered also for labels the current session lacks
-        self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
-        self._curves_of = (("ahf",), False)  # the estimators, and whether a truth is plotted
+        # Drawn at first for the estimators a live session runs (the registry names them without loading
+        # them): the app's usual first session then finds its curves there, not rebuilt (a third of a
+        # second before its first data; bench/bench_first_frame.py).
+        live = estimation.live_estimators()
+        self.attitude = self._add_tab(StackedPlots(attitude_plots(live), hidden), "Attitude")
+        self._curves_of = (live, False)  # the estimators, and whether a truth is plotted
         self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
         self._sensor_aiding: frozenset[str] = frozenset()
         self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
