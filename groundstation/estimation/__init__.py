@@ -20,12 +20,12 @@ import math
 from collections.abc import Iterator, MutableMapping
 from typing import TYPE_CHECKING
 
-from groundstation.estimation.compiled_cache import use_user_cache
+from groundstation.estimation.compiled_cache import use_user_cache_for_numba
 
 if TYPE_CHECKING:
     from groundstation.estimation.base import Estimator
 
-use_user_cache()  # before any estimator imports numba: their compiled kernels survive a re-install
+use_user_cache_for_numba()  # as any estimator imports numba: their compiled kernels survive a re-install
 
 @dataclasses.dataclass(frozen=True)
 class About:
