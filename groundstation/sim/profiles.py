@@ -38,7 +38,7 @@ import numpy as np
 
 from groundstation import quaternion as quat
 from groundstation.sim.seeds import stream
-from groundstation.sim.settings import DEFAULT_DURATION_S, MAX_DURATION_S, PROFILES  # noqa: F401 (their home before)
+from groundstation.sim.settings import DEFAULT_DURATION_S, PROFILES
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 REST_S = 2.0

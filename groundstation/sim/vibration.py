@@ -19,13 +19,12 @@ changes no other output.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
 from groundstation.sim.profiles import REST_S, Moves
-from groundstation.sim.settings import VibrationSettings  # noqa: F401 (its home before)
+from groundstation.sim.settings import VibrationSettings
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 HARMONICS = (1.0, 0.5)  # amplitude of the fundamental and the second harmonic
