@@ -54,3 +54,23 @@ def test_the_first_paint_comes_before_scipy_pandas_pyarrow_and_openpyxl(tmp_path
     paint = position(lines, lambda line: line.startswith("first paint "))
     before = {line.split("|")[-1].strip() for line in lines[:paint] if line.startswith("import time:")}
     assert not before & {"numba", "scipy", "pandas", "pyarrow", "openpyxl"}
+
+
+def test_the_tabs_out_of_sight_are_built_when_first_asked_for_with_their_titles_and_visibility(window, qtbot):
+    """The window shows before the tabs behind Attitude are built; the first session (or a click) builds
+    them in their places, the heading and position tabs still hidden until their data, the current tab kept."""
+    view = window.live_view
+    tabs = view.tabs
+    titles = [tabs.tabText(i) for i in range(tabs.count())]
+    assert titles == ["Attitude", "Sensors", "AHF diagnostics", "Heading", "Position", "Channels", "Vibration"]
+    assert "sensors" not in view.__dict__ and "vibration" not in view.__dict__
+    assert [tabs.isTabVisible(i) for i in range(tabs.count())] == [True, True, True, False, False, True, True]
+    tabs.setCurrentIndex(titles.index("Channels"))
+    window.start_demo()
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 50, timeout=20000)
+    assert [tabs.tabText(i) for i in range(tabs.count())] == titles
+    assert [tabs.widget(i) for i in range(tabs.count())] == [view.attitude, view.sensors, view.diagnostics, view.heading,
+                                                             view.position, view.channels, view.vibration]
+    assert tabs.currentWidget() is view.channels
+    tabs.setCurrentWidget(view.sensors)  # a built tab shows the session's samples
+    qtbot.waitUntil(lambda: view.frames_drawn > 3 and view.current_plots() is view.sensors, timeout=10000)
