@@ -220,6 +220,8 @@ class LiveView(QtWidgets.QWidget):
             plots.set_visible(label, visible)
 
     def _tab_changed(self) -> None:
+        if self.tabs.currentWidget() in self._later.values():  # a click on a tab not built yet
+            self._build_later_tabs()
         self._show_aiding_sensors()
         self.redraw()
 
