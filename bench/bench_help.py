@@ -1,4 +1,4 @@
-"""Start-up cost of the command line: ``groundstation --help`` and ``export --help`` against ``python -c pass``.
+"""Start-up cost of the command line: ``groundstation --help`` and every command's ``--help`` against ``python -c pass``.
 
 CPU seconds (user + system) of each child process, median of ``--repeats`` runs, so other work on the
 machine weighs less than on a wall clock. Run from the worktree root: ``python bench/bench_help.py``.
@@ -13,18 +13,23 @@ import statistics
 import subprocess
 import sys
 
+from groundstation.cli import COMMANDS
+
 CASES = {
     "python -c pass (baseline)": ["-c", "pass"],
     "groundstation --help": ["-m", "groundstation", "--help"],
-    "groundstation export --help": ["-m", "groundstation", "export", "--help"],
-    "groundstation replay --help": ["-m", "groundstation", "replay", "--help"],
-    "groundstation app --help": ["-m", "groundstation", "app", "--help"],
+    **{f"groundstation {name} --help": ["-m", "groundstation", name, "--help"] for name in COMMANDS},
 }
+
+
+# Byte code written and read, as an installed package has it (pip compiles it at install): with
+# PYTHONDONTWRITEBYTECODE set, as on the machine these figures come from, every start compiled every module.
+ENV = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": os.getcwd()}
 
 
 def child_cpu_s(argv: list[str]) -> float:
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    subprocess.run([sys.executable, *argv], check=True, stdout=subprocess.DEVNULL, env={**os.environ, "PYTHONPATH": os.getcwd()})
+    subprocess.run([sys.executable, *argv], check=True, stdout=subprocess.DEVNULL, env=ENV)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
 

@@ -12,8 +12,12 @@ import dataclasses
 import zlib
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 GYR = ["gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s"]
 ACC = ["acc_x_m_s2", "acc_y_m_s2", "acc_z_m_s2"]
@@ -47,6 +51,8 @@ def read_csv(path) -> Trial:
     path = Path(path)
     if not path.is_file():
         raise DatasetError(f"{path}: no such file")
+    import pandas as pd  # here: the app's start and the commands that read no CSV need not wait for pandas
+
     try:
         frame = pd.read_csv(path, compression="infer")
     except (OSError, EOFError, zlib.error, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as error:
@@ -57,6 +63,8 @@ def read_csv(path) -> Trial:
 
 def numeric_column(cells: pd.Series, path) -> np.ndarray:
     """float64 values of a CSV column; empty cells are NaN, any other text is an error (with its line)."""
+    import pandas as pd
+
     values = pd.to_numeric(cells, errors="coerce")
     text = values.isna() & cells.notna()
     if text.any():

@@ -17,7 +17,7 @@ import tempfile
 
 from groundstation.errors import UserError
 from groundstation.sim.options import add_scenario_arguments, scenario_from_args
-from groundstation.sim.profiles import MAX_DURATION_S  # without --duration: a day; after it the craft holds still
+from groundstation.sim.settings import MAX_DURATION_S  # without --duration: a day; after it the craft holds still
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

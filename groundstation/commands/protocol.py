@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from firmware_protocol import SPEC, StreamDecoder
 from groundstation.errors import UserError
 
 CHUNK_BYTES = 1 << 16
@@ -25,6 +24,8 @@ def run(args: argparse.Namespace) -> int:
 
 
 def print_spec() -> None:
+    from firmware_protocol import SPEC  # here: parsing the spec is most of what the help would cost
+
     print(f"protocol version {SPEC.protocol_version}, schema fingerprint 0x{SPEC.fingerprint:08X}, sync 0x{SPEC.sync:02X}")
     for frame_type in SPEC.frames:
         arrow = "aircraft->ground" if frame_type.direction == "down" else "ground->aircraft"
@@ -34,6 +35,8 @@ def print_spec() -> None:
 
 
 def decode_file(path: Path, limit: int) -> None:
+    from firmware_protocol import StreamDecoder
+
     decoder = StreamDecoder()
     shown = 0
     for chunk in link_bytes(path):

@@ -20,31 +20,65 @@ import math
 from collections.abc import Iterator, MutableMapping
 from typing import TYPE_CHECKING
 
-from groundstation.estimation.compiled_cache import use_user_cache
+from groundstation.estimation.compiled_cache import use_user_cache_for_numba
 
 if TYPE_CHECKING:
     from groundstation.estimation.base import Estimator
 
-use_user_cache()  # before any estimator imports numba: their compiled kernels survive a re-install
+use_user_cache_for_numba()  # as any estimator imports numba: their compiled kernels survive a re-install
 
-# Each built-in estimator's class by module and name, imported when first asked for: its module imports
-# numba (seconds), which ``--help`` and the window's first frame need not wait for (bench/bench_help.py).
-_BUILT_IN = {
-    "Ahf2": "ahf2", "Vqf": "vqf", "Ahf": "ahf", "Hf": "ahf", "Ecf": "ecf", "Hfm": "marg", "Ecfm": "marg",
-    "Mcf": "mcf", "Ukf": "ukf", "Sssrukf": "ukf", "Cf1": "cf1", "Kf": "kf", "Ekf": "ekf", "Ahf2m": "ahf2",
+@dataclasses.dataclass(frozen=True)
+class About:
+    """What the app, the commands and the exports say of a built-in estimator, known without importing its
+    module (which imports numba: seconds, which ``--help`` and the window's first paint need not wait for;
+    bench/bench_help.py, bench/bench_first_frame.py). Its class takes these facts from here
+    (``base.Estimator.__init_subclass__``), so each is written once."""
+
+    module: str  # groundstation.estimation.<module> defines the class
+    class_name: str
+    label: str  # what the legend, the panel and the charts call it
+    colour: str  # a colour's name in the app's palette (``ui.plots.PALETTE``): Qt stays out of here
+    needs: frozenset[str] = frozenset()  # aiding it is no more than a tilt filter without: "mag", "gps"
+    live: bool = True  # run on every live session (so showing it is a click, not a restart)
+    tunable: tuple[tuple[str, str, str], ...] = ()  # settings the app offers to tune live: (setting, symbol, unit)
+
+
+_MAG, _GPS = frozenset({"mag"}), frozenset({"gps"})
+_BETA = (("beta", "β", "rad/s"),)
+_KP_KI = (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²"))
+# The built-in estimators, in the order the app, evaluate and exports show them. CF1, KF and EKF only
+# replays of older recordings have; AHF2+mag is for evaluate and replays (live sessions have hfm, ecfm,
+# mcf and vqf for the heading); without GPS velocity the unscented filters are slow tilt filters at
+# ~100x the others' cost.
+BUILT_IN: dict[str, About] = {
+    "ahf2": About("ahf2", "Ahf2", "AHF2", "black"),
+    "vqf": About("vqf", "Vqf", "VQF", "orange"),
+    "ahf": About("ahf", "Ahf", "AHF", "indigo", tunable=(("lambda_min", "λ min", "rad/s"), ("lambda_max", "λ max", "rad/s"))),
+    "hf": About("ahf", "Hf", "HF", "green", tunable=_BETA),
+    "ecf": About("ecf", "Ecf", "ECF", "teal", tunable=_KP_KI),
+    "hfm": About("marg", "Hfm", "HF+mag", "olive", _MAG, tunable=_BETA),
+    "ecfm": About("marg", "Ecfm", "ECF+mag", "cyan", _MAG, tunable=_KP_KI),
+    "mcf": About("mcf", "Mcf", "MCF", "sand", _MAG),
+    "ukf": About("ukf", "Ukf", "UKF", "rose", _GPS),
+    "sssrukf": About("ukf", "Sssrukf", "SSSRUKF", "purple", _GPS),
+    "cf1": About("cf1", "Cf1", "CF1", "olive", live=False),
+    "kf": About("kf", "Kf", "KF", "cyan", live=False),
+    "ekf": About("ekf", "Ekf", "EKF", "sand", live=False),
+    "ahf2m": About("ahf2", "Ahf2m", "AHF2+mag", "purple", _MAG, live=False),
 }
+_BY_CLASS = {about.class_name: about for about in BUILT_IN.values()}
 
 
 def _built_in(class_name: str) -> type:
-    return getattr(importlib.import_module(f"groundstation.estimation.{_BUILT_IN[class_name]}"), class_name)
+    return getattr(importlib.import_module(f"groundstation.estimation.{_BY_CLASS[class_name].module}"), class_name)
 
 
 class _Registry(MutableMapping):
-    """name -> estimator class; the names (keys, ``in``, ``len``) without importing any estimator, a
-    class imported when it is looked up."""
+    """name -> estimator class; the names (keys, ``in``, ``len``) and ``about`` without importing any
+    estimator, a class imported when it is looked up."""
 
     def __init__(self, entries: dict[str, str | type]):
-        self._entries = entries  # name -> class, or the class's name in ``_BUILT_IN`` until first looked up
+        self._entries = entries  # name -> class, or the class's name in ``BUILT_IN`` until first looked up
 
     def __getitem__(self, name: str) -> type:
         entry = self._entries[name]
@@ -58,26 +92,38 @@ class _Registry(MutableMapping):
     def __delitem__(self, name: str) -> None:
         del self._entries[name]
 
+    def __contains__(self, name) -> bool:  # the mixin's would look the class up, importing it
+        return name in self._entries
+
     def __iter__(self) -> Iterator[str]:
         return iter(self._entries)
 
     def __len__(self) -> int:
         return len(self._entries)
 
+    def about(self, name: str) -> About:
+        """An estimator's facts (KeyError for an unknown name): a built-in one's from ``BUILT_IN``, a
+        registered class's from its attributes."""
+        entry, facts = self._entries[name], BUILT_IN.get(name)
+        if isinstance(entry, str) or (facts is not None and entry.__name__ == facts.class_name):
+            return facts
+        return About(entry.__module__, entry.__name__, entry.label, entry.colour, entry.needs, entry.live, entry.tunable)
 
-# The one list of estimators, in the order the app, evaluate and exports show them: each class says its
-# label, colour, needs and whether live sessions run it (``base.Estimator``). A new estimator is its
-# module, its class's module in ``_BUILT_IN`` and its name added here (or ``register(cls)``); nothing else
-# names it (tests/test_cli.py checks each name is its class's ``name``).
-ESTIMATORS: MutableMapping[str, type[Estimator]] = _Registry({
-    "ahf2": "Ahf2", "vqf": "Vqf", "ahf": "Ahf", "hf": "Hf", "ecf": "Ecf", "hfm": "Hfm", "ecfm": "Ecfm", "mcf": "Mcf",
-    "ukf": "Ukf", "sssrukf": "Sssrukf", "cf1": "Cf1", "kf": "Kf", "ekf": "Ekf", "ahf2m": "Ahf2m",
-})
+
+# The one list of estimators: each name's class and facts (``About``). A new estimator is its module and
+# its entry in ``BUILT_IN`` (or ``register(cls)``); nothing else names it (tests/test_cli.py checks each
+# name is its class's ``name``).
+ESTIMATORS: MutableMapping[str, type[Estimator]] = _Registry({name: about.class_name for name, about in BUILT_IN.items()})
+
+
+def about(name: str) -> About | None:
+    """An estimator's facts without importing its kernels; None for a name that is not an estimator."""
+    return ESTIMATORS.about(name) if name in ESTIMATORS else None
 
 
 def __getattr__(name: str):
     """``from groundstation.estimation import Hf`` (and ``Estimator``), imported on first use."""
-    if name in _BUILT_IN:
+    if name in _BY_CLASS:
         return _built_in(name)
     if name == "Estimator":
         return importlib.import_module("groundstation.estimation.base").Estimator
@@ -97,20 +143,20 @@ def register(cls: type[Estimator]) -> type[Estimator]:
 
 def label(name: str) -> str:
     """What the app and the exports call an estimator (its name if it is none of ours)."""
-    cls = ESTIMATORS.get(name)
-    return cls.label if cls else name
+    facts = about(name)
+    return facts.label if facts else name
 
 
 def live_estimators() -> tuple[str, ...]:
     """The estimators every live session runs (and so its recording's replays), so showing one is a
     legend click or a check box, not a restart: the IMU filters, those with the magnetometer and the
     GPS-aided unscented filters (a few µs per sample each, compiled; bench/bench_estimator_costs.out.md). Hidden curves cost the UI nothing per frame."""
-    return tuple(name for name, cls in ESTIMATORS.items() if cls.live)
+    return tuple(name for name in ESTIMATORS if ESTIMATORS.about(name).live)
 
 
 def runnable(capabilities, names=None) -> tuple[str, ...]:
     """Those of ``names`` (default: every estimator) whose needs ``capabilities`` ("mag", "gps") meet."""
-    return tuple(n for n in (ESTIMATORS if names is None else names) if n in ESTIMATORS and ESTIMATORS[n].needs <= set(capabilities))
+    return tuple(n for n in (ESTIMATORS if names is None else names) if n in ESTIMATORS and ESTIMATORS.about(n).needs <= set(capabilities))
 
 
 def aiding_estimator(filters, named: str | None = None) -> str | None:

@@ -189,9 +189,6 @@ class Ahf(CompiledEstimator):
     """Adaptive hybrid filter (eq. 6-20). ``dtype=np.float32`` runs it in single precision."""
 
     name = "ahf"
-    label = "AHF"
-    colour = "indigo"
-    tunable = (("lambda_min", "λ min", "rad/s"), ("lambda_max", "λ max", "rad/s"))
     Settings = AhfSettings
     Diagnostics = AhfDiagnostics
     kernel = staticmethod(ahf_kernel)
@@ -220,8 +217,5 @@ class Hf(Ahf):
     """Hybrid filter with λ fixed at ``beta`` (eq. 6-19): Madgwick's IMU filter. β = 0 is gyro-only."""
 
     name = "hf"
-    label = "HF"
-    colour = "green"
-    tunable = (("beta", "β", "rad/s"),)
     Settings = HfSettings
     adaptive = False

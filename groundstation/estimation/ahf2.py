@@ -343,8 +343,6 @@ def ahf2_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
 
 class Ahf2(CompiledEstimator):
     name = "ahf2"
-    label = "AHF2"
-    colour = "black"
     estimates_gyro_bias = True
     Settings = Ahf2Settings
     Diagnostics = Ahf2Diagnostics
@@ -383,8 +381,4 @@ class Ahf2m(Ahf2):
     """AHF2 with its heading following the magnetometer (step 8 of the module docstring)."""
 
     name = "ahf2m"
-    label = "AHF2+mag"
-    colour = "purple"
-    needs = frozenset({"mag"})
-    live = False  # evaluate and replays; live sessions have hfm, ecfm, mcf and vqf for the heading
     uses_magnetometer = True

@@ -240,7 +240,8 @@ class Estimator:
     """
 
     name: ClassVar[str]
-    # How the estimator describes itself to the app, evaluate and exports (``ESTIMATORS`` lists the classes):
+    # How the estimator describes itself to the app, evaluate and exports (``ESTIMATORS`` lists the classes;
+    # a built-in one's from ``estimation.BUILT_IN``, see ``__init_subclass__``):
     label: ClassVar[str]  # what the legend, the panel and the charts call it
     colour: ClassVar[str]  # a colour's name in the app's palette (``ui.plots.PALETTE``): Qt stays out of here
     needs: ClassVar[frozenset[str]] = frozenset()  # aiding it is no more than a tilt filter without: "mag", "gps"
@@ -253,6 +254,16 @@ class Estimator:
     uses_magnetometer: ClassVar[bool] = False
     Settings: ClassVar[type]
     Diagnostics: ClassVar[type[NamedTuple]]
+
+    def __init_subclass__(cls, **kwargs):
+        """A built-in estimator's label, colour, needs, live flag and tunable settings are written once, in
+        the registry (``estimation.BUILT_IN``), which knows them without importing this module's numba."""
+        super().__init_subclass__(**kwargs)
+        from groundstation.estimation import BUILT_IN
+
+        facts = BUILT_IN.get(cls.__dict__.get("name"))
+        if facts is not None and facts.class_name == cls.__name__:
+            cls.label, cls.colour, cls.needs, cls.live, cls.tunable = facts.label, facts.colour, facts.needs, facts.live, facts.tunable
 
     def __init__(self, settings=None):
         self.settings = self.Settings() if settings is None else settings

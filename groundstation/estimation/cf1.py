@@ -78,9 +78,6 @@ def cf1_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
 
 class Cf1(CompiledEstimator):
     name = "cf1"
-    label = "CF1"
-    colour = "olive"
-    live = False  # only replays of older recordings have it
     Settings = Cf1Settings
     Diagnostics = Cf1Diagnostics
     kernel = staticmethod(cf1_kernel)

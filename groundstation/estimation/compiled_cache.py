@@ -8,8 +8,9 @@ modules it calls into ("Cache invalidation fails to recognize changes in symbols
 different file", numba's notes on caching): the folder is therefore named by a hash of every estimation
 source, so a change to any of them (``base.py``'s guard, a helper) starts a fresh folder.
 
-``NUMBA_CACHE_DIR`` set by the user wins. Set before numba is imported (numba reads it at import) and
-also on ``numba.config`` in case something imported numba first.
+``NUMBA_CACHE_DIR`` set by the user wins. Set just before numba is imported (numba reads it at import;
+``use_user_cache_for_numba``: hashing the sources costs as much as a command's ``--help`` may in all,
+bench/bench_help.py) and also on ``numba.config`` in case something imported numba first.
 """
 
 from __future__ import annotations
@@ -51,3 +52,22 @@ def use_user_cache() -> str:
     if numba is not None:  # imported before us: its config has read the environment already
         numba.config.CACHE_DIR = folder
     return folder
+
+
+class _BeforeNumba:
+    """An import hook (``sys.meta_path``) that points numba's cache at the user's folder when numba is
+    first imported, then steps aside: it finds no module itself."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name == "numba":
+            sys.meta_path.remove(self)
+            use_user_cache()
+        return None
+
+
+def use_user_cache_for_numba() -> None:
+    """``use_user_cache`` now if numba is imported already, else just before it is."""
+    if "numba" in sys.modules:
+        use_user_cache()
+    elif not any(isinstance(finder, _BeforeNumba) for finder in sys.meta_path):
+        sys.meta_path.insert(0, _BeforeNumba())

@@ -116,9 +116,6 @@ def ecf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
 
 class Ecf(CompiledEstimator):
     name = "ecf"
-    label = "ECF"
-    colour = "teal"
-    tunable = (("kp", "Kp", "rad/s"), ("ki", "Ki", "rad/s²"))
     estimates_gyro_bias = True
     Settings = EcfSettings
     Diagnostics = EcfDiagnostics

@@ -148,9 +148,6 @@ def ekf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
 
 class Ekf(CompiledEstimator):
     name = "ekf"
-    label = "EKF"
-    colour = "sand"
-    live = False  # only replays of older recordings have it
     Settings = EkfSettings
     Diagnostics = EkfDiagnostics
     kernel = staticmethod(ekf_kernel)

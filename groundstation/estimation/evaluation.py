@@ -108,6 +108,8 @@ def resampled(trial, rate_hz: float):
 
     up, down = ratio.numerator, ratio.denominator
 
+    from scipy.signal import resample_poly  # here: scipy.signal costs the app's start a second (bench/bench_first_frame.py)
+
     def sensor(values):
         return None if values is None else resample_poly(values, up, down, axis=0)
 

@@ -102,9 +102,6 @@ def kf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
 
 class Kf(CompiledEstimator):
     name = "kf"
-    label = "KF"
-    colour = "cyan"
-    live = False  # only replays of older recordings have it
     estimates_gyro_bias = True
     Settings = KfSettings
     Diagnostics = KfDiagnostics

@@ -39,9 +39,6 @@ class Hfm(Hf):
     """Madgwick's MARG filter: HF (β fixed) plus the magnetometer's gradient (module docstring; ahf.py)."""
 
     name = "hfm"
-    label = "HF+mag"
-    colour = "olive"
-    needs = frozenset({"mag"})
     uses_magnetometer = True
 
 
@@ -49,7 +46,4 @@ class Ecfm(Ecf):
     """Mahony's ECF with the magnetometer error term ``e += m̂ × w`` (module docstring; ecf.py)."""
 
     name = "ecfm"
-    label = "ECF+mag"
-    colour = "cyan"
-    needs = frozenset({"mag"})
     uses_magnetometer = True

@@ -131,9 +131,6 @@ def mcf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
 
 class Mcf(CompiledEstimator):
     name = "mcf"
-    label = "MCF"
-    colour = "sand"
-    needs = frozenset({"mag"})
     uses_magnetometer = True
     Settings = McfSettings
     Diagnostics = McfDiagnostics

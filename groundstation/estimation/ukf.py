@@ -422,8 +422,6 @@ def ukf_run(state, p, gyr, acc, dt, mag, gps, q_out, status_out, diag_out):
 class _GpsUkf(CompiledEstimator):
     """What both filters share; subclasses pick the sigma-point set and dense or square-root steps."""
 
-    needs = frozenset({"gps"})  # without GPS velocity they are slow tilt filters at ~100x the others' cost
-
     Diagnostics = GpsUkfDiagnostics
     kernel = staticmethod(ukf_kernel)
     run_kernel = staticmethod(ukf_run)
@@ -462,8 +460,6 @@ class Ukf(_GpsUkf):
     """Standard UKF: 2n + 1 = 9 symmetric sigma points, full covariance, Cholesky twice a sample."""
 
     name = "ukf"
-    label = "UKF"
-    colour = "rose"
     Settings = UkfSettings
     _square_root = False
 
@@ -476,8 +472,6 @@ class Sssrukf(_GpsUkf):
     """Seed 001's SSSRUKF: square-root UKF, additive noise, n + 2 = 6 spherical simplex sigma points."""
 
     name = "sssrukf"
-    label = "SSSRUKF"
-    colour = "purple"
     Settings = SssrukfSettings
     _square_root = True
 

@@ -74,8 +74,6 @@ class Vqf(Estimator):
     """VQF (the package) behind the project's interface; built on the first sample's period."""
 
     name = "vqf"
-    label = "VQF"
-    colour = "orange"
     estimates_gyro_bias = True
     uses_magnetometer = True
     Settings = VqfSettings

@@ -12,17 +12,18 @@ and tests reproduce). The app and ``groundstation replay`` open files whole inst
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from groundstation import formats
-from groundstation.autopilot.session import FAST_IMU_FORMATS
 from groundstation.formats import IMU_STREAMS
-from groundstation.estimation import live_estimators
-from groundstation.session.load import Loading, load_session
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import pipeline_for
-from groundstation.session.table import LIVE_KEEP_ROWS
-from groundstation.sources import ReplaySource, SourceError, open_source
+
+if TYPE_CHECKING:
+    from groundstation.session.live import LiveSession
+    from groundstation.session.load import Loading
+    from groundstation.sources import ReplaySource
+
+# The makers are imported when a session is opened, not with this module: the window takes ``Sessions``
+# before its first paint, which need not wait for numba, pandas or scipy (bench/bench_first_frame.py).
 
 DEMO_SPEC = "sim:"
 
@@ -35,6 +36,12 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
     live sources; a replay takes the recorded ones. ``defaults`` are source options the spec may
     override (``baud=``, ``speed=``).
     """
+    from groundstation.estimation import live_estimators
+    from groundstation.session.live import LiveSession
+    from groundstation.session.pipeline import Pipeline
+    from groundstation.session.table import LIVE_KEEP_ROWS
+    from groundstation.sources import ReplaySource, SourceError, open_source
+
     source = open_source(spec, **defaults)
     if source.is_replay:
         if not isinstance(source, ReplaySource):  # mavlink:FILE.tlog: a flight log, opened whole
@@ -53,6 +60,9 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
 def replay_session(source: ReplaySource) -> LiveSession:
     """A recording through the live path with its recorded estimators and settings (every one of
     live estimator for the app's recordings), as the live session computed it."""
+    from groundstation.session.live import LiveSession
+    from groundstation.session.replay import pipeline_for
+
     return LiveSession(source, pipeline_for(source.recording), record=False)
 
 
@@ -68,6 +78,15 @@ class Sessions:
 
     def load(self, path, filters=None, forced=None) -> Loading:
         """``path`` computed in a worker; a flight log that can hold a full-rate IMU on the stream ``imu`` names."""
+        from groundstation.autopilot.session import FAST_IMU_FORMATS
+        from groundstation.session.load import Loading
+
         fast_possible = getattr(formats.sniff(path), "name", None) in FAST_IMU_FORMATS
         return Loading(path, filters, forced, self.imu if fast_possible else IMU_STREAMS[0])
-    load_session = staticmethod(load_session)
+
+    @staticmethod
+    def load_session(*args, **kwargs):
+        """``session.load.load_session``: what an export or a report loads its file with."""
+        from groundstation.session.load import load_session
+
+        return load_session(*args, **kwargs)

@@ -1,5 +1,6 @@
 """The flight simulator: truth profiles, an MPU-6050 model, simulated firmware and a radio link.
 
+    settings.py   what a flight is asked to be (the board's and vibration settings, profile names), without the simulator
     profiles.py   seeded truth trajectories (attitude, body rate, linear motion), exact at any instant
     imu.py        MPU-6050 error model -> int16 counts (settings default to the datasheet)
     extra_sensors.py optional magnetometer, barometer and GPS models

@@ -6,12 +6,7 @@ import argparse
 import dataclasses
 
 from groundstation.errors import UserError
-from groundstation.sim.firmware import MODES, FirmwareSettings
-from groundstation.sim.imu import MPU6050Settings
-from groundstation.sim.link import LinkSettings
-from groundstation.sim.profiles import DEFAULT_DURATION_S, MAX_DURATION_S, PROFILES
-from groundstation.sim.stream import Scenario
-from groundstation.sim.vibration import VibrationSettings
+from groundstation.sim.settings import DEFAULT_DURATION_S, MAX_DURATION_S, MODES, PROFILES, FirmwareSettings, VibrationSettings
 
 # Rates of the optional sensors (Hz); each must divide the output rate.
 EXTRA_SENSOR_RATES_HZ = {"mag": 50, "baro": 25, "gps": 5}
@@ -71,7 +66,12 @@ def seed_number(text: str) -> int:
     return seed
 
 
-def scenario_from_args(args: argparse.Namespace, duration_s: float | None) -> Scenario:
+def scenario_from_args(args: argparse.Namespace, duration_s: float | None):
+    """The ``sim.stream.Scenario`` the options describe (UserError for an impossible one)."""
+    from groundstation.sim.imu import MPU6050Settings
+    from groundstation.sim.link import LinkSettings
+    from groundstation.sim.stream import Scenario
+
     sensors = [s.strip() for s in args.sensors.split(",") if s.strip()]
     unknown = set(sensors) - EXTRA_SENSOR_RATES_HZ.keys()
     if unknown:

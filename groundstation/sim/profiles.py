@@ -38,6 +38,7 @@ import numpy as np
 
 from groundstation import quaternion as quat
 from groundstation.sim.seeds import stream
+from groundstation.sim.settings import DEFAULT_DURATION_S, PROFILES
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 REST_S = 2.0
@@ -47,9 +48,6 @@ _SMOOTHSTEP_PEAK_ACCEL = 10.0 / math.sqrt(3.0)
 # Largest ds/du of the same smoothstep (at u = 1/2).
 _SMOOTHSTEP_PEAK_RATE = 1.875
 
-DEFAULT_DURATION_S = {"static": 300.0, "hover": 120.0, "flight": 120.0, "aggressive": 600.0, "slide": 120.0, "fast": 120.0, "car": 120.0, "turntable": 765.0}
-PROFILES = tuple(DEFAULT_DURATION_S)
-MAX_DURATION_S = 86_400.0  # a day: profiles are computed ahead, so their length is bounded
 
 
 class Moves:

@@ -19,12 +19,12 @@ changes no other output.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
 from groundstation.sim.profiles import REST_S, Moves
+from groundstation.sim.settings import VibrationSettings
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 HARMONICS = (1.0, 0.5)  # amplitude of the fundamental and the second harmonic
@@ -32,20 +32,6 @@ PHASES_RAD = (0.0, math.pi / 3.0)
 ACCEL_AXIS_GAIN = np.array([0.5, 0.5, 1.0])  # the rotors shake the frame most along their thrust
 GYRO_AXIS_GAIN = np.array([1.0, 1.0, 0.3])  # and rock it in roll and pitch
 SPIN_UP_S = 2.0
-
-
-@dataclasses.dataclass(frozen=True)
-class VibrationSettings:
-    """``hover_hz`` 0: no vibration. Amplitudes of the fundamental at hover thrust, on the strongest axis."""
-
-    hover_hz: float = 0.0
-    accel_m_s2: float = 3.0
-    gyro_dps: float = 3.0
-
-    def __post_init__(self):
-        if not (0.0 <= self.hover_hz <= 1000.0 and self.accel_m_s2 >= 0.0 and self.gyro_dps >= 0.0):
-            raise ValueError(f"vibration: frequency 0-1000 Hz and amplitudes >= 0, not {self.hover_hz!r} Hz, "
-                             f"{self.accel_m_s2!r} m/s², {self.gyro_dps!r} °/s")
 
 
 class MotorVibration:

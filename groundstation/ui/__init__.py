@@ -1,6 +1,7 @@
 """The desktop app; the only package that imports Qt (PySide6, pyqtgraph).
 
     app.py                QApplication and the main window on a source (``groundstation app``)
+    first_frame.py        the window's first paint (the source opens after it) and the start's stopwatch
     main_window.py        menus and keys, connection bar, live view, side panels, status bar; owns the session
     connection_bar.py     port list (refreshed), baud, connect, demo, open recording, export
     replay_bar.py         play/pause, step, speed, seek slider

@@ -15,7 +15,7 @@ import dataclasses
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.estimation import ESTIMATORS, label
+from groundstation.estimation import ESTIMATORS, about, label
 from groundstation.session.view import Session
 
 SHOWN_COLUMNS = 4  # "show" check boxes per row
@@ -46,7 +46,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self._shown_row = QtWidgets.QGridLayout()
         self._layout.addRow("show", self._shown_row)
         # estimator -> (setting, symbol, unit), as the estimators offer them (``Estimator.tunable``)
-        self.tunable = {name: cls.tunable for name, cls in ESTIMATORS.items() if cls.tunable}
+        self.tunable = {name: about(name).tunable for name in ESTIMATORS if about(name).tunable}
         for name, settings in self.tunable.items():
             for setting, text, unit in settings:
                 box = QtWidgets.QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, singleStep=0.01, suffix=f" {unit}")

@@ -13,7 +13,6 @@ from pathlib import Path
 
 from groundstation.errors import UserError
 from groundstation.export import request as export
-from groundstation.export.excel import ExportCancelled
 
 # The share of the progress bar the decoding takes (the writing takes the rest): a workbook is slow to write.
 DECODE_SHARE = {".xlsx": 0.4, ".csv": 0.9, ".parquet": 0.9, ".mcap": 0.5}
@@ -53,6 +52,8 @@ class ExportJob:
         self.fraction = self._decode_share * share if stage == "decoding" else self._decode_share + (1 - self._decode_share) * share
 
     def _run(self) -> None:
+        from groundstation.export.excel import ExportCancelled  # here: openpyxl need not load before the window shows
+
         try:
             self.message = export.run_export(self.request, self._load, self._progress, self._cancel).message
             self.fraction = 1.0

@@ -36,6 +36,11 @@ HEADING_COLORS = {"compass": "#8c8c8c", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
 # The tabs that appear once a series of theirs has rows.
 AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
+# The tabs after Attitude, in order. Those not in sight at the start are built when first asked for (a
+# session, a click on their title): their plots are two thirds of building the window, which its first
+# paint need not wait for (bench/bench_first_frame.py).
+LATER_TABS = {"sensors": "Sensors", "diagnostics": "AHF diagnostics", "heading": "Heading", "position": "Position",
+              "channels": "Channels", "vibration": "Vibration"}
 
 
 def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None, truth: bool = False) -> tuple[Curve, ...]:
@@ -49,8 +54,8 @@ def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | Non
 
 def colour(name: str) -> str:
     """An estimator's colour (grey if it names none of the palette's)."""
-    cls = estimation.ESTIMATORS.get(name)
-    return PALETTE.get(cls.colour, "#444444") if cls else "#444444"
+    facts = estimation.about(name)
+    return PALETTE.get(facts.colour, "#444444") if facts else "#444444"
 
 
 def attitude_plots(filters: tuple[str, ...], truth: bool = False) -> tuple[Plot, ...]:
@@ -112,21 +117,53 @@ class LiveView(QtWidgets.QWidget):
         controls.addStretch(1)
         self.tabs = QtWidgets.QTabWidget()
         self._hidden = hidden  # remembered also for labels the current session lacks
-        self.attitude = self._add_tab(StackedPlots(attitude_plots(("ahf",)), hidden), "Attitude")
-        self._curves_of = (("ahf",), False)  # the estimators, and whether a truth is plotted
-        self.sensors = self._add_tab(StackedPlots(sensor_plots()), "Sensors")
+        # Drawn at first for the estimators a live session runs (the registry names them without loading
+        # them): the app's usual first session then finds its curves there, not rebuilt (a third of a
+        # second before its first data; bench/bench_first_frame.py).
+        live = estimation.live_estimators()
+        self.attitude = self._add_tab(StackedPlots(attitude_plots(live), hidden), "Attitude")
+        self._curves_of = (live, False)  # the estimators, and whether a truth is plotted
         self._sensor_aiding: frozenset[str] = frozenset()
-        self.diagnostics = self._add_tab(StackedPlots(diagnostic_plots()), "AHF diagnostics")
-        self.heading = self._add_tab(StackedPlots(heading_plots(*self._curves_of), hidden), "Heading")
-        self.position = self._add_tab(PositionView(), "Position")
-        self.channels = self._add_tab(ChannelsView(), "Channels")
-        self.vibration = self._add_tab(VibrationView(), "Vibration")
+        self._later: dict[str, QtWidgets.QWidget] = {}  # a tab not built yet -> the blank page under its title
+        for name, title in LATER_TABS.items():
+            if name == "channels":  # built now: the window restores its panes from the settings at once
+                self.channels = self._add_tab(ChannelsView(), title)
+            else:
+                self._later[name] = QtWidgets.QWidget()
+                self.tabs.addTab(self._later[name], title)
+        for name in AIDING_TABS:  # shown once their data comes (``_show_aiding_tabs``)
+            self.tabs.setTabVisible(self.tabs.indexOf(self._later[name]), False)
         self.tabs.currentChanged.connect(self._tab_changed)  # once every tab is there
-        self._show_aiding_tabs()
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(controls)
         layout.addWidget(self.tabs, 1)
+
+    def __getattr__(self, name: str):
+        """A tab of ``LATER_TABS`` asked for before it is built: every one of them built now."""
+        later = self.__dict__.get("_later")
+        if not later or name not in later:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self._build_later_tabs()
+        return self.__dict__[name]
+
+    def _build_later_tabs(self) -> None:
+        later, self._later = self._later, {}
+        built = {"sensors": lambda: StackedPlots(sensor_plots(self._sensor_aiding)),
+                 "diagnostics": lambda: StackedPlots(diagnostic_plots()),
+                 "heading": lambda: StackedPlots(heading_plots(*self._curves_of), self.hidden_labels()),
+                 "position": PositionView, "vibration": VibrationView}
+        current = self.tabs.currentIndex()
+        self.tabs.blockSignals(True)  # the current tab stays what it was; no half-built view is asked for
+        for name, blank in later.items():
+            index = self.tabs.indexOf(blank)
+            title, visible = self.tabs.tabText(index), self.tabs.isTabVisible(index)
+            self.tabs.removeTab(index)
+            setattr(self, name, self._add_tab(built[name](), title, index))
+            self.tabs.setTabVisible(index, visible)
+            blank.deleteLater()
+        self.tabs.setCurrentIndex(current)
+        self.tabs.blockSignals(False)
 
     def _add_tab(self, plots: StackedPlots | PositionView, title: str, index: int = -1) -> StackedPlots | PositionView:
         plots.userInteracted.connect(lambda: self.pause_button.setChecked(True))
@@ -183,6 +220,8 @@ class LiveView(QtWidgets.QWidget):
             plots.set_visible(label, visible)
 
     def _tab_changed(self) -> None:
+        if self.tabs.currentWidget() in self._later.values():  # a click on a tab not built yet
+            self._build_later_tabs()
         self._show_aiding_sensors()
         self.redraw()
 

@@ -101,7 +101,7 @@ def test_a_failure_in_the_reader_is_the_session_error_not_a_dead_thread(tmp_path
 
 
 def test_record_exits_non_zero_with_the_reason_when_the_reader_fails(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr("groundstation.session.factory.Pipeline", FailingPipeline)
+    monkeypatch.setattr("groundstation.session.pipeline.Pipeline", FailingPipeline)  # open_session imports it when it runs
     status = cli.main(["record", "--port", "sim:", "--duration", "10", "--recordings", str(tmp_path)])
     assert status == 1
     assert "ZeroDivisionError: float division by zero" in capsys.readouterr().err

@@ -5,7 +5,7 @@ from tests.session.test_unexpected_frames import FailingPipeline
 
 
 def test_a_failure_in_the_reader_shows_in_the_banner(window, qtbot, monkeypatch):
-    monkeypatch.setattr("groundstation.session.factory.Pipeline", FailingPipeline)
+    monkeypatch.setattr("groundstation.session.pipeline.Pipeline", FailingPipeline)  # open_session imports it when it runs
     window.connect_serial("sim:")
     session = window.session
     assert session is not None
