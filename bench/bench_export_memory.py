@@ -3,8 +3,9 @@
     python bench/bench_export_memory.py [--minutes 10,60,240] [--live-minutes 60]
 
 Each length is simulated once (``groundstation simulate --scenario flight``). Every case runs in a fresh
-process that first imports what it uses (numpy, numba and the estimators' compiled kernels from numba's
-cache, pyarrow, the loaders) and then resets the kernel's peak-RSS mark (/proc/self/clear_refs, Linux):
+process that first runs it on a 20 s recording (so that what it imports on first use is imported: numpy,
+numba and the estimators' compiled kernels from numba's cache, pyarrow, the loaders) and then resets the
+kernel's peak-RSS mark (/proc/self/clear_refs, Linux):
 "beyond the libraries" is the case's peak RSS minus the RSS after those imports; CPU is the case's
 process time, imports excluded. The cases, all in the same run:
 
@@ -23,6 +24,7 @@ between the shortest and the longest length.
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import subprocess
 import sys
@@ -40,8 +42,9 @@ def memory_kb(field: str) -> int:
         return next(int(line.split()[1]) for line in status if line.startswith(field))
 
 
-def child(case: str, recording: str, out: str, filters: str) -> None:
-    """One case in this process; prints "baseline_kb peak_kb cpu_s"."""
+def child(case: str, recording: str, out: str, filters: str, warm_up: str) -> None:
+    """One case in this process, after the same case on the short recording ``warm_up`` (every module it
+    imports on first use imported, every kernel loaded); prints "baseline_kb peak_kb cpu_s"."""
     import numpy as np
     import pyarrow as pa
     import pyarrow.parquet as pq
@@ -52,27 +55,33 @@ def child(case: str, recording: str, out: str, filters: str) -> None:
     from groundstation.recording import open_recording
     from groundstation.session.load import load_session
 
+    def run(path: str) -> None:
+        if case in ("decode", "bare"):
+            decoded = decode_batch(*open_recording(path).stream())
+            if case == "bare":
+                imu = decoded.frames["IMU_RAW"].raw
+                pq.write_table(pa.table({f: np.asarray(imu[f], dtype=float) for f in imu.dtype.names}), out)
+        elif case == "open":
+            load_session(path, filters.split(","))
+        else:
+            run_export(export_request(path, out, filters=filters.split(","), overwrite=True), load_session)
+
     for name in filters.split(","):
-        create(name)  # the compiled kernels are loaded (from numba's cache) before the baseline
+        create(name)
+    run(warm_up)
+    gc.collect()
     with open("/proc/self/clear_refs", "w") as clear:
         clear.write("5")  # the peak-RSS mark from here
     baseline = memory_kb("VmRSS")
     cpu_started = time.process_time()
-    if case in ("decode", "bare"):
-        decoded = decode_batch(*open_recording(recording).stream())
-        if case == "bare":
-            imu = decoded.frames["IMU_RAW"].raw
-            pq.write_table(pa.table({f: np.asarray(imu[f], dtype=float) for f in imu.dtype.names}), out)
-    elif case == "open":
-        load_session(recording, filters.split(","))
-    else:
-        run_export(export_request(recording, out, filters=filters.split(","), overwrite=True), load_session)
+    run(recording)
     print(baseline, memory_kb("VmHWM"), time.process_time() - cpu_started)
 
 
 def measure(case: str, recording: Path, folder: str, filters: str) -> tuple[float, float, float]:
     out = Path(folder) / "out.parquet"
-    result = subprocess.run([sys.executable, __file__, "--child", case, str(recording), str(out), filters], check=True,
+    warm_up = Path(folder) / "warm-up.gsrec"
+    result = subprocess.run([sys.executable, __file__, "--child", case, str(recording), str(out), filters, str(warm_up)], check=True,
                             env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True)
     out.unlink(missing_ok=True)
     baseline_kb, peak_kb, cpu_s = result.stdout.split()
@@ -83,7 +92,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", default="10,60,240", help="session lengths in minutes (default 10,60,240)")
     parser.add_argument("--live-minutes", type=float, default=60.0, help="the length opened with the live set too")
-    parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
+    parser.add_argument("--child", nargs=5, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         child(*args.child)
@@ -95,6 +104,8 @@ def main() -> None:
     rows = []
     print(f"python {sys.version.split()[0]}, load average {os.getloadavg()[0]:.1f} at the start\n")
     with tempfile.TemporaryDirectory(prefix="bench_export_memory.") as folder:
+        subprocess.run([sys.executable, "-m", "groundstation", "simulate", "--scenario", "flight", "--duration", "20",
+                        "--out", str(Path(folder) / "warm-up.gsrec")], check=True, env=env, capture_output=True)
         for minutes in [float(m) for m in args.minutes.split(",")]:
             recording = Path(folder) / f"{minutes:g}min.gsrec"
             subprocess.run([sys.executable, "-m", "groundstation", "simulate", "--scenario", "flight", "--duration",
