@@ -162,9 +162,10 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
     del emitted_at, frame_ends, starts, placed.lost, scan
 
     order_of = placed.index  # kept index of each frame returned, in return order
+    returned_types = kept.type_ids[order_of]
     frames = {}
     for frame_type in spec.frames:
-        (order,) = np.nonzero(kept.type_ids[order_of] == frame_type.id)
+        (order,) = np.nonzero(returned_types == frame_type.id)
         which = order_of[order]
         dtype = payload_dtype(frame_type)
         starts = kept.starts[which]
@@ -237,15 +238,19 @@ def _scan(buf: np.ndarray, chunk_ends: np.ndarray, tables: _Tables, spec: Spec) 
     s, e = syncs[valid], ends[valid]
     accepted = _greedy(s, e)
     s, e = s[accepted], e[accepted]
+    del accepted, lengths  # an hour's candidates are ~6 MB an array: each goes once used (the decode's peak)
     # Sync bytes inside accepted frames are never examined. Each examined one, and each accepted frame,
     # needs bytes up to ``need`` before the scan can pass it: the scan stops after a chunk at the first
     # one needing more than has arrived (the chunk ends at or after the buffer's end: incomplete).
     examined = ~_inside(syncs, s, e)
     points = np.concatenate((syncs[examined], s))
     need = np.concatenate((np.where(plausible, ends, syncs + HEADER_BYTES)[examined], e))
+    del ends
     ordering = np.argsort(points, kind="stable")
     points, need = points[ordering], need[ordering]
+    del ordering
     reach = np.maximum.accumulate(need) if len(need) else need
+    del need
     first_waiting = np.searchsorted(reach, chunk_ends, side="right")
     stops = chunk_ends.copy()
     waits = first_waiting < len(points)
