@@ -12,7 +12,6 @@ huge foreign file is refused after reading only that much.
 from __future__ import annotations
 
 import functools
-import itertools
 import json
 import mmap
 import os
@@ -321,7 +320,7 @@ class _Walk:
             return False
 
         t = self.chunk_t_host_ns
-        if any(later <= earlier for earlier, later in itertools.pairwise(t)):
+        if len(t) > 1 and (np.diff(np.frombuffer(t, dtype=np.int64)) <= 0).any():
             seen: dict = {}
             dropped = [i for i, (t_ns, offset, length) in enumerate(zip(t, self.chunk_offsets, self.chunk_lengths))
                        if repeats(Kind.CHUNK, t_ns, offset, offset + length, seen)]
