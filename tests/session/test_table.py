@@ -51,6 +51,23 @@ def test_returned_arrays_are_copies_or_read_only():
     assert table.array()[:, 0].tolist() == [0, 1, 2, 3, 4]
 
 
+def test_a_table_made_whole_holds_its_rows_without_a_copy():
+    """``Table.holding`` takes an array in rows or in columns as it is (read-only from then on) and
+    ``to_dict`` gives views of it; anything else is copied once."""
+    for order in "CF":
+        rows = np.arange(15, dtype=float).reshape(5, 3).copy(order=order)
+        table = Table.holding(COLUMNS, rows)
+        columns = table.to_dict()
+        assert all(np.shares_memory(column, rows) for column in columns.values())
+        assert columns["a"].tolist() == [1, 4, 7, 10, 13] and len(table) == 5
+        assert not rows.flags.writeable
+    strided = np.arange(30, dtype=float).reshape(5, 6)[:, ::2]
+    table = Table.holding(COLUMNS, strided)
+    assert not np.shares_memory(table.to_dict()["a"], strided) and table.to_dict()["a"].tolist() == strided[:, 1].tolist()
+    table.append((9.0, 9.0, 9.0))  # a table made whole still grows as any other
+    assert table.column("time_s").tolist() == [0, 6, 12, 18, 24, 9]
+
+
 def traced_bytes(rows: int, width: int = 12) -> tuple[int, int]:
     """Memory held by a table of ``rows`` appended rows, and Python objects created for it."""
     gc.collect()
