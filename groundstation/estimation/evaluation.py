@@ -104,8 +104,6 @@ def resampled(trial, rate_hz: float):
     ratio = Fraction(rate_hz * period_s).limit_denominator(100)
     if abs(ratio - rate_hz * period_s) > 1e-3 * rate_hz * period_s:
         raise ValueError(f"{rate_hz:g} Hz is not a small rational multiple of the trial's {1.0 / period_s:g} Hz")
-    from scipy.signal import resample_poly  # ~1.4 CPU s to import: only a resampled dataset pays it
-
     up, down = ratio.numerator, ratio.denominator
 
     from scipy.signal import resample_poly  # here: scipy.signal costs the app's start a second (bench/bench_first_frame.py)

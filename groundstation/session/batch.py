@@ -356,6 +356,7 @@ class _Builder:
         for row, (_, event) in zip(gap_at + np.arange(len(gaps)), gaps):
             table[row] = gap_row(event, len(columns))
         index = {column: j for j, column in enumerate(columns)}
+        # From here the run reads its gyro and accelerometer from the table's columns: not kept twice
         run.gyr_rad_s, run.acc_g = (SampleColumns(table, sample_rows, [index[f"{quantity}_{a}_{unit}"] for a in "xyz"])
                                     for quantity, unit in (("gyr", "rad_s"), ("acc", "g")))
         for start, end, values in run.stretches(held):

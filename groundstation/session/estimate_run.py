@@ -56,7 +56,7 @@ class EstimateRun:
         names = self.filters if names is None else tuple(names)
         stretch_samples = STRETCH_SAMPLES
         bank = EstimatorBank(self.filters, self.settings, self.forced, self.aiding)
-        bounds = sorted({0, len(self), *(b.sample for b in self.breaks), *range(0, len(self), stretch_samples)})
+        bounds = sorted({0, *(b.sample for b in self.breaks), *range(0, len(self), stretch_samples)})
         pending = iter(self.breaks)
         upcoming = next(pending, None)
         for start, end in zip(bounds, bounds[1:] + [len(self)]):

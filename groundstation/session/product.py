@@ -162,10 +162,9 @@ def estimate_columns(name: str, q: np.ndarray, diagnostics: dict[str, np.ndarray
     return {**{f"{name}_q{c}": q[:, i] for i, c in enumerate("wxyz")}, **{f"{name}_{d}": v for d, v in diagnostics.items()}}
 
 
-def aligned(times: np.ndarray, other_times: np.ndarray, columns) -> np.ndarray:
-    """``columns`` (each with a row at each of ``other_times``, sorted; or an (M, k) array) at the rows of
-    ``times``: (N, k), NaN where no row has that time. Only the rows found are read."""
-    columns = list(columns.T) if isinstance(columns, np.ndarray) else list(columns)
+def aligned(times: np.ndarray, other_times: np.ndarray, columns: list[np.ndarray]) -> np.ndarray:
+    """``columns`` (each with a row at each of ``other_times``, sorted) at the rows of ``times``: (N, k), NaN
+    where no row has that time. Only the rows found are read."""
     out = np.full((len(times), len(columns)), np.nan)
     index = np.searchsorted(other_times, times)
     index = np.clip(index, 0, max(len(other_times) - 1, 0))
