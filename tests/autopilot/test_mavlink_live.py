@@ -26,16 +26,19 @@ from mavlink_helpers import Flying
 SCENARIO = dataclasses.replace(Scenario(), profile="flight", duration_s=60.0, seed=3)
 
 
-def session(source, seconds: float, quiet_s: float = 1.2):
+def session(source, seconds: float | None = None, quiet_s: float = 1.2, until=None):
     """Read, decode and answer like a live session would (the uplink held back for ``quiet_s`` so the
-    rate before the request shows); returns (chunks, records, requester, decoder)."""
+    rate before the request shows), for ``seconds`` or until ``until()`` is true and nothing more
+    arrives; returns (chunks, records, requester, decoder)."""
     decoder, requester = MavlinkDecoder(), StreamRequester(rate_hz=50.0)
     chunks, records = [], []
     start = time.monotonic()
-    end = start + seconds
-    while time.monotonic() < end:
+    end = start + seconds if seconds is not None else None
+    while end is None or time.monotonic() < end:
         chunk = source.read()
         if chunk is None:
+            if until is not None and until():
+                break
             continue
         chunks.append(chunk)
         new = decoder.feed(chunk.data, chunk.t_host_ns)
@@ -126,7 +129,9 @@ def test_bridge_sim_command_sends_mavlink_over_udp():
     process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--udp", f"127.0.0.1:{source.transport.local_address[1]}",
                                 "--duration", "3", "--seed", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
     try:
-        _, records, requester, _ = session(source, 4.5)
+        # Until the sender has finished (its start-up alone can take seconds on a loaded machine):
+        # what it sent before exiting is already in the socket's buffer.
+        _, records, requester, _ = session(source, until=lambda: process.poll() is not None)
         out, err = process.communicate(timeout=30)
     finally:
         process.kill()
