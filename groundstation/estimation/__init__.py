@@ -173,10 +173,38 @@ def aiding_estimator(filters, named: str | None = None) -> str | None:
     return filters[0] if filters else None
 
 
-def setting_names(name: str) -> frozenset[str]:
-    """The settings an estimator has (none for a name that is not an estimator)."""
+_NON_FINITE = {"inf": math.inf, "-inf": -math.inf, "nan": math.nan}
+
+
+def settings_as_json(settings: dict[str, float | bool]) -> dict[str, float | bool | str]:
+    """Settings for a JSON file (a recording's header and its settings events): JSON has no infinity or
+    NaN, so those are written as the text ``settings_from_json`` reads back; booleans stay booleans."""
+    return {k: v if isinstance(v, bool) or math.isfinite(v) else str(v) for k, v in settings.items()}
+
+
+def settings_from_json(name: str, raw) -> tuple[dict[str, float | bool], list[str]]:
+    """The settings of estimator ``name`` in ``raw`` (as ``settings_as_json`` wrote them, or by anybody) that
+    this version has, each as its setting's type (a boolean or a number, inf and NaN included); and
+    ``name.key`` for each left out: another version's setting, or a value not of its setting's type."""
+    if not isinstance(raw, dict):
+        return {}, [f"{name} (not a table of settings)"]
     cls = ESTIMATORS.get(name)
-    return frozenset(f.name for f in dataclasses.fields(cls.Settings)) if cls else frozenset()
+    defaults = dataclasses.asdict(cls.Settings()) if cls else {}
+    kept, left_out = {}, []
+    for key, value in raw.items():
+        value = _NON_FINITE.get(value, value) if isinstance(value, str) else value
+        default = defaults.get(key)
+        if isinstance(default, bool):
+            fits = isinstance(value, bool)
+        else:
+            # NaN only where the default is NaN ("from the data"), as ``create`` checks
+            fits = (isinstance(default, float) and isinstance(value, (int, float)) and not isinstance(value, bool)
+                    and (not math.isnan(value) or math.isnan(default)))
+        if fits:
+            kept[key] = value if isinstance(value, bool) else float(value)
+        else:
+            left_out.append(f"{name}.{key}")
+    return kept, left_out
 
 
 def create(name: str, overrides: dict[str, float] | None = None) -> Estimator:

@@ -124,7 +124,8 @@ def events_table(data: SessionData) -> list[list]:
 
 def describe_event(event: dict) -> str:
     if event["kind"] == "settings":
-        return ", ".join(f"{event['name']}.{k} = {v:g}" for k, v in event["settings"].items())
+        return ", ".join(f"{event['name']}.{k} = {v if isinstance(v, (bool, str)) else format(v, 'g')}"
+                         for k, v in event["settings"].items())
     if event["kind"] == "config":
         return (f"CONFIG: firmware {event['fw_major']}.{event['fw_minor']}.{event['fw_patch']}, ±{event['accel_fs_g']} g, "
                 f"±{event['gyro_fs_dps']} °/s, {event['rate_hz']} Hz, mounting {event['mounting']}, "

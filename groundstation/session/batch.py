@@ -33,6 +33,7 @@ import numpy as np
 from firmware_protocol import SPEC
 from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_batch
 from firmware_protocol.decoder import DecoderStats
+from groundstation.estimation import settings_as_json
 from groundstation.recording import Recording
 from groundstation.session import aiding
 from groundstation.session.catalogue import IMU, estimator_columns, session_catalogue
@@ -90,7 +91,7 @@ class BatchSession:
     def change_settings(self, name: str, overrides: dict[str, float], t_host_ns: int = 0) -> None:
         """As ``Pipeline.change_settings``; ``self._key`` says where in the session it happens."""
         self.bank.change(name, overrides)
-        self.event(self._key, {"t_host_ns": t_host_ns, "kind": "settings", "name": name, "settings": dict(overrides)})
+        self.event(self._key, {"t_host_ns": t_host_ns, "kind": "settings", "name": name, "settings": settings_as_json(overrides)})
 
     def event(self, key: float, event: dict) -> None:
         self._keyed_events.append((key, event))

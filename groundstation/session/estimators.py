@@ -8,9 +8,8 @@ each estimator's effective settings; the estimator objects hold only state.
 from __future__ import annotations
 
 import dataclasses
-import math
 
-from groundstation.estimation import aiding_estimator, create
+from groundstation.estimation import aiding_estimator, create, settings_as_json
 from groundstation.estimation.calibration import RestBiasCalibrator
 
 # Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
@@ -93,9 +92,9 @@ class EstimatorBank:
         """Every estimator's full settings as in effect now."""
         return {name: dataclasses.asdict(est.settings) for name, est in self.estimators.items()}
 
-    def settings_json(self) -> dict[str, dict[str, float | str]]:
-        """``settings()`` for a JSON file: JSON has no infinity, so non-finite values become strings."""
-        return {n: {k: v if math.isfinite(v) else str(v) for k, v in s.items()} for n, s in self.settings().items()}
+    def settings_json(self) -> dict[str, dict[str, float | bool | str]]:
+        """``settings()`` for a JSON file (``settings_as_json``)."""
+        return {name: settings_as_json(settings) for name, settings in self.settings().items()}
 
     def _effective(self, name: str) -> dict[str, float]:
         return {**self._settings[name], **self._forced[name]}

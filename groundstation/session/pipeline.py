@@ -41,6 +41,7 @@ from operator import itemgetter
 from firmware_protocol import SPEC, Frame, StreamDecoder
 from firmware_protocol.spec import Spec
 from groundstation import mounting
+from groundstation.estimation import settings_as_json
 from groundstation.session.aiding import Aiding
 from groundstation.session.catalogue import session_catalogue
 from groundstation.session.clock import SessionClock
@@ -391,7 +392,7 @@ class Pipeline:
     def change_settings(self, name: str, overrides: dict[str, float], t_host_ns: int = 0) -> None:
         """Change an estimator's settings from this point of the stream, keeping its attitude."""
         self.bank.change(name, overrides)
-        self.events.append({"t_host_ns": t_host_ns, "kind": "settings", "name": name, "settings": dict(overrides)})
+        self.events.append({"t_host_ns": t_host_ns, "kind": "settings", "name": name, "settings": settings_as_json(overrides)})
 
     def settings(self) -> dict[str, dict[str, float]]:
         return self.bank.settings()

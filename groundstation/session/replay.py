@@ -8,27 +8,9 @@ from collections.abc import Callable
 
 from groundstation.autopilot.vehicle import MAX_SYSTEM, MIN_SYSTEM
 from groundstation.errors import UserError
-from groundstation.estimation import ESTIMATORS, setting_names
+from groundstation.estimation import ESTIMATORS, settings_from_json
 from groundstation.recording import Recording
 from groundstation.session.pipeline import DEFAULT_FILTERS, PROTOCOLS, Pipeline
-
-
-def checked_settings(name: str, raw) -> tuple[dict[str, float], list[str]]:
-    """The settings of estimator ``name`` in a recording's ``raw`` table that this version has, as finite
-    numbers; and ``name.key`` for each left out (another version's setting, or a value that is no number).
-    A recording is anybody's file: what it says is checked by type here, once, for the header and the
-    settings events alike."""
-    if not isinstance(raw, dict):
-        return {}, [f"{name} (not a table of settings)"]
-    known = setting_names(name) if name in ESTIMATORS else frozenset()
-    kept, left_out = {}, []
-    for key, value in raw.items():
-        is_number = isinstance(value, (int, float)) and not isinstance(value, bool)
-        if key in known and is_number and math.isfinite(value):
-            kept[key] = float(value)
-        else:
-            left_out.append(f"{name}.{key}")
-    return kept, left_out
 
 
 def _header_settings(recording: Recording) -> dict:
@@ -36,19 +18,19 @@ def _header_settings(recording: Recording) -> dict:
     return recorded if isinstance(recorded, dict) else {"estimator_settings": recorded}
 
 
-def recorded_settings(recording: Recording) -> dict[str, dict[str, float]]:
-    """The estimator settings in the header (``Pipeline.settings_json``), as numbers again; those this
+def recorded_settings(recording: Recording) -> dict[str, dict[str, float | bool]]:
+    """The estimator settings in the header (``Pipeline.settings_json``), each of its type again; those this
     version's estimators do not have or cannot read are left out and named by ``left_out_settings``."""
-    return {name: checked_settings(name, settings)[0] for name, settings in _header_settings(recording).items()
+    return {name: settings_from_json(name, settings)[0] for name, settings in _header_settings(recording).items()
             if name in ESTIMATORS}
 
 
 def left_out_settings(recording: Recording) -> list[str]:
     """Every recorded setting, in the header or in a settings event, that a replay cannot apply."""
-    out = [item for name, settings in _header_settings(recording).items() for item in checked_settings(str(name), settings)[1]]
+    out = [item for name, settings in _header_settings(recording).items() for item in settings_from_json(str(name), settings)[1]]
     for _, event in recording.events:
         if event.get("kind") == "settings":
-            out += checked_settings(str(event.get("name")), event.get("settings"))[1]
+            out += settings_from_json(str(event.get("name")), event.get("settings"))[1]
     return list(dict.fromkeys(out))
 
 
@@ -146,7 +128,7 @@ class SettingsSchedule:
         for i, (t, event) in enumerate(recording.events):
             name = event.get("name")
             if event.get("kind") == "settings" and isinstance(name, str):
-                kept, _ = checked_settings(name, event.get("settings"))  # what is left out: left_out_settings
+                kept, _ = settings_from_json(name, event.get("settings"))  # what is left out: left_out_settings
                 if kept:
                     changes.append((t, i, {**event, "settings": kept}))
             elif event.get("kind") in CONFIG_ANSWERS:

@@ -1,12 +1,16 @@
 """A recording's header holds every live estimator's full settings, NaN and inf included (JSON has
 neither: they are written as text); a replay must take them back, whatever they are."""
 
-import numpy as np
+import dataclasses
+import math
 
+import numpy as np
+import pytest
+
+from groundstation.estimation import ESTIMATORS, live_estimators
 from groundstation.recording import RecordingWriter, open_recording
-from groundstation.estimation import live_estimators
 from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import pipeline_for
+from groundstation.session.replay import SettingsSchedule, pipeline_for
 
 
 def test_the_live_estimators_settings_survive_the_recording_header(tmp_path):
@@ -31,3 +35,36 @@ def test_a_recording_from_an_older_version_replays_and_says_what_it_left_out(tmp
     assert replayed.settings()["hf"]["beta"] == 0.2  # what the old version recorded still applies
     warnings = [e["message"] for e in replayed.events if e["kind"] == "warning"]
     assert len(warnings) == 1 and "hf.acc_max_g" in warnings[0]
+
+
+def _away_from_defaults(name: str) -> dict:
+    """Every setting of estimator ``name`` changed from its default, each kind a setting has: a boolean
+    flipped, a number to infinity ("no limit"), NaN where NaN is its default, any other number halved."""
+    defaults = dataclasses.asdict(ESTIMATORS[name].Settings())
+    changed = {}
+    for key, value in defaults.items():
+        if isinstance(value, bool):
+            changed[key] = not value
+        elif math.isnan(value) or math.isinf(value):
+            changed[key] = value
+        else:
+            changed[key] = math.inf if key.endswith("_max_g") else value / 2
+    return changed
+
+
+@pytest.mark.parametrize("name", list(ESTIMATORS))
+def test_every_setting_of_every_estimator_round_trips_without_a_warning(tmp_path, name):
+    """Issue 34: booleans, inf and NaN came back as "settings this version cannot read", defaults applied."""
+    live = Pipeline((name,))
+    tuned = _away_from_defaults(name)
+    live.change_settings(name, tuned, 5)
+    path = tmp_path / "tuned.gsrec"
+    with RecordingWriter(path, {"filters": [name], "estimator_settings": live.settings_json()}) as writer:
+        writer.write_event(5, live.events[-1])
+    recording = open_recording(path)
+    replayed = pipeline_for(recording)
+    assert [e["message"] for e in replayed.events if e["kind"] == "warning"] == []
+    np.testing.assert_equal(replayed.settings()[name], live.settings()[name])
+    schedule = SettingsSchedule(recording)
+    schedule.apply_before(replayed, 10)
+    np.testing.assert_equal(replayed.settings()[name], {**dataclasses.asdict(ESTIMATORS[name].Settings()), **tuned})
