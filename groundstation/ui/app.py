@@ -11,11 +11,72 @@ from groundstation.errors import UserError
 ORGANIZATION = APPLICATION = "groundstation"
 
 
+# The system libraries Qt's xcb platform plugin loads on Linux (its wheel does not carry them), by
+# soname, with the package that holds each on Debian/Ubuntu and on Fedora. Qt aborts the process with a
+# list of plugins when one is missing; a bare desktop install often lacks libxcb-cursor0.
+QT_XCB_LIBRARIES = {
+    "libxcb.so.1": ("libxcb1", "libxcb"),
+    "libxcb-cursor.so.0": ("libxcb-cursor0", "xcb-util-cursor"),
+    "libxkbcommon-x11.so.0": ("libxkbcommon-x11-0", "libxkbcommon-x11"),
+    "libxcb-icccm.so.4": ("libxcb-icccm4", "xcb-util-wm"),
+    "libxcb-image.so.0": ("libxcb-image0", "xcb-util-image"),
+    "libxcb-keysyms.so.1": ("libxcb-keysyms1", "xcb-util-keysyms"),
+    "libxcb-randr.so.0": ("libxcb-randr0", "libxcb"),
+    "libxcb-render-util.so.0": ("libxcb-render-util0", "xcb-util-renderutil"),
+    "libxcb-xinerama.so.0": ("libxcb-xinerama0", "libxcb"),
+    "libxcb-xkb.so.1": ("libxcb-xkb1", "libxcb"),
+    "libxcb-shape.so.0": ("libxcb-shape0", "libxcb"),
+    "libEGL.so.1": ("libegl1", "libglvnd-egl"),
+    "libGL.so.1": ("libgl1", "libglvnd-glx"),
+    "libfontconfig.so.1": ("libfontconfig1", "fontconfig"),
+    "libdbus-1.so.3": ("libdbus-1-3", "dbus-libs"),
+}
+
+
 def check_display() -> None:
-    """Qt aborts the process when it finds no display; say so first, plainly."""
-    if sys.platform.startswith("linux") and not any(os.environ.get(v) for v in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")):
+    """Qt aborts the process when it finds no display, or no library its platform plugin needs; say so
+    first, plainly."""
+    if not sys.platform.startswith("linux"):
+        return
+    if not any(os.environ.get(v) for v in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")):
         raise UserError("no display found (DISPLAY and WAYLAND_DISPLAY are unset); run it in a desktop session, "
                         "or under Xvfb (xvfb-run groundstation app)")
+    if os.environ.get("QT_QPA_PLATFORM", "xcb") == "xcb":
+        check_libraries(QT_XCB_LIBRARIES)
+        check_x_server(os.environ.get("DISPLAY", ""))
+
+
+def check_x_server(display: str) -> None:
+    """UserError when the X server ``display`` names does not answer (Qt aborts with a list of plugins)."""
+    import ctypes
+
+    xcb = ctypes.CDLL("libxcb.so.1")
+    xcb.xcb_connect.restype = ctypes.c_void_p
+    xcb.xcb_connection_has_error.argtypes = xcb.xcb_disconnect.argtypes = [ctypes.c_void_p]
+    connection = xcb.xcb_connect(display.encode(), None)
+    try:
+        if xcb.xcb_connection_has_error(connection):
+            raise UserError(f"no X display answers at DISPLAY={display!r}; run it in a desktop session, or under "
+                            "Xvfb (xvfb-run groundstation app)")
+    finally:
+        xcb.xcb_disconnect(connection)
+
+
+def check_libraries(libraries: dict[str, tuple[str, str]]) -> None:
+    """UserError naming the packages to install when any of ``libraries`` (soname: (Debian package,
+    Fedora package)) cannot be loaded."""
+    import ctypes
+
+    missing = []
+    for soname, packages in libraries.items():
+        try:
+            ctypes.CDLL(soname)
+        except OSError:
+            missing.append(packages)
+    if missing:
+        debian, fedora = (" ".join(dict.fromkeys(names)) for names in zip(*missing))
+        raise UserError(f"Qt cannot open a window: system libraries are missing; install them with "
+                        f"`sudo apt install {debian}` (Debian, Ubuntu) or `sudo dnf install {fedora}` (Fedora)")
 
 
 def run(port: str | None, baud: int | None, recording: str | None, sessions) -> int:

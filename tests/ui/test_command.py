@@ -50,3 +50,33 @@ def test_demo_with_a_port_is_a_usage_error(tmp_path):
     process = app_process(tmp_path, "--demo", "--port", "COM3")
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 2 and "--demo" in stderr
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux sonames")
+def test_a_missing_qt_library_is_named_by_its_packages():
+    """Issue 34: on a bare desktop Linux Qt aborted with a list of plugins; the package to install is named."""
+    from groundstation.errors import UserError
+    from groundstation.ui.app import check_libraries
+
+    check_libraries({"libc.so.6": ("libc6", "glibc")})  # present on every Linux: nothing said
+    with pytest.raises(UserError) as said:
+        check_libraries({"libc.so.6": ("libc6", "glibc"), "libgroundstation-absent.so.0": ("absent-deb", "absent-rpm")})
+    assert "apt install absent-deb`" in str(said.value) and "dnf install absent-rpm`" in str(said.value)
+    assert "libc6" not in str(said.value)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="X11")
+def test_a_display_that_does_not_answer_is_one_line(tmp_path):
+    """Qt aborted (status 134) with a list of plugins when DISPLAY named no X server (or, on a machine
+    without Qt's system libraries, when one of them was missing)."""
+    from groundstation.errors import UserError
+    from groundstation.ui.app import QT_XCB_LIBRARIES, check_libraries
+
+    try:
+        check_libraries(QT_XCB_LIBRARIES)
+        expected = "no X display answers at DISPLAY=':987'"
+    except UserError as missing:
+        expected = str(missing)
+    process = app_process(tmp_path, "--demo", DISPLAY=":987", QT_QPA_PLATFORM=None, WAYLAND_DISPLAY=None)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 2 and expected in stderr and "Traceback" not in stderr
