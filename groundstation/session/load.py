@@ -114,7 +114,8 @@ def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: 
         metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
         pipeline.filters, protocol=metadata.get("protocol", "gs"),
         link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
-        events=[{**event, "t_s": (event["t_host_ns"] - t0_ns) / 1e9} for event in pipeline.events],
+        # An event from before the first byte (the replay's notes on the recording itself) is at its start.
+        events=[{**event, "t_s": max(event["t_host_ns"] - t0_ns, 0) / 1e9} for event in pipeline.events],
         settings_at_start=pipeline.bank.at_start, settings_at_end=pipeline.settings(), damage=damage,
         parameters=dict(pipeline.parameters), magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0, estimates=estimates,
     )

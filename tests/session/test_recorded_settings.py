@@ -68,3 +68,16 @@ def test_every_setting_of_every_estimator_round_trips_without_a_warning(tmp_path
     schedule = SettingsSchedule(recording)
     schedule.apply_before(replayed, 10)
     np.testing.assert_equal(replayed.settings()[name], {**dataclasses.asdict(ESTIMATORS[name].Settings()), **tuned})
+
+
+def test_a_warning_about_the_recording_itself_is_dated_at_its_start(tmp_path):
+    """Issue 34: the Session sheet dated such a warning at -4376.88 s (host time 0 less the first byte's)."""
+    from groundstation.session.load import load_session
+    from tests.simulated import simulated_chunks, write_recording
+
+    path = tmp_path / "old.gsrec"
+    start_ns = 1_700_000_000_000_000_000  # a host clock far from 0, as a real one is
+    write_recording(path, [(start_ns + t, data) for t, data in simulated_chunks(1.0)], {"filters": ["ahf", "gone"]})
+    events = load_session(path).events
+    warning = next(e for e in events if e["kind"] == "warning" and "gone" in e["message"])
+    assert warning["t_s"] == 0.0
