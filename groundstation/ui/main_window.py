@@ -80,6 +80,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.typed_source: str | None = None  # the source string of the live session shown (Connect)
         self.bar = ConnectionBar()
         self.bar.set_recent(self.recent_sources())
+        # Offered until something streams; from then on the box shows what streams (``_start``).
         self.bar.select(settings.value("port"), int(settings.value("baud", 0) or 0))
         self.bar.connectRequested.connect(self.connect_serial)
         self.bar.disconnectRequested.connect(self.disconnect)
@@ -181,8 +182,8 @@ class MainWindow(QtWidgets.QMainWindow):
     # -- sessions -------------------------------------------------------------------------------
 
     def start_demo(self, note: str = "") -> None:
-        self._start(lambda: self.sessions.open(self.sessions.demo_spec, settings=self._stored_estimator_settings(),
-                                               recordings_dir=self.recordings_dir).start(), note)
+        self._start(self.sessions.demo_spec, lambda: self.sessions.open(
+            self.sessions.demo_spec, settings=self._stored_estimator_settings(), recordings_dir=self.recordings_dir).start(), note)
 
     def connect_serial(self, port: str, baud: int = 0, note: str = "") -> None:
         """Connect to ``port``: any source string ``open_source`` accepts (a bad one is explained in the
@@ -195,8 +196,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("port", port)
         self.settings.setValue("baud", baud)
         rate = {"baud": baud} if baud else {}
-        self._start(lambda: self.sessions.open(port, settings=self._stored_estimator_settings(),
-                                               recordings_dir=self.recordings_dir, **rate).start(), note)
+        self._start(port, lambda: self.sessions.open(port, settings=self._stored_estimator_settings(),
+                                                     recordings_dir=self.recordings_dir, **rate).start(), note)
         self.typed_source = port if self.session is not None else None
         if self.session is not None:
             recent = [port, *(s for s in self.recent_sources() if s != port)][:RECENT_SOURCES]
@@ -301,8 +302,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self._load(session.source.path, tuple(filters), forced, f"recomputing {session.source.path.name} with "
                        f"{', '.join(filters)}", recompute=True)
 
-    def _start(self, start, note: str = "") -> None:
-        """Stop the current session, then start another; a failure leaves none and says why."""
+    def _start(self, spec: str, start, note: str = "") -> None:
+        """Stop the current session, then start another on ``spec``; a failure leaves none and says why.
+        The Source box shows ``spec`` once it streams, so it never names another source than the plots'."""
         self.disconnect()
         try:
             session = start()
@@ -311,6 +313,7 @@ class MainWindow(QtWidgets.QMainWindow):
             return
         self.show_error(None)
         self._adopt(session)
+        self.bar.select(spec, None)
         notes = [note, "" if session.source.is_replay else carried_over_note(self._stored_estimator_settings())]
         self.source_label.setText("  —  ".join([session.source.description, *filter(None, notes)]))
 

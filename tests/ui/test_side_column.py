@@ -114,3 +114,22 @@ def test_help_about_says_the_version_and_links_the_docs(window, qtbot):
     box = next(w for w in QtWidgets.QApplication.topLevelWidgets() if isinstance(w, QtWidgets.QMessageBox) and w.isVisible())
     assert f"groundstation {__version__}" in box.text() and 'href="file://' in box.text() and "README.md" in box.text()
     box.close()
+
+
+def test_after_a_restart_the_source_box_shows_what_streams(qtbot, tmp_path):
+    """Issue 34: the box showed the remembered port while the app streamed the simulated bridge, so
+    simulated curves passed for the aircraft."""
+    from PySide6 import QtCore
+
+    from groundstation.session.factory import Sessions
+    from groundstation.ui.main_window import MainWindow
+
+    settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)
+    settings.setValue("port", "/dev/ttyUSB7")
+    settings.setValue("recent_sources", ["/dev/ttyUSB7"])
+    window = MainWindow(settings, Sessions(), recordings_dir=tmp_path / "recordings")
+    qtbot.addWidget(window)
+    window.show()
+    assert window.bar.source == "/dev/ttyUSB7"  # nothing streams yet: the last source is offered
+    window.start_demo("no port given: streaming from the simulated bridge")
+    assert window.session is not None and window.bar.source == window.sessions.demo_spec
