@@ -121,8 +121,8 @@ class Expression:
     @staticmethod
     def _number(node: ast.AST, value: np.float64):
         if not np.isfinite(value):
-            raise ExpressionError(f"{ast.unparse(node)} is {value} in float64 (an overflow, a division by zero "
-                                  f"or outside the function's domain): nothing to plot")
+            raise ExpressionError(f"{ast.unparse(node)} is {value} in float64 (overflow, division by zero or "
+                                  f"outside the function's domain)")
         return ("value", value)
 
     def evaluate(self, values: dict[str, np.ndarray], budget_s: float | None = None) -> np.ndarray:

@@ -161,6 +161,7 @@ class CustomSeriesDialog(QtWidgets.QDialog):
     def __init__(self, check: Callable[[str], None] | None, taken: set[str], parent=None):
         super().__init__(parent)
         self.setWindowTitle("New custom series")
+        self.setMinimumWidth(560)  # the hint and the reasons in a few lines, not a column of words
         self.check, self.taken = check, taken
         self.name = QtWidgets.QLineEdit(placeholderText="roll_difference_deg")
         self.expression = QtWidgets.QLineEdit(placeholderText="ahf2_roll_deg - onboard_roll_deg")
@@ -179,21 +180,25 @@ class CustomSeriesDialog(QtWidgets.QDialog):
         form.addRow(self.message)
         form.addRow(buttons)
 
+    def _say(self, text: str) -> None:
+        self.message.setText(text)
+        self.adjustSize()  # the message's lines shown whole: a wrapped label does not grow its dialog by itself
+
     def accept(self) -> None:
         name = self.name.text().strip()
         if not name.isidentifier():
-            self.message.setText("the name: letters, digits and _, not starting with a digit (roll_difference_deg)")
+            self._say("the name: letters, digits and _, not starting with a digit (roll_difference_deg)")
             return
         if name in self.taken:
-            self.message.setText(f"there is a custom series {name} already")
+            self._say(f"there is a custom series {name} already")
             return
         if self.check is None:
-            self.message.setText("connect, start the demo or open a file first: the channels come from the session")
+            self._say("connect, start the demo or open a file first: the channels come from the session")
             return
         try:
             self.check(self.expression.text())
         except ExpressionError as error:
-            self.message.setText(str(error))
+            self._say(str(error))
             return
         super().accept()
 
