@@ -261,7 +261,7 @@ class ChannelsView(QtWidgets.QWidget):
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(self.note)
-        layout.addWidget(self.splitter)
+        layout.addWidget(self.splitter, 1)  # the note as tall as its lines, the rest to the panes
         self._rebuild()
 
     # -- what the live view asks of a tab --------------------------------------------------------
