@@ -2,27 +2,39 @@
 
 The text is parsed with Python's ``ast`` and only a whitelist is evaluated, on numpy arrays: numbers,
 the names the caller allows (a bare name, or ``table.column``), ``+ - * / ** %``, unary minus, and the
-functions of ``FUNCTIONS`` (numpy's); never ``eval`` of the text. Anything else is an
-``ExpressionError`` whose message says what, for the dialog that asked. ``at_or_before`` is the rule
-that puts another table's column on these rows' times: its newest row at or before each time.
+functions of ``FUNCTIONS`` (numpy's, each with its number of values); never ``eval`` of the text.
+Anything else is an ``ExpressionError`` whose message says what, for the dialog that asked.
+
+Whatever is typed, evaluating is bounded: every number becomes a float64 when parsed, so no Python
+integer arithmetic ever runs (``10**10**10`` would hold the interpreter, and every other thread, for
+ever); the parts made of numbers only are computed once when parsed, and one that is not a finite
+float64 (``1/0``, ``10**400``, ``0**-1``, ``log(0)``) is refused there with its value; on channels,
+overflow and division by zero give inf or NaN (drawn as gaps), never an exception; the text's length
+and its number of parts are capped, and ``evaluate`` stops with an ``ExpressionError`` once past its
+time budget. ``at_or_before`` is the rule that puts another table's column on these rows' times: its
+newest row at or before each time.
 """
 
 from __future__ import annotations
 
 import ast
 import operator
+import time
 
 import numpy as np
 
 from groundstation.errors import UserError
 
-FUNCTIONS = {name: getattr(np, name) for name in (
+# name -> (numpy's function, how many values it takes); numpy's own extra arguments (out=, where=) never reachable
+FUNCTIONS = {name: (getattr(np, name), 2 if name in ("arctan2", "hypot", "minimum", "maximum") else 1) for name in (
     "abs", "sqrt", "sin", "cos", "tan", "arcsin", "arccos", "arctan", "arctan2", "degrees", "radians", "exp", "log",
     "log10", "hypot", "minimum", "maximum", "sign", "floor", "ceil")}
-CONSTANTS = {"pi": np.pi, "e": np.e}
+CONSTANTS = {"pi": np.float64(np.pi), "e": np.float64(np.e)}
 OPERATORS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
              ast.Pow: operator.pow, ast.Mod: operator.mod}
 UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+MAX_CHARACTERS = 1000  # longer than any formula one types; bounds the parser's work
+MAX_PARTS = 200  # numbers, names and operations: bounds the work per row, and the nesting within Python's recursion limit
 
 
 class ExpressionError(UserError):
@@ -38,68 +50,101 @@ def dotted(node: ast.AST) -> str | None:
     return None
 
 
+def as_float64(value: int | float) -> np.float64:
+    """A number as written, in float64: an integer beyond its range is inf, as 1e400 is."""
+    try:
+        return np.float64(value)
+    except OverflowError:
+        return np.float64(np.inf)
+
+
 class Expression:
-    """``text`` over ``known`` names (ExpressionError when it is not an allowed expression of them);
-    ``names``: those it uses, in order of appearance."""
+    """``text`` over ``known`` names (ExpressionError when it is not an allowed expression of them, or
+    a part of numbers only is not a finite float64); ``names``: those it uses, in order of appearance."""
 
     def __init__(self, text: str, known):
         self.text = text.strip()
         if not self.text:
             raise ExpressionError("the expression is empty")
+        if len(self.text) > MAX_CHARACTERS:
+            raise ExpressionError(f"the expression is {len(self.text)} characters long: {MAX_CHARACTERS} at most")
         try:
-            self._tree = ast.parse(self.text, mode="eval").body
+            tree = ast.parse(self.text, mode="eval").body
         except SyntaxError as error:
             raise ExpressionError(f"not an expression: {error.msg} at column {error.offset}") from None
+        except (ValueError, RecursionError, MemoryError):  # a NUL character; nesting the parser will not take
+            raise ExpressionError("not an expression Python can read") from None
+        parts = sum(isinstance(node, ast.expr) for node in ast.walk(tree))
+        if parts > MAX_PARTS:
+            raise ExpressionError(f"the expression has {parts} parts (numbers, names, operations): {MAX_PARTS} at most")
         self.names: list[str] = []
-        self._check(self._tree, known)
+        with np.errstate(all="ignore"):
+            self._tree = self._compile(tree, known)
 
-    def _check(self, node: ast.AST, known) -> None:
+    def _compile(self, node: ast.AST, known):
+        """The checked tree: ("name", name), ("value", float64), or (function, operand nodes ...); the
+        parts of numbers only computed now."""
         name = dotted(node)
         if name is not None:
-            if name in CONSTANTS or name in known:
-                if name not in CONSTANTS and name not in self.names:
+            if name in CONSTANTS:
+                return ("value", CONSTANTS[name])
+            if name in known:
+                if name not in self.names:
                     self.names.append(name)
-                return
+                return ("name", name)
             raise ExpressionError(f"unknown channel {name!r}" + (f" (functions are called: {name}(x))" if name in FUNCTIONS else ""))
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
-            return
+            return self._number(node, as_float64(node.value))
         if isinstance(node, ast.BinOp) and type(node.op) in OPERATORS:
-            self._check(node.left, known)
-            self._check(node.right, known)
-            return
+            return self._apply(node, OPERATORS[type(node.op)], [node.left, node.right], known)
         if isinstance(node, ast.UnaryOp) and type(node.op) in UNARY:
-            self._check(node.operand, known)
-            return
+            return self._apply(node, UNARY[type(node.op)], [node.operand], known)
         if isinstance(node, ast.Call):
             if not (isinstance(node.func, ast.Name) and node.func.id in FUNCTIONS):
                 raise ExpressionError(f"unknown function {ast.unparse(node.func)!r} (allowed: {', '.join(FUNCTIONS)})")
-            if node.keywords or not node.args:
+            function, count = FUNCTIONS[node.func.id]
+            if node.keywords or any(isinstance(a, ast.Starred) for a in node.args):
                 raise ExpressionError(f"{node.func.id}() takes values in order, without names")
-            for arg in node.args:
-                self._check(arg, known)
-            return
+            if len(node.args) != count:
+                raise ExpressionError(f"{node.func.id}() takes {count} value{'s' if count > 1 else ''}, "
+                                      f"not {len(node.args)}: {ast.unparse(node)}")
+            return self._apply(node, function, node.args, known)
         raise ExpressionError(f"{ast.unparse(node)!r} is not allowed: numbers, channels, + - * / ** %, and "
                               f"{', '.join(FUNCTIONS)} only")
 
-    def evaluate(self, values: dict[str, np.ndarray]) -> np.ndarray:
-        """The expression on ``values`` (an array per name of ``names``, all of one length), as float64."""
-        with np.errstate(all="ignore"):  # NaN and inf where the maths has none (log of a negative): drawn as gaps
-            return np.asarray(self._evaluate(self._tree, values), dtype=float)
+    def _apply(self, node: ast.AST, function, operands: list[ast.AST], known):
+        compiled = [self._compile(operand, known) for operand in operands]
+        if all(c[0] == "value" for c in compiled):  # numbers only: computed once, here
+            return self._number(node, np.float64(function(*(c[1] for c in compiled))))
+        return (function, *compiled)
 
-    def _evaluate(self, node: ast.AST, values):
-        name = dotted(node)
-        if name is not None:
-            return CONSTANTS[name] if name in CONSTANTS else values[name]
-        if isinstance(node, ast.Constant):
-            return node.value
-        if isinstance(node, ast.BinOp):
-            return OPERATORS[type(node.op)](self._evaluate(node.left, values), self._evaluate(node.right, values))
-        if isinstance(node, ast.UnaryOp):
-            return UNARY[type(node.op)](self._evaluate(node.operand, values))
-        try:
-            return FUNCTIONS[node.func.id](*(self._evaluate(a, values) for a in node.args))
-        except TypeError as error:  # the wrong number of values for the function
-            raise ExpressionError(f"{node.func.id}(): {error}") from None
+    @staticmethod
+    def _number(node: ast.AST, value: np.float64):
+        if not np.isfinite(value):
+            raise ExpressionError(f"{ast.unparse(node)} is {value} in float64 (overflow, division by zero or "
+                                  f"outside the function's domain)")
+        return ("value", value)
+
+    def evaluate(self, values: dict[str, np.ndarray], budget_s: float | None = None) -> np.ndarray:
+        """The expression on ``values`` (an array per name of ``names``, all of one length), as float64;
+        an ExpressionError once it has taken longer than ``budget_s``."""
+        floats = {name: np.asarray(v, dtype=np.float64) for name, v in values.items()}
+        deadline = None if budget_s is None else time.perf_counter() + budget_s
+        with np.errstate(all="ignore"):  # NaN and inf where the maths has none (log of a negative): drawn as gaps
+            try:
+                return np.asarray(self._evaluate(self._tree, floats, deadline), dtype=np.float64)
+            except TimeoutError:
+                raise ExpressionError(f"took longer than {budget_s:g} s to compute") from None
+
+    def _evaluate(self, node, values, deadline):
+        if node[0] == "value":
+            return node[1]
+        if node[0] == "name":
+            return values[node[1]]
+        result = node[0](*(self._evaluate(operand, values, deadline) for operand in node[1:]))
+        if deadline is not None and time.perf_counter() > deadline:
+            raise TimeoutError
+        return result
 
 
 def at_or_before(times_s: np.ndarray, their_times_s: np.ndarray, their_values: np.ndarray) -> np.ndarray:

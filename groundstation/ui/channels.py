@@ -6,6 +6,9 @@ plots of one channel against another (east against north); custom series, an exp
 
 A layout is the panes (lists of "table.column" names), the XY pairs and the custom series' expressions,
 as JSON (``layout_json``); the window remembers the last one, and the named ones, in its settings.
+A custom series that cannot be computed (a layout's expression refused by this version's checks, a
+channel this session lacks, or past its time budget at a redraw) is switched off for the session and
+said above the panes; the others draw on.
 The channels are the session's catalogue (``ProductView.catalogue``, derived from the protocol spec and
 the estimators): each listed by its label and unit.
 """
@@ -13,6 +16,7 @@ the estimators): each listed by its label and unit.
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 
 import numpy as np
 import pyqtgraph as pg
@@ -20,7 +24,7 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.analysis.expression import Expression, ExpressionError, at_or_before
 from groundstation.session.view import ProductView, Session
-from groundstation.ui.custom_series import CUSTOM, ExpressionDerive, expression_sources
+from groundstation.ui.custom_series import BUDGET_S, CUSTOM, ExpressionDerive, expression_sources, try_on_latest_rows
 from groundstation.ui.plots import LEFT_AXIS_PX, PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
 
@@ -151,16 +155,19 @@ class XYPlots(pg.GraphicsLayoutWidget):
 
 
 class CustomSeriesDialog(QtWidgets.QDialog):
-    """Name and expression of a custom series; a bad expression is said here, and the dialog stays."""
+    """Name and expression of a custom series; a bad expression is said here, and the dialog stays.
+    ``check``: raises ExpressionError for an expression that cannot be plotted (None: no session yet)."""
 
-    def __init__(self, sources: dict | None, taken: set[str], parent=None):
+    def __init__(self, check: Callable[[str], None] | None, taken: set[str], parent=None):
         super().__init__(parent)
         self.setWindowTitle("New custom series")
-        self.sources, self.taken = sources, taken
+        self.setMinimumWidth(560)  # the hint and the reasons in a few lines, not a column of words
+        self.check, self.taken = check, taken
         self.name = QtWidgets.QLineEdit(placeholderText="roll_difference_deg")
         self.expression = QtWidgets.QLineEdit(placeholderText="ahf2_roll_deg - onboard_roll_deg")
         self.message = QtWidgets.QLabel(wordWrap=True)
         self.message.setStyleSheet("color:#8b0000")
+        self.message.setTextFormat(QtCore.Qt.PlainText)  # it quotes typed text
         buttons = QtWidgets.QDialogButtonBox(QtWidgets.QDialogButtonBox.Ok | QtWidgets.QDialogButtonBox.Cancel)
         buttons.accepted.connect(self.accept)
         buttons.rejected.connect(self.reject)
@@ -173,21 +180,25 @@ class CustomSeriesDialog(QtWidgets.QDialog):
         form.addRow(self.message)
         form.addRow(buttons)
 
+    def _say(self, text: str) -> None:
+        self.message.setText(text)
+        self.adjustSize()  # the message's lines shown whole: a wrapped label does not grow its dialog by itself
+
     def accept(self) -> None:
         name = self.name.text().strip()
         if not name.isidentifier():
-            self.message.setText("the name: letters, digits and _, not starting with a digit (roll_difference_deg)")
+            self._say("the name: letters, digits and _, not starting with a digit (roll_difference_deg)")
             return
         if name in self.taken:
-            self.message.setText(f"there is a custom series {name} already")
+            self._say(f"there is a custom series {name} already")
             return
-        if self.sources is None:
-            self.message.setText("connect, start the demo or open a file first: the channels come from the session")
+        if self.check is None:
+            self._say("connect, start the demo or open a file first: the channels come from the session")
             return
         try:
-            Expression(self.expression.text(), self.sources)
+            self.check(self.expression.text())
         except ExpressionError as error:
-            self.message.setText(str(error))
+            self._say(str(error))
             return
         super().accept()
 
@@ -202,6 +213,8 @@ class ChannelsView(QtWidgets.QWidget):
         self.panes: list[list[str]] = [[]]
         self.xy: list[list[str]] = []
         self.custom: dict[str, str] = {}  # name -> expression
+        self.disabled: dict[str, str] = {}  # custom series switched off for this session: name -> why
+        self.budget_s = BUDGET_S  # each custom series' computation at a redraw
         self.selected_pane = 0
         self.series: dict[str, Series] = {}
         self.search = QtWidgets.QLineEdit(placeholderText="search channels")
@@ -232,6 +245,9 @@ class ChannelsView(QtWidgets.QWidget):
         left_layout.addWidget(self.search)
         left_layout.addWidget(self.tree, 1)
         left_layout.addLayout(controls)
+        self.note = QtWidgets.QLabel(wordWrap=True, visible=False)  # the custom series switched off, and why
+        self.note.setStyleSheet("color:#8b0000")
+        self.note.setTextFormat(QtCore.Qt.PlainText)  # the reasons quote typed text
         self.right = QtWidgets.QSplitter(QtCore.Qt.Vertical)
         self.stacked = self._new_plots()
         self.xy_plots = XYPlots([])
@@ -244,7 +260,8 @@ class ChannelsView(QtWidgets.QWidget):
         self.splitter.setSizes([220, 800])
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
-        layout.addWidget(self.splitter)
+        layout.addWidget(self.note)
+        layout.addWidget(self.splitter, 1)  # the note as tall as its lines, the rest to the panes
         self._rebuild()
 
     # -- what the live view asks of a tab --------------------------------------------------------
@@ -264,7 +281,14 @@ class ChannelsView(QtWidgets.QWidget):
         """Take the plotted tables' new rows, then draw with the live view's IMU series as the clock."""
         if self.session is None:
             return
-        taken = {name for name, s in self.series.items() if s.take(self.session.lock)}
+        taken = set()
+        for key, s in list(self.series.items()):
+            try:
+                if s.take(self.session.lock):
+                    taken.add(key)
+            except ExpressionError as error:  # a custom series past its time budget: off, the others draw on
+                del self.series[key]
+                self._disable(key.removeprefix(f"{PREFIX}{CUSTOM}."), str(error))
         self.stacked.draw({"imu": series["imu"], **self.series}, window_s, None if grew is None else taken | {"imu"})
         if self.xy and (grew is None or taken):
             self.xy_plots.draw(self.series, window_s)
@@ -273,6 +297,7 @@ class ChannelsView(QtWidgets.QWidget):
 
     def set_session(self, session: Session | None) -> None:
         self.session = session
+        self.disabled = {}  # another session: its channels may be there, its rows fewer
         self._fill_tree()
         self.stacked.clear_data()  # the same panes: only their data is new (plots are slow to build)
         self._make_series()
@@ -322,6 +347,7 @@ class ChannelsView(QtWidgets.QWidget):
             layout = None
         layout = layout or {"panes": [[]], "xy": [], "custom": {}}
         self.panes, self.xy, self.custom = layout["panes"], layout["xy"], layout["custom"]
+        self.disabled = {}
         self.selected_pane = 0
         self._fill_tree()
         self._rebuild()
@@ -376,10 +402,14 @@ class ChannelsView(QtWidgets.QWidget):
         self._fill_tree()
         self._make_series()
 
+    def check_expression(self, text: str) -> None:
+        """``text`` as an expression of the session's channels, tried once on its latest rows (ExpressionError: why not)."""
+        sources = expression_sources(self.session.view)
+        try_on_latest_rows(Expression(text, sources), sources, self.session.view, self.session.lock)
+
     def new_custom(self) -> CustomSeriesDialog:
         """The dialog asking a custom series' name and expression (checked against the session's channels)."""
-        sources = expression_sources(self.session.view) if self.session is not None else None
-        dialog = CustomSeriesDialog(sources, set(self.custom), self)
+        dialog = CustomSeriesDialog(self.check_expression if self.session is not None else None, set(self.custom), self)
         dialog.accepted.connect(lambda: self.add_custom(dialog.name.text().strip(), dialog.expression.text()))
         dialog.open()
         return dialog
@@ -447,30 +477,41 @@ class ChannelsView(QtWidgets.QWidget):
 
     def _make_series(self) -> None:
         """A series for each plotted table of the session, holding only its plotted columns (from its
-        oldest row kept: a channel added later shows its past too), and one per plotted custom series."""
+        oldest row kept: a channel added later shows its past too), and one per plotted custom series;
+        a custom series that this session cannot compute is switched off and said."""
         self.series = {}
         if self.session is None:
+            self._show_disabled()
             return
         view = self.session.view
         known = channel_names(view)
+        sources = expression_sources(view)
+        derives: dict[str, ExpressionDerive] = {}
+        for name, text in self.custom.items():
+            if name not in self.disabled:
+                try:
+                    derives[name] = ExpressionDerive(name, Expression(text, sources), sources, view.tables,
+                                                     self.session.lock, self.budget_s)
+                except ExpressionError as error:
+                    self.disabled[name] = str(error)
         wanted: dict[str, list[str]] = {}
         plotted = [c for pane in self.panes for c in pane] + [c for pair in self.xy for c in pair]
         for channel in dict.fromkeys(plotted):
             table, column = channel.split(".", 1)
             if channel in known:
                 wanted.setdefault(table, []).append(column)
-            elif table == CUSTOM and column in self.custom:
-                self._custom_series(column)
+            elif table == CUSTOM and column in derives:
+                self.series[series_key(channel)] = Series(view.tables[derives[column].table], derives[column])
         for table, columns in wanted.items():
             self.series[PREFIX + table] = Series(view.tables[table], lambda rows, names, columns=tuple(
                 columns): {c: rows[:, names.index(c)] for c in columns})
+        self._show_disabled()
 
-    def _custom_series(self, name: str) -> None:
-        """The series of custom series ``name``; none when this session lacks a channel it uses."""
-        view = self.session.view
-        sources = expression_sources(view)
-        try:
-            derive = ExpressionDerive(name, Expression(self.custom[name], sources), sources, view.tables, self.session.lock)
-        except ExpressionError:
-            return
-        self.series[series_key(f"{CUSTOM}.{name}")] = Series(view.tables[derive.table], derive)
+    def _disable(self, name: str, reason: str) -> None:
+        self.disabled[name] = reason
+        self._show_disabled()
+
+    def _show_disabled(self) -> None:
+        """The note above the panes: each custom series switched off, and why."""
+        self.note.setText("\n".join(f"custom series {name} is off: {reason}" for name, reason in self.disabled.items()))
+        self.note.setVisible(bool(self.disabled))

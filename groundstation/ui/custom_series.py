@@ -5,7 +5,8 @@ Its names are the session's channels (``table.column``, or the bare column name 
 has it) and the quantities the live view derives (``ahf2_roll_deg``, ``onboard_roll_deg``, ``gyr_x_dps``
 ...: the names its Attitude and Sensors curves carry). The rows are those of the first name's table; a
 name of another table takes that table's newest row at or before each row's time
-(``expression.at_or_before``). No Qt here.
+(``expression.at_or_before``). Each computation has a time budget (``BUDGET_S``); the dialog tries an
+expression once on the session's latest rows (``try_on_latest_rows``) before taking it. No Qt here.
 """
 
 from __future__ import annotations
@@ -14,11 +15,13 @@ import math
 
 import numpy as np
 
-from groundstation.analysis.expression import Expression, at_or_before
+from groundstation.analysis.expression import Expression, ExpressionError, at_or_before
 from groundstation.session.view import ProductView
 from groundstation.ui.series import Derive, imu_quantities, onboard_quantities
 
 CUSTOM = "custom"  # the channels' "table" of custom series: "custom.NAME"
+BUDGET_S = 0.5  # per computation (a redraw's new rows, or all rows at the first): past it the series is disabled
+SAMPLE_ROWS = 500  # the dialog's trial: the latest rows of the expression's table
 
 
 def expression_sources(view: ProductView) -> dict[str, tuple[str, str, Derive | None]]:
@@ -85,8 +88,8 @@ class ExpressionDerive(_Rows):
     """``Series``' derive of a custom series ``name``: ``expression`` on the rows of its first name's
     table (``table``), the other tables' names sampled (``Sampler``; ``lock``: the session's)."""
 
-    def __init__(self, name: str, expression: Expression, sources, tables: dict, lock):
-        self.name = name
+    def __init__(self, name: str, expression: Expression, sources, tables: dict, lock, budget_s: float = BUDGET_S):
+        self.name, self.budget_s = name, budget_s
         self.expression = expression
         by_table: dict[str, dict[str, tuple[str, Derive | None]]] = {}
         for used in expression.names:
@@ -96,10 +99,34 @@ class ExpressionDerive(_Rows):
         super().__init__(by_table.pop(self.table, {}))
         self.samplers = [Sampler(tables[table], lock, wanted) for table, wanted in by_table.items()]
 
-    def __call__(self, rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
+    def inputs(self, rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
+        """The value of each name of the expression at these rows."""
         time_s = rows[:, columns.index("time_s")]
         values = self.values(rows, columns)
         for sampler in self.samplers:
             values.update(sampler.at(time_s))
-        result = self.expression.evaluate(values) if values else np.full(len(rows), self.expression.evaluate({}))
-        return {self.name: np.broadcast_to(result, (len(rows),))}
+        return values
+
+    def result(self, values: dict[str, np.ndarray], count: int) -> np.ndarray:
+        """The expression on ``inputs``' values, one per row (ExpressionError past the time budget)."""
+        return np.broadcast_to(self.expression.evaluate(values, self.budget_s), (count,))
+
+    def __call__(self, rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
+        return {self.name: self.result(self.inputs(rows, columns), len(rows))}
+
+
+def try_on_latest_rows(expression: Expression, sources, view: ProductView, lock, rows: int = SAMPLE_ROWS) -> None:
+    """The expression computed once on its table's latest ``rows``, as a plot would: an ExpressionError
+    if it cannot be, or if every row where its channels all have values gives it none (inf or NaN)."""
+    derive = ExpressionDerive("trial", expression, sources, view.tables, lock)
+    table = view.tables[derive.table]
+    with lock:
+        sample = table.tail(min(len(table), rows))
+    if not len(sample):
+        return  # nothing received yet: the numbers-only parts were checked when parsed
+    values = derive.inputs(sample, table.columns)
+    result = derive.result(values, len(sample))
+    valued = np.logical_and.reduce([np.isfinite(v) for v in values.values()]) if values else np.ones(len(sample), bool)
+    if valued.any() and not np.isfinite(result[valued]).any():
+        raise ExpressionError(f"it gives no finite value (only inf or NaN) on the latest {len(sample)} rows "
+                              f"where its channels have values: nothing would be drawn")
