@@ -186,9 +186,11 @@ class LiveView(QtWidgets.QWidget):
         return self.pause_button.isChecked()
 
     def set_session(self, session: Session | None) -> None:
-        """Show ``session``; its estimators decide the attitude curves."""
+        """Show ``session``, drawing from its start (a pause belonged to the session shown before); its
+        estimators decide the attitude curves."""
         self.session = session
         self._view = None
+        self.pause_button.setChecked(False)
         self._browsing = None
         self.series = {}
         filters = session.view.filters if session is not None else self._curves_of[0]

@@ -274,3 +274,13 @@ def test_cancel_while_computing_leaves_no_session(window, qtbot):
     loading.wait(30)  # the worker ends (or is dropped); nothing is adopted
     qtbot.wait(200)
     assert window.session is None and window.banner.isHidden()
+
+
+def test_a_file_opened_after_the_live_view_was_paused_draws(window, qtbot, recording):
+    """Issue 34: after "Pause view" in a live session, a replay showed blank plots until "Resume view"."""
+    window.start_demo()
+    window.live_view.pause_button.click()
+    assert window.live_view.paused
+    open_file(window, qtbot, recording)
+    assert not window.live_view.paused and window.live_view.pause_button.text() == "Pause view"
+    qtbot.waitUntil(lambda: any(points(curve) for _, curve in window.live_view.attitude.curves), timeout=10000)
