@@ -26,6 +26,21 @@ def defaults(name: str) -> dict[str, float]:
     return dataclasses.asdict(ESTIMATORS[name].Settings())
 
 
+class SettingBox(QtWidgets.QDoubleSpinBox):
+    """A setting's field that the mouse wheel changes only once clicked into: scrolling the panel past it
+    must not retune an estimator unseen (issue 34: AHF λ max went from 2.000 to 1.960 so)."""
+
+    def __init__(self, **options):
+        super().__init__(**options)
+        self.setFocusPolicy(QtCore.Qt.StrongFocus)  # no focus from the wheel
+
+    def wheelEvent(self, event) -> None:
+        if self.hasFocus():
+            super().wheelEvent(event)
+        else:
+            event.ignore()  # to the scrolling panel
+
+
 class EstimatorPanel(QtWidgets.QGroupBox):
     visibilityChanged = QtCore.Signal(str, bool)  # legend label, shown
     sendToAircraft = QtCore.Signal(dict)  # AHF setting -> value, for set_filter_param
@@ -49,7 +64,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.tunable = {name: about(name).tunable for name in ESTIMATORS if about(name).tunable}
         for name, settings in self.tunable.items():
             for setting, text, unit in settings:
-                box = QtWidgets.QDoubleSpinBox(decimals=3, minimum=0.0, maximum=100.0, singleStep=0.01, suffix=f" {unit}")
+                box = SettingBox(decimals=3, minimum=0.0, maximum=100.0, singleStep=0.01, suffix=f" {unit}")
                 self.boxes[name, setting] = box
                 self._layout.addRow(f"{label(name)} {text}", box)
         apply_button = QtWidgets.QPushButton("Apply")

@@ -220,6 +220,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             item.setPreferredHeight(100)
             self.ci.layout.setRowStretchFactor(row, 1)
         self.items[-1].showAxis("bottom")
+        # Seconds after 20 min too, not "ks"; before the label, or pyqtgraph fixes the prefix of the range now
+        self.items[-1].getAxis("bottom").enableAutoSIPrefix(False)
         self.items[-1].setLabel("bottom", "time", units="s")
         self.crosshair = [pg.InfiniteLine(angle=90, movable=False, pen=pg.mkPen("#555", style=QtCore.Qt.DotLine))
                           for _ in self.items]

@@ -56,3 +56,26 @@ def test_tuned_settings_and_shown_estimators_are_remembered(window, qtbot, tmp_p
     again.start_demo()
     assert again.session.pipeline.estimators["ahf"].settings.lambda_min == 0.3
     assert again.estimator_panel.shown["ecf"].isChecked() and not again.estimator_panel.shown["hf"].isChecked()
+
+
+def wheel(widget, steps: int) -> None:
+    from PySide6 import QtCore, QtGui, QtWidgets
+
+    centre = QtCore.QPointF(widget.rect().center())
+    event = QtGui.QWheelEvent(centre, QtCore.QPointF(widget.mapToGlobal(centre.toPoint())), QtCore.QPoint(),
+                              QtCore.QPoint(0, 120 * steps), QtCore.Qt.NoButton, QtCore.Qt.NoModifier,
+                              QtCore.Qt.NoScrollPhase, False)
+    QtWidgets.QApplication.sendEvent(widget, event)
+
+
+def test_the_mouse_wheel_passing_over_a_setting_leaves_it(window, qtbot):
+    """Issue 34: scrolling over the Estimators panel changed AHF λ max from 2.000 to 1.960 unseen."""
+    window.start_demo()
+    box = next(iter(window.estimator_panel.boxes.values()))
+    before = box.value()
+    wheel(box, -4)
+    assert box.value() == before
+    box.setFocus()
+    qtbot.waitUntil(box.hasFocus, timeout=5000)
+    wheel(box, -1)  # clicked into, the wheel tunes it as a spin box does
+    assert box.value() == before - box.singleStep()

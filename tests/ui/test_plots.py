@@ -197,3 +197,13 @@ def test_the_readout_sits_beside_the_cursor_and_leaves_gaps_blank(plots, qtbot):
     plots.draw(gap, 30.0, None)
     text = plots.read_at(30.5)
     assert "nan" not in text.lower() and "AHF" in text  # its roll is still read
+
+
+def test_the_time_axis_stays_in_seconds_after_twenty_minutes(plots, qtbot):
+    """Issue 34: after 20 min the axis read "time (ks)" with ticks 1.170 ... 1.195."""
+    axis = plots.items[-1].getAxis("bottom")
+    plots.items[-1].setXRange(1170.0, 1195.0)
+    plots.show()
+    qtbot.waitExposed(plots)
+    qtbot.waitUntil(lambda: "(s)" in axis.labelString(), timeout=5000)
+    assert "ks" not in axis.labelString() and axis.scale == 1.0
