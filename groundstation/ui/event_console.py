@@ -23,9 +23,12 @@ ENUM_FIELDS = {kind: {f.name: f for f in SPEC.frame(kind.upper()).fields if f.en
 
 
 def describe(event: dict) -> str:
+    """``mode RTL, armed``: each field by its name and value; a flag by its name ("not armed" when false),
+    a field without a value left out (not "severity None")."""
     enums = ENUM_FIELDS.get(event.get("kind"), {})
-    return ", ".join(f"{k} {SPEC.enum_name(enums[k], v)}" if k in enums else f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
-                     for k, v in event.items() if k not in HIDDEN_FIELDS)
+    return ", ".join(f"{k} {SPEC.enum_name(enums[k], v)}" if k in enums else (k if v else f"not {k}") if isinstance(v, bool)
+                     else f"{k} {v:g}" if isinstance(v, float) else f"{k} {v}"
+                     for k, v in event.items() if k not in HIDDEN_FIELDS and v is not None)
 
 
 class EventConsole(QtWidgets.QWidget):

@@ -38,3 +38,11 @@ def test_an_event_late_in_the_session_is_placed_at_its_time_not_at_the_start(win
     command = next(e for e in reversed(session.view.events) if e["kind"] == "command")
     host_s = session.view.imu.column("host_time_s")[-1]
     assert event_session_time_s(session.view, command) == pytest.approx(host_s, abs=0.3)
+
+
+def test_an_events_flags_read_as_words_and_missing_values_are_left_out():
+    """Issue 34: the console showed "severity None" and "armed True"."""
+    from groundstation.ui.event_console import describe
+
+    assert describe({"kind": "mode", "t_host_ns": 5, "mode": "RTL", "armed": True, "severity": None}) == "mode RTL, armed"
+    assert describe({"kind": "mode", "mode": "LOITER", "armed": False}) == "mode LOITER, not armed"
