@@ -212,6 +212,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 if spec_curve.label not in in_legend:
                     in_legend[spec_curve.label] = curve
                     self.legend.addItem(curve, spec_curve.label)
+                    sample, text = self.legend.items[-1]
+                    text.mouseClickEvent = sample.mouseClickEvent  # the name toggles as its eye does
                 self.curves.append((spec_curve, curve))
             self.items.append(item)
         for row, item in enumerate(self.items, start=1):

@@ -207,3 +207,18 @@ def test_the_time_axis_stays_in_seconds_after_twenty_minutes(plots, qtbot):
     qtbot.waitExposed(plots)
     qtbot.waitUntil(lambda: "(s)" in axis.labelString(), timeout=5000)
     assert "ks" not in axis.labelString() and axis.scale == 1.0
+
+
+def test_a_click_on_a_legend_name_toggles_its_curves(plots, qtbot):
+    """Issue 34: on a flight log, clicks on the legend's names did nothing (only the small line before
+    each name toggled): a person clicks the name."""
+    from pyqtgraph.Qt import QtTest
+
+    plots.show()
+    qtbot.waitExposed(plots)
+    _, text = next((s, t) for s, t in plots.legend.items if t.text == "HF")
+    curve = next(c for s, c in plots.curves if s.label == "HF")
+    shown = curve.isVisible()
+    centre = plots.mapFromScene(text.mapToScene(text.boundingRect().center()))
+    QtTest.QTest.mouseClick(plots.viewport(), QtCore.Qt.LeftButton, QtCore.Qt.NoModifier, centre)
+    qtbot.waitUntil(lambda: curve.isVisible() != shown, timeout=5000)
