@@ -47,7 +47,9 @@ REDRAW_HZ = 30
 HORIZON_EVERY, BODY_EVERY, FIGURES_EVERY = 2, 6, 6
 # The comparison estimators start switched off: shown are the best (AHF2, on the BROAD dev set,
 # bench/bench_estimators.out.md), the paper's AHF and the aircraft's own estimate.
-SHOWN_AT_FIRST = ("ahf2", "ahf")
+# The paper's AHF is one click away, not a noise band over every first view (issue 34): the aiding
+# estimator and the aircraft's own estimate are what a first look needs.
+SHOWN_AT_FIRST = ("ahf2",)
 STEP_S = 5.0  # ← and → in a replay
 PAN_FRACTION = 0.1  # of the window, ← and → live
 RECENT_RECORDINGS = 8  # listed in File > Recent recordings

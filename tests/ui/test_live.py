@@ -6,22 +6,22 @@ import numpy as np
 from groundstation import quaternion
 
 
-def test_plotted_pitch_is_the_pipelines_ahf_pitch(window, qtbot):
+def test_plotted_pitch_is_the_pipelines_ahf2_pitch(window, qtbot):
     window.start_demo()
     session = window.session
     qtbot.waitUntil(lambda: len(session.view.imu) > 150 and window.live_view.frames_drawn > 10, timeout=8000)
-    ahf = next(c for s, c in window.live_view.attitude.curves if s.quantity == "ahf_pitch_deg")
+    ahf = next(c for s, c in window.live_view.attitude.curves if s.quantity == "ahf2_pitch_deg")  # shown at first
     onboard = next(c for s, c in window.live_view.attitude.curves if s.quantity == "onboard_pitch_deg")
     t, pitch = ahf.xData[-1], ahf.yData[-1]
     imu = session.view.imu.array()
     row = imu[np.flatnonzero(imu[:, session.view.imu.columns.index("time_s")] == t)[0]]
-    q = [row[session.view.imu.columns.index(f"ahf_q{c}")] for c in "wxyz"]
+    q = [row[session.view.imu.columns.index(f"ahf2_q{c}")] for c in "wxyz"]
     # The window converts a block of rows, this line one row: NumPy may take another SIMD loop for each
     # (arcsin, arctan2: last-bit differences on AVX-512), a few float64 ulp that the float32 curve rounds
     # away, or to the neighbouring float32 at a rounding boundary: one float32 ulp at most.
     expected = np.float32(np.degrees(quaternion.to_euler_zyx(np.array(q))[1]))
     assert abs(pitch - expected) <= abs(np.spacing(expected))  # spacing is negative for a negative number
-    assert f"<td>AHF</td><td align=right>&nbsp;{pitch:+.2f}</td>" in window.live_view.attitude.read_at(t)  # the crosshair's readout: AHF's row, pitch column
+    assert f"<td>AHF2</td><td align=right>&nbsp;{pitch:+.2f}</td>" in window.live_view.attitude.read_at(t)  # the crosshair's readout: AHF2's row, pitch column
     assert len(window.live_view.attitude.drawn(onboard)[0]) > 100  # the aircraft's own estimate is drawn too
     assert window.link_panel.headline.text() == "LINK OK"
     assert str(session.recording_path) in window.recording_label.text()

@@ -78,6 +78,7 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     session, bar = window.session, window.replay_bar
     data = load_session(recording)  # the export's and evaluate's session, computed apart
     assert session.view.filters == data.filters == ("ahf",)
+    window.live_view.set_visible("AHF", True)  # one click away (issue 34: not shown at first)
     window.live_view.window_box.setCurrentText("whole session")
     qtbot.waitUntil(lambda: session.source.position_s > 0.5, timeout=5000)
 
