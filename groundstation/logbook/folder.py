@@ -117,6 +117,9 @@ def staging_folder(out: Path, overwrite: bool) -> Path:
     staging = out.parent / f".{out.name}.gs-{secrets.token_hex(4)}"
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
+        if out.is_dir():  # tried, not guessed from permission bits: the dataset is to be written where it was
+            (out / staging.name).mkdir()
+            (out / staging.name).rmdir()
         staging.mkdir()
     except OSError as error:
         raise UserError(f"cannot write {out}: {error.strerror} ({error.filename})") from None
