@@ -215,13 +215,14 @@ def _pool(task, paths, folder, out, filters, workers: int, limit_s: float, finis
     pending, died, busy = collections.deque(paths), [], []
     context = multiprocessing.get_context("spawn")
     idle: list[_Worker] = []
+    started_one = False  # a worker got as far as its first log: one that dies before is no sign of a broken setup
 
     def error_row(path, error: str) -> None:
         finished(path, [{**log_fields(Path(path), Path(folder)), "error": error}])
 
     try:
         while pending or busy:
-            while pending and len(idle) + len(busy) < workers:
+            while len(idle) < len(pending) and len(idle) + len(busy) < workers:
                 idle.append(_Worker(context, task))
             for worker in [w for w in idle if w.ready and pending]:
                 path = pending.popleft()
@@ -237,7 +238,7 @@ def _pool(task, paths, folder, out, filters, workers: int, limit_s: float, finis
                 except (EOFError, OSError):  # the worker died
                     worker.end()
                     (idle if worker in idle else busy).remove(worker)
-                    if not worker.ready:  # before its first log: another would die the same way
+                    if not worker.ready and not started_one:  # none ever started: the next would die the same way
                         raise UserError(f"a worker process could not start ({_exit_said(worker.process.exitcode)})")
                     if worker.path is None:
                         continue
@@ -248,7 +249,7 @@ def _pool(task, paths, folder, out, filters, workers: int, limit_s: float, finis
                         died.append(worker.path)
                     continue
                 if said is None:
-                    worker.ready = True
+                    worker.ready = started_one = True
                     continue
                 path, (kind, value) = worker.path, said
                 busy.remove(worker)
