@@ -3,10 +3,9 @@ dies, one that stops and never ends) is its row with the error, the others' work
 replaces the dataset whole; the workers are bounded by the cores and the memory.
 
 The logs are PX4 ULogs written here (``mavlink_helpers.write_ulog``). The faults are put in the
-workers' way by a task of this module (``faulty``), which runs the real ``summarise`` on every other log."""
+workers' way by a task (``logbook_faults.faulty``) that runs the real ``summarise`` on the other logs."""
 
 import os
-import signal
 from pathlib import Path
 
 import pandas as pd
@@ -15,22 +14,11 @@ import pytest
 from groundstation.cli import main
 from groundstation.logbook import folder as logbook_folder
 from groundstation.logbook.folder import evaluate_folder, worker_count
-from groundstation.logbook.summary import log_id, summarise
+from groundstation.logbook.summary import log_id
 from tests.autopilot.mavlink_helpers import px4_flight, write_ulog
+from tests.logbook_faults import faulty
 
 FILTERS = ["ahf"]
-
-
-def faulty(path, root, out, filters=None, page=False):
-    """``summarise``, except on the logs named for a fault."""
-    name = Path(path).name
-    if name.startswith("raises"):
-        raise RuntimeError("a defect met in this log")
-    if name.startswith("dies"):
-        os._exit(3)
-    if name.startswith("stops"):
-        os.kill(os.getpid(), signal.SIGSTOP)  # as a worker stopped from outside: it never ends on its own
-    return summarise(path, root, out, filters, page)
 
 
 def write_logs(folder: Path, *names: str) -> Path:
@@ -62,11 +50,11 @@ def test_a_log_that_raises_or_kills_its_worker_is_its_row_and_the_rest_is_writte
 def test_a_stopped_worker_is_ended_at_the_time_limit_and_its_log_named(tmp_path, capsys):
     """One worker stops (SIGSTOP) on its log: past the per-log limit it is ended, the log's row and its
     progress line say so, and the next log runs in a new worker."""
-    logs = write_logs(tmp_path / "logs", "good.ulg", "stops.ulg", "zz_after.ulg")
+    logs = write_logs(tmp_path / "logs", "quick_a.ulg", "stops.ulg", "zz_quick.ulg")
     seen = []
     evaluate_folder(logs, tmp_path / "out", FILTERS, workers=1, task=faulty, limit_s=3.0,
                     progress=lambda *a: seen.append((a[2].name, a[3][0]["error"])))
-    assert [name for name, _ in seen] == ["good.ulg", "stops.ulg", "zz_after.ulg"]  # one worker: in order
+    assert [name for name, _ in seen] == ["quick_a.ulg", "stops.ulg", "zz_quick.ulg"]  # one worker: in order
     rows = rows_by_path(tmp_path / "out")
     assert "stopped after 3 s, the per-log time limit" in rows.loc["stops.ulg", "error"]
     assert rows["error"].isna().sum() == 2

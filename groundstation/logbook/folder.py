@@ -29,7 +29,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 from groundstation.errors import UserError
-from groundstation.logbook.index import write_index
 from groundstation.logbook.summary import LOG_COLUMNS, log_fields, summarise
 
 DEFAULT_LIMIT_S = 600.0  # one log's time at most: the slowest shared log (a 4 MB SITL .tlog) takes 42 s
@@ -97,6 +96,8 @@ def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_
         rows = [row for path in paths for row in results[path]]
         write_logs(rows, staging / "logs.parquet")
         if pages:
+            from groundstation.logbook.index import write_index  # here: each worker imports this module, not the index's
+
             write_index(rows, staging / "index.html")
         swap_in(staging, out)
     finally:
