@@ -14,7 +14,7 @@ import pytest
 from groundstation.cli import main
 from groundstation.logbook import folder as logbook_folder
 from groundstation.logbook.folder import evaluate_folder, worker_count
-from groundstation.logbook.summary import log_id
+from groundstation.logbook.summary import log_id, summarise
 from tests.autopilot.mavlink_helpers import px4_flight, write_ulog
 from tests.logbook_faults import faulty
 
@@ -45,6 +45,18 @@ def test_a_log_that_raises_or_kills_its_worker_is_its_row_and_the_rest_is_writte
     assert pd.isna(rows.loc["good.ulg", "error"]) and rows.loc["good.ulg", "samples"] > 0
     imu = pd.read_parquet(tmp_path / "out" / "tables" / "imu")
     assert set(imu["log_id"]) == {log_id(logs / "good.ulg", logs)}
+
+
+def test_a_failure_after_the_log_is_read_is_its_row_and_leaves_none_of_its_files(tmp_path):
+    """The report page cannot be written (``reports`` is a file): the log's tables, already written, go too."""
+    logs = write_logs(tmp_path / "logs", "good.ulg")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "reports").write_text("in the way")
+    rows = summarise(logs / "good.ulg", logs, out, FILTERS, page=True)
+    assert len(rows) == 1 and rows[0]["error"].startswith("internal error (") and "reports" in rows[0]["error"]
+    assert rows[0]["samples"] is None  # the row of a log that failed: its fields, none of its figures
+    assert (out / "tables").is_dir() and not list((out / "tables").glob("*/log_id=*"))
 
 
 def test_a_stopped_worker_is_ended_at_the_time_limit_and_its_log_named(tmp_path, capsys):

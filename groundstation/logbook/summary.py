@@ -76,7 +76,9 @@ def discard(out: Path, identifier: str) -> None:
 
     for partition in (out / "tables").glob(f"*/log_id={identifier}"):
         shutil.rmtree(partition, ignore_errors=True)
-    (out / "reports" / f"{identifier}.html").unlink(missing_ok=True)
+    page = out / "reports" / f"{identifier}.html"
+    if page.is_file():  # (not there, or its folder not one: what failed may be its writing)
+        page.unlink()
 
 
 def _rows(path: Path, out: Path, filters, page: bool, fields: dict) -> list[dict]:
