@@ -110,6 +110,12 @@ def test_overwrite_replaces_only_a_dataset(tmp_path, capsys):
     assert main(["evaluate", str(logs), "--out", str(precious), "--overwrite"]) == 2
     assert "logs.parquet" in capsys.readouterr().err
     assert (precious / "flight notes.txt").read_text() == "do not lose"
+    out = tmp_path / "out"  # a dataset's folder (its logs.parquet), the logs moved into it since
+    out.mkdir()
+    (out / "logs.parquet").write_bytes(b"")
+    (logs / "kept.ulg").rename(out / "kept.ulg")
+    assert main(["evaluate", str(out), "--out", str(out), "--overwrite"]) == 2
+    assert "holds the logs" in capsys.readouterr().err and (out / "kept.ulg").is_file()
 
 
 def test_workers_are_bounded_by_cores_and_memory(monkeypatch):

@@ -75,6 +75,9 @@ def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_
     folder, out = Path(folder), Path(out)
     if not folder.is_dir():
         raise UserError(f"{folder}: not a folder")
+    if out.resolve() == folder.resolve() or out.resolve() in folder.resolve().parents:
+        raise UserError(f"{out} holds the logs of {folder}: the dataset goes to a folder of its own, which a rerun "
+                        "replaces whole")
     paths = logs_in(folder, out)
     if not paths:
         raise UserError(f"{folder}: no recordings or flight logs in it")
