@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from groundstation.commands.folder import add_batch_options, refuse_batch_options
+from groundstation.commands.folder import add_batch_options, refuse_batch_options, run_folder
 from groundstation.commands.options import add_estimator_options, estimator_options
 
 
@@ -34,8 +34,6 @@ def run(args: argparse.Namespace) -> int:
 
     filters, overrides = estimator_options(args)
     if Path(args.file).is_dir():
-        from groundstation.commands.folder import run_folder
-
         return run_folder(args, filters, overrides, pages=True)
     refuse_batch_options(args)
     if args.out.suffix.lower() not in (".html", ".htm"):
