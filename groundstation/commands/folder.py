@@ -17,7 +17,7 @@ def add_folder_options(parser: argparse.ArgumentParser, out_help: str) -> None:
 
 
 def add_batch_options(parser: argparse.ArgumentParser) -> None:
-    from groundstation.logbook.folder import DEFAULT_LIMIT_S
+    from groundstation.logbook import DEFAULT_LIMIT_S
 
     parser.add_argument("--workers", type=int, metavar="N",
                         help="for a FOLDER: processes at once (default: one per core; at most one per core and "
@@ -38,7 +38,8 @@ def run_folder(args: argparse.Namespace, names, overrides, pages: bool) -> int:
     """Every log under the folder into one Parquet dataset (``pages``: and its flight reports with an
     index), a progress line per log; a log that cannot be read is said and has its error in its row, the
     batch goes on."""
-    from groundstation.logbook.folder import DEFAULT_LIMIT_S, evaluate_folder, worker_count
+    from groundstation.logbook import DEFAULT_LIMIT_S
+    from groundstation.logbook.folder import evaluate_folder, worker_count
 
     if args.out is None:
         raise UserError(f"{args.file} is a folder: say where its dataset goes with --out OUT")

@@ -29,9 +29,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from groundstation.errors import UserError
+from groundstation.logbook import DEFAULT_LIMIT_S
 from groundstation.logbook.summary import LOG_COLUMNS, log_fields, summarise
 
-DEFAULT_LIMIT_S = 600.0  # one log's time at most: the slowest shared log (a 4 MB SITL .tlog) takes 42 s
 # A worker's peak memory, for the bound on their number (more than the free memory holds would have the
 # memory killer choose among them). Measured (/usr/bin/time, summarise with its report page): 0.28-0.32 GB
 # on the largest shared logs (4 MB .tlog, .ulg and .bin), most of it the imports; 1 GB leaves room for
