@@ -88,3 +88,9 @@ def test_a_link_to_itself_in_a_folder_of_logs_is_named_in_one_line(places, tmp_p
         err = capsys.readouterr().err
         assert "loop.ulg" in err and "leads nowhere" in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "out").exists()
+    os.symlink("out", tmp_path / "out")  # OUT a link to itself
+    os.unlink(logs / "loop.ulg")
+    assert main(["evaluate", str(logs), "--out", str(tmp_path / "out")]) == 2
+    assert "a link to none" in capsys.readouterr().err
+    assert main(["evaluate", str(logs), "--out", str(tmp_path / "out" / "dataset")]) == 2  # a loop on the way
+    assert "leads to itself" in capsys.readouterr().err

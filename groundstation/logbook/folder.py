@@ -75,14 +75,11 @@ def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_
     folder, out = Path(folder), Path(out)
     if not folder.is_dir():
         raise UserError(f"{folder}: not a folder")
-    if out.resolve() == folder.resolve() or out.resolve() in folder.resolve().parents:
-        raise UserError(f"{out} holds the logs of {folder}: the dataset goes to a folder of its own, which a rerun "
-                        "replaces whole")
-    paths = logs_in(folder, out)
-    if not paths:
-        raise UserError(f"{folder}: no recordings or flight logs in it")
-    staging = staging_folder(out, overwrite)
+    staging = staging_folder(out, folder, overwrite)
     try:
+        paths = logs_in(folder, out)
+        if not paths:
+            raise UserError(f"{folder}: no recordings or flight logs in it")
         results: dict[Path, list[dict]] = {}
         started = time.monotonic()
 
@@ -108,11 +105,19 @@ def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_
     return rows
 
 
-def staging_folder(out: Path, overwrite: bool) -> Path:
+def staging_folder(out: Path, folder: Path, overwrite: bool) -> Path:
     """A new hidden folder beside ``out`` for the dataset, once ``out`` is known to be replaceable (absent,
-    empty, or with ``overwrite`` a dataset of ours); UserError in one line for every path mistake."""
-    if out.exists() and not out.is_dir():
-        raise UserError(f"{out} is a file; --out names the folder the dataset goes to")
+    empty, or with ``overwrite`` a dataset of ours, not holding the logs of ``folder``); UserError in one
+    line for every path mistake."""
+    if os.path.lexists(out) and not out.is_dir():
+        raise UserError(f"{out} is a file (or a link to none); --out names the folder the dataset goes to")
+    try:
+        resolved = out.resolve()
+    except RuntimeError:  # Python 3.11's word for a link on the way that leads to itself
+        raise UserError(f"cannot write {out}: a link on its way leads to itself") from None
+    if resolved == folder.resolve() or resolved in folder.resolve().parents:
+        raise UserError(f"{out} holds the logs of {folder}: the dataset goes to a folder of its own, which a rerun "
+                        "replaces whole")
     if out.is_dir() and any(out.iterdir()):
         if not overwrite:
             raise UserError(f"{out} exists and is not empty; choose a new folder, or pass --overwrite to replace "
