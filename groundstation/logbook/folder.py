@@ -24,6 +24,7 @@ import multiprocessing.connection
 import os
 import secrets
 import shutil
+import signal
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -212,6 +213,7 @@ class _Worker:
 def _serve(connection, task) -> None:
     """A worker's life: say it is ready, then run ``task`` on each log it is sent until told to stop (None).
     An exception is sent back as its text: the log's error, the worker lives on."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole process group: the batch ends its workers
     connection.send(None)
     while (job := connection.recv()) is not None:
         try:
