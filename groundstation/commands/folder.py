@@ -68,5 +68,5 @@ def run_folder(args: argparse.Namespace, names, overrides, pages: bool) -> int:
     logs = {row["log_id"] for row in rows}
     failed = {row["log_id"] for row in rows if row["error"]}
     pages_said = f", reports/ and {Path(args.out) / 'index.html'} (worst first)" if pages else ""
-    print(f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} unreadable), tables/{pages_said}")
+    print(f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} failed), tables/{pages_said}")
     return 0
