@@ -114,7 +114,7 @@ def test_the_command_line(folder, tmp_path):
     lines = done.stdout.splitlines()
     assert sum(line.startswith("[") for line in lines) == 2 and "cut.bin: error:" in done.stdout
     assert "1 estimators against the onboard" in done.stdout
-    assert lines[-1].startswith(f"wrote {tmp_path / 'out'}") and "2 logs, 1 unreadable" in lines[-1]
+    assert lines[-1].startswith(f"wrote {tmp_path / 'out'}") and "2 logs, 1 failed" in lines[-1]
 
 
 def test_wrong_inputs_are_said_in_one_line(folder, tmp_path, capsys):

@@ -66,6 +66,9 @@ def read_dataflash(path, progress=None) -> FlightLog:
                     rows[name].append([getattr(msg, field) * us_per_unit, *(getattr(msg, f) for f in FIELDS[name])])
                 if progress is not None and count % 4096 == 0:
                     progress(reader.percent, 100)
+    except RecursionError:  # DFReader reads on by calling itself once per record that does not fit its FMT
+        raise UserError(f"{path}: cannot read this DataFlash log: a thousand records in a row do not fit the lengths "
+                        "their formats (FMT) declare; damaged, or not a DataFlash log") from None
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")

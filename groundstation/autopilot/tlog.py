@@ -16,7 +16,6 @@ autopilot time reached so far; a reboot holds it, so the session still sees the 
 
 from __future__ import annotations
 
-import bisect
 import dataclasses
 import struct
 from collections import defaultdict
@@ -171,7 +170,10 @@ def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
         times.append(reached_us)
     if not stamped:
         return None
-    half = bisect.bisect_left([t_ns for t_ns, _ in stamped], (stamped[0][0] + stamped[-1][0]) / 2)
+    # The first packet received at the midpoint or later: a search, not a bisection, since receive times
+    # need not be in order (a clock that runs backwards); the first or the last packet always qualifies.
+    middle_ns = (stamped[0][0] + stamped[-1][0]) / 2
+    half = next(i for i, (t_ns, _) in enumerate(stamped) if t_ns >= middle_ns)
     receive_s = (stamped[-1][0] - stamped[half][0]) * 1e-9
     autopilot_s = (times[-1] - times[half]) * 1e-6
     if autopilot_s <= receive_s + JUMP_TOLERANCE_S + DRIFT_TOLERANCE * autopilot_s:

@@ -21,7 +21,7 @@ import json
 import sys
 from pathlib import Path
 
-from groundstation.commands.folder import add_folder_options, run_folder
+from groundstation.commands.folder import add_folder_options, refuse_batch_options, run_folder
 from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
 from groundstation.errors import UserError
 
@@ -52,8 +52,9 @@ def run(args: argparse.Namespace) -> int:
     names, overrides = estimator_options(args)
     if Path(args.file).is_dir():
         return run_folder(args, names, overrides, pages=False)
-    if args.out is not None or args.dask is not None or args.workers is not None:
-        raise UserError("--out, --workers and --dask are for a folder of logs; one file prints its figures")
+    if args.out is not None or args.overwrite:
+        raise UserError("--out and --overwrite are for a folder of logs; one file prints its figures")
+    refuse_batch_options(args)
     bar = ProgressBar("computing")  # shown after a second: a long recording or log
     try:
         data = load_session(args.file, names, overrides, bar, args.accept_config_changes, imu=args.imu)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from groundstation.commands.folder import add_batch_options, refuse_batch_options, run_folder
 from groundstation.commands.options import add_estimator_options, estimator_options
 
 
@@ -18,9 +19,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, type=Path, metavar="OUT",
                         help="OUT.html, the page to write; for a FOLDER, a folder: OUT/index.html (the logs worst "
                              "first), OUT/reports/ (a page per log), and the dataset evaluate DIR writes")
-    parser.add_argument("--workers", type=int, metavar="N", help="for a FOLDER: processes at once (default: one per core)")
-    parser.add_argument("--dask", metavar="SCHEDULER", help="for a FOLDER: run the logs as tasks on this Dask scheduler")
-    parser.add_argument("--overwrite", action="store_true", help="replace OUT.html if it exists")
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace OUT.html if it exists; for a FOLDER, the dataset an earlier run wrote in OUT")
+    add_batch_options(parser)
     add_estimator_options(parser, None)
 
 
@@ -33,11 +34,8 @@ def run(args: argparse.Namespace) -> int:
 
     filters, overrides = estimator_options(args)
     if Path(args.file).is_dir():
-        from groundstation.commands.folder import run_folder
-
         return run_folder(args, filters, overrides, pages=True)
-    if args.dask is not None or args.workers is not None:
-        raise UserError("--workers and --dask are for a folder of logs")
+    refuse_batch_options(args)
     if args.out.suffix.lower() not in (".html", ".htm"):
         raise UserError(f"{args.out}: a report is an HTML page; name it .html")
     check_destination(args.out, args.overwrite)  # said before the long load: an existing OUT, a missing folder

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from groundstation.errors import UserError
 from groundstation.export.files import atomic_output
 from groundstation.export.foxglove_topics import Topics, earliest_time_s, origin_ns
 from groundstation.session.product import SessionData, event_time_s
@@ -30,12 +31,14 @@ def write_mcap(data: SessionData, path, overwrite: bool = False, t_from: float |
     (session seconds) to ``path``; returns the number of messages."""
     import foxglove
 
+    origin = origin_ns(data.metadata, earliest_time_s(data.tables))
+    check_log_times(origin, data, path)
     with atomic_output(path, overwrite) as temporary:
         context = foxglove.Context()
         writer = foxglove.open_mcap(temporary, allow_overwrite=True, context=context)
         try:
             writer.write_metadata("session", {str(k): str(v) for k, v in data.metadata.items()})
-            topics = Topics(context, data.catalogue, origin_ns(data.metadata, earliest_time_s(data.tables)))
+            topics = Topics(context, data.catalogue, origin)
             count = 0
             for name, columns in data.tables.items():
                 count += topics.rows(name, columns, in_range(columns["time_s"], t_from, t_to))
@@ -48,3 +51,17 @@ def write_mcap(data: SessionData, path, overwrite: bool = False, t_from: float |
         finally:
             writer.close()
     return count
+
+
+LAST_LOG_TIME_NS = 2**63 - 1  # log times are int64 ns since 1970 on the way to the writer (``log_time_ns``): to 2262
+
+
+def check_log_times(origin: int, data: SessionData, path) -> None:
+    """UserError when a row or an event of ``data`` lies later than an MCAP log time can say (a log whose
+    clock says it ran for 292,000 years: crafted or damaged)."""
+    times = [np.asarray(t["time_s"], dtype=float) for t in data.tables.values()]
+    times.append(np.array([event_time_s(e) for e in data.events], dtype=float))
+    latest_s = max((float(np.nanmax(t)) for t in times if np.isfinite(t).any()), default=0.0)
+    if origin + latest_s * 1e9 > LAST_LOG_TIME_NS:
+        raise UserError(f"cannot write {path}: this session's times reach {latest_s:.3g} s, beyond what an MCAP log "
+                        "time holds (ns since 1970 in 64 bits, to the year 2262); export it as CSV or Parquet")

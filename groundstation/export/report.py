@@ -35,6 +35,7 @@ from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.product import ONBOARD, SessionData
 
 MAX_EVENTS = 300  # rows of the events table; the rest are counted
+MAX_FINDINGS = 100  # findings listed, the most severe first; the rest are counted (one log said 60,000)
 MAX_PLOTTED_ESTIMATORS = 4
 FIRMWARE = re.compile(r"\b(ArduCopter|ArduPlane|ArduRover|ArduSub|Rover|APM:\w+|PX4|Blimp|AntennaTracker)\b[^\n]*?\bV?\d+\.\d+[\w.\-]*",
                       re.IGNORECASE)
@@ -158,12 +159,13 @@ def findings_section(found: list[Finding]) -> str:
     if not found:
         return "<h2>Findings</h2><p>Nothing to point out.</p>"
     items = []
-    for f in found:
+    for f in found[:MAX_FINDINGS]:
         values = "".join(f" data-{k.replace('_', '-')}=\"{v:.6g}\"" for k, v in f.values.items())
         when = f" data-t-s=\"{f.t_s:.3f}\"" if f.t_s is not None else ""
         items.append(f"<li class=\"finding {f.severity}\" data-kind=\"{f.kind}\"{when}{values}><span class=\"sev\">{f.severity}</span>"
                      f"{_e(f.title)}" + (f"<div class=\"detail\">{_e(f.detail)}</div>" if f.detail else "") + "</li>")
-    return "<h2>Findings</h2><ul class=\"findings\">" + "".join(items) + "</ul>"
+    rest = f"<p>… and {len(found) - MAX_FINDINGS} more findings.</p>" if len(found) > MAX_FINDINGS else ""
+    return "<h2>Findings</h2><ul class=\"findings\">" + "".join(items) + "</ul>" + rest
 
 
 def attitude_section(data: SessionData) -> str:

@@ -8,3 +8,7 @@ of it:
 - ``OUT/logs.parquet``: a row per log and estimator (``logbook.summary.LOG_COLUMNS``);
 - ``OUT/tables/<table>/log_id=<id>/part-0.parquet``: each log's tables, partitioned by log (Hive style).
 """
+
+# One log's time at most in a folder run (``--time-limit``): the slowest shared log (a 4 MB SITL .tlog)
+# takes 42 s. Here, not in ``folder``: the commands' help names it without importing numpy.
+DEFAULT_LIMIT_S = 600.0

@@ -55,21 +55,39 @@ def log_fields(path: Path, root: Path) -> dict:
 
 
 def summarise(path, root, out, filters=None, page: bool = False) -> list[dict]:
-    """The rows of ``path`` (a row per estimator; one row with ``error`` when it cannot be read), its
-    tables written under ``out/tables``; ``page``: its flight report too, ``out/reports/<log_id>.html``."""
+    """The rows of ``path`` (a row per estimator; one row with ``error`` when it cannot be read or anything
+    on the way fails), its tables written under ``out/tables``; ``page``: its flight report too,
+    ``out/reports/<log_id>.html``. A log that fails leaves none of its files behind."""
+    path, root, out = Path(path), Path(root), Path(out)
+    fields = log_fields(path, root)
+    try:
+        return _rows(path, out, filters, page, dict(fields))  # a copy: an error row carries the log's fields only
+    except UserError as error:
+        error_said = str(error)
+    except Exception as error:  # a defect in a reader or a writer must cost this log only, and say what it was
+        error_said = f"internal error ({type(error).__name__}: {error})"
+    discard(out, fields["log_id"])
+    return [{**fields, "error": error_said}]
+
+
+def discard(out: Path, identifier: str) -> None:
+    """What a log that failed had written: its tables' partitions and its report."""
+    import shutil
+
+    for partition in (out / "tables").glob(f"*/log_id={identifier}"):
+        shutil.rmtree(partition, ignore_errors=True)
+    page = out / "reports" / f"{identifier}.html"
+    if page.is_file():  # (not there, or its folder not one: what failed may be its writing)
+        page.unlink()
+
+
+def _rows(path: Path, out: Path, filters, page: bool, fields: dict) -> list[dict]:
     from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.export.report import NOT_RECORDED, firmware, vehicle, vibration_of, write_report
     from groundstation.export.report_findings import findings
     from groundstation.session.load import load_session
 
-    path, root, out = Path(path), Path(root), Path(out)
-    fields = log_fields(path, root)
-    try:
-        data = load_session(path, filters)
-    except UserError as error:
-        return [{**fields, "error": str(error)}]
-    except Exception as error:  # a defect in a reader must cost this log only, and say what it was
-        return [{**fields, "error": f"internal error while reading ({type(error).__name__}: {error})"}]
+    data = load_session(path, filters)
     time_s = data.time_s
     said = {"vehicle": vehicle(data), "firmware": firmware(data)}
     fields.update({k: v for k, v in said.items() if v != NOT_RECORDED}, samples=len(data),
