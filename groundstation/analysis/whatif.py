@@ -120,6 +120,7 @@ class Filtered:
     sensor: str
     rate_hz: float
     stretches: int  # gap-free stretches (bursts) the spectra average over
+    continuous: bool  # False: the table is bursts (``vibration.coverage`` below ``CONTINUOUS_SHARE``)
     b: np.ndarray  # (3,) the filter at this table's rate
     a: np.ndarray
     before: Spectrum
@@ -130,7 +131,8 @@ class Filtered:
     level_after: float
 
     def as_dict(self) -> dict:
-        return {"table": self.table, "rate_hz": self.rate_hz, "stretches": self.stretches, "unit": UNITS[self.sensor],
+        return {"table": self.table, "rate_hz": self.rate_hz, "stretches": self.stretches, "continuous": self.continuous,
+                "unit": UNITS[self.sensor],
                 "b": self.b.tolist(), "a": self.a.tolist(), "peak_hz": self.peak_hz, "attenuation_db": self.attenuation_db,
                 "level_before": self.level_before, "level_after": self.level_after,
                 "frequency_hz": self.before.frequency_hz.tolist(), "psd_before": self.before.total_psd.tolist(),
@@ -176,7 +178,8 @@ class WhatIf:
             unit = UNITS[sensor]
             peak = ("no peak in its stop band" if f.peak_hz is None
                     else f"peak at {f.peak_hz:.1f} Hz {f.attenuation_db:+.1f} dB")
-            out.append(f"  {sensor} ('{f.table}' at {f.rate_hz:.0f} Hz, {f.stretches} stretches): {peak}; RMS above "
+            runs = f"{f.stretches} {'stretches' if f.continuous else 'bursts'}"
+            out.append(f"  {sensor} ('{f.table}' at {f.rate_hz:.0f} Hz, {runs}): {peak}; RMS above "
                        f"{LEVEL_CUTOFF_HZ:g} Hz {f.level_before:.3f} -> {f.level_after:.3f} {unit}")
         out += [f"  {sensor}: not filtered: {why}" for sensor, why in self.skipped.items()]
         gain = dict(zip(self.bode_hz.tolist(), self.magnitude_db.tolist()))
@@ -250,7 +253,8 @@ def _filtered(table: ImuTable, kind: str, frequency_hz: float, bandwidth_hz: flo
         attenuation_db = float(10.0 * math.log10(np.sum(after.total_psd[lobe]) / np.sum(before.total_psd[lobe])))
     band = f >= LEVEL_CUTOFF_HZ
     df = float(f[1])
-    return Filtered(table.table, table.sensor, raw.rate_hz, len(runs), b, a, before, after, peak_hz, attenuation_db,
+    continuous = coverage(raw.time_s) >= CONTINUOUS_SHARE
+    return Filtered(table.table, table.sensor, raw.rate_hz, len(runs), continuous, b, a, before, after, peak_hz, attenuation_db,
                     float(math.sqrt(np.sum(before.total_psd[band]) * df)), float(math.sqrt(np.sum(after.total_psd[band]) * df)))
 
 

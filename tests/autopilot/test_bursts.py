@@ -109,7 +109,8 @@ def change(regular):
 def test_the_what_if_filters_only_data_sampled_above_twice_its_frequency(regular, change):
     assert set(change.spectra) == {"gyro", "accel"}
     for filtered in change.spectra.values():
-        assert filtered.table.endswith("_fast_0") and filtered.rate_hz > 2 * NOTCH_HZ
+        assert filtered.table.endswith("_fast_0") and filtered.rate_hz > 2 * NOTCH_HZ and not filtered.continuous
+    assert "('gyro_fast_0' at 1975 Hz, 77 bursts)" in "\n".join(change.lines())
     # the 25 Hz logged IMU carries no 54 Hz filter: no attitude difference, and the reason
     assert change.attitude is None and "bursts" in change.attitude_note and "25 Hz" in change.attitude_note
     with pytest.raises(VibrationError, match="faster than"):
