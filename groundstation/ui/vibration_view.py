@@ -226,7 +226,8 @@ class VibrationView(QtWidgets.QWidget):
         self.gain_plot.plot(change.bode_hz, np.maximum(change.magnitude_db, BODE_FLOOR_DB), pen=pg.mkPen(AFTER_PEN, width=1))
         self.phase_plot.plot(change.bode_hz, change.phase_deg, pen=pg.mkPen(AFTER_PEN, width=1))
         lags = change.phase_lag_deg
-        self.phase_plot.setTitle("lag " + ", ".join(f"{lag:.1f}° at {hz:g} Hz" for hz, lag in lags.items()))
+        self.phase_plot.setTitle("lag " + " / ".join(f"{lag:.0f}°" for lag in lags.values())
+                                 + " at " + " / ".join(f"{hz:g}" for hz in lags) + " Hz")
         for hz in LAG_AT_HZ:
             if hz in lags:
                 self.phase_plot.addItem(pg.InfiniteLine(hz, pen=pg.mkPen("#999999", style=QtCore.Qt.DashLine)))
