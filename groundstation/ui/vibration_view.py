@@ -18,14 +18,17 @@ the attitude difference or why there is none); a filter no data can carry is sai
 from __future__ import annotations
 
 from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
 from groundstation.analysis.vibration import AXES, SENSORS, UNITS, VibrationError, VibrationSummary, vibration_summary
-from groundstation.analysis.whatif import KINDS, LAG_AT_HZ, WhatIf, what_if
 from groundstation.session.view import Session
+
+if TYPE_CHECKING:
+    from groundstation.analysis.whatif import WhatIf
 
 AXIS_COLOURS = {"x": "#d62728", "y": "#2ca02c", "z": "#1f77b4"}  # red, green, blue: the axes as a 3D view draws them
 PEAK_BRUSH = "#222222"
@@ -60,6 +63,8 @@ class VibrationView(QtWidgets.QWidget):
                        QtWidgets.QLabel("sensor"), self.sensor_box, self.compute_button):
             controls.addWidget(widget)
         controls.addStretch(1)
+        from groundstation.analysis.whatif import KINDS  # here: it loads numba, which must not delay the first paint
+
         self.change: WhatIf | None = None
         self.filter_box = QtWidgets.QComboBox()
         self.filter_box.addItems(list(KINDS))
@@ -160,6 +165,8 @@ class VibrationView(QtWidgets.QWidget):
 
     def run_what_if(self) -> None:
         """What the filter set in the row would do over the summary's range; a refusal in the banner."""
+        from groundstation.analysis.whatif import what_if
+
         if self.session is None or self.summary is None:
             return
         kind, bandwidth = self.filter_box.currentText(), self.filter_bw.value() or None
@@ -214,6 +221,8 @@ class VibrationView(QtWidgets.QWidget):
             self._show_what_if(sensor)
 
     def _show_what_if(self, sensor: str) -> None:
+        from groundstation.analysis.whatif import LAG_AT_HZ
+
         change = self.change
         filtered = change.spectra.get(sensor) or next(iter(change.spectra.values()))
         self.before_after_plot.setTitle(f"{filtered.sensor}, '{filtered.table}' at {filtered.rate_hz:.0f} Hz")
