@@ -11,9 +11,9 @@ the rows they arrived at, so export and evaluate treat it like any session.
 - Every other message type or topic is a table (``logtables``), the full-rate IMU too; ``imu="fast"``
   runs the estimators on that one (``fast_imu``) where it is a continuous stream (PX4's fifo topics). Where
   it is bursts with gaps between them (ArduPilot's batch sampler) the estimators stay on the logged IMU and
-  the session says why (``burst_note``): integrating across the gaps would be wrong, and filling them with the
-  logged IMU mixes two sensors' timing and filtering (19° pitch RMS against the autopilot on the shared
-  CubeOrange log, 2.9° on the logged IMU alone).
+  the session says why (``burst_note``): an estimator must not integrate across the gaps, and the bursts with
+  the logged IMU filling the gaps put AHF2 19° RMS in pitch from the autopilot on the shared CubeOrange log,
+  where the logged IMU alone gives 2.9°.
 - The onboard attitude and truth are interpolated (normalised linear, shortest way) between the
   two samples around each IMU row, and NaN where those two are more than ``MAX_GAP_S`` apart or the
   row lies outside them.
@@ -201,7 +201,7 @@ def fast_imu(log: FlightLog) -> Series:
     gyro, accel = _fast_gyro(log), log.tables.get(fast_name("accel", 0))
     fast_us = np.asarray(gyro.time_us, dtype=float)
     regular_us = np.zeros(0) if log.imu is None else np.asarray(log.imu.time_us, dtype=float)
-    between = ~_inside_bursts(regular_us, fast_us)
+    between = ~_inside_stretches(regular_us, fast_us)
     t_us = np.concatenate([fast_us, regular_us[between]])
     gyr = np.concatenate([gyro.stack(FAST["gyro"][1]), log.imu.stack(IMU_COLUMNS[:3])[between] if log.imu else np.zeros((0, 3))])
     acc = np.full((len(t_us), 3), np.nan)
@@ -209,7 +209,7 @@ def fast_imu(log: FlightLog) -> Series:
         acc = np.column_stack([np.interp(t_us, regular_us, log.imu.columns[c]) for c in IMU_COLUMNS[3:]])
     if accel is not None:
         accel_us = np.asarray(accel.time_us, dtype=float)
-        covered = _inside_bursts(t_us, accel_us)
+        covered = _inside_stretches(t_us, accel_us)
         acc[covered] = np.column_stack([np.interp(t_us[covered], accel_us, accel.columns[c]) / STANDARD_GRAVITY_M_S2
                                         for c in FAST["accel"][1]])
     order = np.argsort(t_us, kind="stable")
@@ -218,7 +218,7 @@ def fast_imu(log: FlightLog) -> Series:
     return Series(t_us, dict(zip(IMU_COLUMNS, np.column_stack([gyr, acc]).T)), f"{gyro.source} (full rate)")
 
 
-def _inside_bursts(t_us: np.ndarray, burst_us: np.ndarray) -> np.ndarray:
+def _inside_stretches(t_us: np.ndarray, burst_us: np.ndarray) -> np.ndarray:
     """Which of ``t_us`` lie within a gap-free stretch of ``burst_us`` (``vibration.stretches``: the one rule
     for where a stream has gaps), its ends included."""
     inside = np.zeros(len(t_us), dtype=bool)
