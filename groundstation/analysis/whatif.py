@@ -55,22 +55,28 @@ KINDS = ("notch", "lowpass")
 LAG_AT_HZ = (10.0, 20.0, 30.0)  # where a multirotor's attitude loop works: the phase a filter costs there
 BODE_POINTS = 120  # log-spaced from BODE_FROM_HZ to Nyquist, with LAG_AT_HZ and the filter's frequency among them
 BODE_FROM_HZ = 1.0
+NOTCH_BANDWIDTH_SHARE = 0.5  # a notch's default bandwidth, of its centre (ArduPilot's advice for INS_HNTCH_BW)
 IMU_GYRO = ("gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s")
 IMU_ACCEL = ("acc_x_g", "acc_y_g", "acc_z_g")
+
+
+def carries(rate_hz: float, frequency_hz: float) -> bool:
+    """Whether data sampled at ``rate_hz`` can carry a filter at ``frequency_hz``: below its Nyquist frequency
+    (above it the filter would act on aliases)."""
+    return frequency_hz < rate_hz / 2.0
 
 
 def biquad(kind: str, frequency_hz: float, rate_hz: float, bandwidth_hz: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``(b, a)`` (3,), ``a[0] = 1``, of a notch at ``frequency_hz`` (``bandwidth_hz`` between its -3 dB
     points, default half the centre) or a Butterworth low-pass cutting at ``frequency_hz``."""
-    nyquist = rate_hz / 2.0
     if kind not in KINDS:
         raise VibrationError(f"filter kind must be one of {', '.join(KINDS)}, not {kind!r}")
-    if not 0.0 < frequency_hz < nyquist:
-        raise VibrationError(f"the filter's frequency must lie between 0 and {nyquist:g} Hz (Nyquist), not {frequency_hz:g}")
+    if not (frequency_hz > 0.0 and carries(rate_hz, frequency_hz)):
+        raise VibrationError(f"the filter's frequency must lie between 0 and {rate_hz / 2.0:g} Hz (Nyquist), not {frequency_hz:g}")
     w0 = 2.0 * math.pi * frequency_hz / rate_hz
     cos_w0 = math.cos(w0)
     if kind == "notch":
-        bandwidth_hz = frequency_hz / 2.0 if bandwidth_hz is None else bandwidth_hz
+        bandwidth_hz = NOTCH_BANDWIDTH_SHARE * frequency_hz if bandwidth_hz is None else bandwidth_hz
         if not bandwidth_hz > 0.0:
             raise VibrationError(f"the notch bandwidth must be positive, not {bandwidth_hz:g} Hz")
         alpha = math.sin(w0) / (2.0 * frequency_hz / bandwidth_hz)
@@ -201,8 +207,8 @@ def what_if(session, kind: str, frequency_hz: float, bandwidth_hz: float | None 
     when no table is sampled faster than twice ``frequency_hz``, or the filter or the range does not fit."""
     if kind not in KINDS:
         raise VibrationError(f"filter kind must be one of {', '.join(KINDS)}, not {kind!r}")
-    if kind == "notch":
-        bandwidth_hz = frequency_hz / 2.0 if bandwidth_hz is None else bandwidth_hz
+    if kind == "notch" and bandwidth_hz is None:
+        bandwidth_hz = NOTCH_BANDWIDTH_SHARE * frequency_hz
     tables = imu_tables(session)
     if not tables:
         raise VibrationError("the what-if needs the session's IMU samples (this session has none)")
@@ -213,7 +219,7 @@ def what_if(session, kind: str, frequency_hz: float, bandwidth_hz: float | None 
         table = fastest(tables, sensor, start_s, end_s)
         if table is None:
             continue
-        if not frequency_hz < table.rate_hz / 2.0:
+        if not carries(table.rate_hz, frequency_hz):
             skipped[sensor] = (f"'{table.table}' is sampled at {table.rate_hz:.0f} Hz, too slowly for a filter at "
                                f"{frequency_hz:g} Hz (it needs more than {2.0 * frequency_hz:g} Hz)")
             continue
@@ -269,8 +275,8 @@ def _attitude(session, tables: list[ImuTable], kind: str, frequency_hz: float, b
     good = np.isfinite(t) & np.isfinite(gyr).all(axis=1) & np.isfinite(acc).all(axis=1)  # gap rows out
     t, gyr, acc = t[good], gyr[good], acc[good]
     rate_hz = ImuTable("imu", "gyro", t, gyr).rate_hz
-    if not frequency_hz < rate_hz / 2.0:
-        bursts = [x for x in tables if x.table != "imu" and x.rate_hz > 2.0 * frequency_hz and coverage(x.time_s) < CONTINUOUS_SHARE]
+    if not carries(rate_hz, frequency_hz):
+        bursts = [x for x in tables if x.table != "imu" and carries(x.rate_hz, frequency_hz) and coverage(x.time_s) < CONTINUOUS_SHARE]
         faster = ("its full-rate IMU ('" + bursts[0].table + "') is logged in bursts, on which no estimator can run"
                   if bursts else "load its full-rate IMU for it (--imu fast; in the app, File > Full-rate IMU) where the log has one")
         return None, (f"not computed: the estimators' IMU runs at {rate_hz:.0f} Hz, too slowly to carry a filter at "
