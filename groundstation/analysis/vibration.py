@@ -19,7 +19,11 @@ amplitude column is ``√(2 P_k Δf_enbw)`` with the window's noise bandwidth ``
 read low between bins. The spectrogram is the same segments unaveraged.
 
 A session whose rows have gaps (a lost link, a log's dropouts) is cut into uniformly sampled stretches;
-segments never cross a gap, and every stretch's segments are averaged together.
+segments never cross a gap, and every stretch's segments are averaged together. A log's full-rate IMU
+written in bursts (ArduPilot's batch sampler: 1,024 samples at ~2 kHz, then a gap) is such a table: each
+burst is a stretch, Welch's segments lie within a burst, and the spectrum is their mean over the bursts.
+``coverage`` says how much of its span a table's stretches cover: below ``CONTINUOUS_SHARE`` it is bursts,
+which serve a spectrum but no estimator (an estimator would integrate across the gaps).
 
 Levels. ArduPilot's VIBE is the accelerometer's RMS above 5 Hz (its 5 Hz high-pass), in m/s²;
 ArduPilot's guidance is that below 30 m/s² is normally fine, above 30 may give position-hold
@@ -67,6 +71,7 @@ MIN_ROTOR_HZ = 20.0
 MAX_HARMONIC = 4
 SPECTROGRAM_COLUMNS = 400  # at most this many time columns: neighbours averaged beyond
 GAP_FACTOR = 2.5  # a step longer than 2.5 sample periods is a gap (a SITL log's steps jitter by half a period)
+CONTINUOUS_SHARE = 0.99  # a stream whose stretches cover less of its span is bursts (a fifo's rare dropped message is not)
 SENSORS = ("gyro", "accel")
 UNITS = {"gyro": "deg/s", "accel": "m/s²"}
 AXES = "xyz"
@@ -245,6 +250,19 @@ def stretches(time_s: np.ndarray) -> list[slice]:
     cuts = np.flatnonzero((steps <= 0) | (steps > GAP_FACTOR * period)) + 1
     edges = [0, *cuts.tolist(), len(time_s)]
     return [slice(a, b) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def coverage(time_s: np.ndarray) -> float:
+    """The share of ``time_s``'s span that its gap-free ``stretches`` cover, each sample counting one median
+    period: 1 for a continuous stream, about 0.4 for one sensor of ArduPilot's batch sampler."""
+    time_s = np.asarray(time_s, dtype=float)
+    time_s = time_s[np.isfinite(time_s)]
+    if len(time_s) < 2:
+        return 1.0
+    steps = np.diff(time_s)
+    period = float(np.median(steps[steps > 0])) if (steps > 0).any() else 0.0
+    covered = sum(time_s[run.stop - 1] - time_s[run.start] + period for run in stretches(time_s))
+    return float(min(covered / (time_s[-1] - time_s[0] + period), 1.0)) if period > 0 else 1.0
 
 
 def spectrum(table: ImuTable) -> Spectrum:

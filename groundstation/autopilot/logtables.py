@@ -10,15 +10,18 @@ DataFlash values as pymavlink's ``DFReader`` gives them (its format scaling appl
 ``L`` 1e-7) with the unit FMTU gives; ULog array elements as ``name_<i>``.
 
 The full-rate IMU (``FAST``: tables ``gyro_fast_<imu>`` with ``gyr_{x,y,z}_rad_s`` and ``accel_fast_<imu>``
-with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time):
+with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time, and ``batch``: the batch it came in, so that
+a reader can tell a burst from a continuous stream):
 
 - ArduPilot's batch sampler: an ``ISBH`` header (batch ``N``, sensor ``type`` 0 accel / 1 gyro, IMU
   ``instance``, multiplier ``mul``, ``smp_cnt`` samples, ``SampleUS`` the first sample's time,
   ``smp_rate`` Hz) then ``ISBD`` records (``N``, ``seqno``, 32 int16 each of ``x``, ``y``, ``z``): sample
-  ``k = 32 seqno + j`` is ``value / mul`` (rad/s, m/s²) at ``SampleUS + k / smp_rate``. A batch is one
-  sensor's contiguous burst (1024 samples at ~2 kHz by default); gyro and accel bursts alternate.
+  ``k = 32 seqno + j`` is ``value / mul`` (rad/s, m/s²) at ``SampleUS + k / smp_rate`` (each batch at its own
+  rate), ``batch`` its ``N``. A batch is one sensor's contiguous burst (1024 samples at ~2 kHz by default), then
+  a gap; gyro and accel bursts alternate, so neither sensor is a continuous stream.
 - PX4's ``sensor_gyro_fifo`` / ``sensor_accel_fifo``: ``samples`` values ``x[i] * scale`` spaced ``dt`` µs,
-  the newest (``i = samples - 1``) at ``timestamp_sample``; one table per ``multi_id``.
+  the newest (``i = samples - 1``) at ``timestamp_sample``; one table per ``multi_id``; ``batch`` the message's
+  index in the topic (one message follows the other: a continuous stream).
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from groundstation.autopilot.flightlog import Series
 # kind -> (table name before ``_<imu>``, fields, their unit): the table's columns are ``<field>_<unit>``
 FAST = {"gyro": ("gyro_fast", ("gyr_x", "gyr_y", "gyr_z"), "rad/s"), "accel": ("accel_fast", ("acc_x", "acc_y", "acc_z"), "m/s2")}
 ISB_TYPES = {0: "accel", 1: "gyro"}  # ISBH ``type`` (ArduPilot's IMU_SENSOR_TYPE_ACCEL, _GYRO)
+BATCH = "batch"  # the full-rate tables' column of the batch (ISBH ``N``, a fifo message's index) a sample came in
 FIFO_TOPICS = {"sensor_gyro_fifo": "gyro", "sensor_accel_fifo": "accel"}
 ISBD_SAMPLES = 32  # int16 values per axis in one ISBD record
 RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the session's own tables
@@ -59,7 +63,7 @@ class DataflashTables:
         self.rows = defaultdict(list)  # (type, instance) -> [[TimeUS, values...]]
         self.layouts: dict[str, _Layout] = {}  # type -> which of its fields are kept, and how
         self.isbh: dict[int, tuple] = {}  # batch N -> (kind, instance, mul, count, first sample µs, rate Hz)
-        self.isbd = defaultdict(list)  # (kind, instance) -> [((mul, count, first µs, rate), seqno, x, y, z)]
+        self.isbd = defaultdict(list)  # (kind, instance) -> [((mul, count, first µs, rate), N, seqno, x, y, z)]
 
     def add(self, msg) -> None:
         msg_type = msg.get_type()
@@ -79,7 +83,7 @@ class DataflashTables:
         header = self.isbh.get(msg.N)
         if header is None or header[0] is None or not header[2]:
             return  # its header was lost (damaged bytes, a cut log start): no scale, no time
-        self.isbd[header[:2]].append((header[2:], msg.seqno, *msg._elements[-3:]))  # x, y, z: the last three fields
+        self.isbd[header[:2]].append((header[2:], msg.N, msg.seqno, *msg._elements[-3:]))  # x, y, z: the last three fields
 
     def tables(self) -> tuple[dict[str, Series], dict[str, dict[str, str]]]:
         tables, units = {}, {}
@@ -91,19 +95,20 @@ class DataflashTables:
             tables[name] = in_order(values[:, 0], dict(zip(layout.names, values[:, 1:].T)), source)
             units[name] = layout.units
         for (kind, instance), records in self.isbd.items():
-            times, values = _isbd_samples(records)
-            tables[fast_name(kind, instance)] = in_order(times, dict(zip(FAST[kind][1], values.T)), "ISBH/ISBD")
+            times, values, batch = _isbd_samples(records)
+            tables[fast_name(kind, instance)] = in_order(times, {**dict(zip(FAST[kind][1], values.T)), BATCH: batch}, "ISBH/ISBD")
             units[fast_name(kind, instance)] = dict.fromkeys(FAST[kind][1], FAST[kind][2])
         return tables, units
 
 
-def _isbd_samples(records) -> tuple[np.ndarray, np.ndarray]:
-    """One sensor's ISBD records as samples: times (µs) and (n, 3) values in SI units."""
+def _isbd_samples(records) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One sensor's ISBD records as samples: times (µs), (n, 3) values in SI units, and each one's batch ``N``."""
     mul, count, first_us, rate_hz = (np.array([r[0][i] for r in records], dtype=float)[:, None] for i in range(4))
-    k = np.array([r[1] for r in records], dtype=float)[:, None] * ISBD_SAMPLES + np.arange(ISBD_SAMPLES)[None, :]
-    xyz = np.stack([np.array([r[2 + a] for r in records], dtype=float) for a in range(3)], axis=-1)  # (records, 32, 3)
+    batch = np.array([r[1] for r in records], dtype=float)[:, None]
+    k = np.array([r[2] for r in records], dtype=float)[:, None] * ISBD_SAMPLES + np.arange(ISBD_SAMPLES)[None, :]
+    xyz = np.stack([np.array([r[3 + a] for r in records], dtype=float) for a in range(3)], axis=-1)  # (records, 32, 3)
     keep = k < count
-    return (first_us + k * 1e6 / rate_hz)[keep], (xyz / mul[:, :, None])[keep]
+    return (first_us + k * 1e6 / rate_hz)[keep], (xyz / mul[:, :, None])[keep], np.broadcast_to(batch, k.shape)[keep]
 
 
 class _Layout:
@@ -150,7 +155,8 @@ def fifo_series(data: dict, kind: str) -> Series:
     times = newest - (count[:, None] - 1 - slots[None, :]) * np.asarray(data["dt"], dtype=float)[:, None]
     scale = np.asarray(data["scale"], dtype=float)[:, None]
     axes = [np.column_stack([data[f"{a}[{i}]"] for i in slots]) * scale for a in "xyz"]
-    return in_order(times[valid], {c: v[valid] for c, v in zip(FAST[kind][1], axes)}, f"{kind} fifo")
+    batch = np.broadcast_to(np.arange(len(count), dtype=float)[:, None], valid.shape)
+    return in_order(times[valid], {**{c: v[valid] for c, v in zip(FAST[kind][1], axes)}, BATCH: batch[valid]}, f"{kind} fifo")
 
 
 def in_order(time_us, columns: dict, source: str) -> Series:

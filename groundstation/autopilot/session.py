@@ -9,7 +9,11 @@ the rows they arrived at, so export and evaluate treat it like any session.
   components (single-antenna GPS gives no heading); then the compass heading (``mag_raw``) and the
   fused position (``position``) on the aiding estimator's attitude, as live.
 - Every other message type or topic is a table (``logtables``), the full-rate IMU too; ``imu="fast"``
-  runs the estimators on that one (``fast_imu``).
+  runs the estimators on that one (``fast_imu``) where it is a continuous stream (PX4's fifo topics). Where
+  it is bursts with gaps between them (ArduPilot's batch sampler) the estimators stay on the logged IMU and
+  the session says why (``burst_note``): an estimator must not integrate across the gaps, and the bursts with
+  the logged IMU filling the gaps put AHF2 19° RMS in pitch from the autopilot on the shared CubeOrange log,
+  where the logged IMU alone gives 2.9°.
 - The onboard attitude and truth are interpolated (normalised linear, shortest way) between the
   two samples around each IMU row, and NaN where those two are more than ``MAX_GAP_S`` apart or the
   row lies outside them.
@@ -24,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation import formats, quaternion
+from groundstation.analysis.vibration import CONTINUOUS_SHARE, coverage, stretches
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series
 from groundstation.autopilot.logtables import FAST, fast_name
 from groundstation.autopilot.streams import slow_imu_note
@@ -38,7 +43,6 @@ from groundstation.formats import IMU_STREAMS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAX_GAP_S = 1.0
-BURST_GAP = 1.5  # of a full-rate stream's median period: a longer gap ends a burst
 FAST_IMU_FORMATS = ("dataflash", "ulog")  # the formats that can hold a full-rate IMU (``logtables``)
 READ_SHARE = 0.3  # of a load's progress: reading the log; each estimator's run takes an equal part of the rest
 PROGRESS_STEPS = 1000
@@ -85,15 +89,20 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     barometer and GPS go through the live session's aiding stage (``session.aiding``) in time order with
     the IMU samples: the readings handed to the estimators, then the compass heading and the position on
     the aiding estimator's attitude."""
+    notes = []
     if imu == "fast":
-        log = dataclasses.replace(log, imu=fast_imu(log))
+        note = burst_note(log)
+        if note is None:
+            log = dataclasses.replace(log, imu=fast_imu(log))
+        else:
+            notes.append({"kind": "warning", "message": note})
     messages = _message_tables(log)
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
         tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0], messages)}
         return build_product(describe(log), log_catalogue(log, {}, messages), tables, (), protocol=AUTOPILOT_PROTOCOL,
                              true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage),
-                             magnetometer=log.mag is not None, events=log_events(log, t_us[0]),
+                             magnetometer=log.mag is not None, events=log_events(log, t_us[0], notes),
                              parameters=dict(log.parameters))
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
@@ -128,13 +137,15 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     return build_product(describe(log), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
                          true_q=interpolated(t_us, log.truth), true_frame="NED", magnetometer=mag is not None,
                          settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
-                         events=log_events(log, t_us[0]), parameters=dict(log.parameters))
+                         events=log_events(log, t_us[0], notes), parameters=dict(log.parameters))
 
 
-def log_events(log: FlightLog, t0_us: int) -> list[dict]:
+def log_events(log: FlightLog, t0_us: int, notes: list[dict] = ()) -> list[dict]:
     """What the autopilot said (``FlightLog.events``) at session time: seconds from the first sample row
-    (before it: negative), which is both the event's ``t_s`` and its place on the plots' axis."""
-    return [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
+    (before it: negative), which is both the event's ``t_s`` and its place on the plots' axis; ``notes``,
+    what the loading says (a warning), first, at the first row."""
+    said = [{**note, "t_s": 0.0, "session_time_s": 0.0} for note in notes]
+    return said + [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
 
 
 class _Readings:
@@ -157,18 +168,40 @@ class _Readings:
                                      (gps_t, aiding.GPS), (t_us, aiding.SAMPLE)])
 
 
-def fast_imu(log: FlightLog) -> Series:
-    """The estimators' IMU stream at full rate (``--imu fast``): the first IMU's full-rate gyro samples
-    (``logtables``), each with the accelerometer interpolated at its time from the full-rate accel where
-    a burst of it spans the sample, else from the logged IMU; between gyro bursts (ArduPilot's batch
-    sampler logs bursts) the logged IMU's own samples. UserError when the log has no full-rate gyro."""
-    gyro, accel = log.tables.get(fast_name("gyro", 0)), log.tables.get(fast_name("accel", 0))
+def burst_note(log: FlightLog) -> str | None:
+    """None when the first IMU's full-rate gyro is a continuous stream the estimators can run on
+    (``vibration.coverage`` at least ``CONTINUOUS_SHARE``); else why they stay on the logged IMU, in one line.
+    UserError when the log has no full-rate gyro."""
+    gyro = _fast_gyro(log)
+    t_s = gyro.time_us / 1e6
+    share = coverage(t_s)
+    if share >= CONTINUOUS_SHARE:
+        return None
+    runs = stretches(t_s)
+    samples = round(float(np.median([run.stop - run.start for run in runs])))
+    logged = "the logged IMU" if log.imu is None else f"the logged IMU ({log.imu.source}, {log.imu.rate_hz:.0f} Hz)"
+    return (f"the full-rate IMU ({gyro.source}) is logged in bursts, not a continuous stream ({len(runs)} "
+            f"bursts of {samples} samples at {gyro.rate_hz:.0f} Hz, {share:.0%} of the time): the estimators stay on "
+            f"{logged}; the bursts serve the vibration spectra and the what-if")
+
+
+def _fast_gyro(log: FlightLog) -> Series:
+    gyro = log.tables.get(fast_name("gyro", 0))
     if gyro is None:
         raise UserError(f"{log.path}: no full-rate IMU in this log (ArduPilot's ISBH/ISBD batch sampler, PX4's "
                         "sensor_gyro_fifo): open it with the regular IMU stream")
+    return gyro
+
+
+def fast_imu(log: FlightLog) -> Series:
+    """The estimators' IMU stream at full rate (``--imu fast``, where ``burst_note`` finds it continuous): the
+    first IMU's full-rate gyro samples (``logtables``), each with the accelerometer interpolated at its time
+    from the full-rate accel where a stretch of it spans the sample, else from the logged IMU; before and
+    after the full-rate gyro, the logged IMU's own samples. UserError when the log has no full-rate gyro."""
+    gyro, accel = _fast_gyro(log), log.tables.get(fast_name("accel", 0))
     fast_us = np.asarray(gyro.time_us, dtype=float)
     regular_us = np.zeros(0) if log.imu is None else np.asarray(log.imu.time_us, dtype=float)
-    between = ~_inside_bursts(regular_us, fast_us)
+    between = ~_inside_stretches(regular_us, fast_us)
     t_us = np.concatenate([fast_us, regular_us[between]])
     gyr = np.concatenate([gyro.stack(FAST["gyro"][1]), log.imu.stack(IMU_COLUMNS[:3])[between] if log.imu else np.zeros((0, 3))])
     acc = np.full((len(t_us), 3), np.nan)
@@ -176,7 +209,7 @@ def fast_imu(log: FlightLog) -> Series:
         acc = np.column_stack([np.interp(t_us, regular_us, log.imu.columns[c]) for c in IMU_COLUMNS[3:]])
     if accel is not None:
         accel_us = np.asarray(accel.time_us, dtype=float)
-        covered = _inside_bursts(t_us, accel_us)
+        covered = _inside_stretches(t_us, accel_us)
         acc[covered] = np.column_stack([np.interp(t_us[covered], accel_us, accel.columns[c]) / STANDARD_GRAVITY_M_S2
                                         for c in FAST["accel"][1]])
     order = np.argsort(t_us, kind="stable")
@@ -185,18 +218,13 @@ def fast_imu(log: FlightLog) -> Series:
     return Series(t_us, dict(zip(IMU_COLUMNS, np.column_stack([gyr, acc]).T)), f"{gyro.source} (full rate)")
 
 
-def _inside_bursts(t_us: np.ndarray, burst_us: np.ndarray) -> np.ndarray:
-    """Which of ``t_us`` lie within a burst of ``burst_us``: between two neighbouring samples of it no
-    more than ``BURST_GAP`` of its median period apart."""
-    if len(burst_us) < 2:
-        return np.zeros(len(t_us), dtype=bool)
-    gaps = np.diff(burst_us)
-    after = np.searchsorted(burst_us, t_us, side="left")
-    inside = (after > 0) & (after < len(burst_us))
-    ok = np.zeros(len(t_us), dtype=bool)
-    ok[inside] = gaps[after[inside] - 1] <= BURST_GAP * np.median(gaps)
-    exact = (after < len(burst_us)) & (burst_us[np.minimum(after, len(burst_us) - 1)] == t_us)
-    return ok | exact
+def _inside_stretches(t_us: np.ndarray, burst_us: np.ndarray) -> np.ndarray:
+    """Which of ``t_us`` lie within a gap-free stretch of ``burst_us`` (``vibration.stretches``: the one rule
+    for where a stream has gaps), its ends included."""
+    inside = np.zeros(len(t_us), dtype=bool)
+    for run in stretches(burst_us):
+        inside |= (t_us >= burst_us[run.start]) & (t_us <= burst_us[run.stop - 1])
+    return inside
 
 
 def onboard_columns(t_us: np.ndarray, t0_us: int, q: np.ndarray) -> dict[str, np.ndarray]:

@@ -6,7 +6,8 @@ the page, it has no script and no external address. Its sections: the flight (ve
 duration, modes), the findings ranked by severity (``report_findings``), attitude (the host
 estimators against the truth or the onboard estimate: the evaluation's or the agreement's table, and
 a plot), vibration (``analysis.vibration``: spectrum, peaks, levels, clipping, the notch
-suggestion), the link, and the events with the autopilot's messages.
+suggestion, and what that notch would do: ``analysis.whatif``'s spectra before and after, its Bode view
+and the attitude difference where the IMU carries it), the link, and the events with the autopilot's messages.
 
 It reads the product only (``SessionData``), as every export does: the command and the window hand
 it a session they loaded.
@@ -23,6 +24,7 @@ import numpy as np
 
 from groundstation import __version__, quaternion
 from groundstation.analysis.vibration import UNITS, VibrationError, VibrationSummary, vibration_summary
+from groundstation.analysis.whatif import LAG_AT_HZ, what_if
 from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.messages import ALARM_SEVERITIES, MESSAGE_KIND, PARAMETER_KIND
 from groundstation.autopilot.modes import STATUS_KIND, event_time_s, mode_spans
@@ -79,7 +81,8 @@ def report_html(data: SessionData, file_name: str = "") -> str:
              f"<style>{STYLE}</style></head><body>", f"<h1>{_e(title)}</h1>",
              f"<p class=\"detail\">made by groundstation {__version__} on {datetime.date.today().isoformat()}</p>",
              flight_section(data, file_name), findings_section(found), attitude_section(data),
-             vibration_section(vibration, vibration_note), link_section(data), events_section(data), "</body></html>"]
+             vibration_section(vibration, vibration_note), what_if_section(data, vibration), link_section(data),
+             events_section(data), "</body></html>"]
     return "\n".join(parts)
 
 
@@ -231,6 +234,36 @@ def vibration_section(v: VibrationSummary | None, note: str) -> str:
     out += [f"<p>{_e(line)}</p>" for line in clipping]
     out.append(f"<p><b>Notch suggestion:</b> {_e(v.notch['text']) if v.notch else 'none (no peak to suggest one for)'}</p>")
     out += [f"<p class=\"warn\">{_e(w)}</p>" for w in v.warnings]
+    return "\n".join(out)
+
+
+BODE_FLOOR_DB = -60.0  # a notch's centre is -inf dB: drawn at this floor
+BODE_SPAN = 3.0  # the Bode plots run to this many times the filter's frequency: the attitude loop's band and the notch
+
+
+def what_if_section(data: SessionData, v: VibrationSummary | None) -> str:
+    """What the suggested notch would do (``analysis.whatif``), on data sampled fast enough for it; nothing
+    without a suggestion."""
+    if v is None or not v.notch:
+        return ""
+    out = ["<h3>What the suggested notch would do</h3>"]
+    try:
+        change = what_if(data, "notch", v.notch["frequency_hz"], v.notch["bandwidth_hz"], v.start_s, v.end_s)
+    except VibrationError as error:
+        return "\n".join([*out, f"<p>Not computed: {_e(error)}.</p>"])
+    for sensor, f in change.spectra.items():
+        out.append(line_plot([("before", f.before.frequency_hz, f.before.total_psd), ("after", f.after.frequency_hz, f.after.total_psd)],
+                             f"{sensor} spectrum before and after ('{f.table}' at {f.rate_hz:.0f} Hz)", "frequency (Hz)",
+                             f"density ({UNITS[sensor]}²/Hz, x+y+z)", log_y=True,
+                             marks=[] if f.peak_hz is None else [(f.peak_hz, f"{f.attenuation_db:+.1f} dB")]))
+    shown = change.bode_hz <= BODE_SPAN * change.frequency_hz
+    marks = [(hz, f"{hz:g} Hz") for hz in LAG_AT_HZ if hz in change.bode_hz]
+    out.append(line_plot([("gain", change.bode_hz[shown], np.maximum(change.magnitude_db[shown], BODE_FLOOR_DB))],
+                         f"the notch's gain (run at {change.bode_rate_hz:.0f} Hz)", "frequency (Hz)", "gain (dB)", marks=marks))
+    out.append(line_plot([("phase", change.bode_hz[shown], change.phase_deg[shown])], "the notch's phase", "frequency (Hz)",
+                         "phase (°; negative: lag)", marks=marks))
+    lags = "".join(f" data-lag-{hz:g}-hz-deg=\"{lag:.6g}\"" for hz, lag in change.phase_lag_deg.items())
+    out += [f"<p class=\"whatif\"{lags}>{_e(line.strip())}</p>" for line in change.lines()]
     return "\n".join(out)
 
 

@@ -8,21 +8,32 @@ time range (all the data, or from / to seconds of session time) and the text of 
 levels, clipping, motors and the notch suggestion in the autopilot's parameters. It computes when the
 tab is first shown for a session and on "Compute"; a range without enough samples is said in the tab's
 own banner.
+
+The what-if (``analysis.whatif``): a notch or low-pass at a frequency (the suggested notch by default) on
+the data sampled fast enough for it; "Filter" shows the chosen sensor's spectrum before and after, the
+filter's gain and phase (its lag at 10-30 Hz marked), and its text (attenuation at the peak, phase lag,
+the attitude difference or why there is none); a filter no data can carry is said in the banner.
 """
 
 from __future__ import annotations
 
 from types import SimpleNamespace
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.analysis.vibration import AXES, SENSORS, VibrationError, VibrationSummary, vibration_summary
+from groundstation.analysis.vibration import AXES, SENSORS, UNITS, VibrationError, VibrationSummary, vibration_summary
 from groundstation.session.view import Session
+
+if TYPE_CHECKING:
+    from groundstation.analysis.whatif import WhatIf
 
 AXIS_COLOURS = {"x": "#d62728", "y": "#2ca02c", "z": "#1f77b4"}  # red, green, blue: the axes as a 3D view draws them
 PEAK_BRUSH = "#222222"
+BEFORE_PEN, AFTER_PEN = "#777777", "#d62728"  # the spectrum before the filter grey, after it red
+BODE_FLOOR_DB = -60.0  # a notch's centre is -inf dB: drawn at this floor
 
 
 class VibrationView(QtWidgets.QWidget):
@@ -52,6 +63,35 @@ class VibrationView(QtWidgets.QWidget):
                        QtWidgets.QLabel("sensor"), self.sensor_box, self.compute_button):
             controls.addWidget(widget)
         controls.addStretch(1)
+        from groundstation.analysis.whatif import KINDS  # here: it loads numba, which must not delay the first paint
+
+        self.change: WhatIf | None = None
+        self.filter_box = QtWidgets.QComboBox()
+        self.filter_box.addItems(list(KINDS))
+        self.filter_hz, self.filter_bw = (QtWidgets.QDoubleSpinBox(decimals=1, maximum=1e5, suffix=" Hz") for _ in range(2))
+        self.filter_bw.setToolTip("the notch's bandwidth between its -3 dB points (0: half its centre)")
+        self.filter_box.currentTextChanged.connect(lambda kind: self.filter_bw.setEnabled(kind == "notch"))
+        self.filter_button = QtWidgets.QPushButton("Filter")
+        self.filter_button.setToolTip("What this filter would do: the spectrum before and after, its gain and phase, "
+                                      "the attitude difference where the IMU carries it")
+        self.filter_button.clicked.connect(self.run_what_if)
+        what_if_row = QtWidgets.QHBoxLayout()
+        for widget in (QtWidgets.QLabel("what-if"), self.filter_box, QtWidgets.QLabel("at"), self.filter_hz,
+                       QtWidgets.QLabel("bandwidth"), self.filter_bw, self.filter_button):
+            what_if_row.addWidget(widget)
+        what_if_row.addStretch(1)
+        self.before_after_plot, self.gain_plot, self.phase_plot = (pg.PlotWidget(background="w") for _ in range(3))
+        self.before_after_plot.setLogMode(y=True)
+        self.before_after_plot.addLegend(offset=(-10, 10))
+        self.gain_plot.setLabel("left", "gain", "dB")
+        self.phase_plot.setLabel("left", "phase (negative: lag)", "°")
+        self.what_if_plots = QtWidgets.QWidget()
+        plots = QtWidgets.QHBoxLayout(self.what_if_plots)
+        plots.setContentsMargins(0, 0, 0, 0)
+        for plot in (self.before_after_plot, self.gain_plot, self.phase_plot):
+            plot.setLabel("bottom", "frequency", "Hz")
+            plots.addWidget(plot)
+        self.what_if_plots.hide()
         self.banner = QtWidgets.QLabel()
         self.banner.setWordWrap(True)
         self.banner.setStyleSheet("background:#fde0e0; color:#8b0000; padding:4px")
@@ -72,14 +112,17 @@ class VibrationView(QtWidgets.QWidget):
         self.text.setMaximumHeight(170)
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(controls)
+        layout.addLayout(what_if_row)
         layout.addWidget(self.banner)
         layout.addWidget(self.spectrum_plot, 3)
         layout.addWidget(self.spectrogram_plot, 2)
+        layout.addWidget(self.what_if_plots, 2)
         layout.addWidget(self.text)
 
     def set_session(self, session: Session | None) -> None:
         self.session = session
         self.summary = None
+        self.change = None
         self._due = session is not None
         self._clear()
 
@@ -93,10 +136,9 @@ class VibrationView(QtWidgets.QWidget):
         self._due = False
         if self.session is None:
             return
-        view = self.session.view
-        with self.session.lock:  # a snapshot: the reader thread goes on adding rows
-            data = SimpleNamespace(tables={name: table.to_dict() for name, table in view.tables.items()}, catalogue=view.catalogue)
+        data = self._snapshot()
         start, end = (None, None) if self.whole.isChecked() else (self.start_box.value(), self.end_box.value())
+        self.change = None
         try:
             self.summary = vibration_summary(data, start, end)
         except VibrationError as error:
@@ -109,6 +151,34 @@ class VibrationView(QtWidgets.QWidget):
         if self.whole.isChecked():
             self.start_box.setValue(self.summary.start_s)
             self.end_box.setValue(self.summary.end_s)
+        if self.summary.notch:  # the what-if starts at the suggested notch
+            self.filter_hz.setValue(self.summary.notch["frequency_hz"])
+            self.filter_bw.setValue(self.summary.notch["bandwidth_hz"])
+        self._show()
+
+    def _snapshot(self) -> SimpleNamespace:
+        """The session's tables now (the reader thread goes on adding rows), with what the analysis reads."""
+        view = self.session.view
+        with self.session.lock:
+            return SimpleNamespace(tables={name: table.to_dict() for name, table in view.tables.items()},
+                                   catalogue=view.catalogue, settings_at_start=view.settings())
+
+    def run_what_if(self) -> None:
+        """What the filter set in the row would do over the summary's range; a refusal in the banner."""
+        from groundstation.analysis.whatif import what_if
+
+        if self.session is None or self.summary is None:
+            return
+        kind, bandwidth = self.filter_box.currentText(), self.filter_bw.value() or None
+        try:
+            self.change = what_if(self._snapshot(), kind, self.filter_hz.value(), bandwidth if kind == "notch" else None,
+                                  self.summary.start_s, self.summary.end_s)
+        except VibrationError as error:
+            self.change = None
+            self.banner.setText(f"No what-if: {error}")
+            self.banner.show()
+        else:
+            self.banner.hide()
         self._show()
 
     def _clear(self) -> None:
@@ -116,6 +186,9 @@ class VibrationView(QtWidgets.QWidget):
         self.peak_texts = []
         self.image.clear()
         self.text.clear()
+        for plot in (self.before_after_plot, self.gain_plot, self.phase_plot):
+            plot.clear()
+        self.what_if_plots.setVisible(self.change is not None)
 
     def _show(self) -> None:
         """Draw the summary for the chosen sensor (the first it has when it lacks that one)."""
@@ -143,4 +216,27 @@ class VibrationView(QtWidgets.QWidget):
         step_s = (t[1] - t[0]) if len(t) > 1 else sp.nperseg / sp.rate_hz
         self.image.setRect(QtCore.QRectF(t[0] - step_s / 2, 0.0, step_s * len(t), float(sp.frequency_hz[-1])))
         self.spectrogram_plot.setTitle(f"{sensor} spectrogram, '{sp.table}' (log density)")
-        self.text.setPlainText("\n".join(self.summary.lines()))
+        self.text.setPlainText("\n".join(self.summary.lines() + (self.change.lines() if self.change else [])))
+        if self.change is not None:
+            self._show_what_if(sensor)
+
+    def _show_what_if(self, sensor: str) -> None:
+        from groundstation.analysis.whatif import LAG_AT_HZ
+
+        change = self.change
+        filtered = change.spectra.get(sensor) or next(iter(change.spectra.values()))
+        self.before_after_plot.setTitle(f"{filtered.sensor}, '{filtered.table}' at {filtered.rate_hz:.0f} Hz")
+        self.before_after_plot.setLabel("left", "density (x+y+z)", f"({UNITS[filtered.sensor]})²/Hz")
+        floor = np.finfo(float).tiny
+        for name, spectrum, pen in (("before", filtered.before, BEFORE_PEN), ("after", filtered.after, AFTER_PEN)):
+            self.before_after_plot.plot(spectrum.frequency_hz[1:], np.maximum(spectrum.total_psd[1:], floor),
+                                        pen=pg.mkPen(pen, width=1), name=name)
+        self.gain_plot.setTitle(f"the {change.filter} at {change.bode_rate_hz:.0f} Hz")
+        self.gain_plot.plot(change.bode_hz, np.maximum(change.magnitude_db, BODE_FLOOR_DB), pen=pg.mkPen(AFTER_PEN, width=1))
+        self.phase_plot.plot(change.bode_hz, change.phase_deg, pen=pg.mkPen(AFTER_PEN, width=1))
+        lags = change.phase_lag_deg
+        self.phase_plot.setTitle("lag " + " / ".join(f"{lag:.0f}°" for lag in lags.values())
+                                 + " at " + " / ".join(f"{hz:g}" for hz in lags) + " Hz")
+        for hz in LAG_AT_HZ:
+            if hz in lags:
+                self.phase_plot.addItem(pg.InfiniteLine(hz, pen=pg.mkPen("#999999", style=QtCore.Qt.DashLine)))

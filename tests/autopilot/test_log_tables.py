@@ -173,13 +173,13 @@ def sine_rad_s(t_s):
                             np.full(len(t_s), 0.1)])  # fmt: skip
 
 
-@pytest.fixture(scope="module")
-def sine_bin(tmp_path_factory):
-    """A DataFlash log of a 100 Hz IMU, level and still, and two 1024-sample gyro bursts of a known sine."""
-    t_imu_s = np.arange(300) / 100.0
+def isb_log(path, starts_s, seconds: float = 3.0):
+    """A DataFlash log of a 100 Hz IMU, level and still, for ``seconds``, and 1024-sample gyro batches of a
+    known sine starting at ``starts_s``."""
+    t_imu_s = np.arange(round(100 * seconds)) / 100.0
     imu = [(int(10_000_000 + t * 1e6), 0, 0.0, 0.0, 0.0, 0.0, 0.0, -STANDARD_GRAVITY_M_S2) for t in t_imu_s]
     isbh, isbd = [], []
-    for n, start_s in enumerate((0.5, 1.7)):
+    for n, start_s in enumerate(starts_s):
         first_us = 10_000_000 + int(start_s * 1e6)
         isbh.append((first_us + 600_000, n, 1, 0, MUL, 1024, first_us, RATE_HZ))  # logged after its samples
         k = np.arange(1024)
@@ -187,13 +187,18 @@ def sine_bin(tmp_path_factory):
         for seqno in range(32):
             block = counts[seqno * 32 : seqno * 32 + 32]
             isbd.append((first_us + 600_001 + seqno, n, seqno, *block[:, 0], *block[:, 1], *block[:, 2]))
-    path = tmp_path_factory.mktemp("isb") / "sine.bin"
     write_dataflash(path, {
         "IMU": ("QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ", imu),
         "ISBH": ("QHBBHHQf", "TimeUS,N,type,instance,mul,smp_cnt,SampleUS,smp_rate", isbh),
         "ISBD": ("QHHaaa", "TimeUS,N,seqno,x,y,z", isbd),
     })  # fmt: skip
     return path
+
+
+@pytest.fixture(scope="module")
+def sine_bin(tmp_path_factory):
+    """Two 1024-sample gyro bursts of a known sine in three seconds of a 100 Hz IMU."""
+    return isb_log(tmp_path_factory.mktemp("isb") / "sine.bin", (0.5, 1.7))
 
 
 def test_isbd_written_here_gives_the_known_sine(sine_bin):
@@ -207,18 +212,28 @@ def test_isbd_written_here_gives_the_known_sine(sine_bin):
     np.testing.assert_array_equal(fast.stack(("gyr_x", "gyr_y", "gyr_z")), values)
 
 
-def test_the_estimators_run_on_the_fast_stream_only_when_asked(sine_bin):
+def test_bursts_do_not_feed_the_estimators_even_when_asked(sine_bin):
     regular, fast = load_session(sine_bin, ["ahf"]), load_session(sine_bin, ["ahf"], imu="fast")
-    assert len(regular.tables["imu"]["time_s"]) == 300
-    rows = fast.tables["imu"]
-    # the two bursts at full rate, the logged IMU's samples before, between and after them
-    t_imu_s = np.arange(300) / 100.0
-    covered = sum(((t_imu_s >= start) & (t_imu_s <= start + 1023 / RATE_HZ + 1e-9)).sum() for start in (0.5, 1.7))
-    assert len(rows["time_s"]) == 2048 + 300 - covered
-    in_burst = (rows["time_s"] >= 0.5) & (rows["time_s"] < 0.5 + 1023 / RATE_HZ)
-    np.testing.assert_allclose(rows["gyr_x_rad_s"][in_burst], sine_rad_s(rows["device_time_us"][in_burst] / 1e6)[:, 0],
-                               atol=0.5 / MUL + 1e-12)
+    # two bursts in three seconds: the estimators stay on the logged IMU, and the session says why in one line
+    np.testing.assert_array_equal(fast.tables["imu"]["time_s"], regular.tables["imu"]["time_s"])
+    np.testing.assert_array_equal(fast.tables["imu"]["ahf_qw"], regular.tables["imu"]["ahf_qw"])
+    said = [w for w in fast.warnings if "bursts" in w]
+    assert len(said) == 1 and "2 bursts of 1024 samples at 2000 Hz" in said[0] and "the logged IMU (IMU[0], 100 Hz)" in said[0]
     assert "gyro_fast_0" in regular.tables and len(regular.tables["gyro_fast_0"]["time_s"]) == 2048
+    np.testing.assert_array_equal(regular.tables["gyro_fast_0"]["batch"], np.repeat([0.0, 1.0], 1024))
+
+
+def test_batches_back_to_back_are_a_continuous_stream_that_feeds_the_estimators(tmp_path):
+    """The batch sampler set to sample without pause: one batch starts where the last ended, no bursts."""
+    batch_s = 1024 / RATE_HZ
+    path = isb_log(tmp_path / "continuous.bin", batch_s * np.arange(5), seconds=5 * batch_s)
+    data = load_session(path, ["ahf"], imu="fast")
+    assert not any("bursts" in w for w in data.warnings)
+    rows = data.tables["imu"]
+    assert 1 / np.median(np.diff(rows["time_s"])) == pytest.approx(RATE_HZ, rel=1e-6)
+    assert len(rows["time_s"]) >= 5 * 1024
+    np.testing.assert_allclose(rows["gyr_x_rad_s"][:5 * 1024], sine_rad_s(rows["device_time_us"][:5 * 1024] / 1e6)[:, 0],
+                               atol=0.5 / MUL + 1e-12)
 
 
 def test_fast_without_a_full_rate_imu_is_a_clear_error(tmp_path):
@@ -302,5 +317,7 @@ def test_the_fifo_stream_feeds_the_estimators_when_asked(fifo_ulog):
     imu = data.tables["imu"]
     assert 1 / np.median(np.diff(imu["time_s"])) == pytest.approx(FIFO_HZ, rel=1e-3)
     np.testing.assert_allclose(imu["acc_z_g"][10:-10], -9.81 / STANDARD_GRAVITY_M_S2, atol=1e-3)
-    assert data.catalogue["gyro_fast_0"].column_names == ("time_s", "gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s")
-    assert data.catalogue["accel_fast_0"].column_names == ("time_s", "acc_x_m_s2", "acc_y_m_s2", "acc_z_m_s2")
+    assert data.catalogue["gyro_fast_0"].column_names == ("time_s", "gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s", "batch")
+    assert data.catalogue["accel_fast_0"].column_names == ("time_s", "acc_x_m_s2", "acc_y_m_s2", "acc_z_m_s2", "batch")
+    assert not any("bursts" in w for w in data.warnings)  # a fifo is a continuous stream: it feeds the estimators
+    np.testing.assert_array_equal(data.tables["gyro_fast_0"]["batch"], np.repeat(np.arange(2.0 * FIFO_HZ / PER_MESSAGE), PER_MESSAGE))

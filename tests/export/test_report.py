@@ -2,6 +2,7 @@
 whose report finds both; every shared flight log reported without a traceback; the page is whole
 on its own (no script, no address, figures inline) and renders in a real browser (headless Chromium)."""
 
+import html
 import shutil
 import subprocess
 import sys
@@ -119,3 +120,23 @@ def test_a_report_is_refused_before_any_work_and_leaves_no_file(vibrating_flight
     assert main(["report", str(path), "--out", str(tmp_path / "no" / "r.html")]) == 2
     assert "Traceback" not in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+def test_the_report_says_what_the_suggested_notch_would_do(vibrating_flight):
+    """The notch at the 37 Hz rotor, on the 100 Hz IMU that carries it: the spectra before and after, its Bode
+    view, its phase lag at 10-30 Hz and the attitude difference, as ``analysis.whatif`` computes them."""
+    from groundstation.analysis.vibration import vibration_summary
+    from groundstation.analysis.whatif import what_if
+    from groundstation.session.load import load_session
+
+    path, out = vibrating_flight
+    text = out.read_text(encoding="utf-8")
+    data = load_session(path)
+    summary = vibration_summary(data)
+    change = what_if(data, "notch", summary.notch["frequency_hz"], summary.notch["bandwidth_hz"])
+    assert "<h3>What the suggested notch would do</h3>" in text
+    assert "spectrum before and after" in text and "the notch&#x27;s gain" in text and "the notch&#x27;s phase" in text
+    for line in change.lines():
+        assert html.escape(line.strip()) in text
+    assert change.attitude is not None and change.spectra["accel"].attenuation_db < -3.0
+    assert f'data-lag-20-hz-deg="{change.phase_lag_deg[20.0]:.6g}"' in text
