@@ -153,3 +153,16 @@ def test_an_autopilot_logs_parameters(tmp_path):
     with open(tmp_path / "hop.mcap", "rb") as stream:
         metadata = {m.name: m.metadata for m in make_reader(stream).iter_metadata()}
     assert float(metadata["parameters"]["MC_ROLL_P"]) == session.parameters["MC_ROLL_P"]
+
+
+def test_the_config_channel_says_each_unit_once_and_has_a_time(sim_session, tmp_path):
+    """The spec's CONFIG fields that carry their unit in their names (``accel_fs_g`` in g, ``gyro_fs_dps``
+    in deg/s, ``rate_hz`` in Hz) keep them as they are, not ``accel_fs_g_g``; the CONFIG that came before
+    the first sample is at the session's start (time_s 0), not at no time."""
+    write_mcap(sim_session, tmp_path / "flight.mcap")
+    (log_time, config), = read_mcap(tmp_path / "flight.mcap")["/config"]
+    fields = [f.name for f in config.DESCRIPTOR.fields]
+    assert {"accel_fs_g", "gyro_fs_dps", "rate_hz"} <= set(fields)
+    assert not [f for f in fields if f.lower().endswith(("_g_g", "_dps_deg_s", "_hz_hz"))]
+    assert config.accel_fs_g == sim_session.config["accel_fs_g"] and config.rate_hz == sim_session.config["rate_hz"]
+    assert config.time_s == 0.0 and log_time == origin_ns(sim_session.metadata)
