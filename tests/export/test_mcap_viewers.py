@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
+from groundstation import quaternion
 from groundstation.export.foxglove_topics import origin_ns
 from groundstation.export.mcap_file import write_mcap
 from groundstation.export.protobuf_rows import field_names
@@ -106,3 +107,35 @@ def test_the_json_parameters_schema_is_plain(tmp_path):
         (schema, _, message), = make_reader(stream).iter_messages()
     assert json.loads(schema.data)["additionalProperties"] == {"type": "number"}
     assert json.loads(message.data) == {"A": 1.5}
+
+
+def test_rerun_imports_imu_and_attitudes_as_series(sim_session, tmp_path):
+    """Rerun's own MCAP import (the ``rerun mcap convert`` of its SDK) decodes every /imu column and every
+    /attitude/<estimate> angle into a float64 series on the log-time timeline, value for value."""
+    rerun_chunk = pytest.importorskip("rerun.chunk", reason="rerun-sdk (the test extra) is not installed")
+    path = tmp_path / "flight.mcap"
+    write_mcap(sim_session, path)
+    rows = {}  # entity -> (log times, struct rows)
+    for chunk in rerun_chunk.McapReader(path).stream():
+        batch = chunk.to_record_batch()
+        message = next((name for name in batch.schema.names if name.endswith(":message")), None)
+        if message is not None:
+            times, values = rows.setdefault(chunk.entity_path, ([], []))
+            times += batch.column("message_log_time").cast("int64").to_pylist()
+            values += batch.column(message).flatten().to_pylist()  # one message a row: list<struct> -> struct
+    origin = origin_ns(sim_session.metadata)
+    imu = sim_session.tables["imu"]
+    expected = {"/imu": (imu["time_s"], imu)}
+    for name in ("ahf", "hf", "onboard"):
+        table = sim_session.tables["onboard" if name == "onboard" else "imu"]
+        q = np.column_stack([table[c] for c in (["qw", "qx", "qy", "qz"] if name == "onboard" else [f"{name}_q{a}" for a in "wxyz"])])
+        finite = np.isfinite(q).all(axis=1)
+        yaw, pitch, roll = quaternion.euler_deg(q[finite])
+        expected[f"/attitude/{name}"] = (table["time_s"][finite], {"pitch_deg": pitch, "roll_deg": roll, "yaw_deg": yaw})
+    for entity, (time_s, columns) in expected.items():
+        times, values = rows[entity]
+        order = np.argsort(times, kind="stable")
+        np.testing.assert_array_equal(np.array(times)[order], origin + np.rint(time_s * 1e9).astype(np.int64))
+        for column, field in zip(columns, field_names(list(columns))):
+            series = np.array([values[i][field] for i in order], dtype=float)
+            np.testing.assert_array_equal(series, columns[column], err_msg=f"{entity}.{column}")
