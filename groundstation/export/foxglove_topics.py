@@ -12,8 +12,9 @@
 - every event (configuration, warnings, settings changes, autopilot messages, ...): a Foxglove ``Log``
   on ``/events``, its severity from its kind.
 
-A message's log time is ``origin_ns`` plus its session time (the recording's ``start_utc`` for a file,
-the wall clock at the session's first byte live), so Foxglove's timeline reads real time of day.
+A message's log time is ``origin_ns`` plus its session time (the session's ``start_utc``: a recording's
+start, a flight log's own GPS or UTC time; the wall clock at the session's first byte live), so
+Foxglove's timeline reads real time of day.
 """
 
 from __future__ import annotations
@@ -37,8 +38,8 @@ _WARNING_KINDS = frozenset({"warning", "config_conflict", "device_reset", "clock
 
 
 def origin_ns(metadata: dict, earliest_s: float = 0.0) -> int:
-    """The wall-clock time of session time 0 in ns since the epoch: the recording's ``start_utc``; for a
-    session that has none (a flight log, a dataset) the epoch, moved on by whole seconds when rows come
+    """The wall-clock time of session time 0 in ns since the epoch: the session's ``start_utc``; for a
+    session that has none (a flight log without GPS or UTC time, a dataset) the epoch, moved on by whole seconds when rows come
     before time 0 (``earliest_s`` < 0), since MCAP's log times cannot be negative."""
     try:
         start = datetime.fromisoformat(str(metadata.get("start_utc")))

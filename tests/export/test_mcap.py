@@ -132,7 +132,7 @@ def test_cli_exports_a_flight_log_and_refuses_cleanly(tmp_path):
     onboard = session.tables["onboard"]["time_s"]
     assert len(topics["/onboard"]) == len(onboard) > 0
     times = np.array([t for t, _ in topics["/onboard"]])
-    assert times.min() >= 0  # no start time in a .ulg's header here: the epoch, moved past the earliest row
+    assert times.min() >= origin_ns(session.metadata) > 1.6e18  # the log's GPS time (2023), not 1970
     np.testing.assert_allclose(np.diff(times) / 1e9, np.diff(onboard), atol=1e-9)
     again = subprocess.run([sys.executable, "-m", "groundstation", "export", str(log), "--out", str(out)],
                            capture_output=True, text=True, timeout=300)
