@@ -101,3 +101,25 @@ def read_mcap_js(tmp_path_factory):
         return json.loads(done.stdout)
 
     return read
+
+
+@pytest.fixture(scope="session")
+def exported_log(tmp_path_factory):
+    """``export(name) -> (session, mcap path)``: a shared flight log loaded (with ``ahf``) and written to
+    MCAP once per test process, for the tests that read the same export in different ways."""
+    from groundstation.export.mcap_file import write_mcap
+
+    done = {}
+
+    def export(name: str):
+        if name not in done:
+            log = DATASETS / "flightlogs" / name
+            if not log.exists():
+                pytest.skip(f"{log} not found")
+            session = load_session(log, ["ahf"])
+            path = tmp_path_factory.mktemp("exported") / f"{log.stem}.mcap"
+            write_mcap(session, path)
+            done[name] = session, path
+        return done[name]
+
+    return export

@@ -6,17 +6,14 @@ from datetime import datetime, timezone
 import pytest
 from mcap.reader import make_reader
 
-from groundstation.export.mcap_file import write_mcap
-from groundstation.session.load import load_session
 from tests.export.conftest import DATASETS
 
 LOGS = DATASETS / "flightlogs"
 
 
-def first_imu_and_time_metadata(log, tmp_path) -> tuple[float, dict]:
+def first_imu_and_time_metadata(log, exported_log) -> tuple[float, dict]:
     """The log time of the MCAP's first /imu message (s since 1970) and its ``time`` metadata."""
-    path = tmp_path / "log.mcap"
-    write_mcap(load_session(log, ["ahf"]), path)
+    _, path = exported_log(log.name)
     with open(path, "rb") as stream:
         reader = make_reader(stream)
         metadata = {m.name: m.metadata for m in reader.iter_metadata()}
@@ -31,11 +28,11 @@ def need(path):
     return path
 
 
-def test_a_dataflash_log_on_its_gps_time(tmp_path):
+def test_a_dataflash_log_on_its_gps_time(exported_log):
     from pymavlink import DFReader
 
     log = need(LOGS / "arducopter_cubeorange_2023-07-06_10-12-18.bin")
-    stamp_s, time = first_imu_and_time_metadata(log, tmp_path)
+    stamp_s, time = first_imu_and_time_metadata(log, exported_log)
     reader = DFReader.DFReader_binary(str(log), zero_time_base=False)  # its clock from the first GPS time
     truth = next(m for m in iter(reader.recv_msg, None) if m.get_type() == "IMU" and getattr(m, "I", 0) == 0)._timestamp
     assert abs(stamp_s - truth) < 0.05, (stamp_s, truth)
@@ -43,11 +40,11 @@ def test_a_dataflash_log_on_its_gps_time(tmp_path):
     assert time["source"] == "GPS week and ms (GWk, GMS)" and time["session_time_0_utc"].startswith("2023-07-06T09:12")
 
 
-def test_a_ulog_on_its_utc_time(tmp_path):
+def test_a_ulog_on_its_utc_time(exported_log):
     from pyulog import ULog
 
     log = need(LOGS / "px4_fmuv5_quad_hop.ulg")
-    stamp_s, time = first_imu_and_time_metadata(log, tmp_path)
+    stamp_s, time = first_imu_and_time_metadata(log, exported_log)
     ulog = ULog(str(log), ["vehicle_gps_position", "sensor_combined"])
     topics = {d.name: d.data for d in ulog.data_list if d.multi_id == 0}
     gps = topics["vehicle_gps_position"]
@@ -58,18 +55,18 @@ def test_a_ulog_on_its_utc_time(tmp_path):
     assert time["source"] == "vehicle_gps_position.time_utc_usec" and time["session_time_0_utc"].startswith("2023-10-31")
 
 
-def test_a_tlog_on_its_receive_time(tmp_path):
+def test_a_tlog_on_its_receive_time(exported_log):
     from pymavlink import mavutil
 
     log = need(LOGS / "arduplane_quadplane_sitl.tlog")
-    stamp_s, time = first_imu_and_time_metadata(log, tmp_path)
+    stamp_s, time = first_imu_and_time_metadata(log, exported_log)
     connection = mavutil.mavlink_connection(str(log))
     imu = connection.recv_match(type=["HIGHRES_IMU", "RAW_IMU", "SCALED_IMU"])  # its receive time, by pymavlink
     assert abs(stamp_s - imu._timestamp) < 1.0, (stamp_s, imu._timestamp)
     assert time["source"] == ".tlog receive time"
 
 
-def test_a_log_without_utc_time_says_so(tmp_path):
+def test_a_log_without_utc_time_says_so(exported_log):
     log = need(LOGS / "px4_sitl_quad_groundtruth.ulg")  # its GPS never had a time (time_utc_usec 0)
-    stamp_s, time = first_imu_and_time_metadata(log, tmp_path)
+    stamp_s, time = first_imu_and_time_metadata(log, exported_log)
     assert 0 <= stamp_s < 86400 and "no UTC time" in time["log_time"] and "source" not in time

@@ -57,10 +57,8 @@ def test_every_channel_of_a_simulated_session_in_foxglove_and_lichtblick(sim_ses
 
 
 @pytest.mark.parametrize("log", LOGS, ids=[p.name for p in LOGS])
-def test_every_channel_of_a_shared_log_in_foxglove_and_lichtblick(log, read_mcap_js, tmp_path):
-    session = load_session(log, ["ahf"])
-    path = tmp_path / "log.mcap"
-    write_mcap(session, path)
+def test_every_channel_of_a_shared_log_in_foxglove_and_lichtblick(log, read_mcap_js, exported_log):
+    session, path = exported_log(log.name)
     read = read_mcap_js(path)
     check_tables_read_whole(read, session)
     if session.parameters:  # JSON: Lichtblick takes its schema; a parameter without a value is left out
