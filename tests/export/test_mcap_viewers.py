@@ -3,7 +3,10 @@ node with Lichtblick's channel parsing (tests/js), for every channel of a simula
 shared flight log; the ``mcap`` Python reader for the order of the messages and what a seek opens."""
 
 import json
+import subprocess
+import sys
 from collections import Counter
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -137,3 +140,7 @@ def test_rerun_imports_imu_and_attitudes_as_series(sim_session, tmp_path):
         for column, field in zip(columns, field_names(list(columns))):
             series = np.array([values[i][field] for i in order], dtype=float)
             np.testing.assert_array_equal(series, columns[column], err_msg=f"{entity}.{column}")
+    rerun = Path(sys.executable).parent / "rerun"  # its CLI, from the same wheel: every channel's timeline in order
+    check = subprocess.run([str(rerun), "mcap", "check", str(path)], capture_output=True, text=True, timeout=300)
+    statuses = {line.split()[3]: line.split()[0] for line in check.stdout.splitlines() if line.startswith(("ok ", "PROBLEM "))}
+    assert set(statuses) >= {"/imu", "/tf", "/attitude/ahf"} and set(statuses.values()) == {"ok"}, check.stdout
