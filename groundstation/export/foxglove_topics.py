@@ -39,8 +39,8 @@ _WARNING_KINDS = frozenset({"warning", "config_conflict", "device_reset", "clock
 
 def origin_ns(metadata: dict, earliest_s: float = 0.0) -> int:
     """The wall-clock time of session time 0 in ns since the epoch: the session's ``start_utc``; for a
-    session that has none (a flight log without GPS or UTC time, a dataset) the epoch, moved on by whole seconds when rows come
-    before time 0 (``earliest_s`` < 0), since MCAP's log times cannot be negative."""
+    session that has none (a flight log without GPS or UTC time, a dataset) the epoch, moved on by whole
+    seconds when rows come before time 0 (``earliest_s`` < 0), since MCAP's log times cannot be negative."""
     try:
         start = datetime.fromisoformat(str(metadata.get("start_utc")))
     except ValueError:
@@ -137,6 +137,7 @@ class Topics:
         self._channels: dict[str, tuple[object, RowEncoder]] = {}
         self._tf = FrameTransformsChannel("/tf", context=context)
         self._log = LogChannel("/events", context=context)
+        self._parameters = None  # opened with the first parameters
 
     def _channel(self, topic: str, table: str, columns) -> tuple[object, RowEncoder]:
         """The channel of a topic of table rows and its encoder, opened with these columns the first time."""
@@ -205,11 +206,11 @@ class Topics:
         time 0; a parameter without a value (NaN: JSON has none) is left out."""
         import foxglove
 
-        schema = {"type": "object", "title": "parameters", "additionalProperties": {"type": "number"}}
-        if "/parameters" not in self._channels:
-            self._channels["/parameters"] = foxglove.Channel("/parameters", schema=schema, context=self._context), None
+        if self._parameters is None:
+            schema = {"type": "object", "title": "parameters", "additionalProperties": {"type": "number"}}
+            self._parameters = foxglove.Channel("/parameters", schema=schema, context=self._context)
         values = json.dumps({name: v for name, v in parameters.items() if math.isfinite(v)}).encode()
-        return Messages(self._channels["/parameters"][0], np.array([self.origin], dtype=np.int64), lambda i: values)
+        return Messages(self._parameters, np.array([self.origin], dtype=np.int64), lambda i: values)
 
     def events(self, events: list[dict], times_s: list[float]) -> int:
         """Logs events (``event_messages``); returns how many."""
