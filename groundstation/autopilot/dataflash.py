@@ -22,7 +22,9 @@ from pymavlink import DFReader
 from groundstation import quaternion
 from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.logtables import DataflashTables
-from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, series
+from groundstation.autopilot.flightlog import (
+    GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, gps_unix_us, series, utc_offset_us,
+)
 from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.errors import UserError
 from groundstation.formats import FORMATS
@@ -44,7 +46,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
-    rows, said = defaultdict(list), []
+    rows, said, gps_times = defaultdict(list), [], []
     every = DataflashTables()  # every message type as a table (``logtables``)
     chatter = Chatter()  # DFReader prints a "bad header" line per damaged byte, some from C: counted, not shown
     try:
@@ -59,6 +61,8 @@ def read_dataflash(path, progress=None) -> FlightLog:
                     break
                 every.add(msg)
                 name = msg.get_type()
+                if name == "GPS" and getattr(msg, "GWk", 0) > 0 and getattr(msg, "TimeUS", None) is not None:
+                    gps_times.append((msg.GWk, msg.GMS, msg.TimeUS))  # any instance: the GPS time is one
                 if name in stamped:
                     said.append(msg)
                 elif clocks.get(name) is not None and getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
@@ -74,6 +78,9 @@ def read_dataflash(path, progress=None) -> FlightLog:
     log = FlightLog(path, "dataflash", "ArduPilot")
     log.events, log.parameters = dataflash_said(said, reader.mav_type)
     log.tables, log.units = every.tables()
+    if gps_times:
+        week, ms, boot_us = np.array(gps_times, dtype=np.int64).T
+        log.utc_offset_us, log.utc_source = utc_offset_us(gps_unix_us(week, ms), boot_us), "GPS week and ms (GWk, GMS)"
     skipped = [line.split()[1] for line in chatter.lines if line.startswith("Skipped ")]  # "Skipped N bad bytes ..."
     # The same damaged bytes, counted twice: once a "bad header" each while DFReader indexes the file, once
     # as "Skipped N bad bytes" while it reads the messages; either pass may see them.

@@ -16,6 +16,7 @@ A stream the log lacks is None, and ``notes`` says so in words. ``events``: what
 from __future__ import annotations
 
 import dataclasses
+from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +55,29 @@ def series(time_us, columns: dict, source: str) -> Series | None:
     time_us = time_us[order]
     keep = np.concatenate([[True], np.diff(time_us) > 0])
     return Series(time_us[keep], {n: np.asarray(v, dtype=float)[order][keep] for n, v in columns.items()}, source)
+
+
+GPS_EPOCH_UNIX_S = 315_964_800  # 1980-01-06T00:00:00Z, GPS week 0
+GPS_MINUS_UTC_S = 18  # leap seconds GPS time runs ahead of UTC (since 2017-01-01; none announced since)
+
+
+def gps_unix_us(week, ms_of_week):
+    """GPS week and milliseconds of the week as UTC µs since 1970."""
+    return (GPS_EPOCH_UNIX_S - GPS_MINUS_UTC_S + np.asarray(week, dtype=np.int64) * 604_800) * 1_000_000 \
+        + np.asarray(ms_of_week, dtype=np.int64) * 1000
+
+
+def utc_offset_us(utc_us, boot_us) -> int | None:
+    """UTC minus the boot clock from the rows that carry both (a GPS's time of fix and the time it was
+    logged): their median, which a late row cannot move; None without rows."""
+    differences = np.asarray(utc_us, dtype=np.int64) - np.asarray(boot_us, dtype=np.int64)
+    return int(np.median(differences)) if len(differences) else None
+
+
+def utc_text(unix_us: int) -> str:
+    """UTC µs since 1970 as ISO 8601 (``2023-07-06T09:12:18.265127Z``), as a recording's ``start_utc``."""
+    moment = datetime.fromtimestamp(unix_us // 1_000_000, timezone.utc).replace(microsecond=unix_us % 1_000_000)
+    return moment.isoformat(timespec="microseconds").replace("+00:00", "Z")
 
 
 PLAUSIBLE_MARGIN_US = 60_000_000
@@ -104,3 +128,5 @@ class FlightLog:
     damage: list[str] = dataclasses.field(default_factory=list)  # what the reader dropped as damaged
     events: list[tuple[int, dict]] = dataclasses.field(default_factory=list)  # (time µs, event without times)
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)
+    utc_offset_us: int | None = None  # UTC (µs since 1970) minus the boot clock, from the log's GPS or UTC time
+    utc_source: str = ""  # where utc_offset_us comes from, in words

@@ -29,7 +29,7 @@ import numpy as np
 
 from groundstation import formats, quaternion
 from groundstation.analysis.vibration import CONTINUOUS_SHARE, coverage, stretches
-from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series
+from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, utc_text
 from groundstation.autopilot.logtables import FAST, fast_name
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
@@ -100,7 +100,7 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
         tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0], messages)}
-        return build_product(describe(log), log_catalogue(log, {}, messages), tables, (), protocol=AUTOPILOT_PROTOCOL,
+        return build_product(describe(log, t_us[0]), log_catalogue(log, {}, messages), tables, (), protocol=AUTOPILOT_PROTOCOL,
                              true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage),
                              magnetometer=log.mag is not None, events=log_events(log, t_us[0], notes),
                              parameters=dict(log.parameters))
@@ -134,7 +134,7 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     if log.onboard is not None:
         tables[ONBOARD] = onboard_columns(t_us, t_us[0], interpolated(t_us, log.onboard))
     catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()}, messages)
-    return build_product(describe(log), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
+    return build_product(describe(log, t_us[0]), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
                          true_q=interpolated(t_us, log.truth), true_frame="NED", magnetometer=mag is not None,
                          settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
                          events=log_events(log, t_us[0], notes), parameters=dict(log.parameters))
@@ -285,9 +285,12 @@ def attach_simstate_truth(data: SessionData) -> None:
     data.true_q, data.true_frame = interpolated(data.time_s * 1e6, truth), "NED"
 
 
-def describe(log: FlightLog) -> dict:
-    """What the Session sheet and the commands show about the log."""
+def describe(log: FlightLog, t0_us: int) -> dict:
+    """What the Session sheet and the commands show about the log; ``start_utc``, the UTC time of the
+    session's start (its first row, at ``t0_us`` on the boot clock), where the log holds GPS or UTC time."""
     meta = {"source": f"{formats.FORMATS[log.format].description} {log.path.name}", "autopilot": log.autopilot}
+    if log.utc_offset_us is not None:
+        meta["start_utc"], meta["start_utc_source"] = utc_text(log.utc_offset_us + int(t0_us)), log.utc_source
     for name in ("imu", "onboard", "mag", "baro", "gps", "truth"):
         stream: Series | None = getattr(log, name)
         if stream is not None:

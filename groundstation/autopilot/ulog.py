@@ -28,7 +28,7 @@ from numba import njit  # noqa: E402
 
 from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.flightlog import (
-    GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, implausible_message, implausible_times, series,
+    GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, implausible_message, implausible_times, series, utc_offset_us,
 )
 from groundstation.autopilot.logtables import ulog_tables
 from groundstation.autopilot.messages import ulog_said
@@ -87,6 +87,10 @@ def read_ulog(path, progress=None) -> FlightLog:
         log.mag = series(mag["timestamp"], {c: mag[f"magnetometer_ga[{i}]"] * GAUSS_TO_UT for i, c in enumerate(MAG_COLUMNS)}, mag_topic)
     log.baro = _baro(topics)
     log.gps = _gps(topics.get("vehicle_gps_position"))
+    gps = topics.get("vehicle_gps_position", {})
+    if "time_utc_usec" in gps and (fixed := gps["time_utc_usec"] > 0).any():  # 0: no GPS time yet
+        log.utc_offset_us = utc_offset_us(gps["time_utc_usec"][fixed], gps["timestamp"][fixed])
+        log.utc_source = "vehicle_gps_position.time_utc_usec"
     log.events, log.parameters = ulog_said(ulog, topics.get("vehicle_status"))
     return log
 

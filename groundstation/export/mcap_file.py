@@ -11,7 +11,7 @@ import numpy as np
 
 from groundstation.errors import UserError
 from groundstation.export.files import atomic_output
-from groundstation.export.foxglove_topics import Topics, earliest_time_s, origin_ns
+from groundstation.export.foxglove_topics import Topics, earliest_time_s, log_in_time_order, origin_ns, time_metadata
 from groundstation.session.product import SessionData, event_time_s
 
 
@@ -25,29 +25,36 @@ def in_range(time_s: np.ndarray, t_from: float | None, t_to: float | None) -> np
     return np.flatnonzero(keep)
 
 
+CHUNK_BYTES = 256 * 1024  # uncompressed: a few seconds of a busy log a chunk, so a seek reads little
+
+
 def write_mcap(data: SessionData, path, overwrite: bool = False, t_from: float | None = None,
                t_to: float | None = None) -> int:
     """Writes every table, every attitude and every event of ``data`` between ``t_from`` and ``t_to``
-    (session seconds) to ``path``; returns the number of messages."""
+    (session seconds) to ``path``, in log-time order across channels; returns the number of messages.
+    The file's ``time`` metadata says what its log times are on (``origin_ns``)."""
     import foxglove
+    from foxglove.mcap import MCAPWriteOptions
 
     origin = origin_ns(data.metadata, earliest_time_s(data.tables))
     check_log_times(origin, data, path)
     with atomic_output(path, overwrite) as temporary:
         context = foxglove.Context()
-        writer = foxglove.open_mcap(temporary, allow_overwrite=True, context=context)
+        writer = foxglove.open_mcap(temporary, allow_overwrite=True, context=context,
+                                    writer_options=MCAPWriteOptions(chunk_size=CHUNK_BYTES))
         try:
             writer.write_metadata("session", {str(k): str(v) for k, v in data.metadata.items()})
+            writer.write_metadata("time", time_metadata(data.metadata, origin))
             topics = Topics(context, data.catalogue, origin)
-            count = 0
-            for name, columns in data.tables.items():
-                count += topics.rows(name, columns, in_range(columns["time_s"], t_from, t_to))
+            streams = [s for name, columns in data.tables.items()
+                       for s in topics.table_messages(name, columns, in_range(columns["time_s"], t_from, t_to))]
             if data.parameters:  # the autopilot's parameters (last values; their changes are /events)
                 writer.write_metadata("parameters", {name: repr(value) for name, value in data.parameters.items()})
-                count += topics.parameters(data.parameters)
+                streams.append(topics.parameters_messages(data.parameters))
             times = np.array([event_time_s(e) for e in data.events])
             chosen = in_range(times, t_from, t_to)
-            count += topics.events([data.events[i] for i in chosen], times[chosen])
+            streams.append(topics.event_messages([data.events[i] for i in chosen], times[chosen]))
+            count = log_in_time_order(streams)
         finally:
             writer.close()
     return count

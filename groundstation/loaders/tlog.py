@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from groundstation import formats
+from groundstation.autopilot.flightlog import utc_text
 from groundstation.autopilot.tlog import session_packets
 from groundstation.errors import UserError
 from groundstation.session.load import SessionData, pipeline_product
@@ -40,6 +41,10 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
         raise UserError(f"{path}: no autopilot found (no heartbeat naming ArduPilot or PX4, no IMU or attitude message)")
     metadata = {"source": f"{formats.FORMATS['tlog'].description} {path.name}", "protocol": "mavlink",
                 "filters": list(filters)}
+    if pipeline.t0_host_ns is not None:  # the receive clock is UTC: the session's start on it
+        metadata["start_utc"] = utc_text(pipeline.t0_host_ns // 1000)
+        metadata["start_utc_source"] = (".tlog receive time of the first packet, then the autopilot's clock (the "
+                                        "receive times are compressed)" if log.compressed else ".tlog receive time")
     notes = log.notes()
     if notes:
         metadata["notes"] = "; ".join(notes)

@@ -24,6 +24,8 @@ from firmware_protocol.spec import SPEC, TIMESTAMP_FIELD, Field, FrameType, Spec
 
 # A spec unit as a column-name suffix: dimensionless units add nothing, others say the unit.
 _UNIT_SUFFIX = {"1": "", "enum": "", "bits": "", "index": "", "%": "_pct", "deg/s": "_deg_s", "m/s": "_m_s", "m/s2": "_m_s2"}
+# Short forms of a unit that a spec field's name may end with already.
+_UNIT_SHORT = {"deg/s": ("_dps",)}
 # A spec unit as a person reads it in a header.
 _UNIT_SHOWN = {"1": "", "enum": "enum", "bits": "bits", "index": "index", "uT": "µT", "degC": "°C", "deg": "°",
                "deg/s": "°/s", "us": "µs", "count": "count"}  # fmt: skip
@@ -76,7 +78,12 @@ TIME = Column("time_s", "s", "time", 3, "session time: seconds from the first sa
 
 
 def column_name(field: Field) -> str:
-    return field.name + _UNIT_SUFFIX.get(field.unit, "_" + field.unit.replace("/", "_"))
+    """``<field>_<unit>``; a field whose name ends with its unit already (``rate_hz``, or the short form
+    ``gyro_fs_dps``) keeps its name: one unit suffix, not ``rate_hz_Hz``."""
+    suffix = _UNIT_SUFFIX.get(field.unit, "_" + field.unit.replace("/", "_"))
+    if field.name.lower().endswith((suffix.lower(), *_UNIT_SHORT.get(field.unit, ()))):
+        return field.name
+    return field.name + suffix
 
 
 def decimals_for(scale: float, c_type: str) -> int | None:

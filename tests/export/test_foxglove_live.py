@@ -3,7 +3,7 @@ protocol (``foxglove.sdk.v1``, written here from the protocol's description, not
 to every channel, and 10 s of a live 100 Hz session arrive with nothing lost against the session's own
 tables."""
 
-import json
+import base64
 import subprocess
 import sys
 import time
@@ -11,7 +11,11 @@ import time
 import numpy as np
 import pytest
 from groundstation.errors import UserError
+from mcap.records import Schema
+from mcap_protobuf.decoder import DecoderFactory
+
 from groundstation.export.foxglove_live import FoxgloveBridge, parse_address
+from groundstation.export.protobuf_rows import field_names
 from groundstation.session.factory import open_session
 from tests.foxglove_client import Client
 
@@ -36,17 +40,21 @@ def test_ten_seconds_of_a_live_session_arrive_whole(tmp_path):
     imu = session.view.tables["imu"]
     rows = imu.array()
     assert len(rows) > 900  # 10 s at 100 Hz
-    got = [json.loads(payload) for _, payload in client.messages["/imu"]]
+    frames = {c["topic"]: c for c in client.channels.values()}
+    advertised = frames["/imu"]  # protobuf: the FileDescriptorSet in base64 (the protocol's rule for binary schemas)
+    schema = Schema(id=0, name=advertised["schemaName"], encoding=advertised["schemaEncoding"],
+                    data=base64.b64decode(advertised["schema"]))
+    decode = DecoderFactory().decoder_for(advertised["encoding"], schema)
+    got = [decode(payload) for _, payload in client.messages["/imu"]]
     assert len(got) == len(rows)
-    for i, column in enumerate(imu.columns):
-        read = np.array([np.nan if m[column] is None else m[column] for m in got], dtype=float)
-        np.testing.assert_array_equal(read, rows[:, i], err_msg=column)
+    for i, (column, field) in enumerate(zip(imu.columns, field_names(imu.columns))):
+        read = np.array([getattr(m, field) for m in got], dtype=float)
+        np.testing.assert_array_equal(read, rows[:, i], err_msg=column)  # bit for bit, NaN as NaN
     times = np.array([t for t, _ in client.messages["/imu"]], dtype=np.int64)
     np.testing.assert_allclose(np.diff(times) / 1e9, np.diff(rows[:, 0]), atol=2e-9)  # log time follows session time
     assert abs(times[0] / 1e9 - time.time()) < 60  # wall-clock time of day
     onboard = session.view.tables["onboard"]
     assert len(client.messages["/onboard"]) == len(onboard) > 900
-    frames = {c["topic"]: c for c in client.channels.values()}
     assert frames["/tf"]["schemaName"] == "foxglove.FrameTransforms"
     assert len(client.messages["/tf"]) >= len(rows) - 5  # one per sample (those with a converged estimate)
     assert {"/attitude/ahf", "/attitude/hf", "/attitude/onboard", "/events"} <= set(frames)
