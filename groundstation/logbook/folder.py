@@ -18,7 +18,7 @@ from pathlib import Path
 
 from groundstation.errors import UserError
 from groundstation.logbook.index import write_index
-from groundstation.logbook.summary import LOG_COLUMNS, log_fields, summarise
+from groundstation.logbook.summary import LOG_COLUMNS, log_fields, summarise, unify_tables
 
 
 def logs_in(folder: Path, out: Path | None = None) -> list[Path]:
@@ -61,6 +61,8 @@ def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_
 
     task = functools.partial(summarise, page=pages)
     run(task, paths, folder, out, filters, workers, dask_scheduler, finished)
+    if (out / "tables").is_dir():  # none when no log could be read
+        unify_tables(out / "tables")
     rows = [row for path in paths for row in results[path]]
     write_logs(rows, out / "logs.parquet")
     if pages:
