@@ -63,7 +63,7 @@ CLOSE_STALL_S = 2.0  # close() waits for a client's queue to empty while the cli
 
 MESSAGE_DATA = 0x01  # the protocol's server binary opcode: u8 opcode, u32 subscription id, u64 log time ns, payload
 _MESSAGE_HEADER = struct.Struct("<BIQ")
-_STATUS_INFO, _STATUS_WARNING, _STATUS_ERROR = 0, 1, 2
+_STATUS_WARNING, _STATUS_ERROR = 1, 2  # the protocol's status levels (0 is info)
 
 
 def parse_address(text: str, default_host: str = "127.0.0.1") -> tuple[str, int]:
