@@ -120,6 +120,18 @@ def test_a_page_of_another_origin_is_refused(node_modules, tmp_path):
         bridge.close()
 
 
+def test_native_only_refuses_every_page():
+    bridge = FoxgloveBridge("127.0.0.1", 0, web_apps=False)
+    try:
+        with connect(f"ws://127.0.0.1:{bridge.port}", subprotocols=[SUBPROTOCOLS[1]]) as socket:  # a native app
+            assert json.loads(socket.recv(timeout=30))["op"] == "serverInfo"
+        for origin in ("http://localhost:8080", "https://app.foxglove.dev"):
+            with pytest.raises(websockets.InvalidStatus, match="403"):
+                connect(f"ws://127.0.0.1:{bridge.port}", subprotocols=[SUBPROTOCOLS[0]], origin=origin)
+    finally:
+        bridge.close()
+
+
 def test_which_origins_are_served():
     for origin in ("http://localhost:3000", "http://127.0.0.1", "http://[::1]:8080", "https://app.foxglove.dev",
                    "https://lichtblick-suite.github.io"):
