@@ -13,6 +13,7 @@ import sys
 
 from groundstation import __version__
 from groundstation.errors import UserError
+from groundstation.export.request import FORMATS as EXPORT_FORMATS, either
 
 FILES = "a recording, a dataset CSV, a .tlog, .bin or .ulg"  # what load_session opens (formats.FORMATS)
 # name -> (module, one-line help: what the command takes and does). Later issues add their commands here.
@@ -26,7 +27,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "replay": ("groundstation.commands.replay", f"compute {FILES} headless and print its totals (--speed: paced, with a live summary)"),
     "record": ("groundstation.commands.record", "record a live source headless (--port SPEC), printing link health"),
     "import": ("groundstation.commands.import_csv", "turn a dataset CSV (raw IMU layout, plain or .gz) into a recording"),
-    "export": ("groundstation.commands.export", f"export {FILES} to CSV, Parquet or an Excel workbook"),
+    "export": ("groundstation.commands.export", f"export {FILES} to {either(EXPORT_FORMATS.values())}"),
     "vibration": ("groundstation.commands.vibration", f"vibration spectra, peaks, levels, clipping and a notch suggestion of {FILES}"),
     "report": ("groundstation.commands.report", f"a flight report of {FILES}: one HTML page that opens offline"),
     "experiments": ("groundstation.commands.experiments", "the seed papers' experiments on the simulator: tables and PNG figures"),

@@ -110,6 +110,18 @@ def test_every_command_that_opens_any_file_says_so_in_its_one_line_help():
     assert "recording or dataset CSV" not in overview and build_parser() is not None
 
 
+def test_export_help_lists_every_format_of_the_one_registry():
+    """The formats an export writes are ``export.request.FORMATS``; ``groundstation --help`` and
+    ``groundstation export --help`` name each of them (MCAP too) with its suffix."""
+    from groundstation.export.request import FORMATS
+
+    overview = " ".join(run_cli("--help").stdout.split())
+    own = " ".join(run_cli("export", "--help").stdout.split())
+    for suffix, name in FORMATS.items():
+        assert name in overview, f"'groundstation --help' does not name {name}"
+        assert f"OUT{suffix}" in own and name in own, f"'groundstation export --help' does not list {suffix}"
+
+
 HEAVY = ("numpy", "numba", "pandas", "pyarrow", "PySide6", "scipy", "openpyxl")
 
 

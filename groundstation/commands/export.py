@@ -1,5 +1,5 @@
-"""``groundstation export``: a session (a recording, a dataset CSV, a .tlog, .bin or .ulg) to CSV, Parquet
-or an Excel workbook.
+"""``groundstation export``: a session (a recording, a dataset CSV, a .tlog, .bin or .ulg) to any of
+``export.request.FORMATS`` (Excel, CSV, Parquet, MCAP).
 
 Everything given is checked before the decoding starts (``groundstation.export.request``).
 """
@@ -16,9 +16,11 @@ from groundstation.commands.progress import StagedProgress
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from groundstation import formats
+    from groundstation.export.request import FORMATS, either
 
     parser.add_argument("file", metavar="FILE", help=formats.described())
-    parser.add_argument("--out", required=True, type=Path, metavar="OUT", help="OUT.csv, OUT.parquet, OUT.xlsx or OUT.mcap (by extension)")
+    parser.add_argument("--out", required=True, type=Path, metavar="OUT",
+                        help=either(f"OUT{suffix} ({name})" for suffix, name in FORMATS.items()) + ", by its extension")
     add_estimator_options(parser, None)
     add_config_option(parser)
     add_imu_option(parser)

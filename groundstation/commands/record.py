@@ -34,7 +34,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="record into DIR (default: $GROUNDSTATION_RECORDINGS or the platform's recordings folder)")
     parser.add_argument("--foxglove", metavar="[HOST:]PORT", default=None,
                         help="serve the live session to Foxglove (or any Foxglove WebSocket client) on PORT, "
-                             "listening on 127.0.0.1 unless HOST is given (0.0.0.0: every interface)")
+                             "listening on 127.0.0.1 unless HOST is given (0.0.0.0: every interface); native apps "
+                             "and web pages of this machine, Foxglove's and Lichtblick's web apps are served, other pages refused")
+    parser.add_argument("--foxglove-native-only", action="store_true",
+                        help="serve Foxglove's and Lichtblick's desktop apps only: refuse every web page")
     add_estimator_options(parser, ",".join(live_estimators()))
 
 
@@ -51,7 +54,8 @@ def run(args: argparse.Namespace) -> int:
     if parse_spec(args.port).scheme == "recording":
         raise UserError(f"{args.port} is a recording already: 'groundstation replay {args.port}' plays it")
     folder = writable_folder(args.recordings or default_recordings_dir())
-    bridge = FoxgloveBridge(*parse_address(args.foxglove)) if args.foxglove is not None else None
+    bridge = (FoxgloveBridge(*parse_address(args.foxglove), web_apps=not args.foxglove_native_only)
+              if args.foxglove is not None else None)
     try:
         session = open_session(args.port, filters=filters, settings=overrides, recordings_dir=folder,
                                **({"baud": args.baud} if args.baud else {}))
@@ -75,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
             signal.signal(signum, handler)
         if bridge is not None:
             bridge.close()
+            print(bridge.status_text(), flush=True)
     ended_ns = time.monotonic_ns()
     print(totals_line(session))
     for path in session.recorder.paths:

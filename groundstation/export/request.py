@@ -18,9 +18,16 @@ from collections.abc import Callable
 from pathlib import Path
 
 from groundstation.errors import UserError
-from groundstation.export.columns import check_row_options
 
-FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet", ".mcap": "MCAP"}  # suffix -> what the user calls it
+# suffix -> what the user calls it: the one list of export formats (the CLI's help, the app's dialog). This
+# module imports nothing heavy at its top, so that ``groundstation --help`` can read it.
+FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet", ".mcap": "MCAP"}
+
+
+def either(words) -> str:
+    """``a, b, c or d``: a choice as a help line says it."""
+    words = list(words)
+    return " or ".join([", ".join(words[:-1]), words[-1]]) if len(words) > 1 else "".join(words)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -52,7 +59,9 @@ def export_request(source, out, *, filters=None, overrides=None, t_from=None, t_
     request = ExportRequest(Path(source), Path(out), filters, dict(overrides or {}), t_from, t_to, rate_hz, overwrite,
                             accept_config_changes)
     if request.format not in FORMATS:
-        raise UserError(f"{request.out.name}: the name must end in {', '.join(FORMATS)}")
+        raise UserError(f"{request.out.name}: the name must end in {either(FORMATS)}")
+    from groundstation.export.columns import check_row_options  # numpy: not at the top (see FORMATS)
+
     check_row_options(t_from, t_to, rate_hz)
     if request.format == ".mcap" and rate_hz is not None:
         raise UserError("--rate does not apply to MCAP: it keeps every row of every table at its own rate")

@@ -31,7 +31,7 @@ from pathlib import Path
 
 from groundstation.errors import UserError
 from groundstation.logbook import DEFAULT_LIMIT_S
-from groundstation.logbook.summary import LOG_COLUMNS, log_fields, summarise
+from groundstation.logbook.summary import LOG_COLUMNS, log_fields, summarise, unify_tables
 
 # A worker's peak memory, for the bound on their number (more than the free memory holds would have the
 # memory killer choose among them). Measured (/usr/bin/time, summarise with its report page): 0.28-0.32 GB
@@ -94,6 +94,8 @@ def evaluate_folder(folder, out, filters=None, workers: int | None = None, dask_
             _on_dask(job, paths, folder, staging, filters, dask_scheduler, finished)
         else:
             _on_processes(job, paths, folder, staging, filters, worker_count(workers)[0], limit_s, finished)
+        if (staging / "tables").is_dir():  # none when no log could be read
+            unify_tables(staging / "tables")
         rows = [row for path in paths for row in results[path]]
         write_logs(rows, staging / "logs.parquet")
         if pages:

@@ -138,17 +138,42 @@ def imu_rate_hz(data) -> float:
 
 def write_tables(data, folder: Path, identifier: str) -> None:
     """Each table with rows as ``folder/<table>/log_id=<identifier>/part-0.parquet`` (its columns as in
-    every export: names with units)."""
+    every export: names with units; a missing value null, as ``export --out x.parquet`` writes it, so
+    that SQL's avg() skips it where a NaN would make it NaN)."""
     import pyarrow as pa
-    import pyarrow.parquet as pq
-
-    from groundstation.export.files import atomic_output
 
     for name, columns in data.tables.items():
         if not len(columns["time_s"]):
             continue
         target = folder / name / f"log_id={identifier}"
         target.mkdir(parents=True, exist_ok=True)
-        table = pa.table({c: pa.array(np.asarray(v, dtype=float)) for c, v in columns.items()})
-        with atomic_output(target / "part-0.parquet", overwrite=True) as temporary:
-            pq.write_table(table, temporary)
+        _write_part(pa.table({c: pa.array(np.asarray(v, dtype=float), from_pandas=True) for c, v in columns.items()}),
+                    target / "part-0.parquet")
+
+
+def unify_tables(folder: Path) -> None:
+    """One schema per table across the logs under ``folder`` (``write_tables``' tables, once every log's
+    are written): each log's part gets every column any log has for that table, in one order (as they
+    first appear, logs in id order), a column it lacks as nulls. Readers that take one file's schema for
+    all (DuckDB's read_parquet without union_by_name, polars' scan_parquet, pyarrow.dataset) then read
+    every column; only the parts that lack a column are rewritten."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    for table in sorted(p for p in Path(folder).iterdir() if p.is_dir()):
+        schemas = {part: pq.read_schema(part) for part in sorted(table.glob("log_id=*/part-0.parquet"))}
+        names = list(dict.fromkeys(name for schema in schemas.values() for name in schema.names))
+        for part, schema in schemas.items():
+            if schema.names != names:
+                own = pq.read_table(part)
+                _write_part(pa.table({n: own[n] if n in schema.names else pa.nulls(own.num_rows, pa.float64())
+                                      for n in names}), part)
+
+
+def _write_part(table, path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from groundstation.export.files import atomic_output
+
+    with atomic_output(path, overwrite=True) as temporary:
+        pq.write_table(table, temporary)
