@@ -70,7 +70,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
     log.events, log.parameters = dataflash_said(said, reader.mav_type)
-    log.tables, log.units = every.tables()
+    log.tables, log.units, log.warnings = every.tables()
     skipped = [line.split()[1] for line in chatter.lines if line.startswith("Skipped ")]  # "Skipped N bad bytes ..."
     # The same damaged bytes, counted twice: once a "bad header" each while DFReader indexes the file, once
     # as "Skipped N bad bytes" while it reads the messages; either pass may see them.

@@ -132,9 +132,12 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
 
 
 def log_events(log: FlightLog, t0_us: int) -> list[dict]:
-    """What the autopilot said (``FlightLog.events``) at session time: seconds from the first sample row
-    (before it: negative), which is both the event's ``t_s`` and its place on the plots' axis."""
-    return [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
+    """The reader's warnings (``FlightLog.warnings``, at the session's start), then what the autopilot said
+    (``FlightLog.events``) at session time: seconds from the first sample row (before it: negative), which is
+    both the event's ``t_s`` and its place on the plots' axis."""
+    warnings = [{"kind": "warning", "message": w, "t_s": 0.0, "session_time_s": 0.0} for w in log.warnings]
+    return warnings + [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6}
+                       for t_us, event in log.events]
 
 
 class _Readings:
