@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation.errors import UserError
+from groundstation.names import path_name, under
 
 # The columns of logs.parquet, in order: first the log's, then one estimator's figures.
 LOG_COLUMNS = {
@@ -84,7 +85,7 @@ def summarise(path, root, out, filters=None, page: bool = False) -> list[dict]:
     write_tables(data, out / "tables", fields["log_id"])
     if page:
         (out / "reports").mkdir(exist_ok=True)
-        write_report(data, out / "reports" / f"{fields['log_id']}.html", fields["path"], overwrite=True)
+        write_report(data, under(out, "reports", f"{fields['log_id']}.html"), fields["path"], overwrite=True)
     rows = []
     if data.true_q is not None:
         for name, scores in data.evaluate().items():
@@ -120,7 +121,9 @@ def imu_rate_hz(data) -> float:
 
 def write_tables(data, folder: Path, identifier: str) -> None:
     """Each table with rows as ``folder/<table>/log_id=<identifier>/part-0.parquet`` (its columns as in
-    every export: names with units)."""
+    every export: names with units). ``<table>``: the table's name as a folder (``names.path_name``: a log
+    names its topics, and ``../../x`` or 300 characters must not become a path), the name itself in the
+    file's metadata (``table``); every path checked to lie in ``folder``."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -129,8 +132,9 @@ def write_tables(data, folder: Path, identifier: str) -> None:
     for name, columns in data.tables.items():
         if not len(columns["time_s"]):
             continue
-        target = folder / name / f"log_id={identifier}"
+        target = under(folder, path_name(name), f"log_id={identifier}")
         target.mkdir(parents=True, exist_ok=True)
-        table = pa.table({c: pa.array(np.asarray(v, dtype=float)) for c, v in columns.items()})
+        table = pa.table({c: pa.array(np.asarray(v, dtype=float)) for c, v in columns.items()},
+                         metadata={"table": name.encode("utf-8", "backslashreplace")})
         with atomic_output(target / "part-0.parquet", overwrite=True) as temporary:
             pq.write_table(table, temporary)
