@@ -9,6 +9,7 @@ import argparse
 from pathlib import Path
 
 from groundstation.commands.options import add_estimator_options, estimator_options
+from groundstation.text import clean
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -47,6 +48,6 @@ def run(args: argparse.Namespace) -> int:
     finally:
         progress.done()
     for warning in data.warnings:
-        print(f"warning: {warning}")
-    print(f"wrote {write_report(data, args.out, Path(args.file).name, overwrite=True)}")
+        print(f"warning: {clean(warning, visible=True)}")
+    print(clean(f"wrote {write_report(data, args.out, Path(args.file).name, overwrite=True)}", visible=True))
     return 0
