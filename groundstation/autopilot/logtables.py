@@ -39,7 +39,7 @@ FAST = {"gyro": ("gyro_fast", ("gyr_x", "gyr_y", "gyr_z"), "rad/s"), "accel": ("
 ISB_TYPES = {0: "accel", 1: "gyro"}  # ISBH ``type`` (ArduPilot's IMU_SENSOR_TYPE_ACCEL, _GYRO)
 FIFO_TOPICS = {"sensor_gyro_fifo": "gyro", "sensor_accel_fifo": "accel"}
 ISBD_SAMPLES = 32  # int16 values per axis in one ISBD record
-RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the session's own tables
+RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position", "truth")  # a log session's own tables
 DATAFLASH_SKIPPED = ("FMT", "FMTU", "UNIT", "MULT")  # the log's description of itself, not data
 NUMERIC = set("bBhHiIfdgcCeELMqQ")  # DataFlash format characters of numbers (not strings nor ``a`` arrays)
 

@@ -59,3 +59,14 @@ def test_export_columns_that_a_prefix_would_merge_are_kept_apart(tmp_path, capsy
         assert frame["ahf2_qw"].notna().all() and (frame["ahf2_qw"].abs() <= 1.0).all()  # the estimator's, whole
         assert frame["ahf2_qw__2"].count() == counts["ahf2"]
         assert "warning:" in said and "'foo_bar_baz__2'" in said and "'ahf2_qw__2'" in said
+
+
+def test_a_topic_named_as_a_session_table_keeps_both(tmp_path):
+    """A topic ``truth`` beside the simulator's truth (``vehicle_attitude_groundtruth``): the session's
+    ``truth`` table stays the simulator's, the topic is ``truth_log``."""
+    path = tmp_path / "truth.ulg"
+    rows = ulog_topics(path, ["truth"])
+    attitude = {d.name: len(d.data["timestamp"]) for d in ULog(str(path)).data_list}["vehicle_attitude_groundtruth"]
+    data = load_session(path, FILTERS)
+    assert len(data.tables["truth_log"]["time_s"]) == rows["truth"]
+    assert len(data.tables["truth"]["time_s"]) == attitude and "qw" in data.tables["truth"]
