@@ -8,7 +8,7 @@ type (the field its FMTU marks ``#``: ``IMU`` instance 1 -> ``imu_1``) and for a
 gets ``_log`` appended; two names made one by the lower case (``caseTopic``, ``casetopic``) are kept apart
 (``names.kept_apart``: the later gets ``__2``, and a warning says so). Columns: every numeric field but the time (``TimeUS``, ``timestamp``),
 DataFlash values as pymavlink's ``DFReader`` gives them (its format scaling applied: ``c`` /100,
-``L`` 1e-7) with the unit FMTU gives; ULog array elements as ``name_<i>``.
+``L`` 1e-7) with the unit FMTU gives; ULog array elements as ``name_<i>`` (kept apart from a field of that name).
 
 The full-rate IMU (``FAST``: tables ``gyro_fast_<imu>`` with ``gyr_{x,y,z}_rad_s`` and ``accel_fast_<imu>``
 with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time):
@@ -129,16 +129,20 @@ class _Layout:
 def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
     """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked) as a table, and
     the fifo topics' full-rate tables; their units; a warning per topic renamed to keep it apart."""
-    fast, made = [], []  # (table name, series, units)
+    fast, made, renamed = [], [], []  # (table name, series, units); warnings of fields kept apart
     for data in data_list:
-        columns = {_flat(name): values for name, values in data.data.items() if name != "timestamp" and values.dtype.kind in "biuf"}
-        if not len(data.data["timestamp"]) or not columns:
+        fields = [name for name, values in data.data.items() if name != "timestamp" and values.dtype.kind in "biuf"]
+        if not len(data.data["timestamp"]) or not fields:
             continue
+        flat, said = kept_apart([_flat(f) for f in fields], [f"{data.name}.{f}" for f in fields], "ULog field")
+        columns = {name: data.data[field] for name, field in zip(flat, fields)}
+        renamed += said
         made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"], columns, data.name), {}))
         if data.name in FIFO_TOPICS:
             kind = FIFO_TOPICS[data.name]
             fast.append((fast_name(kind, data.multi_id), fifo_series(data.data, kind), dict.fromkeys(FAST[kind][1], FAST[kind][2])))
-    return named_tables(fast + made, "ULog topic")
+    tables, units, warnings = named_tables(fast + made, "ULog topic")
+    return tables, units, renamed + warnings
 
 
 def named_tables(made: list[tuple[str, Series, dict]], what: str) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:

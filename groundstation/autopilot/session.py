@@ -87,7 +87,8 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     the aiding estimator's attitude."""
     if imu == "fast":
         log = dataclasses.replace(log, imu=fast_imu(log))
-    messages = _message_tables(log)
+    messages, renamed = _message_tables(log)
+    log = dataclasses.replace(log, warnings=[*log.warnings, *renamed])
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
         tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0], messages)}
@@ -237,10 +238,12 @@ def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]], messa
                      | {i.name: i for i, _ in messages})
 
 
-def _message_tables(log: FlightLog) -> list[tuple]:
-    """(``TableInfo``, ``Series``) of every other message type the log holds."""
-    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {})), stream)
-            for name, stream in log.tables.items()]
+def _message_tables(log: FlightLog) -> tuple[list[tuple], list[str]]:
+    """(``TableInfo``, ``Series``) of every other message type the log holds, and a warning for each column
+    renamed to keep it apart (``message_table``)."""
+    renamed = []
+    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {}), renamed), stream)
+            for name, stream in log.tables.items()], renamed
 
 
 def attach_simstate_truth(data: SessionData) -> None:

@@ -70,3 +70,26 @@ def test_a_topic_named_as_a_session_table_keeps_both(tmp_path):
     data = load_session(path, FILTERS)
     assert len(data.tables["truth_log"]["time_s"]) == rows["truth"]
     assert len(data.tables["truth"]["time_s"]) == attitude and "qw" in data.tables["truth"]
+
+
+def test_columns_that_flattening_or_units_would_merge_are_kept_apart(tmp_path):
+    """A ULog array ``a[2]`` beside a field ``a_0`` (both column ``a_0`` once flattened), and a field ``Alt``
+    in metres beside a field ``Alt_m`` (both ``Alt_m`` once the unit is a suffix)."""
+    from groundstation.session.catalogue import message_table
+
+    flight, _ = px4_flight(duration_s=2.0)
+    rows = 10
+    fields = [("uint64_t", "timestamp"), ("float[2]", "a"), ("float", "a_0")]
+    columns = {"timestamp": BOOT_US + 10_000 * np.arange(rows), "a": np.tile([1.0, 2.0], (rows, 1)), "a_0": np.full(rows, 3.0)}
+    path = tmp_path / "flat.ulg"
+    write_ulog(path, {**flight, "arr": (fields, columns)})
+    raw = next(d for d in ULog(str(path)).data_list if d.name == "arr").data
+    data = load_session(path, FILTERS)
+    table = data.tables["arr"]
+    assert list(table) == ["time_s", "a_0", "a_1", "a_0__2"]
+    np.testing.assert_array_equal(table["a_0"], raw["a[0]"])
+    np.testing.assert_array_equal(table["a_0__2"], raw["a_0"])
+    assert any("'a_0__2'" in w for w in data.warnings)
+    renamed = []
+    info = message_table("alt", "ALT", ["Alt", "Alt_m"], {"Alt": "m"}, renamed)
+    assert info.column_names == ("time_s", "Alt_m", "Alt_m__2") and len(renamed) == 1 and "'Alt_m'" in renamed[0]
