@@ -133,12 +133,13 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
 
 
 def log_events(log: FlightLog, t0_us: int) -> list[dict]:
-    """The reader's warnings (``FlightLog.warnings``, at the session's start), then what the autopilot said
-    (``FlightLog.events``) at session time: seconds from the first sample row (before it: negative), which is
-    both the event's ``t_s`` and its place on the plots' axis."""
-    warnings = [{"kind": "warning", "message": w, "t_s": 0.0, "session_time_s": 0.0} for w in log.warnings]
-    return warnings + [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6}
-                       for t_us, event in log.events]
+    """The reader's warnings (``FlightLog.warnings``), then what the autopilot said (``FlightLog.events``) at
+    session time: seconds from the first sample row (before it: negative), which is both the event's ``t_s``
+    and its place on the plots' axis. The warnings are about the whole log: at its start (the first sample
+    row, or the first event when one comes before it), so the events stay in time order."""
+    said = [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
+    start_s = min([0.0, *(e["t_s"] for e in said[:1])])
+    return [{"kind": "warning", "message": w, "t_s": start_s, "session_time_s": start_s} for w in log.warnings] + said
 
 
 class _Readings:
