@@ -50,6 +50,7 @@ def check_dataset(logs: Path, out: Path, rows: list[dict]) -> None:
         part = folder / f"log_id={log_id(logs / log, logs)}" / "part-0.parquet"
         table = pq.read_table(part)
         assert table.schema.metadata[b"table"] == name.encode()  # the session's name, kept
+        assert table.schema.metadata[b"label"].decode().startswith(original)  # and the log's: "Upper (ulog)"
         assert table.num_rows == {"Upper": 30, CLIMBING: 10, LONG: 20, "/tmp": 10}[original]
     assert (tables / "imu").is_dir()  # a plain name is its own folder
 

@@ -123,7 +123,8 @@ def write_tables(data, folder: Path, identifier: str) -> None:
     """Each table with rows as ``folder/<table>/log_id=<identifier>/part-0.parquet`` (its columns as in
     every export: names with units). ``<table>``: the table's name as a folder (``names.path_name``: a log
     names its topics, and ``../../x`` or 300 characters must not become a path), the name itself in the
-    file's metadata (``table``); every path checked to lie in ``folder``."""
+    file's metadata (``table``, and ``label``: what the log calls it, ``caseTopic (ulog)``); every path
+    checked to lie in ``folder``."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -134,7 +135,8 @@ def write_tables(data, folder: Path, identifier: str) -> None:
             continue
         target = under(folder, path_name(name), f"log_id={identifier}")
         target.mkdir(parents=True, exist_ok=True)
+        said = {"table": name, "label": data.catalogue[name].label if name in data.catalogue else ""}
         table = pa.table({c: pa.array(np.asarray(v, dtype=float)) for c, v in columns.items()},
-                         metadata={"table": name.encode("utf-8", "backslashreplace")})
+                         metadata={k: v.encode("utf-8", "backslashreplace") for k, v in said.items()})
         with atomic_output(target / "part-0.parquet", overwrite=True) as temporary:
             pq.write_table(table, temporary)
