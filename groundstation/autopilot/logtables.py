@@ -5,10 +5,11 @@ one ``Series`` per type and instance, on the autopilot's clock), so the Channels
 them. Names: the type or topic in lower case, with ``_<instance>`` for a multi-instance DataFlash
 type (the field its FMTU marks ``#``: ``IMU`` instance 1 -> ``imu_1``) and for a ULog topic's
 ``multi_id`` above 0 (``sensor_accel_1``); a name the session's own tables use (``imu``, ``gps``...)
-gets ``_log`` appended; two names made one by the lower case (``caseTopic``, ``casetopic``) are kept apart
-(``names.kept_apart``: the later gets ``__2``, and a warning says so). Columns: every numeric field but the time (``TimeUS``, ``timestamp``),
-DataFlash values as pymavlink's ``DFReader`` gives them (its format scaling applied: ``c`` /100,
-``L`` 1e-7) with the unit FMTU gives; ULog array elements as ``name_<i>`` (kept apart from a field of that name).
+gets ``_log`` appended; two names made one by the lower case (``caseTopic``, ``casetopic``) are kept
+apart (``names.kept_apart``: the later gets ``__2``, and a warning says so). Columns: every numeric field
+but the time (``TimeUS``, ``timestamp``), DataFlash values as pymavlink's ``DFReader`` gives them (its
+format scaling applied: ``c`` /100, ``L`` 1e-7) with the unit FMTU gives; ULog array elements as
+``name_<i>`` (kept apart from a field of that name).
 
 The full-rate IMU (``FAST``: tables ``gyro_fast_<imu>`` with ``gyr_{x,y,z}_rad_s`` and ``accel_fast_<imu>``
 with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time):
@@ -140,12 +141,13 @@ def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]
         made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"], columns, data.name), {}))
         if data.name in FIFO_TOPICS:
             kind = FIFO_TOPICS[data.name]
-            fast.append((fast_name(kind, data.multi_id), fifo_series(data.data, kind), dict.fromkeys(FAST[kind][1], FAST[kind][2])))
+            fast.append((fast_name(kind, data.multi_id), fifo_series(data.data, kind),
+                         dict.fromkeys(FAST[kind][1], FAST[kind][2])))
     tables, units, warnings = named_tables(fast + made, "ULog topic")
     return tables, units, renamed + warnings
 
 
-def named_tables(made: list[tuple[str, Series, dict]], what: str) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
+def named_tables(made: list[tuple[str, Series, dict]], what: str) -> tuple[dict[str, Series], dict[str, dict], list[str]]:
     """``made`` (table name, series, units) as tables and units by name, names kept apart (the full-rate
     tables first: the session finds them by their names); the warnings of those renamed."""
     names, warnings = kept_apart([name for name, _, _ in made], [series.source for _, series, _ in made], what)

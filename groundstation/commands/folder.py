@@ -35,11 +35,13 @@ def run_folder(args: argparse.Namespace, names, overrides, pages: bool) -> int:
         estimators = [row["estimator"] for row in rows if row["estimator"]]
         said = (f"error: {error}" if error else f"{len(estimators)} estimators against the {rows[0]['reference']}"
                 if rows[0]["reference"] else f"{len(estimators)} estimators, nothing to compare them with")
-        print(clean(f"[{done}/{total}] {rows[0]['path']}: {said} ({seconds:.1f} s)", visible=True), flush=True)  # a file's name: one line
+        line = f"[{done}/{total}] {rows[0]['path']}: {said} ({seconds:.1f} s)"
+        print(clean(line, visible=True), flush=True)  # a file's name, its error: one line, nothing acting on the terminal
 
     rows = evaluate_folder(args.file, args.out, names, args.workers, args.dask, progress, pages=pages)
     logs = {row["log_id"] for row in rows}
     failed = {row["log_id"] for row in rows if row["error"]}
     pages_said = f", reports/ and {Path(args.out) / 'index.html'} (worst first)" if pages else ""
-    print(clean(f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} unreadable), tables/{pages_said}", visible=True))
+    line = f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} unreadable), tables/{pages_said}"
+    print(clean(line, visible=True))
     return 0

@@ -56,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
     metadata = {"source": f"imported from {Path(args.file).name}", "time_origin_s": float(columns["time_s"][0])}
     with atomic_recording(args.out, metadata) as writer:
         writer.write_samples(columns)
-    print(clean(f"wrote {args.out}: {len(frame)} samples, columns {', '.join(map(str, frame.columns))}", visible=True))  # the file's names
+    columns_said = ", ".join(map(str, frame.columns))
+    print(clean(f"wrote {args.out}: {len(frame)} samples, columns {columns_said}", visible=True))  # the file's names
     return 0
 
 

@@ -72,7 +72,8 @@ def sensor_columns(data: SessionData) -> dict[str, np.ndarray]:
     return out
 
 
-def export_columns(data: SessionData, rows: np.ndarray | None = None, renamed: list[str] | None = None) -> dict[str, np.ndarray]:
+def export_columns(data: SessionData, rows: np.ndarray | None = None,
+                   renamed: list[str] | None = None) -> dict[str, np.ndarray]:
     """``renamed``: told a warning per reading column renamed to keep it apart (``aux_columns``)."""
     rows = np.arange(len(data)) if rows is None else rows
     out = {"time_s": data.time_s[rows]}
@@ -85,7 +86,8 @@ def export_columns(data: SessionData, rows: np.ndarray | None = None, renamed: l
     return out
 
 
-def aux_columns(data: SessionData, rows: np.ndarray, taken: tuple[str, ...] = (), renamed: list[str] | None = None) -> dict[str, np.ndarray]:
+def aux_columns(data: SessionData, rows: np.ndarray, taken: tuple[str, ...] = (),
+                renamed: list[str] | None = None) -> dict[str, np.ndarray]:
     """Every timestamped table but ``imu``/``onboard`` (``data.catalogue``: one per downlink frame, and
     the fused position), each column prefixed by its table's export prefix (``mag_``, ``baro_``,
     ``gps_``, ``fused_``, ...). Each reading sits on the row of the first IMU sample at or after it;
@@ -124,7 +126,8 @@ def aux_columns(data: SessionData, rows: np.ndarray, taken: tuple[str, ...] = ()
 ROWS_PER_STRETCH = 65_536  # a Parquet row group; the exported columns in memory at once (~70 columns: ~37 MB)
 
 
-def export_stretches(data: SessionData, rows: np.ndarray, rows_per_stretch: int = ROWS_PER_STRETCH, renamed: list[str] | None = None):
+def export_stretches(data: SessionData, rows: np.ndarray, rows_per_stretch: int = ROWS_PER_STRETCH,
+                     renamed: list[str] | None = None):
     """``export_columns`` of consecutive stretches of ``rows``: what a writer holds at once does not grow
     with the session's length; ``renamed`` told the columns renamed (once: every stretch has the same names)."""
     for start in range(0, max(len(rows), 1), rows_per_stretch):
