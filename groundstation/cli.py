@@ -14,6 +14,7 @@ import sys
 from groundstation import __version__
 from groundstation.errors import UserError
 from groundstation.export.request import FORMATS as EXPORT_FORMATS, either
+from groundstation.text import clean
 
 FILES = "a recording, a dataset CSV, a .tlog, .bin or .ulg"  # what load_session opens (formats.FORMATS)
 # name -> (module, one-line help: what the command takes and does). Later issues add their commands here.
@@ -61,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return int(module.run(args) or 0)
     except UserError as error:
-        print(f"groundstation {top.command}: {error}", file=sys.stderr)
+        print(f"groundstation {top.command}: {clean(str(error), visible=True)}", file=sys.stderr)  # names in it: one line
         return 2
     except KeyboardInterrupt:
         return 130

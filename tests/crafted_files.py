@@ -189,3 +189,37 @@ def forged_config_recording(folder: Path, name: str = "forged", at_s: float = 4.
         for t_ns, event in events:
             writer.write_event(t_ns, event)
     return path
+
+
+# -- Flight logs whose names and texts are hostile (issues 31 and 37): written with the tests' own ULog and
+# DataFlash writers (tests/autopilot/mavlink_helpers.py), each a short flight that loads plus what is crafted.
+
+def ulog_topics(path: Path, topics: list[str], logged: list[tuple[int, int, str]] = ()) -> dict[str, int]:
+    """A 2 s PX4 flight (``px4_flight``) plus one topic per name of ``topics`` (the i-th with 10 (i + 1) rows, 10 ms apart,
+    of a float ``value``) and ``logged`` messages (time µs, syslog level, text); returns topic -> rows."""
+    from tests.autopilot.mavlink_helpers import BOOT_US, px4_flight, write_ulog
+
+    flight, _ = px4_flight(duration_s=2.0)
+    extra = {}
+    for i, name in enumerate(topics):
+        rows = 10 * (i + 1)
+        extra[name] = ([("uint64_t", "timestamp"), ("float", "value")],
+                       {"timestamp": BOOT_US + 10_000 * np.arange(rows), "value": np.full(rows, float(i))})
+    write_ulog(path, {**flight, **extra}, logged=list(logged))
+    return {name: 10 * (i + 1) for i, name in enumerate(topics)}
+
+
+def dataflash_types(path: Path, types: list[str], messages: list[str] = ()) -> dict[str, int]:
+    """A 2 s DataFlash log of IMU and ATT at 50 Hz plus one type per name of ``types`` (the i-th with
+    10 (i + 1) rows of a float ``Value``) and a MSG per text of ``messages``; returns type -> rows."""
+    from tests.autopilot.mavlink_helpers import write_dataflash
+
+    time_us = 20_000_000 + 20_000 * np.arange(100)
+    written = {"IMU": ("QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ", [(int(t), 0, 0.0, 0.0, 0.0, 0.0, 0.0, -9.8) for t in time_us]),
+               "ATT": ("Qfff", "TimeUS,Roll,Pitch,Yaw", [(int(t), 0.0, 0.0, 0.0) for t in time_us])}
+    for i, name in enumerate(types):
+        written[name] = ("Qf", "TimeUS,Value", [(int(t), float(i)) for t in time_us[: 10 * (i + 1)]])
+    if messages:
+        written["MSG"] = ("QZ", "TimeUS,Message", [(int(time_us[10 + k]), text.encode()) for k, text in enumerate(messages)])
+    write_dataflash(path, written)
+    return {name: 10 * (i + 1) for i, name in enumerate(types)}

@@ -37,7 +37,7 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
                              "groundstation.recording", "groundstation.experiments", "groundstation.sim")),
     ("computation", ("groundstation.estimation", "groundstation.position", "groundstation.analysis",
                      "groundstation.datasets", "firmware_protocol")),
-    ("foundations", ("groundstation",)),  # units, quaternion, errors, mounting, geodesy, readings
+    ("foundations", ("groundstation",)),  # units, quaternion, errors, mounting, geodesy, readings, names, text
 )
 # What the window and the exports read is the product (``session.product``, ``session.view``); these
 # make it, and neither may reach them, not even through another module.

@@ -77,7 +77,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
     log.events, log.parameters = dataflash_said(said, reader.mav_type)
-    log.tables, log.units = every.tables()
+    log.tables, log.units, log.warnings = every.tables()
     if gps_times:
         week, ms, boot_us = np.array(gps_times, dtype=np.int64).T
         log.utc_offset_us, log.utc_source = utc_offset_us(gps_unix_us(week, ms), boot_us), "GPS week and ms (GWk, GMS)"

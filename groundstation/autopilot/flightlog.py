@@ -126,6 +126,7 @@ class FlightLog:
     units: dict[str, dict[str, str]] = dataclasses.field(default_factory=dict)  # table -> column -> unit
     notes: list[str] = dataclasses.field(default_factory=list)
     damage: list[str] = dataclasses.field(default_factory=list)  # what the reader dropped as damaged
+    warnings: list[str] = dataclasses.field(default_factory=list)  # what a flyer must hear of the reading (names kept apart)
     events: list[tuple[int, dict]] = dataclasses.field(default_factory=list)  # (time µs, event without times)
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)
     utc_offset_us: int | None = None  # UTC (µs since 1970) minus the boot clock, from the log's GPS or UTC time

@@ -5,9 +5,11 @@ one ``Series`` per type and instance, on the autopilot's clock), so the Channels
 them. Names: the type or topic in lower case, with ``_<instance>`` for a multi-instance DataFlash
 type (the field its FMTU marks ``#``: ``IMU`` instance 1 -> ``imu_1``) and for a ULog topic's
 ``multi_id`` above 0 (``sensor_accel_1``); a name the session's own tables use (``imu``, ``gps``...)
-gets ``_log`` appended. Columns: every numeric field but the time (``TimeUS``, ``timestamp``),
-DataFlash values as pymavlink's ``DFReader`` gives them (its format scaling applied: ``c`` /100,
-``L`` 1e-7) with the unit FMTU gives; ULog array elements as ``name_<i>``.
+gets ``_log`` appended; two names made one by the lower case (``caseTopic``, ``casetopic``) are kept
+apart (``names.kept_apart``: the later gets ``__2``, and a warning says so). Columns: every numeric field
+but the time (``TimeUS``, ``timestamp``), DataFlash values as pymavlink's ``DFReader`` gives them (its
+format scaling applied: ``c`` /100, ``L`` 1e-7) with the unit FMTU gives; ULog array elements as
+``name_<i>`` (kept apart from a field of that name).
 
 The full-rate IMU (``FAST``: tables ``gyro_fast_<imu>`` with ``gyr_{x,y,z}_rad_s`` and ``accel_fast_<imu>``
 with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time, and ``batch``: the batch it came in, so that
@@ -34,6 +36,7 @@ from collections import defaultdict
 import numpy as np
 
 from groundstation.autopilot.flightlog import Series
+from groundstation.names import kept_apart
 
 # kind -> (table name before ``_<imu>``, fields, their unit): the table's columns are ``<field>_<unit>``
 FAST = {"gyro": ("gyro_fast", ("gyr_x", "gyr_y", "gyr_z"), "rad/s"), "accel": ("accel_fast", ("acc_x", "acc_y", "acc_z"), "m/s2")}
@@ -41,7 +44,7 @@ ISB_TYPES = {0: "accel", 1: "gyro"}  # ISBH ``type`` (ArduPilot's IMU_SENSOR_TYP
 BATCH = "batch"  # the full-rate tables' column of the batch (ISBH ``N``, a fifo message's index) a sample came in
 FIFO_TOPICS = {"sensor_gyro_fifo": "gyro", "sensor_accel_fifo": "accel"}
 ISBD_SAMPLES = 32  # int16 values per axis in one ISBD record
-RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position")  # the session's own tables
+RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position", "truth")  # a log session's own tables
 DATAFLASH_SKIPPED = ("FMT", "FMTU", "UNIT", "MULT")  # the log's description of itself, not data
 NUMERIC = set("bBhHiIfdgcCeELMqQ")  # DataFlash format characters of numbers (not strings nor ``a`` arrays)
 
@@ -85,20 +88,20 @@ class DataflashTables:
             return  # its header was lost (damaged bytes, a cut log start): no scale, no time
         self.isbd[header[:2]].append((header[2:], msg.N, msg.seqno, *msg._elements[-3:]))  # x, y, z: the last three fields
 
-    def tables(self) -> tuple[dict[str, Series], dict[str, dict[str, str]]]:
-        tables, units = {}, {}
+    def tables(self) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
+        """The tables, their units, and a warning per type renamed to keep it apart (``kept_apart``)."""
+        made = []  # (table name, series, units)
+        for (kind, instance), records in self.isbd.items():
+            times, values, batch = _isbd_samples(records)
+            made.append((fast_name(kind, instance), in_order(times, {**dict(zip(FAST[kind][1], values.T)), BATCH: batch}, "ISBH/ISBD"),
+                         dict.fromkeys(FAST[kind][1], FAST[kind][2])))
         for (msg_type, instance), rows in self.rows.items():
             layout = self.layouts[msg_type]
             values = np.array(rows, dtype=float).reshape(len(rows), -1) * layout.scale / layout.divisor
-            name = table_name(msg_type, instance)
             source = msg_type if instance is None else f"{msg_type}[{instance}]"
-            tables[name] = in_order(values[:, 0], dict(zip(layout.names, values[:, 1:].T)), source)
-            units[name] = layout.units
-        for (kind, instance), records in self.isbd.items():
-            times, values, batch = _isbd_samples(records)
-            tables[fast_name(kind, instance)] = in_order(times, {**dict(zip(FAST[kind][1], values.T)), BATCH: batch}, "ISBH/ISBD")
-            units[fast_name(kind, instance)] = dict.fromkeys(FAST[kind][1], FAST[kind][2])
-        return tables, units
+            made.append((table_name(msg_type, instance), in_order(values[:, 0], dict(zip(layout.names, values[:, 1:].T)), source),
+                         layout.units))
+        return named_tables(made, "DataFlash message")
 
 
 def _isbd_samples(records) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -129,21 +132,32 @@ class _Layout:
         self.instance = (lambda elements: None) if at is None else operator.itemgetter(at)
 
 
-def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]]:
-    """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked) as a table, and the fifo topics' full-rate tables."""
-    tables, units = {}, {}
+def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
+    """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked) as a table, and
+    the fifo topics' full-rate tables; their units; a warning per topic renamed to keep it apart."""
+    fast, made, renamed = [], [], []  # (table name, series, units); warnings of fields kept apart
     for data in data_list:
-        columns = {_flat(name): values for name, values in data.data.items() if name != "timestamp" and values.dtype.kind in "biuf"}
-        if not len(data.data["timestamp"]) or not columns:
+        fields = [name for name, values in data.data.items() if name != "timestamp" and values.dtype.kind in "biuf"]
+        if not len(data.data["timestamp"]) or not fields:
             continue
-        name = table_name(data.name, data.multi_id or None)
-        tables[name] = in_order(data.data["timestamp"], columns, data.name)
-        units[name] = {}
+        flat, said = kept_apart([_flat(f) for f in fields], [f"{data.name}.{f}" for f in fields], "ULog field")
+        columns = {name: data.data[field] for name, field in zip(flat, fields)}
+        renamed += said
+        made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"], columns, data.name), {}))
         if data.name in FIFO_TOPICS:
             kind = FIFO_TOPICS[data.name]
-            tables[fast_name(kind, data.multi_id)] = fifo_series(data.data, kind)
-            units[fast_name(kind, data.multi_id)] = dict.fromkeys(FAST[kind][1], FAST[kind][2])
-    return tables, units
+            fast.append((fast_name(kind, data.multi_id), fifo_series(data.data, kind),
+                         dict.fromkeys(FAST[kind][1], FAST[kind][2])))
+    tables, units, warnings = named_tables(fast + made, "ULog topic")
+    return tables, units, renamed + warnings
+
+
+def named_tables(made: list[tuple[str, Series, dict]], what: str) -> tuple[dict[str, Series], dict[str, dict], list[str]]:
+    """``made`` (table name, series, units) as tables and units by name, names kept apart (the full-rate
+    tables first: the session finds them by their names); the warnings of those renamed."""
+    names, warnings = kept_apart([name for name, _, _ in made], [series.source for _, series, _ in made], what)
+    return ({n: series for n, (_, series, _) in zip(names, made)}, {n: units for n, (_, _, units) in zip(names, made)},
+            warnings)
 
 
 def fifo_series(data: dict, kind: str) -> Series:

@@ -95,14 +95,15 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
         if note is None:
             log = dataclasses.replace(log, imu=fast_imu(log))
         else:
-            notes.append({"kind": "warning", "message": note})
-    messages = _message_tables(log)
+            notes.append(note)
+    messages, renamed = _message_tables(log)
+    log = dataclasses.replace(log, warnings=[*notes, *log.warnings, *renamed])
     if log.imu is None:  # attitude only: the onboard estimate on its own rows
         t_us = log.onboard.time_us
         tables = {ONBOARD: onboard_columns(t_us, t_us[0], log.onboard.stack(Q_COLUMNS)), **reading_tables(log, t_us[0], messages)}
         return build_product(describe(log, t_us[0]), log_catalogue(log, {}, messages), tables, (), protocol=AUTOPILOT_PROTOCOL,
                              true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage),
-                             magnetometer=log.mag is not None, events=log_events(log, t_us[0], notes),
+                             magnetometer=log.mag is not None, events=log_events(log, t_us[0]),
                              parameters=dict(log.parameters))
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
@@ -137,15 +138,17 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     return build_product(describe(log, t_us[0]), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
                          true_q=interpolated(t_us, log.truth), true_frame="NED", magnetometer=mag is not None,
                          settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
-                         events=log_events(log, t_us[0], notes), parameters=dict(log.parameters))
+                         events=log_events(log, t_us[0]), parameters=dict(log.parameters))
 
 
-def log_events(log: FlightLog, t0_us: int, notes: list[dict] = ()) -> list[dict]:
-    """What the autopilot said (``FlightLog.events``) at session time: seconds from the first sample row
-    (before it: negative), which is both the event's ``t_s`` and its place on the plots' axis; ``notes``,
-    what the loading says (a warning), first, at the first row."""
-    said = [{**note, "t_s": 0.0, "session_time_s": 0.0} for note in notes]
-    return said + [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
+def log_events(log: FlightLog, t0_us: int) -> list[dict]:
+    """The reader's warnings (``FlightLog.warnings``), then what the autopilot said (``FlightLog.events``) at
+    session time: seconds from the first sample row (before it: negative), which is both the event's ``t_s``
+    and its place on the plots' axis. The warnings are about the whole log: at its start (the first sample
+    row, or the first event when one comes before it), so the events stay in time order."""
+    said = [{**event, "t_s": float(t_us - t0_us) / 1e6, "session_time_s": float(t_us - t0_us) / 1e6} for t_us, event in log.events]
+    start_s = min([0.0, *(e["t_s"] for e in said[:1])])
+    return [{"kind": "warning", "message": w, "t_s": start_s, "session_time_s": start_s} for w in log.warnings] + said
 
 
 class _Readings:
@@ -262,10 +265,12 @@ def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]], messa
                      | {i.name: i for i, _ in messages})
 
 
-def _message_tables(log: FlightLog) -> list[tuple]:
-    """(``TableInfo``, ``Series``) of every other message type the log holds."""
-    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {})), stream)
-            for name, stream in log.tables.items()]
+def _message_tables(log: FlightLog) -> tuple[list[tuple], list[str]]:
+    """(``TableInfo``, ``Series``) of every other message type the log holds, and a warning for each column
+    renamed to keep it apart (``message_table``)."""
+    renamed = []
+    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {}), renamed), stream)
+            for name, stream in log.tables.items()], renamed
 
 
 def attach_simstate_truth(data: SessionData) -> None:

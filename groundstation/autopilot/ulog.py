@@ -71,7 +71,7 @@ def read_ulog(path, progress=None) -> FlightLog:
                 data.data = {name: values[~wild] for name, values in data.data.items()}
             if data.multi_id == 0:
                 topics[data.name] = data.data
-    log.tables, log.units = ulog_tables(ulog.data_list)
+    log.tables, log.units, log.warnings = ulog_tables(ulog.data_list)
     log.notes += chatter.lines
     if (sc := topics.get("sensor_combined")) is not None:
         values = [*(sc[f"gyro_rad[{i}]"] for i in range(3)), *(sc[f"accelerometer_m_s2[{i}]"] / STANDARD_GRAVITY_M_S2 for i in range(3))]

@@ -24,6 +24,7 @@ from pathlib import Path
 from groundstation.commands.folder import add_folder_options, refuse_batch_options, run_folder
 from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
 from groundstation.errors import UserError
+from groundstation.text import clean
 
 AGREEMENT_TITLE = "agreement with the onboard estimate (difference, not error: the onboard estimate is not truth)"
 
@@ -61,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.done()
     for warning in data.warnings:  # on stderr beside the JSON, and in it
-        print(f"warning: {warning}", file=sys.stderr if args.json else sys.stdout)
+        print(f"warning: {clean(warning, visible=True)}", file=sys.stderr if args.json else sys.stdout)
     carried = {"warnings": data.warnings} if data.warnings else {}
     if data.true_q is None and data.has_onboard():
         if not data.estimated:

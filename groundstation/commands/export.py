@@ -12,6 +12,7 @@ from pathlib import Path
 
 from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
 from groundstation.commands.progress import StagedProgress
+from groundstation.text import clean
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -44,6 +45,6 @@ def run(args: argparse.Namespace) -> int:
     finally:
         progress.done()
     for warning in result.warnings:
-        print(f"warning: {warning}")
-    print(result.message)
+        print(f"warning: {clean(warning, visible=True)}")
+    print(clean(result.message, visible=True))
     return 0

@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 
 from groundstation.errors import UserError
+from groundstation.text import clean
 
 
 def add_folder_options(parser: argparse.ArgumentParser, out_help: str) -> None:
@@ -60,7 +61,8 @@ def run_folder(args: argparse.Namespace, names, overrides, pages: bool) -> int:
         estimators = [row["estimator"] for row in rows if row["estimator"]]
         said = (f"error: {error}" if error else f"{len(estimators)} estimators against the {rows[0]['reference']}"
                 if rows[0]["reference"] else f"{len(estimators)} estimators, nothing to compare them with")
-        print(f"[{done}/{total}] {rows[0]['path']}: {said} ({seconds:.1f} s)", flush=True)
+        line = f"[{done}/{total}] {rows[0]['path']}: {said} ({seconds:.1f} s)"
+        print(clean(line, visible=True), flush=True)  # a file's name, its error: one line, nothing acting on the terminal
 
     limit_s = DEFAULT_LIMIT_S if args.time_limit is None else args.time_limit
     rows = evaluate_folder(args.file, args.out, names, workers, args.dask, progress, pages=pages, limit_s=limit_s,
@@ -68,5 +70,6 @@ def run_folder(args: argparse.Namespace, names, overrides, pages: bool) -> int:
     logs = {row["log_id"] for row in rows}
     failed = {row["log_id"] for row in rows if row["error"]}
     pages_said = f", reports/ and {Path(args.out) / 'index.html'} (worst first)" if pages else ""
-    print(f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} failed), tables/{pages_said}")
+    line = f"wrote {args.out}: logs.parquet ({len(rows)} rows, {len(logs)} logs, {len(failed)} failed), tables/{pages_said}"
+    print(clean(line, visible=True))
     return 0

@@ -30,6 +30,7 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.errors import UserError
     from groundstation.export.files import atomic_recording
     from groundstation.recording import EXTENSION
+    from groundstation.text import clean
 
     if args.out.exists():
         raise UserError(f"{args.out} exists; choose another name")
@@ -55,7 +56,8 @@ def run(args: argparse.Namespace) -> int:
     metadata = {"source": f"imported from {Path(args.file).name}", "time_origin_s": float(columns["time_s"][0])}
     with atomic_recording(args.out, metadata) as writer:
         writer.write_samples(columns)
-    print(f"wrote {args.out}: {len(frame)} samples, columns {', '.join(frame.columns)}")
+    columns_said = ", ".join(map(str, frame.columns))
+    print(clean(f"wrote {args.out}: {len(frame)} samples, columns {columns_said}", visible=True))  # the file's names
     return 0
 
 

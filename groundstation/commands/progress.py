@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 import time
 
+from groundstation.text import clean
+
 
 SHOW_AFTER_S = 1.0  # a job that ends sooner shows no bar
 
@@ -13,7 +15,8 @@ class ProgressBar:
     WIDTH = 30
 
     def __init__(self, label: str, stream=None, delay_s: float | None = None):
-        self.label, self.stream = label, stream or sys.stderr  # looked up now: tests may have replaced it
+        self.label = clean(label, visible=True)  # a file's name: shown, never acting on the terminal
+        self.stream = stream or sys.stderr  # looked up now: tests may have replaced it
         self._start = time.monotonic()
         self._delay_s = SHOW_AFTER_S if delay_s is None else delay_s
         self._shown = False

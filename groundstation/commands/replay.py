@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 
 from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
+from groundstation.text import clean
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -37,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     data = load_session(args.file, filters, overrides, progress, args.accept_config_changes, imu=args.imu)
     progress.done()
     for warning in data.warnings:
-        print(f"warning: {warning}")
+        print(f"warning: {clean(warning, visible=True)}")
     session = RevealSession(data, args.file, (filters, overrides), speed=paced or 1.0, position_s=0.0 if paced else float("inf"))
     if paced:
         with session:

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from groundstation.commands.folder import add_batch_options, refuse_batch_options, run_folder
 from groundstation.commands.options import add_estimator_options, estimator_options
+from groundstation.text import clean
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -45,6 +46,6 @@ def run(args: argparse.Namespace) -> int:
     finally:
         progress.done()
     for warning in data.warnings:
-        print(f"warning: {warning}")
-    print(f"wrote {write_report(data, args.out, Path(args.file).name, overwrite=True)}")
+        print(f"warning: {clean(warning, visible=True)}")
+    print(clean(f"wrote {write_report(data, args.out, Path(args.file).name, overwrite=True)}", visible=True))
     return 0

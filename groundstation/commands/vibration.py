@@ -17,6 +17,7 @@ import json
 import sys
 
 from groundstation.errors import UserError
+from groundstation.text import clean
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -54,11 +55,11 @@ def run(args: argparse.Namespace) -> int:
     except VibrationError as error:
         raise UserError(f"{args.file}: {error}") from None
     for warning in data.warnings:
-        print(f"warning: {warning}", file=sys.stderr if args.json else sys.stdout)
+        print(f"warning: {clean(warning, visible=True)}", file=sys.stderr if args.json else sys.stdout)
     if args.json:
         print(json.dumps({**summary.as_dict(), **({"what_if": change.as_dict()} if change else {})}, indent=2))
     else:
-        print("\n".join(summary.lines()))
+        print("\n".join(clean(line, visible=True) for line in summary.lines()))  # its tables' names: the log's
         if change:
             print("\n".join(change.lines()))
     return 0

@@ -4,7 +4,8 @@
 _yaw_deg`` (ZYX, yaw ±180°: ``quaternion.euler_deg``, docs/conventions.md); ``onboard_*`` for the
 aircraft's own estimate; the sensors in physical units; the truth quaternion when the session has
 one; the magnetometer, barometer, GPS and fused-position readings when the session has them
-(``aux_columns``).
+(``aux_columns``). A name a log gave is one line of text (``text.clean``, visible), and two columns are never
+one (``names.kept_apart``): a later one gets a suffix and a warning.
 """
 
 from __future__ import annotations
@@ -15,7 +16,9 @@ import numpy as np
 
 from groundstation import quaternion
 from groundstation.errors import UserError
+from groundstation.names import kept_apart
 from groundstation.session.product import SessionData
+from groundstation.text import clean
 
 
 def check_row_options(t_from: float | None, t_to: float | None, rate_hz: float | None) -> None:
@@ -69,7 +72,9 @@ def sensor_columns(data: SessionData) -> dict[str, np.ndarray]:
     return out
 
 
-def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[str, np.ndarray]:
+def export_columns(data: SessionData, rows: np.ndarray | None = None,
+                   renamed: list[str] | None = None) -> dict[str, np.ndarray]:
+    """``renamed``: told a warning per reading column renamed to keep it apart (``aux_columns``)."""
     rows = np.arange(len(data)) if rows is None else rows
     out = {"time_s": data.time_s[rows]}
     for name, q in data.attitudes(rows).items():
@@ -77,11 +82,12 @@ def export_columns(data: SessionData, rows: np.ndarray | None = None) -> dict[st
     out.update({name: values[rows] for name, values in sensor_columns(data).items()})
     if data.true_q is not None:
         out.update({f"true_q{c}": data.true_q[rows, i] for i, c in enumerate("wxyz")})
-    out.update(aux_columns(data, rows))
+    out.update(aux_columns(data, rows, tuple(out), renamed))
     return out
 
 
-def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:
+def aux_columns(data: SessionData, rows: np.ndarray, taken: tuple[str, ...] = (),
+                renamed: list[str] | None = None) -> dict[str, np.ndarray]:
     """Every timestamped table but ``imu``/``onboard`` (``data.catalogue``: one per downlink frame, and
     the fused position), each column prefixed by its table's export prefix (``mag_``, ``baro_``,
     ``gps_``, ``fused_``, ...). Each reading sits on the row of the first IMU sample at or after it;
@@ -91,8 +97,12 @@ def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:
     dropout, instead of hiding them behind repeated values. Where IMU frames were lost, two readings
     can share the next IMU row: the later one is kept. The Excel export's Sensors sheet lists every
     reading at its own time.
+
+    Names: ``<prefix>_<column>`` as one line (``text.clean``), kept apart (``names.kept_apart``) from the
+    columns ``taken`` before them and from each other (table ``foo`` column ``bar_baz`` and table ``foo_bar``
+    column ``baz``: ``foo_bar_baz`` and ``foo_bar_baz__2``); ``renamed`` is told a warning for each renamed.
     """
-    out = {}
+    placed_columns = []
     for info in reading_tables(data):
         values = data.tables[info.name]
         at = np.searchsorted(data.time_s, values["time_s"])  # each reading's IMU row
@@ -104,18 +114,24 @@ def aux_columns(data: SessionData, rows: np.ndarray) -> dict[str, np.ndarray]:
         for column in info.column_names[1:]:
             placed = np.full(len(rows), np.nan)
             placed[place[exported]] = values[column][exported]  # of two readings on one row, the later
-            out[column if column.startswith(prefix) else f"{prefix}_{column}"] = placed
-    return out
+            name = clean(column if column.startswith(prefix) else f"{prefix}_{column}", visible=True)
+            placed_columns.append((name, f"{info.name}.{column}", placed))
+    names, warnings = kept_apart([*taken, *(n for n, _, _ in placed_columns)], [*taken, *(o for _, o, _ in placed_columns)],
+                                 "exported column")
+    if renamed is not None:
+        renamed += warnings
+    return {name: placed for name, (_, _, placed) in zip(names[len(taken):], placed_columns)}
 
 
 ROWS_PER_STRETCH = 65_536  # a Parquet row group; the exported columns in memory at once (~70 columns: ~37 MB)
 
 
-def export_stretches(data: SessionData, rows: np.ndarray, rows_per_stretch: int = ROWS_PER_STRETCH):
+def export_stretches(data: SessionData, rows: np.ndarray, rows_per_stretch: int = ROWS_PER_STRETCH,
+                     renamed: list[str] | None = None):
     """``export_columns`` of consecutive stretches of ``rows``: what a writer holds at once does not grow
-    with the session's length."""
+    with the session's length; ``renamed`` told the columns renamed (once: every stretch has the same names)."""
     for start in range(0, max(len(rows), 1), rows_per_stretch):
-        yield export_columns(data, rows[start:start + rows_per_stretch])
+        yield export_columns(data, rows[start:start + rows_per_stretch], renamed if start == 0 else None)
 
 
 def reading_tables(data: SessionData) -> list:

@@ -32,6 +32,7 @@ from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.writer.excel import ExcelWriter
 
 from groundstation.errors import UserError
+from groundstation.text import clean
 
 try:  # openpyxl writes its sheets through lxml when lxml is installed, and lxml reports I/O errors its own way
     from lxml.etree import SerialisationError
@@ -71,8 +72,9 @@ class _ColumnCell(Cell):
 
 def text_cell(sheet, text: str) -> Cell:
     """A cell that holds ``text`` as text: openpyxl makes any string that starts with "=" a live formula,
-    and a recording's header (its source, notes) is anybody's text (=HYPERLINK(...), =cmd|...)."""
-    cell = WriteOnlyCell(sheet, value=text)
+    and a recording's header (its source, notes) is anybody's text (=HYPERLINK(...), =cmd|...); without
+    control characters (``text.clean``), which XML refuses (a PX4 message's colours)."""
+    cell = WriteOnlyCell(sheet, value=clean(text))
     cell.data_type = "s"
     return cell
 

@@ -30,6 +30,7 @@ import numpy as np
 from groundstation import quaternion
 from groundstation.export.protobuf_rows import RowEncoder, descriptor_set, message_name
 from groundstation.session.catalogue import Catalogue
+from groundstation.text import clean
 
 NED_FRAME = "ned"  # the parent frame of every attitude: the quaternions are body -> NED (w-first)
 # Event kinds a pilot must not miss are warnings; failures are errors; everything else is information.
@@ -250,6 +251,6 @@ _EVENT_PLUMBING = frozenset({"kind", "t_s", "t_host_ns", "wall_time", "session_t
 def event_text(event: dict) -> str:
     """What an event says: its message when it has one, else its fields (``kind: field value, ...``)."""
     if event.get("message"):
-        return str(event["message"])
+        return clean(str(event["message"]))  # a log's message can carry escape sequences (``text.clean``)
     fields = ", ".join(f"{k} {v}" for k, v in event.items() if k not in _EVENT_PLUMBING)
-    return f"{event.get('kind', 'event')}: {fields}" if fields else str(event.get("kind", "event"))
+    return clean(f"{event.get('kind', 'event')}: {fields}" if fields else str(event.get("kind", "event")))

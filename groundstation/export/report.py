@@ -16,7 +16,6 @@ it a session they loaded.
 from __future__ import annotations
 
 import datetime
-import html
 import re
 from pathlib import Path
 
@@ -31,7 +30,7 @@ from groundstation.autopilot.modes import STATUS_KIND, event_time_s, mode_spans
 from groundstation.errors import UserError
 from groundstation.estimation.evaluation import truth_in_ned
 from groundstation.export.files import atomic_output
-from groundstation.export.report_figures import line_plot
+from groundstation.export.report_figures import escaped, line_plot
 from groundstation.export.report_findings import Finding, differences_deg, findings
 from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.product import ONBOARD, SessionData
@@ -77,8 +76,8 @@ def report_html(data: SessionData, file_name: str = "") -> str:
     vibration, vibration_note = vibration_of(data)
     found = findings(data, vibration)
     title = f"Flight report: {file_name or data.metadata.get('source', 'session')}"
-    parts = [f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{_e(title)}</title>"
-             f"<style>{STYLE}</style></head><body>", f"<h1>{_e(title)}</h1>",
+    parts = [f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{escaped(title)}</title>"
+             f"<style>{STYLE}</style></head><body>", f"<h1>{escaped(title)}</h1>",
              f"<p class=\"detail\">made by groundstation {__version__} on {datetime.date.today().isoformat()}</p>",
              flight_section(data, file_name), findings_section(found), attitude_section(data),
              vibration_section(vibration, vibration_note), what_if_section(data, vibration), link_section(data),
@@ -93,15 +92,11 @@ def vibration_of(data: SessionData) -> tuple[VibrationSummary | None, str]:
         return None, str(error)
 
 
-def _e(text) -> str:
-    return html.escape(str(text))
-
-
 def _table(header: list[str], rows: list[list], numeric_from: int = 1, row_class=None) -> str:
-    head = "".join(f"<th>{_e(h)}</th>" for h in header)
+    head = "".join(f"<th>{escaped(h)}</th>" for h in header)
     body = []
     for i, row in enumerate(rows):
-        cells = "".join(f"<td class=\"n\">{_e(c)}</td>" if j >= numeric_from else f"<td>{_e(c)}</td>" for j, c in enumerate(row))
+        cells = "".join(f"<td class=\"n\">{escaped(c)}</td>" if j >= numeric_from else f"<td>{escaped(c)}</td>" for j, c in enumerate(row))
         css = f" class=\"{row_class(i)}\"" if row_class and row_class(i) else ""
         body.append(f"<tr{css}>{cells}</tr>")
     return f"<table><tr>{head}</tr>{''.join(body)}</table>"
@@ -154,7 +149,7 @@ def flight_section(data: SessionData, file_name: str) -> str:
     else:
         out.append("<p>Modes: the session reported none.</p>")
     if data.warnings:
-        out.append("<h3>What the file lost, and warnings</h3><ul>" + "".join(f"<li class=\"warn\">{_e(w)}</li>" for w in data.warnings) + "</ul>")
+        out.append("<h3>What the file lost, and warnings</h3><ul>" + "".join(f"<li class=\"warn\">{escaped(w)}</li>" for w in data.warnings) + "</ul>")
     return "\n".join(out)
 
 
@@ -166,7 +161,7 @@ def findings_section(found: list[Finding]) -> str:
         values = "".join(f" data-{k.replace('_', '-')}=\"{v:.6g}\"" for k, v in f.values.items())
         when = f" data-t-s=\"{f.t_s:.3f}\"" if f.t_s is not None else ""
         items.append(f"<li class=\"finding {f.severity}\" data-kind=\"{f.kind}\"{when}{values}><span class=\"sev\">{f.severity}</span>"
-                     f"{_e(f.title)}" + (f"<div class=\"detail\">{_e(f.detail)}</div>" if f.detail else "") + "</li>")
+                     f"{escaped(f.title)}" + (f"<div class=\"detail\">{escaped(f.detail)}</div>" if f.detail else "") + "</li>")
     rest = f"<p>… and {len(found) - MAX_FINDINGS} more findings.</p>" if len(found) > MAX_FINDINGS else ""
     return "<h2>Findings</h2><ul class=\"findings\">" + "".join(items) + "</ul>" + rest
 
@@ -177,7 +172,7 @@ def attitude_section(data: SessionData) -> str:
         try:
             scores = data.evaluate()
         except UserError as error:
-            scores, out = {}, [*out, f"<p>{_e(error)}</p>"]
+            scores, out = {}, [*out, f"<p>{escaped(error)}</p>"]
         rows = [[n, f"{s['incl_rmse_deg']:.3f}", f"{s['incl_max_deg']:.3f}",
                  f"{s['heading_rmse_deg']:.3f}" if "heading_rmse_deg" in s else "-"] for n, s in scores.items()]
         out.append("<p>Against the truth (inclination: the angle between the estimated and the true down).</p>")
@@ -215,7 +210,7 @@ def _reboot_marks(data: SessionData) -> list[tuple[float, str]]:
 def vibration_section(v: VibrationSummary | None, note: str) -> str:
     out = ["<h2>Vibration</h2>"]
     if v is None:
-        return "\n".join([*out, f"<p>No spectrum: {_e(note)}.</p>"])
+        return "\n".join([*out, f"<p>No spectrum: {escaped(note)}.</p>"])
     for sensor, sp in v.spectra.items():
         series = [(f"{sensor} {a}", sp.frequency_hz, sp.amplitude[a]) for a in sp.amplitude]
         out.append(line_plot(series, f"{sensor} spectrum ('{sp.table}' at {sp.rate_hz:.0f} Hz)", "frequency (Hz)",
@@ -231,9 +226,9 @@ def vibration_section(v: VibrationSummary | None, note: str) -> str:
                       [[s, *("—" if a.get(k) is None else f"{a[k]:.3f}" for k in "xyz"), UNITS[s]] for s, a in v.levels.items()]))
     text = v.lines()
     clipping = [line for line in text if line.startswith(("VIBE", "vehicle_imu_status", "motors:"))]
-    out += [f"<p>{_e(line)}</p>" for line in clipping]
-    out.append(f"<p><b>Notch suggestion:</b> {_e(v.notch['text']) if v.notch else 'none (no peak to suggest one for)'}</p>")
-    out += [f"<p class=\"warn\">{_e(w)}</p>" for w in v.warnings]
+    out += [f"<p>{escaped(line)}</p>" for line in clipping]
+    out.append(f"<p><b>Notch suggestion:</b> {escaped(v.notch['text']) if v.notch else 'none (no peak to suggest one for)'}</p>")
+    out += [f"<p class=\"warn\">{escaped(w)}</p>" for w in v.warnings]
     return "\n".join(out)
 
 
@@ -250,7 +245,7 @@ def what_if_section(data: SessionData, v: VibrationSummary | None) -> str:
     try:
         change = what_if(data, "notch", v.notch["frequency_hz"], v.notch["bandwidth_hz"], v.start_s, v.end_s)
     except VibrationError as error:
-        return "\n".join([*out, f"<p>Not computed: {_e(error)}.</p>"])
+        return "\n".join([*out, f"<p>Not computed: {escaped(error)}.</p>"])
     for sensor, f in change.spectra.items():
         out.append(line_plot([("before", f.before.frequency_hz, f.before.total_psd), ("after", f.after.frequency_hz, f.after.total_psd)],
                              f"{sensor} spectrum before and after ('{f.table}' at {f.rate_hz:.0f} Hz)", "frequency (Hz)",
@@ -263,7 +258,7 @@ def what_if_section(data: SessionData, v: VibrationSummary | None) -> str:
     out.append(line_plot([("phase", change.bode_hz[shown], change.phase_deg[shown])], "the notch's phase", "frequency (Hz)",
                          "phase (°; negative: lag)", marks=marks))
     lags = "".join(f" data-lag-{hz:g}-hz-deg=\"{lag:.6g}\"" for hz, lag in change.phase_lag_deg.items())
-    out += [f"<p class=\"whatif\"{lags}>{_e(line.strip())}</p>" for line in change.lines()]
+    out += [f"<p class=\"whatif\"{lags}>{escaped(line.strip())}</p>" for line in change.lines()]
     return "\n".join(out)
 
 

@@ -12,9 +12,16 @@ import math
 
 import numpy as np
 
+from groundstation.text import clean
+
 WIDTH, HEIGHT = 760, 240
 MARGIN = {"left": 58, "right": 12, "top": 26, "bottom": 34}
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
+
+
+def escaped(text) -> str:
+    """Any text as HTML (or SVG) text: without control characters (``text.clean``), then escaped."""
+    return html.escape(clean(str(text)))
 
 
 def nice_ticks(lo: float, hi: float, count: int = 5) -> list[float]:
@@ -72,8 +79,8 @@ def line_plot(series: list[tuple[str, np.ndarray, np.ndarray]], title: str, x_la
         if len(x):
             drawn.append((label, x, np.log10(y) if log_y else y))
     out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" '
-           f'role="img" aria-label="{html.escape(title)}" font-family="sans-serif" font-size="11">',
-           f'<text x="{WIDTH / 2}" y="15" text-anchor="middle" font-size="13" font-weight="bold">{html.escape(title)}</text>']
+           f'role="img" aria-label="{escaped(title)}" font-family="sans-serif" font-size="11">',
+           f'<text x="{WIDTH / 2}" y="15" text-anchor="middle" font-size="13" font-weight="bold">{escaped(title)}</text>']
     if not drawn:
         out.append(f'<text x="{WIDTH / 2}" y="{HEIGHT / 2}" text-anchor="middle" fill="#777">nothing to plot</text></svg>')
         return "\n".join(out)
@@ -107,7 +114,7 @@ def line_plot(series: list[tuple[str, np.ndarray, np.ndarray]], title: str, x_la
     for x, label in marks:
         if x_lo <= x <= x_hi:
             out.append(f'<line x1="{px(x):.1f}" x2="{px(x):.1f}" y1="{top}" y2="{bottom}" stroke="#000" stroke-dasharray="4 3"/>'
-                       f'<text x="{px(x) + 3:.1f}" y="{top + 11}">{html.escape(label)}</text>')
+                       f'<text x="{px(x) + 3:.1f}" y="{top + 11}">{escaped(label)}</text>')
     for i, (label, x, y) in enumerate(drawn):
         points = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(px(x), py(y)))
         colour = COLOURS[i % len(COLOURS)]
@@ -115,9 +122,9 @@ def line_plot(series: list[tuple[str, np.ndarray, np.ndarray]], title: str, x_la
         lx = left + 8 + (i % 4) * 150
         ly = top + 12 + (i // 4) * 13
         out.append(f'<rect x="{lx}" y="{ly - 8}" width="10" height="3" fill="{colour}"/>'
-                   f'<text x="{lx + 14}" y="{ly - 4}">{html.escape(label)}</text>')
-    out.append(f'<text x="{left + plot_w / 2}" y="{HEIGHT - 4}" text-anchor="middle">{html.escape(x_label)}</text>')
+                   f'<text x="{lx + 14}" y="{ly - 4}">{escaped(label)}</text>')
+    out.append(f'<text x="{left + plot_w / 2}" y="{HEIGHT - 4}" text-anchor="middle">{escaped(x_label)}</text>')
     out.append(f'<text x="12" y="{top + plot_h / 2}" text-anchor="middle" transform="rotate(-90 12 {top + plot_h / 2})">'
-               f'{html.escape(y_label)}</text>')
+               f'{escaped(y_label)}</text>')
     out.append("</svg>")
     return "\n".join(out)

@@ -123,6 +123,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
     decoding(1, 1)
     if request.filters is None:
         data = met(data)
+    renamed = []  # CSV and Parquet columns kept apart (``columns.aux_columns``): said with the session's warnings
     if request.format == ".xlsx":
         sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,
                                 forced=request.overrides, overwrite=request.overwrite,
@@ -136,13 +137,13 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
         written = f"{messages} messages on {len(data.tables)} tables, /tf, /attitude/* and /events"
     else:
         rows = select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz)
-        stretches = export_stretches(data, rows)
+        stretches = export_stretches(data, rows, renamed=renamed)
         first = next(stretches)
         columns, chained = len(first), _first_then(first, stretches)
         del first  # each stretch is freed once written
         (write_csv if request.format == ".csv" else write_parquet)(chained, request.out, request.overwrite)
         written = f"{len(rows)} rows, {columns} columns"
-    return ExportResult(f"wrote {request.out}: {written}", data.warnings)
+    return ExportResult(f"wrote {request.out}: {written}", [*data.warnings, *renamed])
 
 
 def _first_then(first, rest):

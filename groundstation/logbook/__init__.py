@@ -6,7 +6,8 @@ Dask cluster), and the results go to one Parquet dataset that DuckDB or pandas r
 of it:
 
 - ``OUT/logs.parquet``: a row per log and estimator (``logbook.summary.LOG_COLUMNS``);
-- ``OUT/tables/<table>/log_id=<id>/part-0.parquet``: each log's tables, partitioned by log (Hive style).
+- ``OUT/tables/<table>/log_id=<id>/part-0.parquet``: each log's tables, partitioned by log (Hive style);
+  ``<table>`` is the table's name as a safe folder name (``names.path_name``), the name in the file's metadata.
 """
 
 # One log's time at most in a folder run (``--time-limit``): the slowest shared log (a 4 MB SITL .tlog)

@@ -7,10 +7,10 @@ address outside the folder).
 
 from __future__ import annotations
 
-import html
 from pathlib import Path
 
 from groundstation.export.files import atomic_output
+from groundstation.export.report_figures import escaped
 from groundstation.export.report_findings import SEVERITIES
 
 STYLE = ("body{font-family:sans-serif;margin:2em;max-width:72em} table{border-collapse:collapse} "
@@ -33,17 +33,17 @@ def write_index(rows: list[dict], path: Path) -> None:
     logs = list({row["log_id"]: row for row in reversed(rows)}.values())
     body = []
     for log in worst_first(logs):
-        name = html.escape(log["path"])
+        name = escaped(log["path"])
         if log["error"]:
-            body.append(f"<tr><td>{name}</td><td class=\"error\">cannot be read</td><td>{html.escape(log['error'])}</td>"
+            body.append(f"<tr><td>{name}</td><td class=\"error\">cannot be read</td><td>{escaped(log['error'])}</td>"
                         "<td></td><td></td></tr>")
             continue
         severity = log["worst_severity"] or "none"
         link = f"<a href=\"reports/{log['log_id']}.html\">{name}</a>"
         duration = f"{log['duration_s']:.0f} s" if log["duration_s"] is not None else ""
         body.append(f"<tr><td>{link}</td><td class=\"{severity}\">{severity}</td>"
-                    f"<td>{html.escape(log['worst_finding'] or 'nothing found')} ({log['findings'] or 0} findings)</td>"
-                    f"<td>{html.escape(log['vehicle'] or '')}</td><td>{duration}</td></tr>")
+                    f"<td>{escaped(log['worst_finding'] or 'nothing found')} ({log['findings'] or 0} findings)</td>"
+                    f"<td>{escaped(log['vehicle'] or '')}</td><td>{duration}</td></tr>")
     page = (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>Flight reports</title>"
             f"<style>{STYLE}</style></head><body><h1>Flight reports: {len(logs)} logs, worst first</h1>"
             "<table><tr><th>log</th><th>worst</th><th>finding</th><th>vehicle</th><th>duration</th></tr>"

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation.errors import UserError
+from groundstation.names import path_name, under
 
 # The columns of logs.parquet, in order: first the log's, then one estimator's figures.
 LOG_COLUMNS = {
@@ -102,7 +103,7 @@ def _rows(path: Path, out: Path, filters, page: bool, fields: dict) -> list[dict
     write_tables(data, out / "tables", fields["log_id"])
     if page:
         (out / "reports").mkdir(exist_ok=True)
-        write_report(data, out / "reports" / f"{fields['log_id']}.html", fields["path"], overwrite=True)
+        write_report(data, under(out, "reports", f"{fields['log_id']}.html"), fields["path"], overwrite=True)
     rows = []
     if data.true_q is not None:
         for name, scores in data.evaluate().items():
@@ -139,15 +140,20 @@ def imu_rate_hz(data) -> float:
 def write_tables(data, folder: Path, identifier: str) -> None:
     """Each table with rows as ``folder/<table>/log_id=<identifier>/part-0.parquet`` (its columns as in
     every export: names with units; a missing value null, as ``export --out x.parquet`` writes it, so
-    that SQL's avg() skips it where a NaN would make it NaN)."""
+    that SQL's avg() skips it where a NaN would make it NaN). ``<table>``: the table's name as a folder
+    (``names.path_name``: a log names its topics, and ``../../x`` or 300 characters must not become a
+    path), the name itself in the file's metadata (``table``, and ``label``: what the log calls it,
+    ``caseTopic (ulog)``); every path checked to lie in ``folder``."""
     import pyarrow as pa
 
     for name, columns in data.tables.items():
         if not len(columns["time_s"]):
             continue
-        target = folder / name / f"log_id={identifier}"
+        target = under(folder, path_name(name), f"log_id={identifier}")
         target.mkdir(parents=True, exist_ok=True)
-        _write_part(pa.table({c: pa.array(np.asarray(v, dtype=float), from_pandas=True) for c, v in columns.items()}),
+        said = {"table": name, "label": data.catalogue[name].label if name in data.catalogue else ""}
+        _write_part(pa.table({c: pa.array(np.asarray(v, dtype=float), from_pandas=True) for c, v in columns.items()},
+                             metadata={k: v.encode("utf-8", "backslashreplace") for k, v in said.items()}),
                     target / "part-0.parquet")
 
 
@@ -167,7 +173,7 @@ def unify_tables(folder: Path) -> None:
             if schema.names != names:
                 own = pq.read_table(part)
                 _write_part(pa.table({n: own[n] if n in schema.names else pa.nulls(own.num_rows, pa.float64())
-                                      for n in names}), part)
+                                      for n in names}, metadata=schema.metadata), part)
 
 
 def _write_part(table, path: Path) -> None:

@@ -21,6 +21,7 @@ import math
 import re
 
 from firmware_protocol.spec import SPEC, TIMESTAMP_FIELD, Field, FrameType, Spec
+from groundstation.names import kept_apart
 
 # A spec unit as a column-name suffix: dimensionless units add nothing, others say the unit.
 _UNIT_SUFFIX = {"1": "", "enum": "", "bits": "", "index": "", "%": "_pct", "deg/s": "_deg_s", "m/s": "_m_s", "m/s2": "_m_s2"}
@@ -110,11 +111,17 @@ def frame_table(frame_type: FrameType) -> TableInfo:
 _UNIT_SLUG = re.compile(r"[^A-Za-z0-9]+")  # "m/s" -> "m_s", "cdeg" stays
 
 
-def message_table(name: str, label: str, fields, units: dict[str, str]) -> TableInfo:
+def message_table(name: str, label: str, fields, units: dict[str, str], renamed: list[str] | None = None) -> TableInfo:
     """The table of a message of another protocol (an autopilot's MAVLink message, live or logged):
     ``time_s``, then one column per field named ``<field>_<unit>`` with the unit its definition gives
-    (``m/s`` -> ``_m_s``, ``%`` -> ``_pct``; none -> the bare field name)."""
-    return TableInfo(name.lower(), label, (TIME, *(_message_column(field, units.get(field) or "") for field in fields)))
+    (``m/s`` -> ``_m_s``, ``%`` -> ``_pct``; none -> the bare field name). Two fields that would share a
+    name (``Alt`` in m and ``Alt_m``) are kept apart (``names.kept_apart``); ``renamed`` is told the warnings."""
+    columns = [_message_column(field, units.get(field) or "") for field in fields]
+    names, warnings = kept_apart([c.name for c in columns], [f"{name}.{field}" for field in fields], "column")
+    if renamed is not None:
+        renamed += warnings
+    columns = [c if c.name == n else dataclasses.replace(c, name=n) for c, n in zip(columns, names)]
+    return TableInfo(name.lower(), label, (TIME, *columns))
 
 
 @functools.cache  # the same fields in every instance of a topic or message type, in every log

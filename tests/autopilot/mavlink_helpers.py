@@ -57,9 +57,11 @@ def _message(kind: bytes, payload: bytes) -> bytes:
     return struct.pack("<HB", len(payload), kind[0]) + payload
 
 
-def write_ulog(path, topics: dict[str, tuple[list[tuple[str, str]], dict[str, np.ndarray]]], info: dict[str, str] | None = None) -> None:
+def write_ulog(path, topics: dict[str, tuple[list[tuple[str, str]], dict[str, np.ndarray]]], info: dict[str, str] | None = None,
+               logged: list[tuple[int, int, str]] = ()) -> None:
     """``topics``: name -> (fields [(type, name)], columns name -> (N,) or (N, k) array). Version 1 file
-    with the flag-bits message, one format and one subscription per topic, data interleaved by time."""
+    with the flag-bits message, one format and one subscription per topic, data interleaved by time;
+    ``logged``: logged messages (timestamp µs, syslog level 0-7, text) among them."""
     out = bytearray(b"ULog\x01\x12\x35" + bytes([1]) + struct.pack("<Q", 0))
     out += _message(b"B", bytes(16) + struct.pack("<3Q", 0, 0, 0))
     for key, value in (info or {}).items():
@@ -79,9 +81,11 @@ def write_ulog(path, topics: dict[str, tuple[list[tuple[str, str]], dict[str, np
             for (_, fname), code in zip(fields, codes):
                 cast = float if code == "f" else int
                 values.extend(cast(v) for v in np.atleast_1d(columns[fname][i]).tolist())
-            rows.append((int(columns["timestamp"][i]), msg_id, struct.pack(fmt, *values)))
-    for _, msg_id, payload in sorted(rows, key=lambda r: (r[0], r[1])):
-        out += _message(b"D", struct.pack("<H", msg_id) + payload)
+            rows.append((int(columns["timestamp"][i]), msg_id, b"D", struct.pack("<H", msg_id) + struct.pack(fmt, *values)))
+    for timestamp, level, text in logged:
+        rows.append((timestamp, -1, b"L", struct.pack("<BQ", ord("0") + level, timestamp) + text.encode()))
+    for _, _, kind, payload in sorted(rows, key=lambda r: (r[0], r[1])):
+        out += _message(kind, payload)
     Path(path).write_bytes(bytes(out))
 
 
