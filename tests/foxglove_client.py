@@ -48,3 +48,18 @@ class Client:
                 if frame[0] == MESSAGE_DATA:
                     subscription, log_time = struct.unpack_from("<IQ", frame, 1)
                     self.messages.setdefault(subscriptions[subscription], []).append((log_time, frame[13:]))
+
+
+def decoded(client: Client, topic: str) -> list:
+    """``topic``'s messages as received, decoded with the schema the server advertised for it (protobuf:
+    its FileDescriptorSet in base64, the protocol's rule for binary schemas), by the mcap library's decoder."""
+    import base64
+
+    from mcap.records import Schema
+    from mcap_protobuf.decoder import DecoderFactory
+
+    advertised = next(c for c in client.channels.values() if c["topic"] == topic)
+    schema = Schema(id=0, name=advertised["schemaName"], encoding=advertised["schemaEncoding"],
+                    data=base64.b64decode(advertised["schema"]))
+    decode = DecoderFactory().decoder_for(advertised["encoding"], schema)
+    return [decode(payload) for _, payload in client.messages[topic]]

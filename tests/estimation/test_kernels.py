@@ -72,9 +72,17 @@ def stepped(est, gyr, acc, dt, mag, gps):
     return np.array([q for q, _ in rows]), np.array([d for _, d in rows])
 
 
-def assert_same(q, diag, q_ref, table_ref, fields):
-    np.testing.assert_array_equal(q, q_ref)
-    np.testing.assert_array_equal(np.column_stack([diag[f] for f in fields]), table_ref)
+def assert_same(q, diag, q_ref, table_ref, fields, atol: float = 0.0):
+    np.testing.assert_allclose(q, q_ref, rtol=0, atol=atol)
+    np.testing.assert_allclose(np.column_stack([diag[f] for f in fields]), table_ref, rtol=atol, atol=atol)
+
+
+# The interpreted source against the compiled kernel: the same operations, but LLVM may order or fuse a
+# few of them (and numba calls libm where NumPy may run its own code): each step may round differently
+# in the last place of a unit quaternion's components (2.2e-16), and the filter does not amplify it
+# (mcf, seed 190: 1.1e-16 after 300 samples). 300 samples of a few ulp each stay below 1e-12; a stale
+# cache or a source that says something else differs by orders of magnitude more.
+INTERPRETED_ATOL = 1e-12
 
 
 GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
@@ -87,6 +95,7 @@ GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
 # full β·dt step in another direction (1.2e-3 in q on the first sample).
 @example(seed=1, events=[], waiting=0, gate={}, start=None)
 @example(seed=35, events=[], waiting=0, gate=GATES[1], start=None)
+@example(seed=190, events=[], waiting=0, gate={}, start=None)  # mcf: 1 ulp apart (INTERPRETED_ATOL)
 @given(
     seed=st.integers(0, 2**31),
     events=st.lists(st.tuples(st.integers(0, 10_000), st.sampled_from(sorted(EVENTS))), max_size=30),
@@ -96,8 +105,9 @@ GATES = [{}, {"acc_deviation_max_g": 0.2, "acc_window_s": 0.3}]
 )
 @pytest.mark.parametrize("name", COMPILED)
 def test_run_equals_step_and_the_interpreted_source(name, seed, events, waiting, gate, start):
-    """Compiled run = compiled step = the kernel's Python source interpreted (dtype=np.float64), bit for
-    bit (the compiled code is what the source says, a stale cache included)."""
+    """Compiled run = compiled step, bit for bit (the same code); = the kernel's Python source interpreted
+    (dtype=np.float64) to ``INTERPRETED_ATOL`` (the compiled code is what the source says, a stale cache
+    included)."""
     gyr, acc, dt, mag, gps = samples(300, seed, events, waiting)
     cls = ESTIMATORS[name]
     batch, stepper, interpreted = (cls(create(name, gate).settings, dtype=t) for t in (None, None, np.float64))
@@ -108,7 +118,7 @@ def test_run_equals_step_and_the_interpreted_source(name, seed, events, waiting,
     fields = cls.Diagnostics._fields
     assert_same(q, diag, q_step, table_step, fields)
     q_py, diag_py = interpreted.run(gyr, acc, dt, mag=mag, gps=gps)
-    assert_same(q_py, diag_py, q_step, table_step, fields)
+    assert_same(q_py, diag_py, q_step, table_step, fields, atol=INTERPRETED_ATOL)
     assert np.all(np.isfinite(q)) and np.allclose(np.linalg.norm(q, axis=1), 1.0)
     assert all(np.all(np.isfinite(diag[f])) for f in fields)
 

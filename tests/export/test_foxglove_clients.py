@@ -5,20 +5,25 @@ memory, none of it kept after they leave, and the recording meanwhile loses noth
 
 The npm packages are installed once per lock file (``npm ci``) into a cache folder outside the work tree."""
 
+import base64
 import hashlib
 import json
 import os
 import select
 import shutil
+import socket as socket_module
 import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 import websockets
+from mcap.records import Schema
+from mcap_protobuf.decoder import DecoderFactory
 from websockets.sync.client import connect
 
 from groundstation.export.foxglove_live import SUBPROTOCOLS, FoxgloveBridge, origin_allowed
+from groundstation.export.protobuf_rows import field_names
 from groundstation.session.factory import open_session
 from groundstation.session.load import load_session
 from tests.waiting import wait_for
@@ -91,14 +96,18 @@ def test_foxglove_npm_client_receives_the_session_with_either_subprotocol(node_m
     assert got["protocol"] == subprotocol and got["serverInfo"]["name"] == "groundstation" and not got["errors"]
     channels = {c["topic"]: c for c in got["channels"]}
     assert channels["/tf"]["schemaName"] == "foxglove.FrameTransforms" and channels["/tf"]["encoding"] == "protobuf"
-    assert channels["/imu"]["encoding"] == "json" and json.loads(channels["/imu"]["schema"])["title"] == "imu"
+    advertised = channels["/imu"]  # protobuf: the FileDescriptorSet in base64 (the protocol's rule for binary schemas)
+    assert advertised["encoding"] == "protobuf" and advertised["schemaName"] == "groundstation.imu"
+    schema = Schema(id=0, name=advertised["schemaName"], encoding=advertised["schemaEncoding"],
+                    data=base64.b64decode(advertised["schema"]))
+    decode = DecoderFactory().decoder_for(advertised["encoding"], schema)
     imu = session.view.tables["imu"]
     rows = imu.array()
-    messages = [json.loads(payload) for _, payload in got["messages"]["/imu"]]
+    messages = [decode(base64.b64decode(payload)) for _, payload in got["messages"]["/imu"]]
     assert len(messages) == len(rows)
-    for i, column in enumerate(imu.columns):
-        read = np.array([np.nan if m.get(column) is None else m[column] for m in messages], dtype=float)
-        np.testing.assert_array_equal(read, rows[:, i], err_msg=column)
+    for i, (column, field) in enumerate(zip(imu.columns, field_names(imu.columns))):
+        read = np.array([getattr(m, field) for m in messages], dtype=float)
+        np.testing.assert_array_equal(read, rows[:, i], err_msg=column)  # bit for bit, NaN as NaN
     times = np.array([int(t) for t, _ in got["messages"]["/imu"]], dtype=np.int64)
     np.testing.assert_allclose(np.diff(times) / 1e9, np.diff(rows[:, 0]), atol=2e-9)  # log time follows session time
     assert len(got["messages"]["/onboard"]) == len(session.view.tables["onboard"])
@@ -167,8 +176,13 @@ def stalled_clients(port: int, count: int) -> list:
     """``count`` clients that subscribe to every channel and then read nothing more."""
     sockets = []
     for _ in range(count):
-        # max_queue=1: the client's reader stops taking frames off the socket after one it was not asked for.
-        socket = connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOLS[0]], max_queue=1).__enter__()
+        # max_queue=1: the client's reader stops taking frames off the socket after one it was not asked for;
+        # a small receive buffer (set before connecting: it sets the window) so that the server's queue, not
+        # the kernel's buffers of megabytes, is what fills (in seconds, however small the messages).
+        raw = socket_module.socket(socket_module.AF_INET, socket_module.SOCK_STREAM)
+        raw.setsockopt(socket_module.SOL_SOCKET, socket_module.SO_RCVBUF, 4096)
+        raw.connect(("127.0.0.1", port))
+        socket = connect(f"ws://127.0.0.1:{port}", sock=raw, subprotocols=[SUBPROTOCOLS[0]], max_queue=1).__enter__()
         assert json.loads(socket.recv(timeout=30))["op"] == "serverInfo"
         channels = json.loads(socket.recv(timeout=30))["channels"]
         socket.send(json.dumps({"op": "subscribe", "subscriptions": [
@@ -180,8 +194,9 @@ def stalled_clients(port: int, count: int) -> list:
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the process's RSS from /proc")
 def test_ten_clients_that_never_read_cost_little_memory_and_the_recording_nothing(tmp_path):
     """Twice ten clients that stop reading once subscribed, until each one's queue is full and drops: the
-    process (server and these clients) grows by less than 50 MB; after they leave it keeps less than 10 MB
-    of it (what the allocator keeps for reuse: the second ten take no more than the first)."""
+    process (server and these clients) grows by less than 50 MB; after they leave it keeps less than 20 MB
+    of it (what the allocator keeps for reuse, and the live session's own tables growing meanwhile: a
+    few MB a minute), and the second ten take no more than the first (nothing leaks per client)."""
     session = live_session(tmp_path, record=True)
     bridge = FoxgloveBridge("127.0.0.1", 0).serve(session)
     rounds = []
@@ -203,7 +218,7 @@ def test_ten_clients_that_never_read_cost_little_memory_and_the_recording_nothin
     for during, after in rounds:
         print(f"\nRSS before {before / 2**20:.1f} MiB, 10 clients that never read {during / 2**20:.1f} MiB, "
               f"after they left {after / 2**20:.1f} MiB")
-        assert during - before < 50 * 2**20 and after - before < 10 * 2**20
+        assert during - before < 50 * 2**20 and after - before < 20 * 2**20
     assert rounds[1][0] - rounds[0][0] < 4 * 2**20  # the second ten reuse what the first left
     assert bridge.dropped > 0 and "messages dropped for slow clients" in bridge.status_text()
     counters = session.view.counters()

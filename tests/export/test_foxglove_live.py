@@ -3,7 +3,6 @@ protocol (``foxglove.sdk.v1``, written here from the protocol's description, not
 to every channel, and 10 s of a live 100 Hz session arrive with nothing lost against the session's own
 tables."""
 
-import base64
 import subprocess
 import sys
 import time
@@ -11,13 +10,11 @@ import time
 import numpy as np
 import pytest
 from groundstation.errors import UserError
-from mcap.records import Schema
-from mcap_protobuf.decoder import DecoderFactory
 
 from groundstation.export.foxglove_live import FoxgloveBridge, parse_address
 from groundstation.export.protobuf_rows import field_names
 from groundstation.session.factory import open_session
-from tests.foxglove_client import Client
+from tests.foxglove_client import Client, decoded
 
 def test_ten_seconds_of_a_live_session_arrive_whole(tmp_path):
     session = open_session("sim:?scenario=hover&seed=3", filters=("ahf", "hf"), record=False)
@@ -41,11 +38,7 @@ def test_ten_seconds_of_a_live_session_arrive_whole(tmp_path):
     rows = imu.array()
     assert len(rows) > 900  # 10 s at 100 Hz
     frames = {c["topic"]: c for c in client.channels.values()}
-    advertised = frames["/imu"]  # protobuf: the FileDescriptorSet in base64 (the protocol's rule for binary schemas)
-    schema = Schema(id=0, name=advertised["schemaName"], encoding=advertised["schemaEncoding"],
-                    data=base64.b64decode(advertised["schema"]))
-    decode = DecoderFactory().decoder_for(advertised["encoding"], schema)
-    got = [decode(payload) for _, payload in client.messages["/imu"]]
+    got = decoded(client, "/imu")
     assert len(got) == len(rows)
     for i, (column, field) in enumerate(zip(imu.columns, field_names(imu.columns))):
         read = np.array([getattr(m, field) for m in got], dtype=float)
