@@ -2,7 +2,8 @@
 or ``TimeMS`` in logs of ArduPilot before 3.3, 2015, whose ``GPS`` carries its boot time in ``T`` ms
 and GPS time of week in ``TimeMS``).
 
-Messages and units used (ArduPilot's LogStructure): ``IMU`` (instance ``I`` 0: ``GyrX..Z`` rad/s,
+Messages and units used (ArduPilot's LogStructure): ``IMU`` (the instance ``I`` with real samples first,
+``imu_choice``: ``GyrX..Z`` rad/s,
 ``AccX..Z`` m/s², body FRD, every sample the logging rate keeps), ``ATT`` (``Roll``, ``Pitch``, ``Yaw`` in
 degrees, ZYX, body -> NED: the onboard estimate), ``MAG`` (instance 0, ``MagX..Z`` mGauss), ``BARO``
 (instance 0, ``Press`` Pa, ``Temp`` °C), ``GPS`` (instance 0: ``Lat``/``Lng`` degrees, ``Alt`` m,
@@ -21,6 +22,7 @@ from pymavlink import DFReader
 
 from groundstation import quaternion
 from groundstation.autopilot.chatter import Chatter
+from groundstation.autopilot.imu_choice import ImuChoice, said_choice
 from groundstation.autopilot.logtables import DataflashTables
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, series
 from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
@@ -45,6 +47,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
     rows, said = defaultdict(list), []
+    choice = ImuChoice()  # the IMU instance the estimators run on
     every = DataflashTables()  # every message type as a table (``logtables``)
     chatter = Chatter()  # DFReader prints a "bad header" line per damaged byte, some from C: counted, not shown
     try:
@@ -61,7 +64,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
                 name = msg.get_type()
                 if name in stamped:
                     said.append(msg)
-                elif clocks.get(name) is not None and getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
+                elif clocks.get(name) is not None and _taken(msg, name, choice):
                     field, us_per_unit = clocks[name]
                     rows[name].append([getattr(msg, field) * us_per_unit, *(getattr(msg, f) for f in FIELDS[name])])
                 if progress is not None and count % 4096 == 0:
@@ -83,9 +86,10 @@ def read_dataflash(path, progress=None) -> FlightLog:
     if rows["IMU"]:
         imu = np.array(rows["IMU"], dtype=float)
         values = np.column_stack([imu[:, 1:4], imu[:, 4:7] / STANDARD_GRAVITY_M_S2])
-        log.imu = series(imu[:, 0], dict(zip(IMU_COLUMNS, values.T)), "IMU[0]")
+        log.imu = series(imu[:, 0], dict(zip(IMU_COLUMNS, values.T)), choice.chosen)
     else:
-        log.notes.append("no IMU messages logged (the logging bitmask left them out): onboard attitude only")
+        log.notes.append(f"{choice.said()}: onboard attitude only" if choice.heard else
+                         "no IMU messages logged (the logging bitmask left them out): onboard attitude only")
     if rows["ATT"]:
         att = np.array(rows["ATT"], dtype=float)
         q = quaternion.from_euler_zyx(*np.radians(att[:, 1:4]).T)
@@ -96,6 +100,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
     if rows["BARO"]:
         baro = np.array(rows["BARO"], dtype=float)
         log.baro = series(baro[:, 0], {"pressure_hpa": baro[:, 1] / 100.0, "temperature_c": baro[:, 2]}, "BARO[0]")
+    said_choice(log, choice)
     gps = np.array(rows["GPS"], dtype=float).reshape(-1, 1 + len(FIELDS["GPS"]))  # the time, then the fields
     gps = gps[gps[:, 7] >= 2]  # a 2D fix or better
     if len(gps):
@@ -103,6 +108,14 @@ def read_dataflash(path, progress=None) -> FlightLog:
         columns = [gps[:, 1], gps[:, 2], gps[:, 3], gps[:, 4] * np.cos(course), gps[:, 4] * np.sin(course), gps[:, 6], gps[:, 7], gps[:, 8]]
         log.gps = series(gps[:, 0], dict(zip(GPS_COLUMNS, columns)), "GPS[0]")
     return log
+
+
+def _taken(msg, name: str, choice: ImuChoice) -> bool:
+    """Whether a sensor message is the session's: the IMU instance ``choice`` takes, instance 0 of the others."""
+    if name != "IMU":
+        return getattr(msg, "I", 0) == 0
+    return choice.take(f"IMU[{getattr(msg, 'I', 0)}]", (msg.AccX / STANDARD_GRAVITY_M_S2, msg.AccY / STANDARD_GRAVITY_M_S2,
+                                                        msg.AccZ / STANDARD_GRAVITY_M_S2))
 
 
 def boot_clock(reader, name: str) -> tuple[str, int] | None:

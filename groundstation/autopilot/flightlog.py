@@ -104,3 +104,4 @@ class FlightLog:
     damage: list[str] = dataclasses.field(default_factory=list)  # what the reader dropped as damaged
     events: list[tuple[int, dict]] = dataclasses.field(default_factory=list)  # (time µs, event without times)
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)
+    imu_choice: str = ""  # which IMU stream is ``imu`` and why (``imu_choice``)

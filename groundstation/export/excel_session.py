@@ -31,7 +31,7 @@ METADATA_LABELS = {
     "source_spec": "source (as typed)", "format": "file format", "format_version": "recording format version",
     "protocol": "link protocol", "protocol_fingerprint": "protocol fingerprint (ground station)",
     "vehicle_system": "MAVLink vehicle (system id)", "aiding_estimator": "aiding estimator",
-    "autopilot": "autopilot", "imu_rate_hz": "IMU rate (Hz)", "imu_warning": "IMU warning",
+    "autopilot": "autopilot", "imu_rate_hz": "IMU rate (Hz)", "imu_choice": "IMU for the estimators", "imu_warning": "IMU warning",
     "time_origin_s": "time origin (s)", "notes": "notes",
 }  # fmt: skip
 PROTOCOLS = {"gs": "the project's own (firmware_protocol)", "mavlink": "MAVLink (an autopilot)"}
