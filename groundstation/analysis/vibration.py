@@ -48,6 +48,7 @@ import re
 
 import numpy as np
 
+from groundstation.analysis.fields import message_field
 from groundstation.analysis.spectrum import WINDOWS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
@@ -321,11 +322,8 @@ def _between(table: ImuTable, start_s: float, end_s: float) -> ImuTable:
 
 
 def _column(columns: dict, field: str) -> np.ndarray | None:
-    """A logged message's field: the column named ``field`` or ``field_<unit>`` (catalogue.message_table)."""
-    for name, values in columns.items():
-        if name == field or name.startswith(field + "_"):
-            return np.asarray(values, dtype=float)
-    return None
+    """A logged message's field: the column named ``field`` or ``field_<unit>`` (``fields``)."""
+    return message_field(columns, field)
 
 
 def _rows(session, table: str, start_s: float, end_s: float) -> dict | None:

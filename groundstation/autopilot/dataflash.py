@@ -41,6 +41,10 @@ FIELDS = {  # each row: the time in µs (``CLOCKS``), then these
 # The autopilot's boot clock, by the first field a message's format has: (field, µs per unit).
 CLOCKS = (("TimeUS", 1), ("T", 1000), ("TimeMS", 1000))
 MGAUSS_TO_UT = 0.1
+# A log copied off the card or flash in whole blocks (an SD card's 512-byte sectors; ArduPilot's file logger
+# writes 4 KiB at a time) ends mid-record, in its last block: a file of whole blocks whose unfinished
+# record is shorter than one is that, not damage (both shared real .bin logs end so).
+BLOCK_BYTES = 512
 
 def read_dataflash(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
@@ -81,7 +85,10 @@ def read_dataflash(path, progress=None) -> FlightLog:
     if damaged:
         log.damage.append(f"{damaged} damaged bytes skipped")
     cut = unfinished_record_bytes(reader)
-    if cut:
+    if cut and reader.data_len % BLOCK_BYTES == 0 and cut < BLOCK_BYTES:
+        log.notes.append(f"the log ends in its last block with {cut} bytes of a record the autopilot had not finished: "
+                         "a log copied off the card in whole blocks ends so")
+    elif cut:
         log.damage.append(cut_message(cut))
     if rows["IMU"]:
         imu = np.array(rows["IMU"], dtype=float)

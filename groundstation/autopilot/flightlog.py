@@ -80,9 +80,8 @@ def implausible_message(source: str, time_us: np.ndarray) -> str:
 
 
 def cut_message(unfinished_bytes: int) -> str:
-    """What a log that ends inside a record lost, said the same for every format. Not always a fault of
-    the copy: a DataFlash log read off the card in whole blocks ends mid-record too (both shared real
-    ``.bin`` logs do); but a log cut short looks exactly like this, and nothing else tells them apart."""
+    """What a log that ends inside a record lost, said the same for every format. (A DataFlash log copied
+    in whole blocks ends mid-record too, and is told apart by its size: ``dataflash.BLOCK_BYTES``.)"""
     return (f"the file ends inside a record ({unfinished_bytes} bytes of an unfinished one): the log was cut short "
             "or stopped mid-write, and anything after it is missing")
 

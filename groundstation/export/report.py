@@ -45,7 +45,7 @@ table { border-collapse: collapse; margin: 0.5em 0; font-size: 0.9em; }
 td, th { border: 1px solid #ccc; padding: 2px 8px; text-align: left; } th { background: #f0f0f0; }
 td.n { text-align: right; font-variant-numeric: tabular-nums; }
 .finding { margin: 0.3em 0; padding: 0.3em 0.6em; border-left: 6px solid #999; background: #fafafa; list-style: none; }
-.finding.high { border-color: #c00; } .finding.medium { border-color: #e90; } .finding.low { border-color: #39c; }
+.finding.critical { border-color: #600; background: #fee; } .finding.high { border-color: #c00; } .finding.medium { border-color: #e90; } .finding.low { border-color: #39c; }
 .sev { font-weight: bold; text-transform: uppercase; font-size: 0.8em; margin-right: 0.5em; }
 .detail { color: #555; font-size: 0.9em; } .warn { color: #a00; } ul.findings { padding-left: 0; }
 tr.alarm td { color: #a00; }
