@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from groundstation.session.figures import rate_hz
+
 
 Q_COLUMNS = ("qw", "qx", "qy", "qz")
 IMU_COLUMNS = ("gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s", "acc_x_g", "acc_y_g", "acc_z_g")
@@ -41,8 +43,8 @@ class Series:
 
     @property
     def rate_hz(self) -> float:
-        """Median rate on the autopilot's clock; NaN with fewer than two samples."""
-        return 1e6 / float(np.median(np.diff(self.time_us))) if len(self) > 1 else float("nan")
+        """Median rate on the autopilot's clock (``figures.rate_hz``); NaN with fewer than two samples."""
+        return rate_hz(self.time_us / 1e6)
 
 
 def series(time_us, columns: dict, source: str) -> Series | None:

@@ -88,7 +88,7 @@ def link_loss(data: SessionData) -> list[Finding]:
     sent = c.get("frames", 0) + c.get("frames_lost", 0)
     if not sent or not c.get("frames_lost"):
         return []
-    share = c["frames_lost"] / sent
+    share = data.link_loss_pct() / 100.0  # the one figure every place gives (``session.figures``)
     severity = "high" if share >= LINK_LOSS_HIGH else "medium" if share >= LINK_LOSS_MEDIUM else "low"
     per = data.link.per_second
     worst = int(np.argmax(per["frames_lost"])) if len(per.get("frames_lost", ())) else None

@@ -11,9 +11,8 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ
+from groundstation.session.figures import rate_hz
 from groundstation.session.view import ProductView
 from groundstation.ui.series import GAP_S
 
@@ -25,14 +24,15 @@ def newest_time_s(table) -> float | None:
     return float(last[0][table.columns.index("time_s")]) if len(last) else None
 
 
-def interval_s(table) -> float:
-    """The median interval of the newest samples of ``table`` (session time); NaN with fewer than 3."""
+def newest_rate_hz(table) -> float:
+    """The sample rate of the newest samples of ``table`` (``figures.rate_hz``); NaN with fewer than 3."""
     rows = table.tail(RATE_ROWS)
-    if len(rows) < 3:
-        return math.nan
-    steps = np.diff(rows[:, table.columns.index("time_s")])
-    steps = steps[np.isfinite(steps) & (steps > 0)]
-    return float(np.median(steps)) if len(steps) else math.nan
+    return rate_hz(rows[:, table.columns.index("time_s")]) if len(rows) >= 3 else math.nan
+
+
+def interval_s(table) -> float:
+    """The sample interval of the newest samples of ``table`` (s); NaN when not known."""
+    return 1.0 / newest_rate_hz(table)
 
 
 def stream_interval_s(view: ProductView) -> float:
@@ -53,7 +53,7 @@ def headline(view: ProductView) -> tuple[str, str]:
     imu_s = newest_time_s(view.imu)
     if imu_s is None or onboard_s - imu_s > GAP_S:
         return "onboard", "no raw IMU"
-    rate_hz = 1.0 / interval_s(view.imu)
-    if rate_hz < MIN_FILTER_RATE_HZ:  # NaN (too few samples yet) compares False
-        return "onboard", f"IMU at {rate_hz:.0f} Hz"
+    imu_hz = newest_rate_hz(view.imu)
+    if imu_hz < MIN_FILTER_RATE_HZ:  # NaN (too few samples yet) compares False
+        return "onboard", f"IMU at {imu_hz:.1f} Hz"
     return filters[0], ""
