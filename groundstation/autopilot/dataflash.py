@@ -9,7 +9,9 @@ degrees, ZYX, body -> NED: the onboard estimate), ``MAG`` (instance 0, ``MagX..Z
 (instance 0, ``Press`` Pa, ``Temp`` °C), ``GPS`` (instance 0: ``Lat``/``Lng`` degrees, ``Alt`` m,
 ``Spd`` m/s, ``GCrs`` degrees, ``VZ`` m/s down, ``Status`` fix type, ``NSats``). A log whose logging
 bitmask left out ``IMU`` still opens, with the onboard attitude only. ``MSG``, ``ERR``, ``EV``, ``MODE``,
-``ARM`` and ``PARM``: what the autopilot said and how it was set (``messages.dataflash_said``).
+``ARM`` and ``PARM``: what the autopilot said and how it was set (``messages.dataflash_said``), each at its
+own boot time, or (a log before 2015: no time in ``PARM``, ``MSG``, ``MODE``, ``EV``) at the latest record's
+that has one, as DFReader times them.
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from pymavlink import DFReader
 from groundstation import quaternion
 from groundstation.autopilot.chatter import Chatter
 from groundstation.autopilot.imu_choice import ImuChoice, said_choice
-from groundstation.autopilot.logtables import DataflashTables
+from groundstation.autopilot.logtables import CLOCKS, DataflashTables
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, series
 from groundstation.autopilot.messages import DATAFLASH_SAID, dataflash_said
 from groundstation.errors import UserError
@@ -38,8 +40,7 @@ FIELDS = {  # each row: the time in µs (``CLOCKS``), then these
     "BARO": ("Press", "Temp"),
     "GPS": ("Lat", "Lng", "Alt", "Spd", "GCrs", "VZ", "Status", "NSats"),
 }
-# The autopilot's boot clock, by the first field a message's format has: (field, µs per unit).
-CLOCKS = (("TimeUS", 1), ("T", 1000), ("TimeMS", 1000))
+IMU_TYPES = ("IMU", "IMU2", "IMU3")  # an IMU: instance ``I`` of IMU, or (logs before 2015) a type of its own
 MGAUSS_TO_UT = 0.1
 # A log copied off the card or flash in whole blocks (an SD card's 512-byte sectors; ArduPilot's file logger
 # writes 4 KiB at a time) ends mid-record, in its last block: a file of whole blocks whose unfinished
@@ -57,26 +58,27 @@ def read_dataflash(path, progress=None) -> FlightLog:
     try:
         with chatter.caught():
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
-        clocks = {name: boot_clock(reader, name) for name in FIELDS}
-        # the messages, events and parameters where the log stamps them in TimeUS (older logs' MSG, MODE: not at all)
-        stamped = {name for name in DATAFLASH_SAID if boot_clock(reader, name) == CLOCKS[0]}
+        clocks = {name: boot_clock(reader, name) for name in reader.name_to_id}
+        last_us = None  # the boot time of the latest stamped record: an unstamped one (a log before 2015's PARM, MSG) came then
         with chatter.caught(descriptors=False):  # reading prints from Python only
             for count in itertools.count():
                 if (msg := reader.recv_msg()) is None:
                     break
                 every.add(msg)
                 name = msg.get_type()
-                if name in stamped:
-                    said.append(msg)
-                elif clocks.get(name) is not None and _taken(msg, name, choice):
-                    field, us_per_unit = clocks[name]
-                    rows[name].append([getattr(msg, field) * us_per_unit, *(getattr(msg, f) for f in FIELDS[name])])
+                if (clock := clocks.get(name)) is not None:
+                    last_us = getattr(msg, clock[0]) * clock[1]
+                if name in DATAFLASH_SAID:
+                    said.append((last_us, msg))
+                elif clock is not None and (kind := "IMU" if name in IMU_TYPES else name) in FIELDS and _taken(msg, name, choice):
+                    rows[kind].append([getattr(msg, clock[0]) * clock[1], *(getattr(msg, f) for f in FIELDS[kind])])
                 if progress is not None and count % 4096 == 0:
                     progress(reader.percent, 100)
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
-    log.events, log.parameters = dataflash_said(said, reader.mav_type)
+    first_us = next((t_us for t_us, _ in said if t_us is not None), 0)  # what came before any stamp: the log's start
+    log.events, log.parameters = dataflash_said([(first_us if t_us is None else int(t_us), r) for t_us, r in said], reader.mav_type)
     log.tables, log.units = every.tables()
     skipped = [line.split()[1] for line in chatter.lines if line.startswith("Skipped ")]  # "Skipped N bad bytes ..."
     # The same damaged bytes, counted twice: once a "bad header" each while DFReader indexes the file, once
@@ -118,10 +120,10 @@ def read_dataflash(path, progress=None) -> FlightLog:
 
 
 def _taken(msg, name: str, choice: ImuChoice) -> bool:
-    """Whether a sensor message is the session's: the IMU instance ``choice`` takes, instance 0 of the others."""
-    if name != "IMU":
+    """Whether a sensor message is the session's: the IMU ``choice`` takes, instance 0 of the others."""
+    if name not in IMU_TYPES:
         return getattr(msg, "I", 0) == 0
-    return choice.take(f"IMU[{getattr(msg, 'I', 0)}]", (msg.AccX / STANDARD_GRAVITY_M_S2, msg.AccY / STANDARD_GRAVITY_M_S2,
+    return choice.take(f"IMU[{getattr(msg, 'I', 0)}]" if name == "IMU" else name, (msg.AccX / STANDARD_GRAVITY_M_S2, msg.AccY / STANDARD_GRAVITY_M_S2,
                                                         msg.AccZ / STANDARD_GRAVITY_M_S2))
 
 
