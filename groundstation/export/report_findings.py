@@ -194,7 +194,8 @@ INCIDENT_JOIN_S = 5.0  # evidence of one kind this close to the last is the same
 INCIDENT_TEXTS = tuple((kind, severity, what, re.compile(pattern, re.IGNORECASE)) for kind, severity, what, pattern in (
     ("crash", "critical", "crash", r"^CRASH_CHECK: error|^crash: |crash detected|parachute released"),
     ("thrust_loss", "high", "potential thrust loss", r"^THRUST_LOSS_CHECK: error|thrust loss"),
-    ("emergency_stop", "high", "motors emergency-stopped", r"^MOTORS_EMERGENCY_STOPPED$|e-?stop|emergency stop"),
+    ("emergency_stop", "high", "motors emergency-stopped",
+     r"^MOTORS_EMERGENCY_STOPPED$|MotorEStop HIGH|emergency stop(ped)?$|kill[- ]switch (engaged|on)"),
     ("failsafe", "high", "radio failsafe", r"^FAILSAFE_RADIO: error|radio failsafe|RC failsafe|RC lost"),
     ("failsafe", "high", "battery failsafe", r"^FAILSAFE_BATT: error|battery failsafe|battery \d* ?is (low|critical)|(low|critical|dangerous|emergency) battery"),
     ("failsafe", "high", "EKF failsafe", r"^(EKFCHECK|FAILSAFE_EKFINAV): error|EKF failsafe|EKF variance"),

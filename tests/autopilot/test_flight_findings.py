@@ -129,3 +129,17 @@ def test_each_kind_of_trouble_is_a_finding_at_its_first_logged_time(crash_bin, c
 def test_the_crash_log_has_no_emergency_stop_and_the_copter_no_crash(crash_findings, copter_findings):
     assert not [f for f in crash_findings if f.kind == "emergency_stop"]
     assert not [f for f in copter_findings[1] if f.kind in ("crash", "failsafe", "brownout", "gps_glitch")], copter_findings[1]
+
+
+@pytest.mark.parametrize("text, what", [
+    ("MotorEStop HIGH", "motors emergency-stopped"), ("MotorEStop LOW", None),  # ArduPilot's RC switch engaged / released
+    ("MOTORS_EMERGENCY_STOPPED", "motors emergency-stopped"), ("MOTORS_EMERGENCY_STOP_CLEARED", None),
+    ("CRASH_CHECK: error 1", "crash"), ("CRASH_CHECK: resolved", None), ("Crash: Disarming", "crash"),
+    ("FAILSAFE_RADIO: error 1", "radio failsafe"), ("FAILSAFE_RADIO: resolved", None),
+    ("[commander] Dangerous battery level!, please land!", "battery failsafe"), ("GPS Glitch", "GPS glitch"),
+])  # fmt: skip
+def test_what_the_autopilot_says_is_evidence_only_of_trouble_begun(text, what):
+    from groundstation.export.report_findings import incident_of
+
+    entry = incident_of({"kind": "message", "message": text})
+    assert (entry[2] if entry else None) == what
