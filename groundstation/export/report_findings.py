@@ -7,7 +7,7 @@ recomputes them. Thresholds are named here with where they come from.
 Incidents (``incidents``): what the autopilot logged about the flight going wrong, each a finding with its
 time (the first evidence), severity and evidence: its texts, ``ERR`` and ``EV`` (``INCIDENT_TEXTS``), the
 attitude far from its demand as ArduCopter's crash check judges it (``ATT``), the board's supply
-(``POWR``), the accelerometer's clip counters (``VIBE``), the EKF's normalised innovations (``XKF4``/``NKF4``)
+(``POWR``, MAVLink ``POWER_STATUS``), the accelerometer's clip counters (``VIBE``), the EKF's normalised innovations (``XKF4``/``NKF4``)
 and the magnetic field's strength (the compass, ``mag_raw``). Evidence of one kind within ``INCIDENT_JOIN_S`` of the
 last is one incident. A crash is ``critical``, above every other finding.
 """
@@ -208,6 +208,7 @@ INCIDENT_TEXTS = tuple((kind, severity, what, re.compile(pattern, re.IGNORECASE)
 CRASH_ANGLE_DEG, CRASH_TRIGGER_S = 30.0, 2.0  # ArduCopter's crash check: attitude this far from its demand this long
 BROWNOUT_V, BROWNOUT_HIGH_V = 4.5, 4.3  # board supply (POWR.Vcc); ArduPilot's BRD_VBUS_MIN default 4.3 V
 OVERCURRENT_FLAGS = {8: "peripheral overcurrent", 16: "high-power peripheral overcurrent"}  # MAV_POWER_STATUS bits
+POWER_TABLES = {"powr": ("Vcc", "Flags", 1.0), "power_status": ("Vcc", "flags", 1e-3)}  # table: (supply, flags, V per unit)
 EKF_VARIANCE_HIGH, EKF_VARIANCE_MEDIUM = 0.8, 0.5  # FS_EKF_THRESH's default; the GCSs' amber
 EKF_VARIANCES = {"SV": "velocity", "SP": "position", "SH": "height", "SM": "magnetometer", "SVT": "airspeed"}
 MAG_INTERFERENCE = 0.3  # of the field's usual strength: ArduPilot's COMPASS_MOT calibration treats 30 % as bad interference
@@ -286,20 +287,25 @@ def _crash_attitude(data: SessionData) -> list[Evidence]:
 
 
 def _power(data: SessionData) -> list[Evidence]:
-    """The board's supply below ``BROWNOUT_V`` (a brownout resets the board), and overcurrent flags (``POWR``)."""
-    powr = data.tables.get("powr")
-    if not powr:
-        return []
-    t, out = powr["time_s"], []
-    vcc = message_field(powr, "Vcc")
-    if vcc is not None and (low := np.flatnonzero(vcc < BROWNOUT_V)).size:
-        lowest = low[np.argmin(vcc[low])]
-        out.append(Evidence("brownout", "high" if vcc[lowest] < BROWNOUT_HIGH_V else "medium", "brownout: board supply low",
-                            float(t[low[0]]), f"POWR.Vcc {vcc[low[0]]:.2f} V (lowest {vcc[lowest]:.2f} V at {t[lowest]:.2f} s)"))
-    flags = message_field(powr, "Flags")
-    for bit, what in OVERCURRENT_FLAGS.items():
-        if flags is not None and (hit := np.flatnonzero(np.nan_to_num(flags).astype(int) & bit)).size:
-            out.append(Evidence("power", "high", f"power: {what}", float(t[hit[0]]), f"POWR.Flags {int(flags[hit[0]])} (bit {bit})"))
+    """The board's supply below ``BROWNOUT_V`` (a brownout resets the board), and overcurrent flags: DataFlash
+    ``POWR`` or MAVLink ``POWER_STATUS`` (``POWER_TABLES``; the flags are MAV_POWER_STATUS in both)."""
+    out = []
+    for name, (vcc_field, flags_field, volts_per_unit) in POWER_TABLES.items():
+        table = data.tables.get(name)
+        if not table or not len(table.get("time_s", ())):
+            continue
+        t, said = table["time_s"], name.upper()
+        vcc = message_field(table, vcc_field)
+        vcc = None if vcc is None else vcc * volts_per_unit
+        if vcc is not None and (low := np.flatnonzero(vcc < BROWNOUT_V)).size:
+            lowest = low[np.argmin(vcc[low])]
+            out.append(Evidence("brownout", "high" if vcc[lowest] < BROWNOUT_HIGH_V else "medium", "brownout: board supply low",
+                                float(t[low[0]]), f"{said}.{vcc_field} {vcc[low[0]]:.2f} V (lowest {vcc[lowest]:.2f} V at {t[lowest]:.2f} s)"))
+        flags = message_field(table, flags_field)
+        for bit, what in OVERCURRENT_FLAGS.items():
+            if flags is not None and (hit := np.flatnonzero(np.nan_to_num(flags).astype(int) & bit)).size:
+                out.append(Evidence("power", "high", f"power: {what}", float(t[hit[0]]),
+                                    f"{said}.{flags_field} {int(flags[hit[0]])} (bit {bit})"))
     return out
 
 

@@ -143,3 +143,34 @@ def test_what_the_autopilot_says_is_evidence_only_of_trouble_begun(text, what):
 
     entry = incident_of({"kind": "message", "message": text})
     assert (entry[2] if entry else None) == what
+
+
+def test_a_mavlink_links_power_status_gives_the_same_power_findings(tmp_path):
+    """POWER_STATUS (Vcc in mV, MAV_POWER_STATUS flags, the bits of POWR's) on a link: a dip of the board's
+    supply and a peripheral overcurrent, each at the session time of the IMU sample before it (pymavlink)."""
+    import struct
+
+    from pymavlink import mavutil
+
+    from mavlink_helpers import Sender, ardupilot_heartbeat
+
+    autopilot, rng, out = Sender(), np.random.default_rng(3), bytearray()
+    for k in range(100):  # 10 s at 10 Hz
+        t_us = BOOT_US + k * 100_000
+        packets = [ardupilot_heartbeat(autopilot)] if k % 10 == 0 else []
+        packets.append(autopilot.raw_imu(t_us, *np.rint(rng.normal(0, 5, 2)).astype(int), -1000, 0, 0, 0, 200, 0, 400, 0, 2500))
+        if k % 5 == 0:
+            packets.append(autopilot.power_status(4200 if k == 60 else 5100, 0, 3 | (8 if k >= 80 else 0)))
+        out += b"".join(struct.pack(">Q", 1_700_000_000_000_000 + t_us) + p for p in packets)
+    path = tmp_path / "power.tlog"
+    path.write_bytes(bytes(out))
+    log, imu_us, expected = mavutil.mavlink_connection(str(path)), [], {}
+    while (msg := log.recv_match(type=["RAW_IMU", "POWER_STATUS"])) is not None:
+        if msg.get_type() == "RAW_IMU":
+            imu_us.append(msg.time_usec)
+        elif msg.Vcc < 4500 and "brownout" not in expected or msg.flags & 8 and "power" not in expected:
+            expected["brownout" if msg.Vcc < 4500 else "power"] = (imu_us[-1] - imu_us[0]) / 1e6
+    found = {f.kind: f for f in findings(load_session(path, ["ahf"]), None)}
+    for kind, t_s in expected.items():
+        assert found[kind].t_s == pytest.approx(t_s, abs=1e-3) and "POWER_STATUS" in found[kind].detail, found
+    assert found["brownout"].severity == "high" and "4.20 V" in found["brownout"].detail
