@@ -20,8 +20,6 @@ import math
 import re
 from pathlib import Path
 
-import numpy as np
-
 from groundstation import __version__, quaternion
 from groundstation.analysis.vibration import UNITS, VibrationError, VibrationSummary, vibration_summary
 from groundstation.autopilot.agreement import onboard_agreement
