@@ -210,10 +210,17 @@ BROWNOUT_V, BROWNOUT_HIGH_V = 4.5, 4.3  # board supply (POWR.Vcc); ArduPilot's B
 OVERCURRENT_FLAGS = {8: "peripheral overcurrent", 16: "high-power peripheral overcurrent"}  # MAV_POWER_STATUS bits
 POWER_TABLES = {"powr": ("Vcc", "Flags", 1.0), "power_status": ("Vcc", "flags", 1e-3)}  # table: (supply, flags, V per unit)
 EKF_VARIANCE_HIGH, EKF_VARIANCE_MEDIUM = 0.8, 0.5  # FS_EKF_THRESH's default; the GCSs' amber
-EKF_VARIANCES = {"SV": "velocity", "SP": "position", "SH": "height", "SM": "magnetometer", "SVT": "airspeed"}
+# The EKF's normalised innovation variances: a log's table (by name) -> {field: what it measures}. EKF3's
+# XKF4 and EKF2's NKF4 (one per core), MAVLink's EKF_STATUS_REPORT (live and in a .tlog).
+EKF_VARIANCES = ((re.compile(r"^[xn]kf4(_\d+)?$"), {"SV": "velocity", "SP": "position", "SH": "height", "SM": "magnetometer",
+                                                    "SVT": "airspeed"}),
+                 (re.compile(r"^ekf_status_report$"), {"velocity_variance": "velocity", "pos_horiz_variance": "position",
+                                                       "pos_vert_variance": "height", "compass_variance": "magnetometer",
+                                                       "terrain_alt_variance": "terrain height"}))
+# The accelerometers' clip counters (since boot): DataFlash VIBE (per IMU), MAVLink VIBRATION.
+CLIP_COUNTERS = ((re.compile(r"^vibe(_\d+)?$"), ("Clip", "Clip0", "Clip1", "Clip2")),
+                 (re.compile(r"^vibration$"), ("clipping_0", "clipping_1", "clipping_2")))
 MAG_INTERFERENCE = 0.3  # of the field's usual strength: ArduPilot's COMPASS_MOT calibration treats 30 % as bad interference
-EKF_TABLE = re.compile(r"^[xn]kf4(_\d+)?$")  # EKF3's XKF4, EKF2's NKF4, one per core
-VIBE_TABLE = re.compile(r"^vibe(_\d+)?$")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -310,27 +317,27 @@ def _power(data: SessionData) -> list[Evidence]:
 
 
 def _clipping(data: SessionData) -> list[Evidence]:
-    """The accelerometer's clip counter (``VIBE.Clip``, counting since boot) rising: samples beyond its range lost."""
+    """An accelerometer's clip counter (``CLIP_COUNTERS``, counting since boot) rising: samples beyond its range lost."""
     out = []
-    for name in sorted(n for n in data.tables if VIBE_TABLE.match(n)):
-        vibe = data.tables[name]
-        for field in ("Clip", "Clip0", "Clip1", "Clip2"):
-            clips = message_field(vibe, field)
+    for name, table, fields in ((n, data.tables[n], fields) for pattern, fields in CLIP_COUNTERS
+                                for n in sorted(data.tables) if pattern.match(n)):
+        for field in fields:
+            clips = message_field(table, field)
             if clips is None or not (rise := np.flatnonzero(np.diff(np.nan_to_num(clips)) > 0)).size:
                 continue
             at = rise[0] + 1
-            out.append(Evidence("clipping", "high", "the accelerometer clipped", float(vibe["time_s"][at]),
+            out.append(Evidence("clipping", "high", "the accelerometer clipped", float(table["time_s"][at]),
                                 f"{name.upper()}.{field} {clips[at - 1]:.0f} -> {clips[at]:.0f} (by the end {np.nanmax(clips):.0f})"))
     return out
 
 
 def _ekf_variance(data: SessionData) -> list[Evidence]:
-    """The EKF's normalised innovation variances (``XKF4``/``NKF4`` SV, SP, SH, SM, SVT) at the failsafe's
-    threshold or the GCSs' amber: each variance's first time above the higher level it reaches."""
+    """The EKF's normalised innovation variances (``EKF_VARIANCES``) at the failsafe's threshold or the GCSs'
+    amber: each variance's first time above the higher level it reaches."""
     out = []
-    for name in sorted(n for n in data.tables if EKF_TABLE.match(n)):
-        table = data.tables[name]
-        for field, what in EKF_VARIANCES.items():
+    for name, table, fields in ((n, data.tables[n], fields) for pattern, fields in EKF_VARIANCES
+                                for n in sorted(data.tables) if pattern.match(n)):
+        for field, what in fields.items():
             values = message_field(table, field)
             if values is None:
                 continue

@@ -145,9 +145,10 @@ def test_what_the_autopilot_says_is_evidence_only_of_trouble_begun(text, what):
     assert (entry[2] if entry else None) == what
 
 
-def test_a_mavlink_links_power_status_gives_the_same_power_findings(tmp_path):
-    """POWER_STATUS (Vcc in mV, MAV_POWER_STATUS flags, the bits of POWR's) on a link: a dip of the board's
-    supply and a peripheral overcurrent, each at the session time of the IMU sample before it (pymavlink)."""
+def test_a_mavlink_link_gives_the_power_ekf_and_clipping_findings_a_log_does(tmp_path):
+    """POWER_STATUS (Vcc in mV, MAV_POWER_STATUS flags, the bits of POWR's), EKF_STATUS_REPORT and VIBRATION
+    on a link: a dip of the board's supply, a peripheral overcurrent, a velocity variance over 0.8 and the
+    clip counter rising, each at the session time of the IMU sample before it (pymavlink's reading)."""
     import struct
 
     from pymavlink import mavutil
@@ -161,16 +162,25 @@ def test_a_mavlink_links_power_status_gives_the_same_power_findings(tmp_path):
         packets.append(autopilot.raw_imu(t_us, *np.rint(rng.normal(0, 5, 2)).astype(int), -1000, 0, 0, 0, 200, 0, 400, 0, 2500))
         if k % 5 == 0:
             packets.append(autopilot.power_status(4200 if k == 60 else 5100, 0, 3 | (8 if k >= 80 else 0)))
+            packets.append(autopilot.ekf_status_report(0, 0.9 if k == 40 else 0.1, 0.1, 0.1, 0.1, 0.0))
+            packets.append(autopilot.vibration(t_us, 5.0, 5.0, 5.0, 0 if k < 70 else 12, 0, 0))
         out += b"".join(struct.pack(">Q", 1_700_000_000_000_000 + t_us) + p for p in packets)
     path = tmp_path / "power.tlog"
     path.write_bytes(bytes(out))
     log, imu_us, expected = mavutil.mavlink_connection(str(path)), [], {}
-    while (msg := log.recv_match(type=["RAW_IMU", "POWER_STATUS"])) is not None:
-        if msg.get_type() == "RAW_IMU":
+    while (msg := log.recv_match(type=["RAW_IMU", "POWER_STATUS", "EKF_STATUS_REPORT", "VIBRATION"])) is not None:
+        kind = msg.get_type()
+        happened = {"POWER_STATUS": {"brownout": msg.Vcc < 4500 if kind == "POWER_STATUS" else False,
+                                     "power": bool(msg.flags & 8) if kind == "POWER_STATUS" else False},
+                    "EKF_STATUS_REPORT": {"ekf_variance": kind == "EKF_STATUS_REPORT" and msg.velocity_variance > 0.8},
+                    "VIBRATION": {"clipping": kind == "VIBRATION" and msg.clipping_0 > 0}}.get(kind, {})
+        if kind == "RAW_IMU":
             imu_us.append(msg.time_usec)
-        elif msg.Vcc < 4500 and "brownout" not in expected or msg.flags & 8 and "power" not in expected:
-            expected["brownout" if msg.Vcc < 4500 else "power"] = (imu_us[-1] - imu_us[0]) / 1e6
+        for what, now in happened.items():
+            if now and what not in expected:
+                expected[what] = ((imu_us[-1] - imu_us[0]) / 1e6, kind)
     found = {f.kind: f for f in findings(load_session(path, ["ahf"]), None)}
-    for kind, t_s in expected.items():
-        assert found[kind].t_s == pytest.approx(t_s, abs=1e-3) and "POWER_STATUS" in found[kind].detail, found
+    assert set(expected) == {"brownout", "power", "ekf_variance", "clipping"}
+    for what, (t_s, kind) in expected.items():
+        assert found[what].t_s == pytest.approx(t_s, abs=1e-3) and kind in found[what].detail, found
     assert found["brownout"].severity == "high" and "4.20 V" in found["brownout"].detail
