@@ -114,6 +114,7 @@ def test_rate_loss_and_duration_are_one_number_in_all_five_places(injected, tmp_
     sheet = {row[0]: row[1] for row in load_workbook(tmp_path / "w.xlsx", read_only=True)["Session"].iter_rows(values_only=True)
              if len(row) > 1 and row[0]}
     places["workbook"] = {"rate": sheet["IMU rate (Hz)"], "loss": sheet["frames lost (%)"], "duration": sheet["duration (s)"]}
+    assert sheet["IMU for the estimators"].startswith("RAW_IMU") and "not SCALED_IMU2" in sheet["IMU for the estimators"]
 
     for place, figures in places.items():
         assert figures["rate"] == pytest.approx(rate, abs=0.05), place  # the texts show one decimal
