@@ -17,6 +17,9 @@ from groundstation.session.view import ProductView
 from groundstation.ui.series import GAP_S
 
 RATE_ROWS = 20  # the newest rows a stream's rate is the median interval of
+# The raw IMU stopped when the aircraft's estimate is this many of the IMU's own intervals ahead of it
+# (or GAP_S, at the project's rates): between two samples of a 2 Hz RAW_IMU the attitude runs 0.5 s ahead.
+STOPPED_INTERVALS = 3
 
 
 def newest_time_s(table) -> float | None:
@@ -51,9 +54,10 @@ def headline(view: ProductView) -> tuple[str, str]:
     if not filters:
         return "onboard", ""
     imu_s = newest_time_s(view.imu)
-    if imu_s is None or onboard_s - imu_s > GAP_S:
-        return "onboard", "no raw IMU"
     imu_hz = newest_rate_hz(view.imu)
+    stopped_after_s = STOPPED_INTERVALS / imu_hz if STOPPED_INTERVALS / imu_hz > GAP_S else GAP_S  # NaN: GAP_S
+    if imu_s is None or onboard_s - imu_s > stopped_after_s:
+        return "onboard", "no raw IMU"
     if imu_hz < MIN_FILTER_RATE_HZ:  # NaN (too few samples yet) compares False
         return "onboard", f"IMU at {imu_hz:.1f} Hz"
     return filters[0], ""

@@ -21,7 +21,7 @@ from groundstation.session.load import load_session
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "autopilot"))
 from mavlink_helpers import flightlog  # noqa: E402
 
-KEEP_BYTES = 400_000
+KEEP_BYTES = 200_000
 INJECTED_AT = (500, 1500, 2500)  # after these records
 INJECTED_SEQ = (100, 7, 200)
 
