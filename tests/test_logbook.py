@@ -158,16 +158,16 @@ def test_report_dir_writes_a_page_per_log_and_an_index_worst_first(folder, tmp_p
     small = tmp_path / "small"
     small.mkdir()
     shutil.copy(folder / "px4" / CHOSEN[0], small)
-    shutil.copy(folder / CHOSEN[1], small)
+    shutil.copy(folder / CHOSEN[2], small)
     shutil.copy(folder / "cut.bin", small)
     out = tmp_path / "reports"
     assert main(["report", str(small), "--out", str(out), "--filters", "ahf", "--workers", "2"]) == 0
     logs = pd.read_parquet(out / "logs.parquet").drop_duplicates("log_id").set_index("path")
     index = (out / "index.html").read_text()
-    order = [index.index(name) for name in ("cut.bin", CHOSEN[0], CHOSEN[1])]
-    assert order == sorted(order)  # unreadable first, then the hop's high finding, then the ground log's medium one
-    assert logs.loc[CHOSEN[0], "worst_severity"] == "high" and logs.loc[CHOSEN[1], "worst_severity"] == "medium"
-    for name in (CHOSEN[0], CHOSEN[1]):
+    order = [index.index(name) for name in ("cut.bin", CHOSEN[0], CHOSEN[2])]
+    assert order == sorted(order)  # unreadable first, then the hop's high finding, then the SITL flight's medium one
+    assert logs.loc[CHOSEN[0], "worst_severity"] == "high" and logs.loc[CHOSEN[2], "worst_severity"] == "medium"
+    for name in (CHOSEN[0], CHOSEN[2]):
         page = out / "reports" / f"{logs.loc[name, 'log_id']}.html"
         assert f'href="reports/{page.name}"' in index and "Flight report" in page.read_text()
     assert not (out / "reports" / f"{logs.loc['cut.bin', 'log_id']}.html").exists()

@@ -52,6 +52,7 @@ import re
 
 import numpy as np
 
+from groundstation.analysis.fields import message_field
 from groundstation.analysis.spectrum import WINDOWS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
@@ -62,6 +63,10 @@ VIBE_BAD_M_S2 = 60.0  # above, nearly always a problem
 RESOLUTION_HZ = 1.0  # segments of about one second: 1 Hz bins, enough to place a motor peak
 MIN_SEGMENT = 32  # fewer samples than this in every stretch: no spectrum
 PEAK_OVER_MEDIAN = 10.0  # a peak's density over the spectrum's median above the cut-off (10 dB)
+# The least amplitude a peak must have besides (a sine's, in the sensor's unit): a still IMU's round-off
+# stands far over its own noise-free median, and a tone this weak moves no attitude and needs no notch
+# (an MPU-6000's gyro noise is ~0.005 °/s/√Hz, its accelerometer's ~0.004 m/s²/√Hz: 1 Hz bins sit below).
+MIN_PEAK = {"gyro": 0.05, "accel": 0.05}  # °/s, m/s²
 PEAKS_PER_AXIS = 4
 LOBE_BINS = 3  # a peak's power is summed over ±3 bins: the Hann main lobe (±2) and a rotor's wander
 HARMONIC_TOLERANCE = 0.02  # a harmonic within 2 % (or one bin) of k × the rotor frequency
@@ -339,11 +344,8 @@ def _between(table: ImuTable, start_s: float, end_s: float) -> ImuTable:
 
 
 def _column(columns: dict, field: str) -> np.ndarray | None:
-    """A logged message's field: the column named ``field`` or ``field_<unit>`` (catalogue.message_table)."""
-    for name, values in columns.items():
-        if name == field or name.startswith(field + "_"):
-            return np.asarray(values, dtype=float)
-    return None
+    """A logged message's field: the column named ``field`` or ``field_<unit>`` (``fields``)."""
+    return message_field(columns, field)
 
 
 def _rows(session, table: str, start_s: float, end_s: float) -> dict | None:
@@ -364,8 +366,8 @@ def alias_hz(frequency_hz: float, rate_hz: float) -> float:
 
 def find_peaks(sp: Spectrum) -> list[Peak]:
     """The strongest local maxima of each axis's density above ``LEVEL_CUTOFF_HZ`` that stand
-    ``PEAK_OVER_MEDIAN`` times over the axis's median there; frequency the lobe's power-weighted mean,
-    amplitude from the lobe's power."""
+    ``PEAK_OVER_MEDIAN`` times over the axis's median there and reach ``MIN_PEAK``; frequency the lobe's
+    power-weighted mean, amplitude from the lobe's power."""
     f = sp.frequency_hz
     df = f[1] - f[0]
     band = f >= LEVEL_CUTOFF_HZ
@@ -384,8 +386,9 @@ def find_peaks(sp: Spectrum) -> list[Peak]:
         for i in kept:
             lobe = slice(max(i - LOBE_BINS, 1), min(i + LOBE_BINS + 1, len(f)))
             power = p[lobe]
-            peaks.append(Peak(float(np.sum(f[lobe] * power) / np.sum(power)), float(math.sqrt(2.0 * np.sum(power) * df)),
-                              axis, sp.sensor, sp.unit))
+            amplitude = math.sqrt(2.0 * np.sum(power) * df)
+            if amplitude >= MIN_PEAK[sp.sensor]:
+                peaks.append(Peak(float(np.sum(f[lobe] * power) / np.sum(power)), amplitude, axis, sp.sensor, sp.unit))
     return sorted(peaks, key=lambda q: -q.amplitude)
 
 

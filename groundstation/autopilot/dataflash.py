@@ -2,13 +2,16 @@
 or ``TimeMS`` in logs of ArduPilot before 3.3, 2015, whose ``GPS`` carries its boot time in ``T`` ms
 and GPS time of week in ``TimeMS``).
 
-Messages and units used (ArduPilot's LogStructure): ``IMU`` (instance ``I`` 0: ``GyrX..Z`` rad/s,
+Messages and units used (ArduPilot's LogStructure): ``IMU`` (the instance ``I`` with real samples first,
+``imu_choice``: ``GyrX..Z`` rad/s,
 ``AccX..Z`` m/s², body FRD, every sample the logging rate keeps), ``ATT`` (``Roll``, ``Pitch``, ``Yaw`` in
 degrees, ZYX, body -> NED: the onboard estimate), ``MAG`` (instance 0, ``MagX..Z`` mGauss), ``BARO``
 (instance 0, ``Press`` Pa, ``Temp`` °C), ``GPS`` (instance 0: ``Lat``/``Lng`` degrees, ``Alt`` m,
 ``Spd`` m/s, ``GCrs`` degrees, ``VZ`` m/s down, ``Status`` fix type, ``NSats``). A log whose logging
 bitmask left out ``IMU`` still opens, with the onboard attitude only. ``MSG``, ``ERR``, ``EV``, ``MODE``,
-``ARM`` and ``PARM``: what the autopilot said and how it was set (``messages.dataflash_said``).
+``ARM`` and ``PARM``: what the autopilot said and how it was set (``messages.dataflash_said``), each at its
+own boot time, or (a log before 2015: no time in ``PARM``, ``MSG``, ``MODE``, ``EV``) at the latest record's
+that has one, as DFReader times them.
 """
 
 from __future__ import annotations
@@ -21,7 +24,8 @@ from pymavlink import DFReader
 
 from groundstation import quaternion
 from groundstation.autopilot.chatter import Chatter
-from groundstation.autopilot.logtables import DataflashTables
+from groundstation.autopilot.imu_choice import ImuChoice, said_choice
+from groundstation.autopilot.logtables import CLOCKS, DataflashTables
 from groundstation.autopilot.flightlog import (
     GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, cut_message, gps_unix_us, series, utc_offset_us,
 )
@@ -38,23 +42,26 @@ FIELDS = {  # each row: the time in µs (``CLOCKS``), then these
     "BARO": ("Press", "Temp"),
     "GPS": ("Lat", "Lng", "Alt", "Spd", "GCrs", "VZ", "Status", "NSats"),
 }
-# The autopilot's boot clock, by the first field a message's format has: (field, µs per unit).
-CLOCKS = (("TimeUS", 1), ("T", 1000), ("TimeMS", 1000))
+IMU_TYPES = ("IMU", "IMU2", "IMU3")  # an IMU: instance ``I`` of IMU, or (logs before 2015) a type of its own
 MGAUSS_TO_UT = 0.1
+# A log copied off the card or flash in whole blocks (an SD card's 512-byte sectors; ArduPilot's file logger
+# writes 4 KiB at a time) ends mid-record, in its last block: a file of whole blocks whose unfinished
+# record is shorter than one is that, not damage (both shared real .bin logs end so).
+BLOCK_BYTES = 512
 
 def read_dataflash(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
     rows, said, gps_times = defaultdict(list), [], []
+    choice = ImuChoice()  # the IMU instance the estimators run on
     every = DataflashTables()  # every message type as a table (``logtables``)
     chatter = Chatter()  # DFReader prints a "bad header" line per damaged byte, some from C: counted, not shown
     try:
         with chatter.caught():
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
-        clocks = {name: boot_clock(reader, name) for name in FIELDS}
-        # the messages, events and parameters where the log stamps them in TimeUS (older logs' MSG, MODE: not at all)
-        stamped = {name for name in DATAFLASH_SAID if boot_clock(reader, name) == CLOCKS[0]}
+        clocks = {name: boot_clock(reader, name) for name in reader.name_to_id}
+        last_us = None  # the boot time of the latest stamped record: an unstamped one (a log before 2015's PARM, MSG) came then
         with chatter.caught(descriptors=False):  # reading prints from Python only
             for count in itertools.count():
                 if (msg := reader.recv_msg()) is None:
@@ -63,11 +70,12 @@ def read_dataflash(path, progress=None) -> FlightLog:
                 name = msg.get_type()
                 if name == "GPS" and getattr(msg, "GWk", 0) > 0 and getattr(msg, "TimeUS", None) is not None:
                     gps_times.append((msg.GWk, msg.GMS, msg.TimeUS))  # any instance: the GPS time is one
-                if name in stamped:
-                    said.append(msg)
-                elif clocks.get(name) is not None and getattr(msg, "I", 0) == 0:  # instance 0 of the multi-instance sensors
-                    field, us_per_unit = clocks[name]
-                    rows[name].append([getattr(msg, field) * us_per_unit, *(getattr(msg, f) for f in FIELDS[name])])
+                if (clock := clocks.get(name)) is not None:
+                    last_us = getattr(msg, clock[0]) * clock[1]
+                if name in DATAFLASH_SAID:
+                    said.append((last_us, msg))
+                elif clock is not None and (kind := "IMU" if name in IMU_TYPES else name) in FIELDS and _taken(msg, name, choice):
+                    rows[kind].append([getattr(msg, clock[0]) * clock[1], *(getattr(msg, f) for f in FIELDS[kind])])
                 if progress is not None and count % 4096 == 0:
                     progress(reader.percent, 100)
     except RecursionError:  # DFReader reads on by calling itself once per record that does not fit its FMT
@@ -76,7 +84,8 @@ def read_dataflash(path, progress=None) -> FlightLog:
     except Exception as error:  # DFReader raises assorted errors on corrupt formats
         raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
     log = FlightLog(path, "dataflash", "ArduPilot")
-    log.events, log.parameters = dataflash_said(said, reader.mav_type)
+    first_us = next((t_us for t_us, _ in said if t_us is not None), 0)  # what came before any stamp: the log's start
+    log.events, log.parameters = dataflash_said([(first_us if t_us is None else int(t_us), r) for t_us, r in said], reader.mav_type)
     log.tables, log.units, log.warnings = every.tables()
     if gps_times:
         week, ms, boot_us = np.array(gps_times, dtype=np.int64).T
@@ -88,14 +97,18 @@ def read_dataflash(path, progress=None) -> FlightLog:
     if damaged:
         log.damage.append(f"{damaged} damaged bytes skipped")
     cut = unfinished_record_bytes(reader)
-    if cut:
+    if cut and reader.data_len % BLOCK_BYTES == 0 and cut < BLOCK_BYTES:
+        log.notes.append(f"the log ends in its last block with {cut} bytes of a record the autopilot had not finished: "
+                         "a log copied off the card in whole blocks ends so")
+    elif cut:
         log.damage.append(cut_message(cut))
     if rows["IMU"]:
         imu = np.array(rows["IMU"], dtype=float)
         values = np.column_stack([imu[:, 1:4], imu[:, 4:7] / STANDARD_GRAVITY_M_S2])
-        log.imu = series(imu[:, 0], dict(zip(IMU_COLUMNS, values.T)), "IMU[0]")
+        log.imu = series(imu[:, 0], dict(zip(IMU_COLUMNS, values.T)), choice.chosen)
     else:
-        log.notes.append("no IMU messages logged (the logging bitmask left them out): onboard attitude only")
+        log.notes.append(f"{choice.said()}: onboard attitude only" if choice.heard else
+                         "no IMU messages logged (the logging bitmask left them out): onboard attitude only")
     if rows["ATT"]:
         att = np.array(rows["ATT"], dtype=float)
         q = quaternion.from_euler_zyx(*np.radians(att[:, 1:4]).T)
@@ -106,6 +119,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
     if rows["BARO"]:
         baro = np.array(rows["BARO"], dtype=float)
         log.baro = series(baro[:, 0], {"pressure_hpa": baro[:, 1] / 100.0, "temperature_c": baro[:, 2]}, "BARO[0]")
+    said_choice(log, choice)
     gps = np.array(rows["GPS"], dtype=float).reshape(-1, 1 + len(FIELDS["GPS"]))  # the time, then the fields
     gps = gps[gps[:, 7] >= 2]  # a 2D fix or better
     if len(gps):
@@ -113,6 +127,14 @@ def read_dataflash(path, progress=None) -> FlightLog:
         columns = [gps[:, 1], gps[:, 2], gps[:, 3], gps[:, 4] * np.cos(course), gps[:, 4] * np.sin(course), gps[:, 6], gps[:, 7], gps[:, 8]]
         log.gps = series(gps[:, 0], dict(zip(GPS_COLUMNS, columns)), "GPS[0]")
     return log
+
+
+def _taken(msg, name: str, choice: ImuChoice) -> bool:
+    """Whether a sensor message is the session's: the IMU ``choice`` takes, instance 0 of the others."""
+    if name not in IMU_TYPES:
+        return getattr(msg, "I", 0) == 0
+    return choice.take(f"IMU[{getattr(msg, 'I', 0)}]" if name == "IMU" else name, (msg.AccX / STANDARD_GRAVITY_M_S2, msg.AccY / STANDARD_GRAVITY_M_S2,
+                                                        msg.AccZ / STANDARD_GRAVITY_M_S2))
 
 
 def boot_clock(reader, name: str) -> tuple[str, int] | None:

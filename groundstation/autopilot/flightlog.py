@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from groundstation.session.figures import rate_hz
+
 
 Q_COLUMNS = ("qw", "qx", "qy", "qz")
 IMU_COLUMNS = ("gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s", "acc_x_g", "acc_y_g", "acc_z_g")
@@ -42,8 +44,8 @@ class Series:
 
     @property
     def rate_hz(self) -> float:
-        """Median rate on the autopilot's clock; NaN with fewer than two samples."""
-        return 1e6 / float(np.median(np.diff(self.time_us))) if len(self) > 1 else float("nan")
+        """Median rate on the autopilot's clock (``figures.rate_hz``); NaN with fewer than two samples."""
+        return rate_hz(self.time_us / 1e6)
 
 
 def series(time_us, columns: dict, source: str) -> Series | None:
@@ -104,9 +106,8 @@ def implausible_message(source: str, time_us: np.ndarray) -> str:
 
 
 def cut_message(unfinished_bytes: int) -> str:
-    """What a log that ends inside a record lost, said the same for every format. Not always a fault of
-    the copy: a DataFlash log read off the card in whole blocks ends mid-record too (both shared real
-    ``.bin`` logs do); but a log cut short looks exactly like this, and nothing else tells them apart."""
+    """What a log that ends inside a record lost, said the same for every format. (A DataFlash log copied
+    in whole blocks ends mid-record too, and is told apart by its size: ``dataflash.BLOCK_BYTES``.)"""
     return (f"the file ends inside a record ({unfinished_bytes} bytes of an unfinished one): the log was cut short "
             "or stopped mid-write, and anything after it is missing")
 
@@ -131,3 +132,4 @@ class FlightLog:
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)
     utc_offset_us: int | None = None  # UTC (µs since 1970) minus the boot clock, from the log's GPS or UTC time
     utc_source: str = ""  # where utc_offset_us comes from, in words
+    imu_choice: str = ""  # which IMU stream is ``imu`` and why (``imu_choice``)

@@ -1,13 +1,13 @@
 """Every table of a flight log, and its full-rate IMU.
 
-Every DataFlash message type and every ULog topic that carries numbers becomes a table (``FlightLog.tables``:
+Every DataFlash message type with a time (``CLOCKS``) and every ULog topic that carries numbers becomes a table (``FlightLog.tables``:
 one ``Series`` per type and instance, on the autopilot's clock), so the Channels tab can plot any of
 them. Names: the type or topic in lower case, with ``_<instance>`` for a multi-instance DataFlash
 type (the field its FMTU marks ``#``: ``IMU`` instance 1 -> ``imu_1``) and for a ULog topic's
 ``multi_id`` above 0 (``sensor_accel_1``); a name the session's own tables use (``imu``, ``gps``...)
 gets ``_log`` appended; two names made one by the lower case (``caseTopic``, ``casetopic``) are kept
 apart (``names.kept_apart``: the later gets ``__2``, and a warning says so). Columns: every numeric field
-but the time (``TimeUS``, ``timestamp``), DataFlash values as pymavlink's ``DFReader`` gives them (its
+but the time (``CLOCKS``, ``timestamp``), DataFlash values as pymavlink's ``DFReader`` gives them (its
 format scaling applied: ``c`` /100, ``L`` 1e-7) with the unit FMTU gives; ULog array elements as
 ``name_<i>`` (kept apart from a field of that name).
 
@@ -44,6 +44,9 @@ ISB_TYPES = {0: "accel", 1: "gyro"}  # ISBH ``type`` (ArduPilot's IMU_SENSOR_TYP
 BATCH = "batch"  # the full-rate tables' column of the batch (ISBH ``N``, a fifo message's index) a sample came in
 FIFO_TOPICS = {"sensor_gyro_fifo": "gyro", "sensor_accel_fifo": "accel"}
 ISBD_SAMPLES = 32  # int16 values per axis in one ISBD record
+# The autopilot's boot clock, by the first field a DataFlash format has: (field, µs per unit). ``TimeMS`` in
+# logs before ArduPilot 3.3 (2015), whose ``GPS`` carries its boot time in ``T`` ms (``TimeMS`` there: GPS time).
+CLOCKS = (("TimeUS", 1), ("T", 1000), ("TimeMS", 1000))
 RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position", "truth")  # a log session's own tables
 DATAFLASH_SKIPPED = ("FMT", "FMTU", "UNIT", "MULT")  # the log's description of itself, not data
 NUMERIC = set("bBhHiIfdgcCeELMqQ")  # DataFlash format characters of numbers (not strings nor ``a`` arrays)
@@ -115,18 +118,19 @@ def _isbd_samples(records) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 class _Layout:
-    """One DataFlash type's kept fields: ``TimeUS`` then its numbers, their units, and the format's
-    multipliers (``c`` 0.01, ``L`` 1e-7) applied to the raw values as DFReader applies them."""
+    """One DataFlash type's kept fields: its boot time (``CLOCKS``) then its numbers, their units, and the
+    format's multipliers (``c`` 0.01, ``L`` 1e-7) applied to the raw values as DFReader applies them."""
 
     def __init__(self, fmt):
-        kept = [i for i, (c, f) in enumerate(zip(fmt.columns, fmt.format)) if f in NUMERIC and c != "TimeUS"]
+        clock, us_per_unit = next(((f, scale) for f, scale in CLOCKS if f in fmt.colhash), (None, 1))
+        kept = [i for i, (c, f) in enumerate(zip(fmt.columns, fmt.format)) if f in NUMERIC and c != clock]
         self.names = [fmt.columns[i] for i in kept]
         self.units = {c: fmt.get_unit(c) for c in self.names}
-        has_time = "TimeUS" in fmt.colhash and bool(kept)
-        self.take = operator.itemgetter(fmt.colhash["TimeUS"], *kept) if has_time else None  # a type without time: no table
+        has_time = clock is not None and bool(kept)
+        self.take = operator.itemgetter(fmt.colhash[clock], *kept) if has_time else None  # a type without time: no table
         mults = [None, *(fmt.msg_mults[i] for i in kept)]
         # DFReader divides by 1/m for m < 1 (more exact than multiplying by m) and multiplies otherwise: so do we
-        self.scale = np.array([m if m is not None and m >= 1.0 else 1.0 for m in mults])
+        self.scale = np.array([us_per_unit, *(m if m is not None and m >= 1.0 else 1.0 for m in mults[1:])])
         self.divisor = np.array([1.0 / m if m is not None and 0.0 < m < 1.0 else 1.0 for m in mults])
         at = fmt.colhash.get(fmt.instance_field) if fmt.instance_field is not None else None
         self.instance = (lambda elements: None) if at is None else operator.itemgetter(at)

@@ -58,17 +58,35 @@ PX4_INTEGER_FORMATS = {1: "<B", 2: "<b", 3: "<H", 4: "<h", 5: "<I", 6: "<i"}
 
 @dataclass
 class SenderCounts:
-    """Per (system, component): messages received and lost (gaps in the 8-bit sequence number)."""
+    """Per (system, component): messages received and lost (gaps in the 8-bit sequence number).
+
+    A message out of its sender's sequence is held (``_broke``) until the next one says what it was: if
+    the sequence goes on from it, the messages between were lost; if the sequence goes on from before it,
+    it was a stranger using the sender's ids (a spoofer, another link's copy) and nothing was lost to it
+    (counted in ``strangers``). Counted blindly, each stranger made up to 255 of the sender's messages
+    look lost on its way in and again on its way out."""
 
     received: int = 0
     lost: int = 0
+    strangers: int = 0
     last_seq: int | None = None
+    _broke: int | None = None  # the sequence number of a message out of sequence, not yet judged
 
     def count(self, seq: int) -> None:
-        if self.last_seq is not None:
-            self.lost += (seq - self.last_seq - 1) % 256
-        self.last_seq = seq
         self.received += 1
+        if self.last_seq is not None and self._broke is not None:
+            from_last, from_broke = (seq - self.last_seq - 1) % 256, (seq - self._broke - 1) % 256
+            if from_last < from_broke:  # the sequence goes on from before the break: that was a stranger
+                self.strangers += 1
+                self.received -= 1
+            else:  # it goes on from the break: the messages before the break were lost
+                self.lost += (self._broke - self.last_seq - 1) % 256
+                self.last_seq = self._broke
+            self._broke = None
+        if self.last_seq is None or (seq - self.last_seq - 1) % 256 == 0:
+            self.last_seq = seq
+        else:
+            self._broke = seq
 
     @property
     def loss_pct(self) -> float:

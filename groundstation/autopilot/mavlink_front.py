@@ -4,8 +4,9 @@
 axes (FRD). They go where the project's own frames go:
 
 - ``ImuSample`` -> the IMU stage (the same ``EstimatorBank``, table ``imu``), ``dt`` from the
-  autopilot's ``time_us``; only the first IMU stream of the vehicle (``RAW_IMU``, or ``HIGHRES_IMU``...)
-  feeds the estimators, a second one (``SCALED_IMU2``) gets a table of its own;
+  autopilot's ``time_us``; only the vehicle's first IMU stream with real samples (``imu_choice``: ``RAW_IMU``,
+  ``HIGHRES_IMU``, not ArduSub's all-zero ``SCALED_IMU2``) feeds the estimators, and its magnetometer the
+  compass; any other gets a table of its own (a warning says when one was passed over);
 - ``OnboardAttitude`` -> ``onboard`` (no λ or flags: NaN);
 - ``MagReading`` / ``BaroReading`` / ``GpsReading`` -> ``mag_raw`` / ``baro`` / ``gps`` and Aiding
   (GPS velocity aids only when all three NED components are known: GPS_RAW_INT has no vertical speed);
@@ -44,6 +45,7 @@ import math
 from firmware_protocol import DecoderStats
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
+from groundstation.autopilot.imu_choice import ImuChoice
 from groundstation.autopilot.messages import StatusTexts, message_event, parameter_change
 from groundstation.autopilot.modes import status_event
 from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
@@ -69,7 +71,7 @@ class MavlinkFrontEnd:
         self.other_tables: set[str] = set()  # tables made for senders other than the vehicle
         self.other_columns = 0
         self.unplaced_messages = 0  # of other senders, past the bound on their tables
-        self._imu_source: str | None = None
+        self.imu_choice = ImuChoice()  # which of the vehicle's IMU streams feeds the estimators
         self._uplink = b""
         self._first_request_ns: int | None = None
         self._slow_warned = False
@@ -150,12 +152,15 @@ class MavlinkFrontEnd:
 
     def _imu(self, t_host_ns: int, r: rec.ImuSample) -> None:
         vehicle = self._from_vehicle(r)
-        if not vehicle or self._imu_source not in (None, r.source):  # the vehicle's second IMU: <source>_<system>
+        choice = self.imu_choice
+        chosen_before = choice.chosen
+        if not vehicle or not choice.take(r.source, r.acc_g):  # not the IMU: <source>_<system>
             label = f"{r.source} of system {r.system}, component {r.component} (not the IMU the estimators use)"
             name = f"{r.source}_{r.system}" + ("" if vehicle else f"_{r.component}")
             self._table_row(t_host_ns, name.lower(), label, list(IMU_UNITS), IMU_UNITS, (*r.acc_g, *r.gyr_rad_s), vehicle)
             return
-        self._imu_source = r.source
+        if chosen_before is None and (warning := choice.warning()):  # a stream the autopilot names but that has no sensor
+            self.pipeline._warn(t_host_ns, warning)
         p = self.pipeline
         self._place(t_host_ns, r)
         p.imu_stage(t_host_ns, p._time_s, p._device_us, r.acc_g, r.gyr_rad_s, r.temperature_c, 1.0 / self.requester.rate_hz)
@@ -166,7 +171,7 @@ class MavlinkFrontEnd:
             self.pipeline.onboard_stage(r.q, _NAN, _NAN)
 
     def _mag(self, t_host_ns: int, r: rec.MagReading) -> None:
-        if self._from_vehicle(r):
+        if self._from_vehicle(r) and r.source == self.imu_choice.chosen:  # the compass that comes with the IMU
             self._place(t_host_ns, r)
             self.pipeline.magnetometer_stage(r.mag_uT, r.mag_uT)  # already body axes
 

@@ -106,10 +106,10 @@ Said = tuple[list[tuple[int, dict]], dict[str, float]]  # (time µs, event witho
 
 
 def dataflash_said(records, vehicle_type: int) -> Said:
-    """The events and parameters of a DataFlash log's ``DATAFLASH_SAID`` records (DFReader messages, in
-    log order); ``vehicle_type``: the MAV_TYPE DFReader read from the firmware's message. Arming is
-    known from EV ARMED/DISARMED and ARM; a log whose first word on it is a disarm began armed."""
-    arming = [_armed(r) for r in records if _armed(r) is not None]
+    """The events and parameters of a DataFlash log's ``DATAFLASH_SAID`` records ((boot time µs, DFReader
+    message), in log order); ``vehicle_type``: the MAV_TYPE DFReader read from the firmware's message.
+    Arming is known from EV ARMED/DISARMED and ARM; a log whose first word on it is a disarm began armed."""
+    arming = [_armed(r) for _, r in records if _armed(r) is not None]
     armed = (not arming[0]) if arming else None
     mode, events, parameters = None, [], {}
 
@@ -119,8 +119,8 @@ def dataflash_said(records, vehicle_type: int) -> Said:
             events.append((t_us, status_event(new_mode, new_armed)))
         mode, armed = new_mode, new_armed
 
-    for r in records:
-        kind, t_us = r.get_type(), int(r.TimeUS)
+    for t_us, r in records:
+        kind = r.get_type()
         if kind == "PARM":
             change = parameter_change(parameters, r.Name, float(r.Value))
             events += [(t_us, change)] if change is not None else []

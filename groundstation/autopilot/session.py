@@ -300,6 +300,8 @@ def describe(log: FlightLog, t0_us: int) -> dict:
         stream: Series | None = getattr(log, name)
         if stream is not None:
             meta[f"{name} stream"] = f"{stream.source}, {len(stream)} samples at {stream.rate_hz:.1f} Hz"
+    if log.imu_choice:
+        meta["imu_choice"] = log.imu_choice
     if log.imu is not None:
         meta["imu_rate_hz"] = round(log.imu.rate_hz, 2)
         note = slow_imu_note(log.imu.rate_hz)

@@ -19,6 +19,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation.autopilot.records import ImuSample, VehicleStatus
 from groundstation.autopilot.vehicle import AUTOPILOTS, Vehicle
+from groundstation.session.figures import rate_hz
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
@@ -112,7 +113,7 @@ class ImuRateMonitor:
     def rate_hz(self) -> float:
         if len(self._times_us) < 3:
             return float("nan")
-        return 1e6 / float(np.median(np.diff(np.array(self._times_us, dtype=float))))
+        return rate_hz(np.array(self._times_us, dtype=float) / 1e6)
 
     @property
     def too_slow(self) -> bool:

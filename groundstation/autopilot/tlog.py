@@ -29,6 +29,7 @@ from firmware_protocol.decoder import BACK_TOLERANCE_US
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder, new_parser
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, cut_message, series
+from groundstation.autopilot.imu_choice import ImuChoice, said_choice
 from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
 from groundstation.errors import UserError
 from groundstation.autopilot.vehicle import Vehicle
@@ -39,8 +40,6 @@ MAGIC_V1, MAGIC_V2 = 0xFE, 0xFD
 SIGNED = 0x01
 RESYNC_WINDOW_US = 3 * 24 * 3600 * 1_000_000  # a timestamp this far from the last is junk
 UNIX_RANGE_US = (946_684_800_000_000, 4_102_444_800_000_000)  # 2000-01-01 .. 2100-01-01
-# Preferred IMU streams: the one the autopilot calls IMU 0 first.
-IMU_PREFERENCE = ("HIGHRES_IMU", "RAW_IMU", "SCALED_IMU", "SCALED_IMU2", "SCALED_IMU3")
 AUTOPILOT_NAMES = {MAV_AUTOPILOT_ARDUPILOTMEGA: "ArduPilot", MAV_AUTOPILOT_PX4: "PX4"}
 
 
@@ -210,14 +209,15 @@ def from_records(path: Path, records: list, mapper: MessageMapper) -> FlightLog:
     by_kind = defaultdict(list)
     for r in mine:
         by_kind[type(r)].append(r)
-    imu_source = _imu_source(by_kind[rec.ImuSample])
-    if imu_source is not None:
-        rows = [r for r in by_kind[rec.ImuSample] if r.source == imu_source]
+    choice = ImuChoice()
+    rows = [r for r in by_kind[rec.ImuSample] if choice.take(r.source, r.acc_g)]
+    if rows:
         log.imu = series([r.time_us for r in rows], dict(zip(IMU_COLUMNS, np.column_stack(
-            [[r.gyr_rad_s for r in rows], [r.acc_g for r in rows]]).T)), imu_source)  # fmt: skip
-        mags = [r for r in by_kind[rec.MagReading] if r.source == imu_source]
+            [[r.gyr_rad_s for r in rows], [r.acc_g for r in rows]]).T)), choice.chosen)  # fmt: skip
+        mags = [r for r in by_kind[rec.MagReading] if r.source == choice.chosen]
         if mags and np.any([r.mag_uT for r in mags]):
-            log.mag = series([r.time_us for r in mags], dict(zip(MAG_COLUMNS, np.array([r.mag_uT for r in mags]).T)), imu_source)
+            log.mag = series([r.time_us for r in mags], dict(zip(MAG_COLUMNS, np.array([r.mag_uT for r in mags]).T)), choice.chosen)
+    said_choice(log, choice)
     attitude = by_kind[rec.OnboardAttitude]
     sources = {r.source for r in attitude}
     board_source = "ATTITUDE_QUATERNION" if "ATTITUDE_QUATERNION" in sources else "ATTITUDE"
@@ -240,12 +240,6 @@ def _busiest_system(records) -> int:
     for r in records:
         counts[r.system] += 1
     return max(counts, key=counts.get)
-
-
-def _imu_source(samples) -> str | None:
-    """The preferred IMU stream that carries data (ArduSub's SCALED_IMU2 can be all zeros: no second IMU)."""
-    live = {r.source for r in samples if any(r.acc_g)}
-    return next((s for s in IMU_PREFERENCE if s in live), None)
 
 
 def _device_clock(records):

@@ -9,6 +9,7 @@ import time
 import numpy as np
 
 from groundstation import quaternion
+from groundstation.session.figures import loss_pct, rate_hz, span_s
 from groundstation.session.view import Session
 
 
@@ -50,10 +51,13 @@ def totals_line(session: Session) -> str:
     recording and its replay)."""
     p = session.view
     with session.lock:
+        imu_s = p.imu.column("time_s")
+        samples = f"{len(imu_s)} IMU samples at {rate_hz(imu_s):.1f} Hz" if len(imu_s) else f"{len(p.onboard)} onboard attitude samples, no IMU"
+        samples += f" over {span_s(imu_s if len(imu_s) else p.onboard.column('time_s')):.1f} s"  # the session's duration
         if p.link is None:  # a flight log or a dataset: no link was decoded
-            return f"{len(p.imu)} IMU samples" if p.filters else f"{len(p.onboard)} onboard attitude samples, no IMU"
+            return samples
         c = p.counters()
-        line = (f"{len(p.imu)} IMU samples, {c['frames']} frames, {c['frames_lost']} lost, "
+        line = (f"{samples}, {c['frames']} frames, {c['frames_lost']} lost ({loss_pct(c['frames'], c['frames_lost']):.1f} %), "
                 f"{c['crc_errors']} CRC errors, {c['bytes_skipped']} bytes skipped")
     ignored = getattr(session.source, "ignored", None)  # a UDP source locked to its sender
     return f"{line}; {ignored}" if ignored and ignored.datagrams else line

@@ -16,6 +16,7 @@ from groundstation import mounting
 from groundstation.errors import UserError
 from groundstation.export.excel_columns import DATE_TIME, start_time
 from groundstation.export.excel_stream import text_cell
+from groundstation.session.figures import rate_hz
 from groundstation.session.product import SessionData
 
 WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70, "E": 24}
@@ -25,13 +26,14 @@ LINK_COUNTS = (
     ("bytes_skipped", "bytes skipped (B)"), ("duplicates", "duplicate frames (count)"),
 )  # fmt: skip
 GYRO_CALIBRATION = SPEC.frame("CONFIG").field("gyro_calibration")  # "unknown" from firmware older than the field
-SHOWN_METADATA = {"source", "port", "start_utc", "app_version", "protocol_version", "estimator_settings", "filters"}
+SHOWN_METADATA = {"source", "port", "start_utc", "app_version", "protocol_version", "estimator_settings", "filters",
+                  "imu_rate_hz"}  # the IMU rate: computed for every session (``SessionData.imu_rate_hz``)
 # The other header fields, by what a reader calls them (a field not listed: its name with spaces).
 METADATA_LABELS = {
     "source_spec": "source (as typed)", "format": "file format", "format_version": "recording format version",
     "protocol": "link protocol", "protocol_fingerprint": "protocol fingerprint (ground station)",
     "vehicle_system": "MAVLink vehicle (system id)", "aiding_estimator": "aiding estimator",
-    "autopilot": "autopilot", "imu_rate_hz": "IMU rate (Hz)", "imu_warning": "IMU warning",
+    "autopilot": "autopilot", "imu_choice": "IMU for the estimators", "imu_warning": "IMU warning",
     "time_origin_s": "time origin (s)", "notes": "notes",
 }  # fmt: skip
 PROTOCOLS = {"gs": "the project's own (firmware_protocol)", "mavlink": "MAVLink (an autopilot)"}
@@ -45,7 +47,8 @@ def session_rows(data: SessionData, rows: np.ndarray, forced: dict | None = None
     """The sheet as rows of values; ``forced``: the caller's setting overrides (``--set``)."""
     out = [[Heading("Session")], *facts(data, rows), []]
     if data.link is not None:
-        out += [[Heading("Link")], *([label, data.link.counters[name]] for name, label in LINK_COUNTS), []]
+        out += [[Heading("Link")], *([label, data.link.counters[name]] for name, label in LINK_COUNTS),
+                ["frames lost (%)", loss if math.isfinite(loss := data.link_loss_pct()) else None], []]
     if data.estimated:
         out += settings_table(data, forced or {})
     out += events_table(data)
@@ -63,14 +66,16 @@ def facts(data: SessionData, rows: np.ndarray) -> list[list]:
     if start is not None:
         out.append(["recording started (UTC)", start])
     out += [
-        ["duration (s)", float(time_s[-1] - time_s[0])],
+        ["duration (s)", data.duration_s()],
         ["samples (count)", len(data)],
         ["exported rows (count)", len(rows)],
         ["exported from (s)", float(time_s[rows[0]])],
         ["exported to (s)", float(time_s[rows[-1]])],
     ]
     if len(rows) > 1:
-        out.append(["exported rate (Hz)", float(1.0 / np.median(np.diff(time_s[rows])))])
+        out.append(["exported rate (Hz)", rate_hz(time_s[rows])])
+    if math.isfinite(imu_hz := data.imu_rate_hz()):
+        out.append(["IMU rate (Hz)", imu_hz])
     out += [[label, meta[key]] for key, label in (("app_version", "ground station version"),
                                                   ("protocol_version", "protocol version (ground station)")) if key in meta]
     out += firmware(data)

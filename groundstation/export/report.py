@@ -16,6 +16,7 @@ it a session they loaded.
 from __future__ import annotations
 
 import datetime
+import math
 import re
 from pathlib import Path
 
@@ -47,7 +48,7 @@ table { border-collapse: collapse; margin: 0.5em 0; font-size: 0.9em; }
 td, th { border: 1px solid #ccc; padding: 2px 8px; text-align: left; } th { background: #f0f0f0; }
 td.n { text-align: right; font-variant-numeric: tabular-nums; }
 .finding { margin: 0.3em 0; padding: 0.3em 0.6em; border-left: 6px solid #999; background: #fafafa; list-style: none; }
-.finding.high { border-color: #c00; } .finding.medium { border-color: #e90; } .finding.low { border-color: #39c; }
+.finding.critical { border-color: #600; background: #fee; } .finding.high { border-color: #c00; } .finding.medium { border-color: #e90; } .finding.low { border-color: #39c; }
 .sev { font-weight: bold; text-transform: uppercase; font-size: 0.8em; margin-right: 0.5em; }
 .detail { color: #555; font-size: 0.9em; } .warn { color: #a00; } ul.findings { padding-left: 0; }
 tr.alarm td { color: #a00; }
@@ -125,22 +126,18 @@ def vehicle(data: SessionData) -> str:
     return NOT_RECORDED
 
 
-def duration_s(data: SessionData) -> float:
-    ends = [float(np.nanmax(c["time_s"])) for c in data.tables.values() if len(c.get("time_s", ())) and np.isfinite(c["time_s"]).any()]
-    return max(ends, default=0.0)
-
-
 def flight_section(data: SessionData, file_name: str) -> str:
     meta = data.metadata
     rows = [["file", file_name or "-"], ["source", meta.get("source", "")], ["vehicle", vehicle(data)],
-            ["firmware", firmware(data)], ["duration", f"{duration_s(data):.1f} s"],
-            ["IMU samples", f"{len(data.tables['imu']['time_s'])}" + (f" at {meta['imu_rate_hz']:g} Hz" if meta.get("imu_rate_hz") else "")],
+            ["firmware", firmware(data)], ["duration", f"{data.duration_s():.1f} s"],
+            ["IMU samples", f"{len(data.tables['imu']['time_s'])}" + (f" at {rate:.1f} Hz" if math.isfinite(rate := data.imu_rate_hz()) else "")],
+            ["link loss", f"{loss:.1f} %" if math.isfinite(loss := data.link_loss_pct()) else "no link decoded"],
             ["host estimators", ", ".join(data.estimated) or "none (no IMU samples)"],
             ["reference", "truth" if data.true_q is not None else "the onboard estimate" if data.has_onboard() else "none"]]
     if data.parameters:
         rows.append(["parameters", f"{len(data.parameters)} recorded"])
     out = ["<h2>Flight</h2>", _table(["", ""], rows, numeric_from=2)]
-    spans = mode_spans(data.events, duration_s(data))
+    spans = mode_spans(data.events, float(data.time_s[-1]) if len(data.time_s) else 0.0)
     if spans:
         out.append("<h3>Modes</h3>")
         out.append(_table(["mode", "armed", "from (s)", "to (s)", "for (s)"],

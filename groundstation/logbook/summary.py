@@ -8,7 +8,6 @@ A log that cannot be read gives one row with its ``error``: it never stops the b
 from __future__ import annotations
 
 import hashlib
-import math
 from pathlib import Path
 
 import numpy as np
@@ -35,14 +34,6 @@ LOG_COLUMNS = {
 def log_id(path: Path, root: Path) -> str:
     """A stable id of a log: the first 12 hex digits of the SHA-1 of its path under the folder."""
     return hashlib.sha1(path.relative_to(root).as_posix().encode()).hexdigest()[:12]
-
-
-def link_loss_pct(data) -> float:
-    """Frames lost as a share of frames sent (NaN without a link: a dataset, a DataFlash or ULog file)."""
-    if data.link is None:
-        return math.nan
-    lost, received = data.link.counters.get("frames_lost", 0), data.link.counters.get("frames", 0)
-    return 100.0 * lost / (lost + received) if lost + received else math.nan
 
 
 def log_fields(path: Path, root: Path) -> dict:
@@ -89,11 +80,9 @@ def _rows(path: Path, out: Path, filters, page: bool, fields: dict) -> list[dict
     from groundstation.session.load import load_session
 
     data = load_session(path, filters)
-    time_s = data.time_s
     said = {"vehicle": vehicle(data), "firmware": firmware(data)}
     fields.update({k: v for k, v in said.items() if v != NOT_RECORDED}, samples=len(data),
-                  duration_s=float(time_s[-1] - time_s[0]) if len(time_s) > 1 else 0.0,
-                  imu_rate_hz=imu_rate_hz(data), link_loss_pct=link_loss_pct(data),
+                  duration_s=data.duration_s(), imu_rate_hz=data.imu_rate_hz(), link_loss_pct=data.link_loss_pct(),
                   warnings="\n".join(data.warnings) or None)
     vibration, _ = vibration_of(data)
     fields.update(vibration_fields(vibration))
@@ -128,13 +117,6 @@ def vibration_fields(summary) -> dict:
     strongest = max(summary.peaks, key=lambda p: p.amplitude, default=None)
     return {"vibration_accel_m_s2": levels.get("accel"), "vibration_gyro_deg_s": levels.get("gyro"),
             "vibration_peak_hz": strongest.frequency_hz if strongest else None, "vibration_source": summary.source}
-
-
-def imu_rate_hz(data) -> float:
-    times = data.tables["imu"]["time_s"]
-    steps = np.diff(times[np.isfinite(times)])
-    steps = steps[steps > 0]
-    return float(1.0 / np.median(steps)) if len(steps) else math.nan
 
 
 def write_tables(data, folder: Path, identifier: str) -> None:

@@ -120,6 +120,7 @@ def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: 
         parameters=dict(pipeline.parameters), magnetometer=len(pipeline.tables.get("mag_raw", ())) > 0, estimates=estimates,
     )
     if data.protocol == "mavlink":
+        data.metadata["imu_choice"] = pipeline.front.imu_choice.said()
         attach_simstate_truth(data)
     return data
 

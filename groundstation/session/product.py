@@ -22,6 +22,7 @@ import numpy as np
 from groundstation.errors import UserError
 from groundstation.estimation.evaluation import scores, uses_magnetometer
 from groundstation.session.catalogue import Catalogue
+from groundstation.session.figures import loss_pct, rate_hz, span_s
 
 ONBOARD = "onboard"  # the aircraft's own estimate: a table, and an attitude scored beside the host estimators
 
@@ -69,6 +70,20 @@ class SessionData:
 
     def __len__(self) -> int:
         return len(self.time_s)
+
+    def imu_rate_hz(self) -> float:
+        """The IMU's sample rate (``figures.rate_hz``); NaN without IMU samples."""
+        return rate_hz(self.tables["imu"]["time_s"]) if "imu" in self.tables else float("nan")
+
+    def link_loss_pct(self) -> float:
+        """Frames lost, % of those sent (``figures.loss_pct``); NaN without a link (a dataset, a flight log)."""
+        if self.link is None:
+            return float("nan")
+        return loss_pct(self.link.counters.get("frames", 0), self.link.counters.get("frames_lost", 0))
+
+    def duration_s(self) -> float:
+        """From the first sample row to the last (``figures.span_s``)."""
+        return span_s(self.time_s)
 
     @property
     def warnings(self) -> list[str]:

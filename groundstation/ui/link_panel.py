@@ -14,6 +14,7 @@ import time
 
 from PySide6 import QtWidgets
 
+from groundstation.session.figures import loss_pct
 from groundstation.session.view import Session
 from groundstation.ui.sample_streams import stream_interval_s
 
@@ -56,7 +57,8 @@ def link_figures(session: Session, now_ns: int) -> dict[str, float]:
     return {
         "frames_per_s": frames,
         "bytes_per_s": bytes_per_s,
-        "loss_pct": 100.0 * lost / (frames + lost) if frames + lost > 0 else math.nan,
+        "loss_pct": loss_pct(counters["frames"], counters["frames_lost"]),  # the session's, as every place says it
+        "loss_now_pct": loss_pct(frames, lost) if math.isfinite(frames + lost) else math.nan,  # the last second's
         "crc_per_s": crc,
         "crc_total": counters["crc_errors"],
         "lost_total": counters["frames_lost"],
@@ -81,7 +83,7 @@ def link_state(session: Session, figures: dict[str, float]) -> tuple[str, str]:
     since = figures["since_last_frame_s"]
     if since >= NO_DATA_S:
         return "down", "NO DATA" if math.isinf(since) else f"NO DATA for {since:.0f} s"
-    if since >= figures["late_after_s"] or figures["loss_pct"] >= DEGRADED_LOSS_PCT or figures["crc_per_s"] > 0:
+    if since >= figures["late_after_s"] or figures["loss_now_pct"] >= DEGRADED_LOSS_PCT or figures["crc_per_s"] > 0:
         return "degraded", "DEGRADED"
     return "ok", "LINK OK"
 
@@ -154,7 +156,8 @@ class LinkPanel(QtWidgets.QGroupBox):
         f = link_figures(session, now_ns)
         self._show_state(*link_state(session, f))
         self.values["frames/s"].setText(_number(f["frames_per_s"], ".0f"))
-        self.values["loss"].setText(f"{_number(f['loss_pct'], '.1f')} %  ({f['lost_total']} in all)")
+        self.values["loss"].setText(f"{_number(f['loss_pct'], '.1f')} %  ({f['lost_total']} in all; "
+                                    f"{_number(f['loss_now_pct'], '.1f')} % in the last second)")
         self.values["CRC failures"].setText(f"{_number(f['crc_per_s'], '.0f')}/s  ({f['crc_total']} in all)")
         self.values["bytes/s"].setText(_number(f["bytes_per_s"], ".0f"))
         self.values["since last frame"].setText(f"{_number(f['since_last_frame_s'] * 1e3, '.0f')} ms")

@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ
+from groundstation.session.figures import rate_hz
 from groundstation.session.view import ProductView
 from groundstation.ui.series import GAP_S
 
 RATE_ROWS = 20  # the newest rows a stream's rate is the median interval of
+# The raw IMU stopped when the aircraft's estimate is this many of the IMU's own intervals ahead of it
+# (or GAP_S, at the project's rates): between two samples of a 2 Hz RAW_IMU the attitude runs 0.5 s ahead.
+STOPPED_INTERVALS = 3
 
 
 def newest_time_s(table) -> float | None:
@@ -25,14 +27,15 @@ def newest_time_s(table) -> float | None:
     return float(last[0][table.columns.index("time_s")]) if len(last) else None
 
 
-def interval_s(table) -> float:
-    """The median interval of the newest samples of ``table`` (session time); NaN with fewer than 3."""
+def newest_rate_hz(table) -> float:
+    """The sample rate of the newest samples of ``table`` (``figures.rate_hz``); NaN with fewer than 3."""
     rows = table.tail(RATE_ROWS)
-    if len(rows) < 3:
-        return math.nan
-    steps = np.diff(rows[:, table.columns.index("time_s")])
-    steps = steps[np.isfinite(steps) & (steps > 0)]
-    return float(np.median(steps)) if len(steps) else math.nan
+    return rate_hz(rows[:, table.columns.index("time_s")]) if len(rows) >= 3 else math.nan
+
+
+def interval_s(table) -> float:
+    """The sample interval of the newest samples of ``table`` (s); NaN when not known."""
+    return 1.0 / newest_rate_hz(table)
 
 
 def stream_interval_s(view: ProductView) -> float:
@@ -51,9 +54,10 @@ def headline(view: ProductView) -> tuple[str, str]:
     if not filters:
         return "onboard", ""
     imu_s = newest_time_s(view.imu)
-    if imu_s is None or onboard_s - imu_s > GAP_S:
+    imu_hz = newest_rate_hz(view.imu)
+    stopped_after_s = STOPPED_INTERVALS / imu_hz if STOPPED_INTERVALS / imu_hz > GAP_S else GAP_S  # NaN: GAP_S
+    if imu_s is None or onboard_s - imu_s > stopped_after_s:
         return "onboard", "no raw IMU"
-    rate_hz = 1.0 / interval_s(view.imu)
-    if rate_hz < MIN_FILTER_RATE_HZ:  # NaN (too few samples yet) compares False
-        return "onboard", f"IMU at {rate_hz:.0f} Hz"
+    if imu_hz < MIN_FILTER_RATE_HZ:  # NaN (too few samples yet) compares False
+        return "onboard", f"IMU at {imu_hz:.1f} Hz"
     return filters[0], ""

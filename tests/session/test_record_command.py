@@ -38,7 +38,7 @@ def test_a_recording_of_the_pty_bridge_replays_to_the_same_totals(tmp_path):
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith(f"recording {pty} @ 115200 baud to {tmp_path}")
     totals = done.stdout.splitlines()[-2]
-    assert " IMU samples, " in totals and int(totals.split()[0]) > 150  # 3 s at 100 Hz after the 1 s boot
+    assert " IMU samples at " in totals and int(totals.split()[0]) > 150  # 3 s at 100 Hz after the 1 s boot
     path = recording_of(done.stdout)
     recording = open_recording(path)
     assert recording.closed_cleanly and recording.damage == [] and recording.metadata["filters"] == ["ahf", "hf"]

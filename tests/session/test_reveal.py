@@ -101,8 +101,8 @@ def gs(*args) -> subprocess.CompletedProcess:
 def test_replay_command_computes_a_recording_and_plays_it_at_a_pace():
     data = load_session(LOSSY)
     c = data.link.counters
-    totals = (f"{len(data)} IMU samples, {c['frames']} frames, {c['frames_lost']} lost, {c['crc_errors']} CRC errors, "
-              f"{c['bytes_skipped']} bytes skipped")
+    totals = (f"{len(data)} IMU samples at {data.imu_rate_hz():.1f} Hz over {data.duration_s():.1f} s, {c['frames']} frames, "
+              f"{c['frames_lost']} lost ({data.link_loss_pct():.1f} %), {c['crc_errors']} CRC errors, {c['bytes_skipped']} bytes skipped")
     done = gs("replay", LOSSY)
     assert done.returncode == 0 and done.stdout.splitlines() == [totals], done.stderr
     paced = gs("replay", LOSSY, "--speed", "64")  # about half a second of playback
@@ -121,7 +121,8 @@ def test_replay_command_reads_flight_logs(name):
     done = gs("replay", path, "--speed", "64")
     assert done.returncode == 0, done.stderr
     last = done.stdout.splitlines()[-1]
-    assert last == (f"{len(data)} IMU samples" if data.sample_table == "imu" else f"{len(data)} onboard attitude samples, no IMU")
+    samples = f"{len(data)} IMU samples at {data.imu_rate_hz():.1f} Hz" if data.sample_table == "imu" else f"{len(data)} onboard attitude samples, no IMU"
+    assert last == f"{samples} over {data.duration_s():.1f} s"
 
 
 def test_a_flight_logs_progress_moves_through_its_estimators():

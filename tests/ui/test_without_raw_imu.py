@@ -1,5 +1,5 @@
 """Issue 24, defects 3 and 5: without raw IMU (the firmware's "estimated" mode) or with an IMU too slow
-for host filtering (an autopilot's RAW_IMU at 4 Hz), the aircraft's own estimate carries the view and
+for host filtering (an autopilot's RAW_IMU at 4.0 Hz), the aircraft's own estimate carries the view and
 the attitude panel, and says so; back in "both", the stretch without raw IMU is no gap and no host curve
 draws a line across it."""
 
@@ -73,7 +73,7 @@ def test_a_4_hz_autopilot_shows_its_own_estimate_as_the_attitude_and_its_link_st
     session = window.session
     qtbot.waitUntil(lambda: len(session.view.imu) > 30, timeout=30000)
     headlines = badge_over(qtbot, window, 8.0)
-    assert window.attitude_panel.title().startswith("Attitude (onboard — IMU at 4 Hz")
+    assert window.attitude_panel.title().startswith("Attitude (onboard — IMU at 4.0 Hz")
     assert headlines == {"LINK OK"}
 
 
@@ -84,4 +84,4 @@ def test_a_healthy_4_hz_bridge_keeps_its_badge_ok_and_shows_the_onboard_attitude
     session = window.session
     qtbot.waitUntil(lambda: len(session.view.imu) > 8, timeout=15000)
     assert badge_over(qtbot, window, 6.0) == {"LINK OK"}
-    assert window.attitude_panel.title() == "Attitude (onboard — IMU at 4 Hz)"
+    assert window.attitude_panel.title() == "Attitude (onboard — IMU at 4.0 Hz)"
