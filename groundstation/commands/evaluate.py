@@ -29,15 +29,21 @@ from groundstation.text import clean
 AGREEMENT_TITLE = "agreement with the onboard estimate (difference, not error: the onboard estimate is not truth)"
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
+def default_filters() -> str:
+    """The estimators whose needs a file meets (the GPS-aided filters are left out: the datasets have no
+    GPS, and without it they are slow tilt filters whose heading can flip). --filters ukf,sssrukf scores them."""
     from groundstation import formats
     from groundstation.estimation import runnable
 
+    return ",".join(runnable(formats.FILE_AIDING))
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from groundstation import formats
+
     parser.add_argument("file", metavar="FILE", help=f"a file with truth or an onboard estimate: {formats.described()}; "
                                                      "or a FOLDER of them (every one under it, with --out)")
-    # By default the estimators whose needs a file meets (the GPS-aided filters are left out: the datasets
-    # have no GPS, and without it they are slow tilt filters at ~100x the others' cost). --filters ukf,sssrukf scores them.
-    add_estimator_options(parser, ",".join(runnable(formats.FILE_AIDING)))
+    add_estimator_options(parser, default_filters())
     add_config_option(parser)
     add_imu_option(parser)
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
@@ -48,6 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.commands.progress import ProgressBar
+    from groundstation.estimation import unmet_needs
     from groundstation.session.load import load_session
 
     names, overrides = estimator_options(args)
@@ -61,9 +68,12 @@ def run(args: argparse.Namespace) -> int:
         data = load_session(args.file, names, overrides, bar, args.accept_config_changes, imu=args.imu)
     finally:
         bar.done()
-    for warning in data.warnings:  # on stderr beside the JSON, and in it
+    # an estimator asked for by name whose aiding the file lacks (ukf without GPS) is scored, and said to be so
+    asked = data.estimated if args.filters != default_filters() else ()
+    warnings = [*data.warnings, *(f"{why}, and {args.file} has none" for name in asked if (why := unmet_needs(name, data.aiding())))]
+    for warning in warnings:  # on stderr beside the JSON, and in it
         print(f"warning: {clean(warning, visible=True)}", file=sys.stderr if args.json else sys.stdout)
-    carried = {"warnings": data.warnings} if data.warnings else {}
+    carried = {"warnings": warnings} if warnings else {}
     if data.true_q is None and data.has_onboard():
         if not data.estimated:
             raise UserError(f"{args.file}: no IMU samples, so no host estimator ran; only the onboard estimate is there")

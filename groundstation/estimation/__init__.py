@@ -159,6 +159,19 @@ def runnable(capabilities, names=None) -> tuple[str, ...]:
     return tuple(n for n in (ESTIMATORS if names is None else names) if n in ESTIMATORS and ESTIMATORS.about(n).needs <= set(capabilities))
 
 
+# What an estimator is without an aiding it needs, for the one line that says so (``unmet_needs``)
+_WITHOUT = {
+    "gps": "GPS velocity and heading: without them it is a slow tilt filter whose heading drifts and can flip",
+    "mag": "a magnetometer: without one its heading is the gyro's and drifts",
+}
+
+
+def unmet_needs(name: str, capabilities) -> str | None:
+    """Why ``name`` is little use with only ``capabilities`` ("mag", "gps"), in one line; None when they meet its needs."""
+    missing = sorted(ESTIMATORS.about(name).needs - set(capabilities)) if name in ESTIMATORS else []
+    return "; ".join(f"{name} needs {_WITHOUT[need]}" for need in missing) or None
+
+
 def aiding_estimator(filters, named: str | None = None) -> str | None:
     """The estimator that aids the compass heading and position among ``filters``: ``named`` if given
     (ValueError if it does not run), else ``AIDING_ESTIMATOR``; a session without that one is aided by

@@ -65,8 +65,8 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import GYRO_OVERRANGE, NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, record, sample
-from groundstation.estimation.tilt import earth_field_reference, unit_field
+from groundstation.estimation.base import GYRO_OVERRANGE, NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, record, sample
+from groundstation.estimation.tilt import about_vertical_q, earth_field_reference, unit_field
 
 
 @dataclasses.dataclass(frozen=True)
@@ -127,8 +127,6 @@ def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
         s2 = 2.0 * q4 * fx + 2.0 * q1 * fy - 4.0 * q2 * fz
         s3 = -2.0 * q1 * fx + 2.0 * q4 * fy - 4.0 * q3 * fz
         s4 = 2.0 * q2 * fx + 2.0 * q3 * fy
-        if p[P_MAGNETOMETER] != 0.0:  # hfm: Madgwick's magnetometer term (marg.py)
-            s1, s2, s3, s4 = _field_gradient(q1, q2, q3, q4, s1, s2, s3, s4, mx, my, mz)
         # Tangent projection ∇f ← ∇f - (q·∇f) q (module docstring: mounting independence)
         s = q1 * s1 + q2 * s2 + q3 * s3 + q4 * s4
         s1, s2, s3, s4 = s1 - s * q1, s2 - s * q2, s3 - s * q3, s4 - s * q4
@@ -153,6 +151,14 @@ def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
             k = lam * (1.0 / np.sqrt(n2))
             # (eq. 18) q̇ = q̇_ω - λ ∇f/‖∇f‖
             d1, d2, d3, d4 = d1 - k * s1, d2 - k * s2, d3 - k * s3, d4 - k * s4
+        if p[P_MAGNETOMETER] != 0.0:  # hfm: Madgwick's magnetometer term about the vertical, its own step (marg.py)
+            status, field = field_screen(state, status, gx, gy, gz, dt_s, mx, my, mz)
+            if field:
+                b1, b2, b3, b4 = _field_gradient(q1, q2, q3, q4, mx, my, mz)
+                n2 = b1 * b1 + b2 * b2 + b3 * b3 + b4 * b4
+                if n2 > 0.0:
+                    k = lam / math.sqrt(n2)
+                    d1, d2, d3, d4 = d1 - k * b1, d2 - k * b2, d3 - k * b3, d4 - k * b4
     # (eq. 19) q(k) = q(k-1) + q̇ Δt, normalised
     q1, q2, q3, q4 = q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s
     r = 1.0 / np.sqrt(q1 * q1 + q2 * q2 + q3 * q3 + q4 * q4)
@@ -161,22 +167,25 @@ def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
 
 
 @register_jitable
-def _field_gradient(q1, q2, q3, q4, s1, s2, s3, s4, mx, my, mz):
-    """∇f with Madgwick's magnetometer rows added (marg.py); unchanged without a usable reading."""
+def _field_gradient(q1, q2, q3, q4, mx, my, mz):
+    """The gradient of Madgwick's magnetometer rows, its part about the vertical only (marg.py); zero
+    without a usable reading."""
     usable, mx, my, mz = unit_field(mx, my, mz)
     if not usable:
-        return s1, s2, s3, s4
+        return 0.0, 0.0, 0.0, 0.0
     bx, bz = earth_field_reference(q1, q2, q3, q4, mx, my, mz)
     # (Madgwick eq. 31) f_b = Rᵀ(q) b - m̂
     f4 = 2.0 * bx * (0.5 - q3 * q3 - q4 * q4) + 2.0 * bz * (q2 * q4 - q1 * q3) - mx
     f5 = 2.0 * bx * (q2 * q3 - q1 * q4) + 2.0 * bz * (q1 * q2 + q3 * q4) - my
     f6 = 2.0 * bx * (q1 * q3 + q2 * q4) + 2.0 * bz * (0.5 - q2 * q2 - q3 * q3) - mz
-    # (Madgwick eq. 32, 34) ∇f += J_bᵀ f_b
-    s1 += -2.0 * bz * q3 * f4 + (-2.0 * bx * q4 + 2.0 * bz * q2) * f5 + 2.0 * bx * q3 * f6
-    s2 += 2.0 * bz * q4 * f4 + (2.0 * bx * q3 + 2.0 * bz * q1) * f5 + (2.0 * bx * q4 - 4.0 * bz * q2) * f6
-    s3 += (-4.0 * bx * q3 - 2.0 * bz * q1) * f4 + (2.0 * bx * q2 + 2.0 * bz * q4) * f5 + (2.0 * bx * q1 - 4.0 * bz * q3) * f6
-    s4 += (-4.0 * bx * q4 + 2.0 * bz * q2) * f4 + (-2.0 * bx * q1 + 2.0 * bz * q3) * f5 + 2.0 * bx * q2 * f6
-    return s1, s2, s3, s4
+    # (Madgwick eq. 32, 34) J_bᵀ f_b, about the vertical
+    return about_vertical_q(
+        q1, q2, q3, q4,
+        -2.0 * bz * q3 * f4 + (-2.0 * bx * q4 + 2.0 * bz * q2) * f5 + 2.0 * bx * q3 * f6,
+        2.0 * bz * q4 * f4 + (2.0 * bx * q3 + 2.0 * bz * q1) * f5 + (2.0 * bx * q4 - 4.0 * bz * q2) * f6,
+        (-4.0 * bx * q3 - 2.0 * bz * q1) * f4 + (2.0 * bx * q2 + 2.0 * bz * q4) * f5 + (2.0 * bx * q1 - 4.0 * bz * q3) * f6,
+        (-4.0 * bx * q4 + 2.0 * bz * q2) * f4 + (-2.0 * bx * q1 + 2.0 * bz * q3) * f5 + 2.0 * bx * q2 * f6,
+    )  # fmt: skip
 
 
 @njit(cache=True)

@@ -60,8 +60,8 @@ Per sample, Δt the period:
    the turn rate as step 2's τ shortens with it, for the opposite reason: while the body turns fast the
    compass heading carries the tilt's lag and the magnetometer's timing, while the gyro over a few
    seconds does not. On the BROAD dev set (heading RMSE, 8 undisturbed trials): τ_m fixed at 9 s 1.24°,
-   adapted 1.13°, VQF 1.13°; bench/bench_estimators.out.md. No magnetic disturbance rejection yet
-   (the dev trials have none).
+   adapted 1.13°, VQF 1.13°; bench/bench_estimators.out.md. A reading whose norm or dip is off the learnt
+   field is skipped, ψ_m held (``base.field_screen``, VQF's rule; ``MAG_REJECTED`` in the status).
 
 Settings. τ_acc and k_i are the best of a small grid (τ_acc 4-6 s, k_i 0.03-0.3 /s) on the BROAD dev
 set, τ_mag of 5, 9 and 20 s; the figure that says how well that choice carries to data it was not made
@@ -107,7 +107,7 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_MAGNETOMETER, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, record, sample
+from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_MAGNETOMETER, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, record, sample
 from groundstation.estimation.tilt import quaternion_product, wrap_pi
 
 
@@ -275,6 +275,9 @@ def ahf2_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
             turned, tx, ty = True, ux * delta, uy * delta
     q = quaternion_product(q_c, q_g)
     if p[_FOLLOW_MAG] != 0.0:
+        status, field = field_screen(state, status, gx, gy, gz, dt_s, mx, my, mz)
+        if not field:
+            mx = my = mz = math.nan  # no reading, or a rejected one: ψ_m held
         q = quaternion_product(_yaw_turn(_follow_magnetometer(state, p, q, dt_s, mx, my, mz)), q)
     state[0], state[1], state[2], state[3] = q
     if turned and p[_KI] > 0.0 and state[_REST] == 0.0 and state[_STARTING] == 0.0:

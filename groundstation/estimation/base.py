@@ -59,6 +59,8 @@ Robust stepping (every estimator, decided here once):
   deviation and not the instantaneous norm: under shaking the norm swings above and below 1 g, and
   rejecting only the large-norm half of each swing leaves a biased mean direction (BROAD trial 16, hf:
   12.4° with a 3 g limit, 3.0° without); the low-passed deviation ``|‖a‖ - 1|`` rejects both halves alike.
+- A magnetometer estimator corrects heading only, and not with a reading whose norm or dip is off the
+  field it has learnt (``field_screen``: a magnet near the sensor, a motor's current; ``MAG_REJECTED``).
 - A gyro at its full-scale limit is a finite number and is integrated like any other (``ahf`` can
   also raise λ then; see its ``gyro_overrange_rad_s``).
 
@@ -116,6 +118,7 @@ ACC_SKIPPED = 8  # accelerometer unusable: gyro-only on this sample
 REINITIALISED = 16  # gap longer than max_gap_s: pitch/roll re-set from the accelerometer
 GYRO_OVERRANGE = 32  # ahf only: gyro at or above gyro_overrange_rad_s, λ forced to λ_max
 LIMITED = 64  # dt above STEP_RATIO_MAX running intervals: integrated as that many (the interval rule)
+MAG_REJECTED = 128  # magnetometer estimators: the reading disagrees with the learnt field, heading not corrected (field_screen)
 NO_UPDATE = WAITING | HELD | REINITIALISED  # the guard has said all there is to say about the sample
 
 
@@ -136,6 +139,7 @@ STATUS_NAMES = {
     REINITIALISED: "reinitialised",
     GYRO_OVERRANGE: "gyro_overrange",
     LIMITED: "limited",
+    MAG_REJECTED: "mag_rejected",
 }
 
 # The interval rule (module docstring): a step integrates at most STEP_RATIO_MAX running intervals; the
@@ -371,7 +375,8 @@ def batch_inputs(gyr_rad_s, acc_g, dt_s):
 STATE_WAITING = 4  # state[0:4] is q (w, x, y, z); this slot 1 while waiting for gravity, else 0
 STATE_ACC_DEV = 5  # the low-passed |‖acc‖ - 1| (g)
 STATE_DT_RUN = 6  # the running sample interval, s (the interval rule); 0 before the first
-STATE_DIAG = 7  # the diagnostics after status, in their order; then the estimator's own state
+STATE_MAG = 7  # field_screen's: the reference field's norm (0: none yet) and dip, the candidate's norm, dip and time
+STATE_DIAG = 12  # the diagnostics after status, in their order; then the estimator's own state
 # Slots of its parameter array
 P_ACC_MIN2, P_ACC_DEV_MAX, P_ACC_WINDOW_S, P_MAX_GAP_S = 0, 1, 2, 3
 P_MAGNETOMETER = 4  # 1: the estimator uses the magnetometer (marg.py): yaw from the compass on (re-)initialising
@@ -416,6 +421,59 @@ def guard(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
         yaw = euler_of((float(state[0]), float(state[1]), float(state[2]), float(state[3])))[0]
         _set_gravity_attitude(state, p, ax, ay, az, yaw, mx, my, mz)
     return status, acc_ok, dt_s
+
+
+# Magnetic disturbance rejection (field_screen), VQF's rule and constants (Laidig & Seel 2023, §3.3; Fusion's
+# magnetic rejection is alike): a reading whose norm or dip is off the learnt reference is a disturbance
+MAG_NORM_TOLERANCE = 0.1  # |‖m‖ - n_ref| above this fraction of n_ref
+MAG_DIP_TOLERANCE_RAD = math.radians(10.0)  # |dip - dip_ref| above this
+MAG_REF_TAU_S = 20.0  # the reference follows the accepted readings with this time constant
+MAG_NEW_S = 20.0  # a steady other field seen this long while turning becomes the reference
+MAG_NEW_RATE_RAD_S = math.radians(20.0)  # "while turning": an external field stays steady in norm and dip only if earth-fixed
+
+
+@register_jitable
+def _matches(n, dip, n_ref, dip_ref):
+    return abs(n - n_ref) <= MAG_NORM_TOLERANCE * n_ref and abs(dip - dip_ref) <= MAG_DIP_TOLERANCE_RAD
+
+
+@register_jitable
+def field_screen(state, status, gx, gy, gz, dt_s, mx, my, mz):
+    """Whether a magnetometer estimator may correct heading with this reading: ``(status, usable)``, status
+    with ``MAG_REJECTED`` when the reading's norm or dip (its angle below the estimated horizontal) is off
+    the learnt reference (a magnet, a motor's current). The first reading sets the reference; accepted
+    readings move it slowly (``MAG_REF_TAU_S``); another field steady in norm and dip for ``MAG_NEW_S``
+    of turning becomes it (the reference was the disturbed one, or the craft has moved). Not usable
+    without a reading (None, NaN, zero), which is no rejection."""
+    n2 = mx * mx + my * my + mz * mz
+    if not (0.0 < n2 and n2 < math.inf):
+        return status, False
+    q1, q2, q3, q4 = state[0], state[1], state[2], state[3]
+    n = math.sqrt(n2)
+    # down on the body axes (seed 000 eq. 8) against the reading's direction
+    s = (2.0 * (q2 * q4 - q1 * q3) * mx + 2.0 * (q1 * q2 + q3 * q4) * my + (q1 * q1 - q2 * q2 - q3 * q3 + q4 * q4) * mz) / n
+    dip = math.asin(min(max(s, -1.0), 1.0))
+    if state[STATE_MAG] == 0.0:
+        state[STATE_MAG], state[STATE_MAG + 1] = n, dip
+        return status, True
+    k = dt_s / (MAG_REF_TAU_S + dt_s)
+    if _matches(n, dip, state[STATE_MAG], state[STATE_MAG + 1]):
+        state[STATE_MAG] += k * (n - state[STATE_MAG])
+        state[STATE_MAG + 1] += k * (dip - state[STATE_MAG + 1])
+        state[STATE_MAG + 2] = state[STATE_MAG + 4] = 0.0  # no candidate
+        return status, True
+    if state[STATE_MAG + 2] == 0.0 or not _matches(n, dip, state[STATE_MAG + 2], state[STATE_MAG + 3]):
+        state[STATE_MAG + 2], state[STATE_MAG + 3], state[STATE_MAG + 4] = n, dip, 0.0  # a new candidate
+    else:
+        state[STATE_MAG + 2] += k * (n - state[STATE_MAG + 2])
+        state[STATE_MAG + 3] += k * (dip - state[STATE_MAG + 3])
+        if gx * gx + gy * gy + gz * gz >= MAG_NEW_RATE_RAD_S * MAG_NEW_RATE_RAD_S:
+            state[STATE_MAG + 4] += dt_s
+        if state[STATE_MAG + 4] >= MAG_NEW_S:
+            state[STATE_MAG], state[STATE_MAG + 1] = state[STATE_MAG + 2], state[STATE_MAG + 3]
+            state[STATE_MAG + 2] = state[STATE_MAG + 4] = 0.0
+            return status, True
+    return status | MAG_REJECTED, False
 
 
 @register_jitable
@@ -516,7 +574,7 @@ class CompiledEstimator(Estimator):
         if self._cast is not None:  # interpreted: a list of numpy scalars reads 3x faster than an array
             self._params = list(self._params)
         q = (1.0, 0.0, 0.0, 0.0) if q0 is None else quaternion.normalise(q0).tolist()
-        self._state = np.array([*q, float(q0 is None), 0.0, 0.0, *self._initial_state()], dtype=self._dtype)
+        self._state = np.array([*q, float(q0 is None), 0.0, 0.0, *[0.0] * (STATE_DIAG - STATE_MAG), *self._initial_state()], dtype=self._dtype)
 
     @property
     def _q(self):

@@ -31,8 +31,8 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
-from groundstation.estimation.tilt import earth_field_reference, unit_field
+from groundstation.estimation.base import NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, integrate_rate, record, sample
+from groundstation.estimation.tilt import about_vertical, earth_field_reference, unit_field
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,8 +81,10 @@ def ecf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
         if err > p[_ERROR_MAX]:
             c = p[_ERROR_MAX] / err
             ex, ey, ez = ex * c, ey * c, ez * c
-        if p[P_MAGNETOMETER] != 0.0:  # ecfm: e += m × w (marg.py)
-            ex, ey, ez = _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz)
+        if p[P_MAGNETOMETER] != 0.0:  # ecfm: e += m × w about the vertical (marg.py)
+            status, field = field_screen(state, status, gx, gy, gz, dt_s, mx, my, mz)
+            if field:
+                ex, ey, ez = _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz, vx, vy, vz)
         ki, kp, m = p[_KI] * dt_s, p[_KP], p[_BIAS_MAX]
         bx, by, bz = bx - ki * ex, by - ki * ey, bz - ki * ez  # ḃ = -Ki e
         bx, by, bz = min(max(bx, -m), m), min(max(by, -m), m), min(max(bz, -m), m)
@@ -94,8 +96,9 @@ def ecf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
 
 
 @register_jitable
-def _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz):
-    """e with Mahony's magnetometer term ``m̂ × w`` added (marg.py); unchanged without a usable reading."""
+def _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz, vx, vy, vz):
+    """e with Mahony's magnetometer term ``m̂ × w`` added about the estimated vertical (vx, vy, vz) (marg.py);
+    unchanged without a usable reading."""
     usable, mx, my, mz = unit_field(mx, my, mz)
     if not usable:
         return ex, ey, ez
@@ -104,8 +107,9 @@ def _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz):
     wx = bx * (1.0 - 2.0 * (q3 * q3 + q4 * q4)) + bz * 2.0 * (q2 * q4 - q1 * q3)
     wy = bx * 2.0 * (q2 * q3 - q1 * q4) + bz * 2.0 * (q1 * q2 + q3 * q4)
     wz = bx * 2.0 * (q2 * q4 + q1 * q3) + bz * (1.0 - 2.0 * (q2 * q2 + q3 * q3))
-    # (Mahony eq. 48a) e += m̂ × w
-    return ex + my * wz - mz * wy, ey + mz * wx - mx * wz, ez + mx * wy - my * wx
+    # (Mahony eq. 48a) e += m̂ × w, its part about the vertical only
+    cx, cy, cz = about_vertical(vx, vy, vz, my * wz - mz * wy, mz * wx - mx * wz, mx * wy - my * wx)
+    return ex + cx, ey + cy, ez + cz
 
 
 @njit(cache=True)

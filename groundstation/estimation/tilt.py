@@ -96,3 +96,23 @@ def earth_field_reference(q1, q2, q3, q4, mx, my, mz):
     hy = 2.0 * (q2 * q3 + q1 * q4) * mx + (1.0 - 2.0 * (q2 * q2 + q4 * q4)) * my + 2.0 * (q3 * q4 - q1 * q2) * mz
     hz = 2.0 * (q2 * q4 - q1 * q3) * mx + 2.0 * (q3 * q4 + q1 * q2) * my + (1.0 - 2.0 * (q2 * q2 + q3 * q3)) * mz
     return math.sqrt(hx * hx + hy * hy), hz
+
+
+@register_jitable
+def about_vertical(vx, vy, vz, x, y, z):
+    """The part of a body-axes turn rate (x, y, z) about the estimated vertical, the unit (vx, vy, vz) on the
+    body axes: a turn about it moves heading only. Every magnetometer correction passes through this (or
+    ``about_vertical_q``): the field may correct heading, never pitch and roll (a magnet near the sensor
+    would tilt the estimate)."""
+    c = vx * x + vy * y + vz * z
+    return c * vx, c * vy, c * vz
+
+
+@register_jitable
+def about_vertical_q(q1, q2, q3, q4, s1, s2, s3, s4):
+    """``about_vertical`` for a quaternion rate (s1..s4) at q: its part along ``[0, 0, 0, 1] ⊗ q`` (unit), the
+    rate of a turn about the NED vertical. (The body rate ``2 q* ⊗ s`` projected onto the body's vertical and
+    turned back, ``½ q ⊗ [0, ω]``, is the same vector.)"""
+    t1, t2, t3, t4 = -q4, -q3, q2, q1
+    c = t1 * s1 + t2 * s2 + t3 * s3 + t4 * s4
+    return c * t1, c * t2, c * t3, c * t4

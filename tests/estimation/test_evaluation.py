@@ -158,6 +158,21 @@ def test_evaluate_command_json(trial_slice):
     assert figures["hfm"] == pytest.approx(expected["hfm"]) and "heading_rmse_deg" in figures["hfm"]  # the CLI scores heading too
 
 
+def test_a_gps_aided_filter_asked_for_without_gps_is_said_to_need_it(trial_slice):
+    """Issue 33: ukf and sssrukf without GPS flipped to about 178° with no warning. They are not run by
+    default on a file without GPS; asked for by name, they are scored and one line says why to doubt it."""
+    default = run_cli(str(trial_slice), "--json")
+    assert default.returncode == 0, default.stderr
+    figures = json.loads(default.stdout)
+    assert "ukf" not in figures and "sssrukf" not in figures and "warnings" not in figures
+    asked = run_cli(str(trial_slice), "--filters", "ecf,ukf", "--json")
+    assert asked.returncode == 0, asked.stderr
+    figures = json.loads(asked.stdout)
+    assert list(figures) == ["ecf", "ukf", "warnings"]
+    assert len(figures["warnings"]) == 1 and figures["warnings"][0].startswith("ukf needs GPS")
+    assert f"warning: {figures['warnings'][0]}" in asked.stderr
+
+
 @pytest.mark.parametrize(
     "args, message",
     [

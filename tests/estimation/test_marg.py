@@ -1,14 +1,11 @@
-"""HFM and ECFM against ahrs's MARG filters, their fall-back to the IMU filters, and yaw against truth.
-
-Frames as in test_oracles.py. ahrs's Madgwick puts the field's horizontal part on earth +x (north). ahrs's Mahony gets ``-acc`` (its reference direction is then our down) and puts the field on
-earth +y, so its earth frame is (west, north, down): ``q_ned = qz(-90°) ⊗ q_ahrs``.
-"""
+"""HFM and ECFM: the magnetometer turns them about the vertical only, their fall-back to the IMU filters, and
+yaw against truth. (Their IMU parts are checked against ahrs in test_oracles.py; ahrs's MARG filters let the
+field tilt the estimate, which these do not: test_magnetic_disturbance.py.)"""
 
 import math
 
 import numpy as np
 import pytest
-from ahrs.filters import Madgwick, Mahony
 from estimation_samples import random_samples
 
 from groundstation import quaternion as quat
@@ -19,7 +16,6 @@ from groundstation.estimation.marg import Ecfm, Hfm
 from groundstation.sim.offline import simulate
 
 Q0 = quat.normalise([0.9, 0.1, -0.3, 0.2])
-TO_NED = quat.from_euler_zyx(-math.pi / 2, 0.0, 0.0)  # ahrs Mahony's (W, N, D) earth frame -> NED
 
 
 def random_fields(n, seed):
@@ -29,38 +25,28 @@ def random_fields(n, seed):
     return m * rng.uniform(20.0, 60.0, (n, 1)) / np.linalg.norm(m, axis=1, keepdims=True)
 
 
-def test_hfm_agrees_with_ahrs_madgwick_marg():
-    """Hovering (small errors, where ahrs's step has no radial part to speak of: ahf.py on the tangent
-    projection), the sensor turned to read +1 g on z so ahrs runs upright, fed as it is; ahrs's earth
-    frame (north, west, up) is NED after a half turn about x."""
-    run = simulate("hover", 30.0, seed=2, mag_rate_hz=100.0)
-    flip = np.array([1.0, -1.0, -1.0])
-    gyr, acc, mag, dt = run.gyr_rad_s * flip, run.acc_g * flip, run.mag_ut * flip, run.dt_s
-    half_turn = np.array([0.0, 1.0, 0.0, 0.0])
-    hfm = Hfm(HfSettings(beta=0.3))
-    q, _ = hfm.run(gyr, acc, dt, mag=mag)
-    filt, qr, ref = Madgwick(gain=0.3), quat.multiply(half_turn, q[0]), [q[0]]
-    for g, a, m in zip(gyr[1:], acc[1:], mag[1:]):
-        qr = filt.updateMARG(qr, g, a, m, dt=dt)
-        ref.append(quat.multiply(half_turn, qr))
-    apart = np.degrees(2 * np.arccos(np.abs(np.sum(q * np.array(ref), axis=1)).clip(max=1.0)))
-    assert np.median(apart) < 0.01 and np.percentile(apart, 90) < 0.05, np.percentile(apart, [50, 90, 100])
-
-
-def test_ecfm_equals_ahrs_mahony_marg():
-    gyr, acc, dt = random_samples(3_000, seed=13)
-    mag = random_fields(3_000, seed=14)
-    ecfm = Ecfm(EcfSettings(kp=0.8, ki=0.2, bias_max_rad_s=math.inf, error_max=math.inf))  # bounds off: Mahony as published
-    ecfm.reset(Q0)
-    q, diag = ecfm.run(gyr, acc, dt, mag=mag)
-    filt, ref, bias = Mahony(k_P=0.8, k_I=0.2), [], []
-    qr = quat.multiply(quat.conjugate(TO_NED), Q0)
-    for g, a, m, d in zip(gyr, acc, mag, dt):
-        qr = filt.updateMARG(qr, g, -a, m, dt=d)
-        ref.append(qr)
-        bias.append(filt.b.copy())
-    np.testing.assert_allclose(q, quat.multiply(TO_NED, np.array(ref)), atol=1e-9, rtol=0)
-    np.testing.assert_allclose(np.column_stack([diag[f"bias_{k}_rad_s"] for k in "xyz"]), bias, atol=1e-9)
+def test_the_magnetometer_turns_the_estimate_about_the_vertical_only():
+    """One step from random attitudes with a random field reading, against the same step of the IMU twin
+    (Hf, Ecf): the estimates are apart by a turn about the NED vertical (issue 33: Madgwick's and
+    Mahony's published MARG terms tilt too, so a magnet near the sensor moved pitch and roll). The
+    Euler step mixes the two corrections to second order, (λ Δt)² = 2.5e-5 rad here, against a
+    first-order tilt of λ Δt = 5e-3 rad from the published terms."""
+    rng = np.random.default_rng(21)
+    fields = random_fields(200, seed=22)
+    turned = 0
+    for field in fields:
+        q0 = quat.normalise(rng.normal(size=4))
+        down_body = quat.rotate(quat.conjugate(q0), [0.0, 0.0, 1.0])
+        acc = tuple(-down_body + rng.normal(0.0, 0.05, 3))  # a gravity error as well
+        for est, twin in ((Hfm(HfSettings(beta=0.5)), Hf(HfSettings(beta=0.5))), (Ecfm(EcfSettings(kp=0.5, ki=0.5)), Ecf(EcfSettings(kp=0.5, ki=0.5)))):
+            est.reset(q0)
+            twin.reset(q0)
+            q, _ = est.step((0.0, 0.0, 0.0), acc, 0.01, mag=tuple(field))
+            q_twin, _ = twin.step((0.0, 0.0, 0.0), acc, 0.01)
+            turn = quat.multiply(np.array(q), quat.conjugate(np.array(q_twin)))
+            assert np.hypot(turn[1], turn[2]) < 5e-5, est.name
+            turned += abs(turn[3]) > 5e-5
+    assert turned > 300  # the field did turn heading on almost every sample
 
 
 def test_without_a_usable_reading_they_are_the_imu_filters():
@@ -93,9 +79,11 @@ def test_yaw_turns_to_truth_from_a_wrong_start_on_a_simulated_flight():
         err = np.angle(np.exp(1j * (quat.to_euler_zyx(q)[:, 0] - yaw_true)))
         return np.degrees(np.sqrt(np.mean(err[samples] ** 2)))
 
-    for est in (Hfm(), Ecfm()):
-        assert yaw_rms_deg(est) < 3.0, est.name
-        assert yaw_rms_deg(est, None, slice(None)) < 3.0, est.name
+    # hfm's tilt is HF's (2.8° RMS in this hover; ECF's 1.1°), and a tilt error turns the compass heading by
+    # up to tan(dip) ≈ 2.2 times it here: the magnetometer corrects heading only (issue 33)
+    for est, limit_deg in ((Hfm(), 5.0), (Ecfm(), 3.0)):
+        assert yaw_rms_deg(est) < limit_deg, est.name
+        assert yaw_rms_deg(est, None, slice(None)) < limit_deg, est.name
     assert yaw_rms_deg(Hf()) > 50.0
 
 
