@@ -25,7 +25,7 @@ def newest_acc_norm_g(session) -> float:
 
 @pytest.mark.parametrize("accept, norm_g", [(False, 1.0), (True, 4.0)])
 def test_the_banner_holds_the_scales_until_the_user_decides(window, qtbot, forged, accept, norm_g):
-    window._start(lambda: open_session(f"{forged}?speed=2").start())
+    window._start(f"{forged}?speed=2", lambda: open_session(f"{forged}?speed=2").start())
     session = window.session
     qtbot.waitUntil(window.config_banner.isVisible, timeout=20_000)
     text = window.config_banner.label.text()
