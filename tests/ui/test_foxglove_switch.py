@@ -5,6 +5,7 @@ import json
 import socket
 
 from tests.foxglove_client import Client
+from tests.waiting import LIMIT_MS
 
 
 def free_port() -> int:
@@ -23,7 +24,7 @@ def test_the_switch_serves_the_live_session(window, qtbot):
     client = Client(port)
     try:
         assert client.ready.wait(10)
-        qtbot.waitUntil(lambda: len(client.messages.get("/imu", [])) > 100, timeout=15000)
+        qtbot.waitUntil(lambda: len(client.messages.get("/imu", [])) > 100, timeout=LIMIT_MS)
         rows = [json.loads(p) for _, p in client.messages["/imu"]]
         times = [r["time_s"] for r in rows]
         assert times == sorted(times) and len(set(times)) == len(times)  # in order, none twice

@@ -4,12 +4,13 @@ redraw timer keeps drawing, the link panel reports a healthy link."""
 import numpy as np
 
 from groundstation import quaternion
+from tests.waiting import LIMIT_MS
 
 
 def test_plotted_pitch_is_the_pipelines_ahf_pitch(window, qtbot):
     window.start_demo()
     session = window.session
-    qtbot.waitUntil(lambda: len(session.view.imu) > 150 and window.live_view.frames_drawn > 10, timeout=8000)
+    qtbot.waitUntil(lambda: len(session.view.imu) > 150 and window.live_view.frames_drawn > 10, timeout=LIMIT_MS)
     ahf = next(c for s, c in window.live_view.attitude.curves if s.quantity == "ahf_pitch_deg")
     onboard = next(c for s, c in window.live_view.attitude.curves if s.quantity == "onboard_pitch_deg")
     t, pitch = ahf.xData[-1], ahf.yData[-1]
