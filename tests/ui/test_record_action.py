@@ -28,8 +28,7 @@ def test_recording_stops_and_starts_a_new_file_that_replays(window, qtbot):
     qtbot.waitUntil(lambda: session.recorder.bytes_written > 20_000, timeout=LIMIT_MS)
     window.tick()
     window.ticks = 0  # the next tick refreshes the figures
-    qtbot.wait(300)
-    assert f"● recording {second}" in window.recording_label.text()
+    qtbot.waitUntil(lambda: f"● recording {second}" in window.recording_label.text(), timeout=LIMIT_MS)
     window.disconnect()
     pipeline = Pipeline(("ahf",))  # the new file stands on its own: a CONFIG frame and the samples
     for t_host_ns, data in open_recording(second).chunks():

@@ -42,9 +42,8 @@ def test_estimated_mode_keeps_the_view_moving_on_the_onboard_estimate(window, qt
     set_mode(qtbot, window, "estimated")
     switched_s = float(session.view.imu.tail(1)[0][0])
     qtbot.waitUntil(lambda: len(session.view.onboard) and session.view.onboard.tail(1)[0][0] > switched_s + 5, timeout=LIMIT_MS)  # past one step of the axis (4 s)
-    qtbot.wait(500)  # a few redraws
     onboard_s = float(session.view.onboard.tail(1)[0][0])
-    assert right_edge_s(window) >= onboard_s  # the time axis follows the aircraft's estimate
+    qtbot.waitUntil(lambda: right_edge_s(window) >= onboard_s, timeout=LIMIT_MS)  # the time axis follows the aircraft's estimate
     assert window.attitude_panel.title() == "Attitude (onboard — no raw IMU)"
     onboard = window.live_view.series["onboard"]
     pitch = float(onboard.recent.values["onboard_pitch_deg"][onboard.recent.count - 1])
@@ -52,8 +51,7 @@ def test_estimated_mode_keeps_the_view_moving_on_the_onboard_estimate(window, qt
     assert abs(float(window.attitude_panel.readouts["pitch"].text().rstrip("°")) - pitch) < 2.0  # moving with it
     set_mode(qtbot, window, "both")
     qtbot.waitUntil(lambda: session.view.imu.tail(1)[0][0] > onboard_s + 1, timeout=LIMIT_MS)
-    qtbot.wait(500)
-    assert window.attitude_panel.title() == "Attitude (AHF2)"
+    qtbot.waitUntil(lambda: window.attitude_panel.title() == "Attitude (AHF2)", timeout=LIMIT_MS)
     plots = window.live_view.attitude
     shaded = [r.getRegion() for r in plots.items[0].items if isinstance(r, pg.LinearRegionItem)]
     assert not any(low < onboard_s < high for low, high in shaded)  # the onboard estimate never stopped
