@@ -12,11 +12,9 @@ import threading
 import time
 
 from groundstation.sim.stream import Scenario, SimStream
+from tests.waiting import LIMIT_S
 
 SCENARIO = Scenario("hover", 60.0, seed=7)
-# A send or the wait for the session's close gives up only after this long: a limit for a broken
-# session, far beyond what a loaded 2-core machine takes (seconds).
-PATIENCE_S = 120.0
 
 
 class _Pump:
@@ -87,7 +85,7 @@ class TcpBridge(_Pump):
                 self.stream.advance(time.monotonic() - t0)  # nobody listening: those bytes are lost
                 continue
             self.connections += 1
-            client.settimeout(PATIENCE_S)
+            client.settimeout(LIMIT_S)
             with client:
                 while not self.stop.is_set() and not self._drop.is_set():
                     for chunk in self.stream.advance(time.monotonic() - t0):
@@ -112,5 +110,5 @@ def _close_gently(client: socket.socket) -> None:
         client.shutdown(socket.SHUT_WR)
         while client.recv(4096):
             pass
-    except OSError:  # a reset from the peer, or PATIENCE_S without its close: nothing more to keep
+    except OSError:  # a reset from the peer, or LIMIT_S without its close: nothing more to keep
         return

@@ -4,7 +4,7 @@ aircraft (its ACKs come back)."""
 
 from groundstation.recording import open_recording
 from groundstation.session.factory import open_session
-from tests.waiting import wait_for
+from tests.waiting import LIMIT_S, wait_for
 
 from .bridges import TcpBridge, UdpBridge
 
@@ -129,7 +129,7 @@ def _connections_that_open_late(monkeypatch):
 
     def late(*args, **kwargs):
         sock = connect(*args, **kwargs)
-        assert select.select([sock], [], [], 60)[0], "the bridge sent nothing within 60 s"  # a limit, not a pace
+        assert select.select([sock], [], [], LIMIT_S)[0], "the bridge sent nothing"
         return sock
 
     monkeypatch.setattr(socket, "create_connection", late)
@@ -158,10 +158,14 @@ def _serve(payloads: list[bytes]):
 
 
 def read_until_dropped(source) -> list[bytes]:
+    import time
+
     from groundstation.sources import SourceError
 
     chunks = []
+    deadline = time.monotonic() + LIMIT_S
     while True:
+        assert time.monotonic() < deadline, "the bridge's close: not seen"
         try:
             chunk = source.read()
         except SourceError:
@@ -186,7 +190,7 @@ def test_tcp_source_keeps_the_bytes_that_arrive_while_it_connects_and_those_that
         source.reopen()  # as the session does after the bridge dropped the connection
         second = read_until_dropped(source)
         source.close()
-        thread.join(timeout=60)
+        thread.join(timeout=LIMIT_S)
     finally:
         server.close()
     assert [b"".join(first), b"".join(second)] == payloads
