@@ -24,6 +24,7 @@ from pathlib import Path
 from groundstation.sources.base import Chunk, SourceClosed, SourceError
 from groundstation.sources.serial_port import SerialSource
 from groundstation.sources.spec import Spec
+from groundstation.sources.tcp import TcpSource
 from groundstation.sources.udp import UdpSource
 
 SIK_BAUD = 57600
@@ -95,8 +96,7 @@ def open_link(spec: Spec, kind: str, address: str) -> MavlinkSource:
             return MavlinkSource(transport, f"MAVLink UDP in {transport.address[0]}:{port}")
         if kind == "tcp":
             host = host or "localhost"
-            return MavlinkSource(SerialSource(f"socket://{host}:{port}", description=f"MAVLink TCP {host}:{port}"),
-                                 f"MAVLink TCP {host}:{port}")  # fmt: skip
+            return MavlinkSource(TcpSource(host, port, f"MAVLink TCP {host}:{port}"), f"MAVLink TCP {host}:{port}")
         from groundstation.autopilot.streams import gcs_heartbeat
 
         # Every interface: the vehicle may be on another machine; only its address is trusted (remote).

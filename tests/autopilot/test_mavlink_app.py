@@ -3,10 +3,12 @@
 
 import numpy as np
 
+from tests.waiting import LIMIT_MS
+
 
 def test_window_shows_and_records_a_mavlink_link(qtbot, mavlink_window):
     window = mavlink_window
-    qtbot.waitUntil(lambda: len(window.session.view.imu) > 100, timeout=8000)  # the window ticks meanwhile
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 100, timeout=LIMIT_MS)  # the window ticks meanwhile
     qtbot.wait(300)
     session = window.session
     assert session.view.protocol == "mavlink" and session.error is None

@@ -22,28 +22,33 @@ from groundstation.sim.stream import Scenario
 from groundstation.sources import SourceClosed, SourceError, open_source
 from groundstation.units import STANDARD_GRAVITY_M_S2
 from mavlink_helpers import Flying
+from tests.waiting import LIMIT_S
 
 SCENARIO = dataclasses.replace(Scenario(), profile="flight", duration_s=60.0, seed=3)
 
 
-def session(source, seconds: float | None = None, quiet_s: float = 1.2, until=None):
-    """Read, decode and answer like a live session would (the uplink held back for ``quiet_s`` so the
-    rate before the request shows), for ``seconds`` or until ``until()`` is true and nothing more
-    arrives; returns (chunks, records, requester, decoder)."""
+def session(source, seconds: float, quiet_s: float = 1.2):
+    """Read, decode and answer like a live session would until ``seconds`` of the aircraft's IMU time have
+    arrived (the uplink held back for its first ``quiet_s``, so the rate before the request shows);
+    returns (chunks, records, requester, decoder). The aircraft's time, not the wall clock: a loaded
+    machine (a bridge process slow to start) only makes it take longer."""
     decoder, requester = MavlinkDecoder(), StreamRequester(rate_hz=50.0)
-    chunks, records = [], []
-    start = time.monotonic()
-    end = start + seconds if seconds is not None else None
-    while end is None or time.monotonic() < end:
+    chunks, records, imu_us = [], [], []
+    deadline = time.monotonic() + LIMIT_S
+
+    def imu_s() -> float:
+        return (imu_us[-1] - imu_us[0]) / 1e6 if imu_us else 0.0
+
+    while imu_s() < seconds:
+        assert time.monotonic() < deadline, f"{seconds:g} s of IMU samples: not within {LIMIT_S:g} s"
         chunk = source.read()
         if chunk is None:
-            if until is not None and until():
-                break
             continue
         chunks.append(chunk)
         new = decoder.feed(chunk.data, chunk.t_host_ns)
         records += new
-        uplink = requester.update(new, chunk.t_host_ns) if time.monotonic() - start > quiet_s else b""
+        imu_us += [r.time_us for r in new if isinstance(r, rec.ImuSample)]
+        uplink = requester.update(new, chunk.t_host_ns) if imu_s() > quiet_s else b""
         if uplink:
             source.write(uplink)
     return chunks, records, requester, decoder
@@ -129,10 +134,8 @@ def test_bridge_sim_command_sends_mavlink_over_udp():
     process = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--udp", f"127.0.0.1:{source.transport.local_address[1]}",
                                 "--duration", "3", "--seed", "2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)  # fmt: skip
     try:
-        # Until the sender has finished (its start-up alone can take seconds on a loaded machine):
-        # what it sent before exiting is already in the socket's buffer.
-        _, records, requester, _ = session(source, until=lambda: process.poll() is not None)
-        out, err = process.communicate(timeout=30)
+        _, records, requester, _ = session(source, 2.5)  # of the bridge's 3 s
+        out, err = process.communicate(timeout=LIMIT_S)
     finally:
         process.kill()
         source.close()

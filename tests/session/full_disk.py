@@ -40,6 +40,29 @@ def grow(folder: Path, size: str) -> None:
     subprocess.run(["mount", "-o", f"remount,size={size}", str(folder)], check=True)
 
 
-def simulated_source(seed: int = 1):
-    """The simulated bridge streaming in real time, as the app's demo does."""
-    return open_source(f"sim:?scenario=flight&duration=600&seed={seed}")
+def simulated_source(seed: int = 1, max_read_bytes: int | None = None):
+    """The simulated bridge streaming in real time, as the app's demo does; with ``max_read_bytes``,
+    read at most that many bytes at a time, as a UART driver's buffer delivers them."""
+    source = open_source(f"sim:?scenario=flight&duration=600&seed={seed}")
+    if max_read_bytes is not None:
+        source._port = BoundedReads(source._port, max_read_bytes)
+    return source
+
+
+class BoundedReads:
+    """A port whose reads return at most ``max_bytes``: after a stall of a loaded machine the bytes due
+    come as several small chunks, not as one chunk of every second missed."""
+
+    def __init__(self, port, max_bytes: int):
+        self._port = port
+        self._max_bytes = max_bytes
+
+    def __getattr__(self, name):
+        return getattr(self._port, name)
+
+    @property
+    def in_waiting(self) -> int:
+        return min(self._port.in_waiting, self._max_bytes)
+
+    def read(self, size: int = 1) -> bytes:
+        return self._port.read(min(size, self._max_bytes))

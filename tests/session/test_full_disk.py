@@ -16,7 +16,7 @@ from groundstation.session.live import LiveSession
 from groundstation.session.pipeline import Pipeline
 from groundstation.session.replay import replay
 from tests.session.full_disk import grow, simulated_source, tiny_tmpfs
-from tests.waiting import wait_for
+from tests.waiting import LIMIT_S, wait_for
 
 
 def kinds(session) -> list[str]:
@@ -64,10 +64,12 @@ def test_the_files_of_a_full_disk_session_open_and_replay(tmp_path):
         session.recorder.retry_interval_s = 0.2
         with session:
             wait_for(lambda: session.recorder.state == "failed")
-            time.sleep(0.5)
             grow(folder, "16m")
             wait_for(lambda: session.recorder.state == "recording")
-            time.sleep(1.0)
+            rows = len(session.pipeline.imu)
+            # the new file's own CONFIG (asked for on resuming) and rows to replay, however slowly they come
+            wait_for(lambda: "config" in kinds(session)[kinds(session).index("recording_resumed"):]
+                     and len(session.pipeline.imu) >= rows + 100, what="the CONFIG and 100 rows after resuming")
         first, second = session.recorder.paths
         assert session.recorder.state == "off"
 
@@ -86,22 +88,29 @@ def test_the_files_of_a_full_disk_session_open_and_replay(tmp_path):
         assert sorted(p.name for p in folder.iterdir() if p.suffix == ".gsrec") == sorted([first.name, second.name])
 
 
+FILE_LIMIT_BYTES = 12_000
 RLIMIT_SCRIPT = textwrap.dedent(
-    """
-    import json, resource, signal, sys, time
+    f"""
+    import json, resource, signal, sys
     from groundstation.session.live import LiveSession
     from groundstation.session.pipeline import Pipeline
     from tests.session.full_disk import simulated_source
+    from tests.waiting import LIMIT_S, wait_for
 
     signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG instead of killing
-    resource.setrlimit(resource.RLIMIT_FSIZE, (12_000, 12_000))
-    session = LiveSession(simulated_source(), Pipeline(("ahf",)), recordings_dir=sys.argv[1])
+    resource.setrlimit(resource.RLIMIT_FSIZE, ({FILE_LIMIT_BYTES}, {FILE_LIMIT_BYTES}))
+    # chunks of at most 2 kB, as from a UART: each file has room for some (one chunk of every second a loaded
+    # machine kept the reader away could be bigger than a whole file, which then holds none)
+    session = LiveSession(simulated_source(max_read_bytes=2048), Pipeline(("ahf",)), recordings_dir=sys.argv[1])
     session.recorder.retry_interval_s = 0.3
     session.recorder.min_free_bytes = 0  # the disk has room; each file hits the size limit
     with session:
-        time.sleep(float(sys.argv[2]))
-    print(json.dumps({"events": session.pipeline.events, "paths": [str(p) for p in session.recorder.paths],
-                      "imu_rows": len(session.pipeline.imu), "running_error": session.error}))
+        wait_for(lambda: session.recorder.state == "failed", what="the first file's failure")
+        rows_at_failure = len(session.pipeline.imu)
+        wait_for(lambda: len(session.recorder.paths) >= 3 and len(session.pipeline.imu) >= rows_at_failure + 200,
+                 what="two resumptions and 200 rows")
+    print(json.dumps({{"events": session.pipeline.events, "paths": [str(p) for p in session.recorder.paths],
+                      "rows_after_failure": len(session.pipeline.imu) - rows_at_failure, "running_error": session.error}}))
     """
 )
 
@@ -109,26 +118,26 @@ RLIMIT_SCRIPT = textwrap.dedent(
 @pytest.mark.skipif(not hasattr(os, "setrlimit") and sys.platform == "win32", reason="RLIMIT_FSIZE is POSIX only")
 def test_a_file_size_limit_fails_the_recording_and_the_session_decodes_on(tmp_path):
     pytest.importorskip("resource")
-    seconds = 5.0
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-    done = subprocess.run([sys.executable, "-c", RLIMIT_SCRIPT, str(tmp_path), str(seconds)], capture_output=True,
-                          text=True, timeout=60, cwd=root)
+    # the script's two waits have LIMIT_S each; the rest is its start and stop
+    done = subprocess.run([sys.executable, "-c", RLIMIT_SCRIPT, str(tmp_path)], capture_output=True, text=True,
+                          timeout=3 * LIMIT_S, cwd=root)
     assert done.returncode == 0, done.stderr
     assert "Traceback" not in done.stderr
     out = json.loads(done.stdout)
-    kinds = [e["kind"] for e in out["events"]]
-    assert "recording_failed" in kinds and "recording_resumed" in kinds
-    failure = next(e for e in out["events"] if e["kind"] == "recording_failed")
-    assert "File too large" in failure["message"]
-    assert out["running_error"] is None
-    assert out["imu_rows"] >= 80 * (seconds - 1.5)  # ~100 Hz throughout, the boot second aside
-    assert len(out["paths"]) >= 2
-    for path in out["paths"]:
+    assert out["running_error"] is None and out["rows_after_failure"] >= 200  # decoding went on past the failures
+    failed = [e for e in out["events"] if e["kind"] == "recording_failed"]
+    resumed = [e for e in out["events"] if e["kind"] == "recording_resumed"]
+    assert all("File too large" in e["message"] for e in failed)
+    paths = out["paths"]
+    # each failure names the file that failed, each resumption the file it failed in and the new one
+    assert [e["path"] for e in failed] == paths[:len(failed)] and len(failed) >= len(paths) - 1
+    assert [(e["previous_path"], e["path"]) for e in resumed] == list(zip(paths, paths[1:]))
+    for path in paths:
         recording = open_recording(path)  # every file opens, the cut ones included
-        # the last file may have been resumed just before the session stopped (a loaded machine): no chunk yet
-        assert recording.chunk_count > 0 or path == out["paths"][-1]
-        assert os.path.getsize(path) <= 12_000
-    assert open_recording(out["paths"][0]).chunk_count > 0
+        # the last file may have been resumed just before the session stopped: no chunk yet
+        assert recording.chunk_count > 0 or path == paths[-1]
+        assert os.path.getsize(path) <= FILE_LIMIT_BYTES
 
 
 def test_a_folder_that_cannot_be_recorded_into_still_gives_a_live_session(tmp_path):

@@ -5,12 +5,12 @@ import re
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
 
 from groundstation.recording import open_recording
+from tests.waiting import LIMIT_S, wait_for
 
 posix_only = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals and signals are POSIX")
 
@@ -53,9 +53,10 @@ def test_ctrl_c_stops_cleanly_and_says_where_the_recording_is(tmp_path):
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     first = process.stdout.readline()
     assert first.startswith("recording simulated bridge (hover, seed 1) to "), process.stderr.read()
-    time.sleep(2.5)
+    # the file on disk (flushed every 0.25 s) holds the chunks asserted below, however slowly they come
+    wait_for(lambda: open_recording(first.split(" to ", 1)[1].strip()).chunk_count > 50, what="50 chunks on disk")
     process.send_signal(signal.SIGINT)
-    out, err = process.communicate(timeout=20)
+    out, err = process.communicate(timeout=LIMIT_S)
     assert process.returncode == 0 and "Traceback" not in err, err
     path = recording_of(out)
     assert path == first.split(" to ", 1)[1].strip()
@@ -99,17 +100,12 @@ def test_the_summary_says_when_the_port_is_gone_or_silent(tmp_path):
     stream = SimStream(Scenario("static", 10.0, seed=1))
     with session:
         os.write(master, b"".join(c.data for c in stream.advance(2.0)))  # 1 s of frames after the boot second
-        deadline = time.monotonic() + 10
-        while len(session.pipeline.imu) < 90:
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
+        wait_for(lambda: len(session.pipeline.imu) >= 90)
         assert summary_line(session).startswith("t ")
-        time.sleep(1.5)  # the radio goes quiet; the adapter is still there
-        assert re.match(r"NO DATA for [12] s from /dev/pts/", summary_line(session))
+        # the radio goes quiet; the adapter is still there
+        wait_for(lambda: re.match(r"NO DATA for \d+ s from /dev/pts/", summary_line(session)), what="NO DATA")
         os.close(master)  # the adapter is pulled out
-        while session.connected:
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
+        wait_for(lambda: not session.connected)
         assert summary_line(session).startswith("PORT GONE: ")
 
 

@@ -6,11 +6,13 @@ back (uplink) to the simulated firmware, which answers with ACKs as the flight b
 
 from __future__ import annotations
 
+import select
 import socket
 import threading
 import time
 
 from groundstation.sim.stream import Scenario, SimStream
+from tests.waiting import LIMIT_S
 
 SCENARIO = Scenario("hover", 60.0, seed=7)
 
@@ -83,16 +85,15 @@ class TcpBridge(_Pump):
                 self.stream.advance(time.monotonic() - t0)  # nobody listening: those bytes are lost
                 continue
             self.connections += 1
-            client.settimeout(0.01)
+            client.settimeout(LIMIT_S)
             with client:
                 while not self.stop.is_set() and not self._drop.is_set():
                     for chunk in self.stream.advance(time.monotonic() - t0):
                         client.sendall(chunk.data)
                         self.sent += chunk.data
-                    try:
-                        data = client.recv(4096)
-                    except TimeoutError:
+                    if not select.select([client], [], [], 0.01)[0]:  # the pace of the stream, not a wait for an outcome
                         continue
+                    data = client.recv(4096)
                     if not data:
                         break
                     self._received(data)
@@ -102,18 +103,12 @@ class TcpBridge(_Pump):
 
 
 def _close_gently(client: socket.socket) -> None:
-    """A FIN after the last bytes, then the peer's unread bytes drained: closing with unread bytes sends a
-    reset, and the peer's kernel then drops the bytes it had not yet handed to the session."""
+    """A FIN after the last bytes, then the peer's bytes drained until it closes too (the session does
+    when it reads the end): closing with unread bytes sends a reset, and the reset discards what this
+    side had not yet delivered."""
     try:
         client.shutdown(socket.SHUT_WR)
-    except OSError:
+        while client.recv(4096):
+            pass
+    except OSError:  # a reset from the peer, or LIMIT_S without its close: nothing more to keep
         return
-    deadline = time.monotonic() + 1.0
-    while time.monotonic() < deadline:
-        try:
-            if not client.recv(4096):
-                return
-        except TimeoutError:
-            continue
-        except OSError:
-            return

@@ -4,7 +4,7 @@ aircraft (its ACKs come back)."""
 
 from groundstation.recording import open_recording
 from groundstation.session.factory import open_session
-from tests.waiting import wait_for
+from tests.waiting import LIMIT_S, wait_for
 
 from .bridges import TcpBridge, UdpBridge
 
@@ -116,3 +116,82 @@ def test_udp_source_locks_to_its_bridge_and_a_spoofer_neither_rescales_nor_recei
     finally:
         bridge.close()
         spoofer.close()
+
+
+def _connections_that_open_late(monkeypatch):
+    """``socket.create_connection`` that returns only once the peer's first bytes have arrived: the
+    bridge sends as soon as it accepts, and on a loaded machine (or a slow link's RTT after a
+    preempted reader) those bytes are there before the source has finished opening."""
+    import select
+    import socket
+
+    connect = socket.create_connection
+
+    def late(*args, **kwargs):
+        sock = connect(*args, **kwargs)
+        assert select.select([sock], [], [], LIMIT_S)[0], "the bridge sent nothing"
+        return sock
+
+    monkeypatch.setattr(socket, "create_connection", late)
+
+
+def _serve(payloads: list[bytes]):
+    """A bridge that, for each connection in turn, sends its payload on accepting and closes at once (its
+    last data and its FIN arrive together)."""
+    import socket
+    import threading
+
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def serve():
+        for payload in payloads:
+            client, _ = server.accept()
+            with client:
+                client.sendall(payload)
+                client.shutdown(socket.SHUT_WR)
+                while client.recv(4096):  # unread bytes at close would make it a reset: read until the source closes
+                    pass
+
+    thread = threading.Thread(target=serve, daemon=True)
+    thread.start()
+    return server, thread
+
+
+def read_until_dropped(source) -> list[bytes]:
+    import time
+
+    from groundstation.sources import SourceError
+
+    chunks = []
+    deadline = time.monotonic() + LIMIT_S
+    while True:
+        assert time.monotonic() < deadline, "the bridge's close: not seen"
+        try:
+            chunk = source.read()
+        except SourceError:
+            return chunks
+        if chunk is not None:
+            chunks.append(chunk.data)
+
+
+def test_tcp_source_keeps_the_bytes_that_arrive_while_it_connects_and_those_that_come_with_the_close(monkeypatch):
+    """The bytes a bridge sends the moment it accepts, and its last bytes arriving together with its FIN,
+    all reach the session, on the first connection and on a reconnection, in a few chunks (not one per byte)."""
+    import random
+
+    from groundstation.sources import open_source
+
+    _connections_that_open_late(monkeypatch)
+    payloads = [random.Random(seed).randbytes(4096) for seed in (1, 2)]
+    server, thread = _serve(payloads)
+    try:
+        source = open_source(f"tcp://127.0.0.1:{server.getsockname()[1]}")
+        first = read_until_dropped(source)
+        source.reopen()  # as the session does after the bridge dropped the connection
+        second = read_until_dropped(source)
+        source.close()
+        thread.join(timeout=LIMIT_S)
+    finally:
+        server.close()
+    assert [b"".join(first), b"".join(second)] == payloads
+    assert len(first) <= 8 and len(second) <= 8  # what arrived together is read together

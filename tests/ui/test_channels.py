@@ -9,6 +9,7 @@ from PySide6 import QtWidgets
 from groundstation.session.factory import Sessions
 
 from groundstation.ui.main_window import MainWindow
+from tests.waiting import LIMIT_MS
 
 
 def listed(view) -> set[str]:
@@ -39,7 +40,7 @@ def test_channels_are_listed_plotted_in_panes_and_remembered(window, qtbot, tmp_
     view.channels.add("onboard.lambda")
     assert len(view.channels.items) == 2
     curves = {spec.label: curve for spec, curve in view.channels.stacked.curves}
-    qtbot.waitUntil(lambda: all(c.xData is not None and len(c.xData) > 10 for c in curves.values()), timeout=8000)
+    qtbot.waitUntil(lambda: all(c.xData is not None and len(c.xData) > 10 for c in curves.values()), timeout=LIMIT_MS)
     for label, curve in curves.items():
         table, column = label.split(".")
         times, values = tables[table].column("time_s"), tables[table].column(column)
@@ -124,7 +125,7 @@ def test_an_xy_plot_draws_east_against_north(window, qtbot):
     view.channels.add_xy("gps.lon_deg", "position.pos_n_m")  # another table's: its row at or before each time
     curve, across = view.channels.xy_plots.curves
     table = window.session.view.tables["position"]
-    qtbot.waitUntil(lambda: len(table) > 1300 and curve.xData is not None and across.xData is not None, timeout=30000)
+    qtbot.waitUntil(lambda: len(table) > 1300 and curve.xData is not None and across.xData is not None, timeout=LIMIT_MS)
     assert len(curve.xData) < 1100
     table = window.session.view.tables["position"]
     east, north = table.column("pos_e_m"), table.column("pos_n_m")
@@ -160,7 +161,7 @@ def test_a_custom_series_from_an_expression_is_listed_plotted_and_checked(window
     assert "custom.roll_difference_deg" in listed(view)
     view.channels.add("custom.roll_difference_deg")
     (spec, curve), = view.channels.stacked.curves
-    qtbot.waitUntil(lambda: curve.xData is not None and len(curve.xData) > 50, timeout=10000)
+    qtbot.waitUntil(lambda: curve.xData is not None and len(curve.xData) > 50, timeout=LIMIT_MS)
     imu, onboard = window.session.view.imu, window.session.view.onboard
     times = imu.column("time_s")
     t = curve.xData[-40:]

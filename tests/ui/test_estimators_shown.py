@@ -19,6 +19,7 @@ from groundstation.ui.estimator_panel import SHOWN_COLUMNS
 from groundstation.ui.main_window import MainWindow
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 NEW = ("hfm", "ecfm", "mcf", "ukf", "sssrukf")
 LIVE_FILTERS = live_estimators()
@@ -56,7 +57,7 @@ def test_new_estimators_run_start_hidden_and_toggle_on_the_demo(window, qtbot):
     assert {(name, setting) for name, setting in panel.boxes if name in NEW} == {
         ("hfm", "beta"), ("ecfm", "kp"), ("ecfm", "ki")}
 
-    qtbot.waitUntil(lambda: view.frames_drawn > 20 and len(window.session.view.imu) > 300, timeout=10000)
+    qtbot.waitUntil(lambda: view.frames_drawn > 20 and len(window.session.view.imu) > 300, timeout=LIMIT_MS)
     rows = imu_rows(window)
     for name in NEW:  # the columns fill: unit quaternions from the start
         q = np.column_stack([rows[f"{name}_q{c}"] for c in "wxyz"])
@@ -71,7 +72,7 @@ def test_new_estimators_run_start_hidden_and_toggle_on_the_demo(window, qtbot):
         panel.shown[name].setChecked(True)
         shown_as = label(name)
         heading = curves(view.heading, shown_as)[0]
-        qtbot.waitUntil(lambda: points(heading) > 50, timeout=3000)
+        qtbot.waitUntil(lambda: points(heading) > 50, timeout=LIMIT_MS)
         assert all(c.isVisible() for c in curves(view.attitude, shown_as) + curves(view.heading, shown_as))
         assert shown_as in view.heading.read_at(float(heading.xData[-1]))  # the crosshair reads it too
         panel.shown[name].setChecked(False)
@@ -79,14 +80,14 @@ def test_new_estimators_run_start_hidden_and_toggle_on_the_demo(window, qtbot):
         assert shown_as not in view.attitude.visible_labels()
     view.tabs.setCurrentWidget(view.attitude)  # shown now, the attitude plots draw it too
     panel.shown["ukf"].setChecked(True)
-    qtbot.waitUntil(lambda: points(curves(view.attitude, "UKF")[0]) > 50, timeout=3000)
+    qtbot.waitUntil(lambda: points(curves(view.attitude, "UKF")[0]) > 50, timeout=LIMIT_MS)
     window.grab()  # the two-row legend and the grid of boxes paint
 
 
 def test_hfm_yaw_follows_the_compass_on_the_demo(window, qtbot):
     window.start_demo()
     pipeline = window.session.view
-    qtbot.waitUntil(lambda: len(pipeline.imu) > 800 and len(pipeline.tables["mag_raw"]) > 400, timeout=15000)
+    qtbot.waitUntil(lambda: len(pipeline.imu) > 800 and len(pipeline.tables["mag_raw"]) > 400, timeout=LIMIT_MS)
     rows = imu_rows(window)
     with window.session.lock:
         mag = pipeline.tables["mag_raw"].to_dict()
@@ -102,7 +103,7 @@ def test_hfm_yaw_follows_the_compass_on_the_demo(window, qtbot):
     view.tabs.setCurrentWidget(view.heading)
     window.estimator_panel.shown["hfm"].setChecked(True)
     hfm = curves(view.heading, "HF+mag")[0]
-    qtbot.waitUntil(lambda: points(hfm) > 50, timeout=3000)
+    qtbot.waitUntil(lambda: points(hfm) > 50, timeout=LIMIT_MS)
     assert np.all((hfm.yData >= 0) & (hfm.yData < 360))  # the Heading tab's 0..360°
 
 
@@ -120,7 +121,7 @@ def app_recording(tmp_path_factory):
 def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_recording, tmp_path):
     open_file(window, qtbot, app_recording)
     window.replay_bar.speed_box.setCurrentIndex(window.replay_bar.speed_box.findData(64.0))
-    qtbot.waitUntil(lambda: not window.session.running, timeout=20000)
+    qtbot.waitUntil(lambda: not window.session.running, timeout=LIMIT_MS)
     assert window.session.view.filters == LIVE_FILTERS
     rows = imu_rows(window)
     for name in NEW:
@@ -130,7 +131,7 @@ def test_a_replay_and_its_export_carry_every_estimator(window, qtbot, app_record
     assert not any(window.estimator_panel.shown[name].isChecked() for name in NEW)
     window.estimator_panel.shown["mcf"].setChecked(True)
     mcf = curves(window.live_view.attitude, "MCF")[0]
-    qtbot.waitUntil(lambda: points(mcf) > 0, timeout=3000)  # drawn on switching on, with nothing new arriving
+    qtbot.waitUntil(lambda: points(mcf) > 0, timeout=LIMIT_MS)  # drawn on switching on, with nothing new arriving
 
     out = tmp_path / "demo.csv"
     job = ExportJob(load_session, app_recording, out).start()

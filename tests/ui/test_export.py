@@ -8,6 +8,7 @@ from groundstation.session.load import load_session
 from groundstation.ui.export_dialog import ExportDialog
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 
 def test_export_dialog_writes_the_selected_range(window, qtbot, recording, tmp_path):
@@ -19,7 +20,7 @@ def test_export_dialog_writes_the_selected_range(window, qtbot, recording, tmp_p
     dialog.t_from.setValue(5.0)
     dialog.t_to.setValue(10.0)
     dialog.export_button.click()
-    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=20000)
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=LIMIT_MS)
     assert dialog.status.text().startswith(f"wrote {out}") and dialog.progress.value() == 1000
     table = pd.read_csv(out)
     assert table["time_s"].min() >= 5.0 and table["time_s"].max() <= 10.0 and len(table) > 400
@@ -34,7 +35,7 @@ def test_export_dialog_writes_a_workbook(qtbot, recording, tmp_path):
     dialog.path_edit.setText(str(out))
     dialog.rate.setValue(10)
     dialog.export_button.click()
-    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=30000)
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=LIMIT_MS)
     assert dialog.status.text().startswith(f"wrote {out}: sheets Session, Attitude") and out.stat().st_size > 10_000
 
 
@@ -46,7 +47,7 @@ def test_cancel_leaves_no_file(qtbot, recording, tmp_path):
     dialog.path_edit.setText(str(out))
     dialog.export_button.click()
     dialog.cancel_button.click()  # before the decoder's first progress report has passed
-    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=20000)
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=LIMIT_MS)
     assert dialog.status.text() == "cancelled; nothing was written"
     assert not out.exists() and not list(tmp_path.glob(".cancelled*"))
 
@@ -67,7 +68,7 @@ def test_the_dialog_saves_into_documents_then_where_the_user_last_exported(windo
     dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
     dialog.path_edit.setText(str(elsewhere / "first.csv"))
     dialog.export_button.click()
-    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=20000)
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=LIMIT_MS)
     dialog.close()
     again = window.export()
     qtbot.addWidget(again)

@@ -13,6 +13,7 @@ import numpy as np
 
 from groundstation.estimation import live_estimators
 from groundstation.session.load import load_session
+from tests.waiting import LIMIT_MS
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -69,10 +70,10 @@ def test_the_tabs_out_of_sight_are_built_when_first_asked_for_with_their_titles_
     assert "vibration" in view.__dict__ and tabs.currentWidget() is view.vibration
     tabs.setCurrentIndex(titles.index("Channels"))
     window.start_demo()
-    qtbot.waitUntil(lambda: len(window.session.view.imu) > 50, timeout=20000)
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 50, timeout=LIMIT_MS)
     assert [tabs.tabText(i) for i in range(tabs.count())] == titles
     assert [tabs.widget(i) for i in range(tabs.count())] == [view.attitude, view.sensors, view.diagnostics, view.heading,
                                                              view.position, view.channels, view.vibration]
     assert tabs.currentWidget() is view.channels
     tabs.setCurrentWidget(view.sensors)  # a built tab shows the session's samples
-    qtbot.waitUntil(lambda: view.frames_drawn > 3 and view.current_plots() is view.sensors, timeout=10000)
+    qtbot.waitUntil(lambda: view.frames_drawn > 3 and view.current_plots() is view.sensors, timeout=LIMIT_MS)

@@ -11,6 +11,7 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.session.factory import Sessions
 from groundstation.ui.main_window import MainWindow
+from tests.waiting import LIMIT_MS
 
 posix = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
 
@@ -52,15 +53,15 @@ def test_typing_a_port_and_pressing_return_while_the_demo_runs_switches_to_it(wi
     qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
     assert window.session is not demo and bridge_pty in window.session.source.description
     assert not demo.running
-    qtbot.waitUntil(lambda: len(window.session.view.imu) > 20, timeout=15000)
+    qtbot.waitUntil(lambda: len(window.session.view.imu) > 20, timeout=LIMIT_MS)
 
 
 def test_the_keys_work_after_typing_a_source_and_clicking_around(window, qtbot):
     window.activateWindow()
-    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=3000)
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=LIMIT_MS)
     type_in_source_box(qtbot, window, "sim:?seed=2")
     qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
-    qtbot.waitUntil(lambda: window.live_view.frames_drawn > 10, timeout=8000)
+    qtbot.waitUntil(lambda: window.live_view.frames_drawn > 10, timeout=LIMIT_MS)
     press(qtbot, window, QtCore.Qt.Key_Space)
     assert window.live_view.paused and window.bar.source == "sim:?seed=2"  # no space typed into the box
     press(qtbot, window, QtCore.Qt.Key_End)
@@ -98,7 +99,7 @@ def test_reconnected_carries_the_time_the_data_came_back(window, qtbot, tmp_path
         process.stdout.readline()
         type_in_source_box(qtbot, window, str(link))
         for _ in range(3):  # the port may vanish between looking and pressing Return: a person presses it again
-            qtbot.waitUntil(link.exists, timeout=10000)
+            qtbot.waitUntil(link.exists, timeout=LIMIT_MS)
             qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
             if window.session is not None:
                 break
@@ -106,8 +107,8 @@ def test_reconnected_carries_the_time_the_data_came_back(window, qtbot, tmp_path
         assert window.session is not None, window.banner.text()
         view = window.session.view
         kinds = lambda: [e["kind"] for e in list(view.events)]  # noqa: E731
-        qtbot.waitUntil(lambda: "reconnected" in kinds(), timeout=30000)
-        qtbot.waitUntil(lambda: window.event_console.table.rowCount() >= len(view.events), timeout=5000)
+        qtbot.waitUntil(lambda: "reconnected" in kinds(), timeout=LIMIT_MS)
+        qtbot.waitUntil(lambda: window.event_console.table.rowCount() >= len(view.events), timeout=LIMIT_MS)
     finally:
         process.terminate()
         process.wait(timeout=10)

@@ -6,6 +6,7 @@ import socket
 import pytest
 
 from tests.foxglove_client import Client, decoded
+from tests.waiting import LIMIT_MS
 
 
 def free_port() -> int:
@@ -24,7 +25,7 @@ def test_the_switch_serves_the_live_session(window, qtbot):
     client = Client(port)
     try:
         assert client.ready.wait(10)
-        qtbot.waitUntil(lambda: len(client.messages.get("/imu", [])) > 100, timeout=15000)
+        qtbot.waitUntil(lambda: len(client.messages.get("/imu", [])) > 100, timeout=LIMIT_MS)
         times = [row.time_s for row in decoded(client, "/imu")]
         assert times == sorted(times) and len(set(times)) == len(times)  # in order, none twice
     finally:

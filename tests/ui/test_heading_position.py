@@ -14,6 +14,7 @@ from groundstation.sim.profiles import make_profile
 from groundstation.ui.navigation import heading_now, newest_row
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 DURATION_S, SEED = 20, 3
 GPS_NOISE_M = AuxSettings().gps_position_noise_m
@@ -35,7 +36,7 @@ def replay_to_the_end(window, qtbot, path) -> Pipeline:
     open_file(window, qtbot, path)
     bar = window.replay_bar
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(64.0))
-    qtbot.waitUntil(lambda: not window.session.running, timeout=15000)
+    qtbot.waitUntil(lambda: not window.session.running, timeout=LIMIT_MS)
     return window.session.view
 
 
@@ -51,7 +52,7 @@ def test_readouts_and_plots_follow_the_tables_and_the_truth(window, qtbot, aided
     pipeline = replay_to_the_end(window, qtbot, aided_recording)
     view, gps = window.live_view, newest_row(pipeline.tables["gps"])
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["heading"].text() == f"{gps['heading_deg']:5.1f}° GPS",
-                    timeout=3000)
+                    timeout=LIMIT_MS)
     first_device_s = pipeline.imu.column("device_time_us")[0] / 1e6 - pipeline.imu.column("time_s")[0]
     truth = make_profile("flight", DURATION_S, SEED).truth(pipeline.tables["gps"].column("time_s") + first_device_s)
     true_yaw_deg = math.degrees(quaternion.to_euler_zyx(truth.q_body_to_ned[-1])[0])
@@ -63,7 +64,7 @@ def test_readouts_and_plots_follow_the_tables_and_the_truth(window, qtbot, aided
     compass = next(c for s, c in view.heading.curves if s.label == "compass")
     gps_heading = next(c for s, c in view.heading.curves if s.label == "GPS")
     newest_s = newest_row(pipeline.tables["mag_raw"])["time_s"]  # the plots take the rows a tick after the pipeline
-    qtbot.waitUntil(lambda: compass.xData is not None and compass.xData[-1] == newest_s, timeout=5000)
+    qtbot.waitUntil(lambda: compass.xData is not None and compass.xData[-1] == newest_s, timeout=LIMIT_MS)
     assert compass.yData[-1] == np.float32(newest_row(pipeline.tables["mag_raw"])["heading_deg"] % 360.0)
     assert gps_heading.yData[-1] == np.float32(gps["heading_deg"])
 
@@ -97,7 +98,7 @@ def test_readouts_and_plots_follow_the_tables_and_the_truth(window, qtbot, aided
 def test_a_session_without_aiding_sensors_shows_a_dash(window, qtbot, recording):
     open_file(window, qtbot, recording)
     view, panel = window.live_view, window.attitude_panel
-    qtbot.waitUntil(lambda: view.frames_drawn > 5 and panel.readouts["yaw"].text() != "—", timeout=5000)
+    qtbot.waitUntil(lambda: view.frames_drawn > 5 and panel.readouts["yaw"].text() != "—", timeout=LIMIT_MS)
     assert panel.readouts["heading"].text() == "—"
     assert not view.tabs.isTabVisible(view.tabs.indexOf(view.heading))
     assert not view.tabs.isTabVisible(view.tabs.indexOf(view.position))
@@ -112,11 +113,11 @@ def test_the_demo_shows_heading_and_position(window, qtbot):
     window.start_demo()
     view = window.live_view
     qtbot.waitUntil(lambda: view.tabs.isTabVisible(view.tabs.indexOf(view.position))
-                    and window.attitude_panel.readouts["heading"].text().endswith("GPS"), timeout=8000)
+                    and window.attitude_panel.readouts["heading"].text().endswith("GPS"), timeout=LIMIT_MS)
     tables = window.session.view.tables
     assert len(tables["mag_raw"]) and len(tables["baro"]) and len(tables["gps"])
     view.tabs.setCurrentWidget(view.position)
-    qtbot.waitUntil(lambda: view.position.readouts["fix"].text() == "3D", timeout=3000)
+    qtbot.waitUntil(lambda: view.position.readouts["fix"].text() == "3D", timeout=LIMIT_MS)
     hf_heading = next(c for s, c in view.heading.curves if s.label == "HF")
     assert not hf_heading.isVisible()  # the comparison estimators start switched off, here too
     window.estimator_panel.shown["hf"].setChecked(True)

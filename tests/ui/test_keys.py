@@ -5,6 +5,7 @@ import pytest
 from PySide6 import QtCore, QtWidgets
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 
 def key(qtbot, window, name, modifier=QtCore.Qt.NoModifier):
@@ -17,7 +18,7 @@ def x_range(window):
 
 def test_keys_live(window, qtbot):
     window.start_demo()
-    qtbot.waitUntil(lambda: window.live_view.frames_drawn > 20, timeout=8000)
+    qtbot.waitUntil(lambda: window.live_view.frames_drawn > 20, timeout=LIMIT_MS)
     key(qtbot, window, QtCore.Qt.Key_Space)
     assert window.live_view.paused
     low, high = x_range(window)

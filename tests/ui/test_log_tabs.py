@@ -7,6 +7,7 @@ from PySide6 import QtCore
 
 from tests.ui.helpers import open_file
 from tests.ui.test_replay import flightlog, points
+from tests.waiting import LIMIT_MS
 
 COPTER = "arducopter_cubeorange_2023-07-06_10-12-18.bin"
 SITL_ULOG = "px4_sitl_quad_groundtruth.ulg"
@@ -28,14 +29,14 @@ def test_a_dataflash_log_fills_the_heading_and_position_tabs_and_lists_its_table
     live = played_to_the_end(window, qtbot, flightlog(COPTER))
     tabs = live.tabs
     qtbot.waitUntil(lambda: tabs.isTabVisible(tabs.indexOf(live.heading)) and tabs.isTabVisible(tabs.indexOf(live.position)),
-                    timeout=10000)  # fmt: skip
+                    timeout=LIMIT_MS)  # fmt: skip
     tabs.setCurrentWidget(live.heading)
     compass = curve(live.heading, "compass_heading_deg")
-    qtbot.waitUntil(lambda: points(compass) >= len(window.session.data.tables["mag_raw"]["time_s"]), timeout=10000)
+    qtbot.waitUntil(lambda: points(compass) >= len(window.session.data.tables["mag_raw"]["time_s"]), timeout=LIMIT_MS)
     assert np.isfinite(compass.yData).mean() > 0.99
     tabs.setCurrentWidget(live.position)
     qtbot.waitUntil(lambda: points(live.position.tracks["gps"]) > 400 and points(live.position.tracks["position"]) > 1000,
-                    timeout=10000)  # fmt: skip
+                    timeout=LIMIT_MS)  # fmt: skip
     tables = [live.channels.tree.topLevelItem(i).text(0) for i in range(live.channels.tree.topLevelItemCount())]
     assert {"imu", "gps", "mag_raw", "position", "att", "vibe_0", "gyro_fast_0", "accel_fast_0"} <= set(tables)
     assert len(tables) > 60
@@ -46,7 +47,7 @@ def test_a_dataflash_log_fills_the_heading_and_position_tabs_and_lists_its_table
 def test_a_sitl_log_plots_its_truth_dashed(window, qtbot):
     live = played_to_the_end(window, qtbot, flightlog(SITL_ULOG))
     truth = curve(live.attitude, "truth_pitch_deg")
-    qtbot.waitUntil(lambda: points(truth) == len(window.session.data.tables["truth"]["time_s"]), timeout=10000)
+    qtbot.waitUntil(lambda: points(truth) == len(window.session.data.tables["truth"]["time_s"]), timeout=LIMIT_MS)
     assert truth.opts["pen"].style() == QtCore.Qt.DashLine
     assert np.nanmax(np.abs(truth.yData)) > 1.0  # it flew
 

@@ -11,6 +11,7 @@ from PySide6 import QtCore
 
 from groundstation.sources.sniff import as_mavlink, mavlink_packets
 from tests.ui.test_first_session import type_in_source_box
+from tests.waiting import LIMIT_MS
 
 
 def free_udp_port() -> int:
@@ -34,10 +35,10 @@ def test_mavlink_on_a_udp_bridge_source_is_opened_as_mavlink(window, qtbot, sitl
     typed = f"udp://127.0.0.1:{sitl_on_udp}"
     type_in_source_box(qtbot, window, typed)
     qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
-    qtbot.waitUntil(lambda: window.session is not None and window.session.view.protocol == "mavlink", timeout=20000)
+    qtbot.waitUntil(lambda: window.session is not None and window.session.view.protocol == "mavlink", timeout=LIMIT_MS)
     assert window.bar.source == f"mavlink:udpin:127.0.0.1:{sitl_on_udp}"
     assert f"MAVLink heard on {typed}" in window.source_label.text()
-    qtbot.waitUntil(lambda: len(window.session.view.onboard) > 2, timeout=20000)  # its attitude arrives
+    qtbot.waitUntil(lambda: len(window.session.view.onboard) > 2, timeout=LIMIT_MS)  # its attitude arrives
     assert not window.banner.isVisible()
 
 
@@ -45,7 +46,7 @@ def test_the_projects_own_bridge_is_never_taken_for_mavlink(window, qtbot):
     type_in_source_box(qtbot, window, "sim:?seed=6&ber=1e-3")  # bit errors: CRC failures, no frame of MAVLink
     qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
     session = window.session
-    qtbot.waitUntil(lambda: len(session.view.imu) > 100, timeout=10000)
+    qtbot.waitUntil(lambda: len(session.view.imu) > 100, timeout=LIMIT_MS)
     assert session.heard_protocol is None and window.session is session
 
 

@@ -2,6 +2,7 @@
 goes, a tuned parameter reaches the estimator and the recording, the aircraft acknowledges commands."""
 
 from groundstation.recording import open_recording
+from tests.waiting import LIMIT_MS
 
 
 def curve(window, quantity):
@@ -14,7 +15,7 @@ def test_estimator_toggle_and_live_tuning(window, qtbot):
     hf = curve(window, "hf_pitch_deg")
     assert not hf.isVisible()
     panel.shown["hf"].setChecked(True)
-    qtbot.waitUntil(lambda: hf.isVisible() and hf.xData is not None and len(hf.xData) > 50, timeout=5000)
+    qtbot.waitUntil(lambda: hf.isVisible() and hf.xData is not None and len(hf.xData) > 50, timeout=LIMIT_MS)
     assert curve(window, "hf_roll_deg").isVisible()  # both plots follow
     panel.shown["hf"].setChecked(False)
     assert not hf.isVisible() and not curve(window, "hf_roll_deg").isVisible()
@@ -33,13 +34,13 @@ def test_estimator_toggle_and_live_tuning(window, qtbot):
 def test_uplink_commands_are_acknowledged(window, qtbot):
     window.start_demo()
     uplink = window.uplink_panel
-    qtbot.waitUntil(lambda: "mode both" in uplink.config_label.text(), timeout=5000)
+    qtbot.waitUntil(lambda: "mode both" in uplink.config_label.text(), timeout=LIMIT_MS)
     uplink.mode_box.setCurrentText("raw")
     uplink.mode_button.click()
     window.estimator_panel.boxes["ahf", "lambda_max"].setValue(1.5)
     window.estimator_panel.sendToAircraft.emit(window.estimator_panel.values("ahf"))
-    qtbot.waitUntil(lambda: uplink.answers.text().count("ACK ok") == 3, timeout=5000)
-    qtbot.waitUntil(lambda: "mode raw" in uplink.config_label.text(), timeout=3000)  # CONFIG follows set_mode
+    qtbot.waitUntil(lambda: uplink.answers.text().count("ACK ok") == 3, timeout=LIMIT_MS)
+    qtbot.waitUntil(lambda: "mode raw" in uplink.config_label.text(), timeout=LIMIT_MS)  # CONFIG follows set_mode
 
 
 def test_tuned_settings_and_shown_estimators_are_remembered(window, qtbot, tmp_path):

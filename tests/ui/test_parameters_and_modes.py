@@ -21,7 +21,7 @@ def copter(window, qtbot):
         pytest.skip(f"{COPTER} is absent (the shared flight logs)")
     open_file(window, qtbot, COPTER, timeout_ms=120000)
     assert window.loading is None and not window.banner.isVisible(), window.banner.text()
-    play_to_the_end(window, qtbot, timeout_ms=60000)
+    play_to_the_end(window, qtbot)
     qtbot.wait(600)  # a figures tick
     return window
 

@@ -13,6 +13,7 @@ from groundstation.estimation import ESTIMATORS, live_estimators
 from groundstation.ui.live_view import ONBOARD_COLOUR, PALETTE, attitude_plots, colour, diagnostic_plots
 from groundstation.ui.plots import StackedPlots
 from groundstation.ui.series import Series
+from tests.waiting import LIMIT_MS
 
 FILTERS = ("ahf", "hf", "ecf", "hfm", "ecfm", "mcf", "ukf", "sssrukf")
 
@@ -77,7 +78,7 @@ def test_a_curve_switched_on_from_outside_repaints_its_legend_entry(qtbot):
     qtbot.wait(100)
     painted.clear()
     plots.set_visible("HF", True)  # the Estimators panel's check box
-    qtbot.waitUntil(lambda: True in painted, timeout=1000)  # the entry drawn as shown
+    qtbot.waitUntil(lambda: True in painted, timeout=LIMIT_MS)  # the entry drawn as shown
 
 
 def test_resume_view_follows_the_newest_data_at_once(plots):

@@ -2,6 +2,7 @@
 behind a display that still looks live."""
 
 from tests.session.test_unexpected_frames import FailingPipeline
+from tests.waiting import LIMIT_MS
 
 
 def test_a_failure_in_the_reader_shows_in_the_banner(window, qtbot, monkeypatch):
@@ -9,6 +10,6 @@ def test_a_failure_in_the_reader_shows_in_the_banner(window, qtbot, monkeypatch)
     window.connect_serial("sim:")
     session = window.session
     assert session is not None
-    qtbot.waitUntil(lambda: window.banner.isVisible(), timeout=10000)
+    qtbot.waitUntil(lambda: window.banner.isVisible(), timeout=LIMIT_MS)
     assert not session.running
     assert "ZeroDivisionError: float division by zero" in window.banner.text()

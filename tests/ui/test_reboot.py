@@ -6,6 +6,8 @@ import math
 import numpy as np
 from PySide6 import QtGui
 
+from tests.waiting import LIMIT_MS
+
 REBOOT_AFTER_S = 3.0  # the uptime must exceed the reboot's outage, else the restart cannot be told (clock.py)
 
 
@@ -25,11 +27,11 @@ def test_a_device_reboot_breaks_every_curve_and_the_link_panel_shows_no_restart_
     window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     session = window.session
     events = session.view.events
-    qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=10000)
+    qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=LIMIT_MS)
     reset = next(e for e in events if e["kind"] == "device_reset")
     before_s, after_s = reset["session_time_before_s"], reset["session_time_s"]
     qtbot.waitUntil(lambda: window.live_view.attitude.curves[0][1].xData is not None
-                    and window.live_view.attitude.curves[0][1].xData[-1] > after_s + 1.5, timeout=10000)
+                    and window.live_view.attitude.curves[0][1].xData[-1] > after_s + 1.5, timeout=LIMIT_MS)
     window.live_view.window_box.setCurrentText("whole session")
     window.live_view.redraw()
     shown = [(spec, c) for spec, c in window.live_view.attitude.curves if c.isVisible() and c.xData is not None]
@@ -56,14 +58,14 @@ def test_after_a_device_reboot_the_attitude_panel_warns_while_the_estimates_re_c
     window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     warning = window.attitude_panel.reconverging
     events = window.session.view.events
-    qtbot.waitUntil(lambda: window.session.view.imu.tail(1).size and window.session.view.imu.tail(1)[0][0] > 1.0, timeout=10000)
+    qtbot.waitUntil(lambda: window.session.view.imu.tail(1).size and window.session.view.imu.tail(1)[0][0] > 1.0, timeout=LIMIT_MS)
     window.tick()
     assert not warning.isVisible()  # nothing restarted yet
-    qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=10000)
+    qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=LIMIT_MS)
     reset_s = next(e for e in events if e["kind"] == "device_reset")["session_time_s"]
-    qtbot.waitUntil(lambda: (window.tick(), warning.isVisible())[1], timeout=5000)
+    qtbot.waitUntil(lambda: (window.tick(), warning.isVisible())[1], timeout=LIMIT_MS)
     assert "Re-converging after device reboot" in warning.text()
     assert window.session.view.imu.tail(1)[0][0] < reset_s + RECONVERGE_S
     # gone once every estimator is back on truth (RECONVERGE_S of samples after the restart)
-    qtbot.waitUntil(lambda: (window.tick(), not warning.isVisible())[1], timeout=int((RECONVERGE_S + 5) * 1000))
+    qtbot.waitUntil(lambda: (window.tick(), not warning.isVisible())[1], timeout=LIMIT_MS)
     assert window.session.view.imu.tail(1)[0][0] >= reset_s + RECONVERGE_S

@@ -5,12 +5,13 @@ from groundstation.recording import open_recording
 from groundstation.session.pipeline import Pipeline
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 
 def test_recording_stops_and_starts_a_new_file_that_replays(window, qtbot):
     window.start_demo()
     session, action = window.session, window.record_action
-    qtbot.waitUntil(lambda: session.recorder.bytes_written > 20_000, timeout=10000)
+    qtbot.waitUntil(lambda: session.recorder.bytes_written > 20_000, timeout=LIMIT_MS)
     first = session.recording_path
     assert action.isEnabled() and action.text() == "Stop recording"
     action.trigger()
@@ -24,11 +25,10 @@ def test_recording_stops_and_starts_a_new_file_that_replays(window, qtbot):
     action.trigger()
     second = session.recording_path
     assert second != first and second.parent == first.parent and session.recorder.state == "recording"
-    qtbot.waitUntil(lambda: session.recorder.bytes_written > 20_000, timeout=10000)
+    qtbot.waitUntil(lambda: session.recorder.bytes_written > 20_000, timeout=LIMIT_MS)
     window.tick()
     window.ticks = 0  # the next tick refreshes the figures
-    qtbot.wait(300)
-    assert f"● recording {second}" in window.recording_label.text()
+    qtbot.waitUntil(lambda: f"● recording {second}" in window.recording_label.text(), timeout=LIMIT_MS)
     window.disconnect()
     pipeline = Pipeline(("ahf",))  # the new file stands on its own: a CONFIG frame and the samples
     for t_host_ns, data in open_recording(second).chunks():

@@ -16,6 +16,7 @@ from groundstation.estimation.ahf import Hf
 from groundstation.loaders import dataset_csv
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 TRIAL = Path(__file__).resolve().parents[2].parent / "shared" / "datasets" / "broad" / "02_undisturbed_slow_rotation_B.csv.gz"
 needs_dataset = pytest.mark.skipif(not TRIAL.exists(), reason=f"dataset not found at {TRIAL}")
@@ -73,7 +74,7 @@ def test_a_registered_estimator_and_file_format_reach_the_app_the_cli_and_an_exp
     box.setChecked(True)
     twin = [c for s, c in window.live_view.attitude.curves if s.label == "Twin"]  # pitch and roll
     assert len(twin) == 2 and {c.opts["pen"].color().name() for c in twin} == {"#cc6677"}  # Tol's muted rose
-    qtbot.waitUntil(lambda: all(c.xData is not None and len(c.xData) > 10 for c in twin), timeout=10000)
+    qtbot.waitUntil(lambda: all(c.xData is not None and len(c.xData) > 10 for c in twin), timeout=LIMIT_MS)
 
     # evaluate: the new estimator is among the default ones, and scores as HF (the same arithmetic).
     assert main(["evaluate", str(npz_trial), "--json"]) == 0

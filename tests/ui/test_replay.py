@@ -18,6 +18,7 @@ from groundstation.formats import FILE_AIDING
 from groundstation.ui.sample_streams import headline
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 FLIGHTLOGS = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs"
 # Small ones, one per format: a 208 s ArduPlane SITL tlog (4 Hz IMU), a 98 s ArduCopter DataFlash log
@@ -65,7 +66,7 @@ def check_plotted_up_to(window, qtbot, data, name: str, t_s: float) -> None:
     def sampled():  # the curve's points at the session's rows; the others break the line in a gap (NaN)
         return np.isin(curve.xData, data.time_s) if curve.xData is not None else np.zeros(0, dtype=bool)
 
-    qtbot.waitUntil(lambda: sampled().sum() == rows.sum(), timeout=3000)
+    qtbot.waitUntil(lambda: sampled().sum() == rows.sum(), timeout=LIMIT_MS)
     assert np.isnan(curve.yData[~sampled()]).all()
     np.testing.assert_array_equal(curve.xData[sampled()], data.time_s[rows])
     expected = pitch_deg(data.quaternion(name)[rows])
@@ -80,7 +81,7 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     assert session.view.filters == data.filters == ("ahf",)
     window.live_view.set_visible("AHF", True)  # one click away (issue 34: not shown at first)
     window.live_view.window_box.setCurrentText("whole session")
-    qtbot.waitUntil(lambda: session.source.position_s > 0.5, timeout=5000)
+    qtbot.waitUntil(lambda: session.source.position_s > 0.5, timeout=LIMIT_MS)
 
     bar.play_button.click()  # pause: the clock stops
     assert session.source.paused and bar.play_button.text() == "Play"
@@ -106,7 +107,7 @@ def test_a_recording_shows_the_rows_load_session_computes(window, qtbot, recordi
     assert [e["session_time_s"] for e in session.view.events] == sorted(t for t in times if t <= 7.5)
 
     bar.play_button.click()
-    qtbot.waitUntil(lambda: session.source.position_s > 8.5, timeout=3000)  # 4x from 7.5 s
+    qtbot.waitUntil(lambda: session.source.position_s > 8.5, timeout=LIMIT_MS)  # 4x from 7.5 s
     assert session.view.counters()["frames"] > 0 and window.link_panel.values["frames/s"].text() not in ("—", "")
 
 
@@ -115,7 +116,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     path = flightlog(name)
     window.open_recording(path)
     assert window.loading_row.isVisible() and "computing" in window.loading_bar.format()  # progress while computing
-    qtbot.waitUntil(lambda: window.loading is None, timeout=60000)
+    qtbot.waitUntil(lambda: window.loading is None, timeout=LIMIT_MS)
     assert window.banner.isHidden() and not window.loading_row.isVisible()
     session, bar = window.session, window.replay_bar
     filters = runnable(FILE_AIDING, live_estimators())
@@ -128,7 +129,7 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     window.live_view.window_box.setCurrentText("whole session")
 
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(8.0))
-    qtbot.waitUntil(lambda: points(pitch_curve(window, AIDING_ESTIMATOR)) > 3, timeout=5000)  # playing
+    qtbot.waitUntil(lambda: points(pitch_curve(window, AIDING_ESTIMATOR)) > 3, timeout=LIMIT_MS)  # playing
     bar.play_button.click()
     assert session.source.paused
     middle = float(data.time_s[len(data) // 2])
@@ -146,11 +147,11 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     else:
         q = data.quaternion(shown)[last:last + 1]
     newest = f"{pitch_deg(q)[0]:+7.1f}°"
-    qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=3000)
+    qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() == newest, timeout=LIMIT_MS)
     assert len(loads) == 1  # seeking computed nothing
 
     window.estimator_panel.shown["cf1"].setChecked(True)  # a what-if: one more estimator
-    qtbot.waitUntil(lambda: window.loading is None and "cf1" in window.session.view.filters, timeout=60000)
+    qtbot.waitUntil(lambda: window.loading is None and "cf1" in window.session.view.filters, timeout=LIMIT_MS)
     assert loads[-1][0] == (*filters, "cf1")
     session = window.session
     assert session.source.position_s == middle / 3 and session.source.paused  # the position kept
@@ -170,7 +171,7 @@ def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
     window.replay_bar.play_button.click()
     window.seek(30.0)
     check_plotted_up_to(window, qtbot, session.data, "onboard", 30.0)
-    qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() != "—", timeout=3000)
+    qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() != "—", timeout=LIMIT_MS)
 
 
 def bad_files(tmp_path: Path) -> list[tuple[Path, str]]:
@@ -209,7 +210,7 @@ def test_bad_files_say_why_in_the_banner(window, qtbot, tmp_path, recording):
 
 def test_a_file_typed_as_the_source_opens_whole(window, qtbot, recording):
     window.connect_serial(str(recording), 115200)
-    qtbot.waitUntil(lambda: window.loading is None, timeout=20000)
+    qtbot.waitUntil(lambda: window.loading is None, timeout=LIMIT_MS)
     assert window.session.source.path == recording and window.replay_bar.isVisible()
 
 
@@ -223,7 +224,7 @@ def test_the_export_dialog_writes_the_estimators_a_flight_log_is_shown_with(wind
     dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
     dialog.path_edit.setText(str(out))
     dialog.export_button.click()
-    qtbot.waitUntil(lambda: dialog.job.done, timeout=60000)
+    qtbot.waitUntil(lambda: dialog.job.done, timeout=LIMIT_MS)
     assert dialog.job.error is None, dialog.job.error
     header = out.read_text().splitlines()[0].split(",")
     for name in window.session.view.filters:  # the window's estimators, not the CLI's default
@@ -245,7 +246,7 @@ def test_a_tlogs_messages_are_channels_revealed_with_the_clock(window, qtbot):
     table = data.tables["vfr_hud"]
     rows = table["time_s"] <= 120.0
     sampled = lambda: np.isin(curve.xData, table["time_s"]) if curve.xData is not None else np.zeros(0, dtype=bool)  # noqa: E731
-    qtbot.waitUntil(lambda: sampled().sum() == rows.sum(), timeout=3000)
+    qtbot.waitUntil(lambda: sampled().sum() == rows.sum(), timeout=LIMIT_MS)
     assert np.isnan(curve.yData[~sampled()]).all()  # the points that break the line across a gap
     np.testing.assert_array_equal(curve.xData[sampled()], table["time_s"][rows])
     np.testing.assert_array_equal(curve.yData[sampled()], table["airspeed_m_s"][rows].astype(np.float32))

@@ -4,6 +4,7 @@ status bar saying where; with nothing open, the banner says why not."""
 from PySide6 import QtWidgets
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 
 def test_the_file_menu_writes_the_flight_report_and_says_where(window, qtbot, recording, tmp_path):
@@ -12,8 +13,8 @@ def test_the_file_menu_writes_the_flight_report_and_says_where(window, qtbot, re
     assert "Flight &report…" in [a.text() for a in file_menu.actions()]
     out = tmp_path / "flight-report.html"
     job = window.flight_report(out)
-    qtbot.waitUntil(lambda: job.done, timeout=60000)
-    qtbot.waitUntil(lambda: str(out) in window.statusBar().currentMessage(), timeout=5000)
+    qtbot.waitUntil(lambda: job.done, timeout=LIMIT_MS)
+    qtbot.waitUntil(lambda: str(out) in window.statusBar().currentMessage(), timeout=LIMIT_MS)
     assert job.error is None and not window.banner.isVisible()
     text = out.read_text(encoding="utf-8")
     assert "<h2>Findings</h2>" in text and recording.name in text

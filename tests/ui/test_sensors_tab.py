@@ -5,16 +5,17 @@ import numpy as np
 from groundstation.ui.plots import Plot
 
 from tests.ui.helpers import open_file
+from tests.waiting import LIMIT_MS
 
 
 def test_magnetometer_and_barometer_appear_on_the_sensors_tab(window, qtbot, recording):
     window.start_demo()  # the demo craft carries a magnetometer and a barometer
     view = window.live_view
     view.tabs.setCurrentWidget(view.sensors)
-    qtbot.waitUntil(lambda: len(view.sensors.items) == 4, timeout=8000)
+    qtbot.waitUntil(lambda: len(view.sensors.items) == 4, timeout=LIMIT_MS)
     mag_x = next(c for s, c in view.sensors.curves if s.quantity == "mag_x_uT")
     pressure = next(c for s, c in view.sensors.curves if s.quantity == "baro_pressure_hPa")
-    qtbot.waitUntil(lambda: mag_x.xData is not None and len(mag_x.xData) > 20 and pressure.xData is not None, timeout=5000)
+    qtbot.waitUntil(lambda: mag_x.xData is not None and len(mag_x.xData) > 20 and pressure.xData is not None, timeout=LIMIT_MS)
     mag, baro = window.session.view.tables["mag_raw"], window.session.view.tables["baro"]
     row = np.flatnonzero(mag.column("time_s") == mag_x.xData[-1])[0]
     assert mag_x.yData[-1] == np.float32(mag.column("mag_x_uT")[row])

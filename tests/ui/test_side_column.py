@@ -9,6 +9,7 @@ from firmware_protocol import SPEC
 from groundstation.estimation import ESTIMATORS
 
 from tests.ui.helpers import open_file, play_to_the_end
+from tests.waiting import LIMIT_MS
 
 
 def side_labels(window) -> list[QtWidgets.QLabel]:
@@ -48,7 +49,7 @@ def test_apply_moves_no_field_and_names_the_setting_as_its_field_does(window, qt
     window.start_demo()
     window.controls.setCurrentWidget(window.estimator_panel)
     panel = window.estimator_panel
-    qtbot.waitUntil(lambda: panel.isEnabled() and len(window.session.view.imu) > 20, timeout=30000)
+    qtbot.waitUntil(lambda: panel.isEnabled() and len(window.session.view.imu) > 20, timeout=LIMIT_MS)
     before = settled(panel, qtbot)  # the banners of a starting session come and go above the panels
     name, setting = next((n, s) for (n, s) in panel.boxes if n == "ahf" and s != "lam_min")  # AHF λ max
     box = panel.boxes[name, setting]
@@ -63,7 +64,7 @@ def test_apply_moves_no_field_and_names_the_setting_as_its_field_does(window, qt
 def test_events_wrap_their_details(window, qtbot):
     window.start_demo()
     console = window.event_console
-    qtbot.waitUntil(lambda: console.table.rowCount() > 2, timeout=30000)
+    qtbot.waitUntil(lambda: console.table.rowCount() > 2, timeout=LIMIT_MS)
     window.controls.setCurrentWidget(console)  # shown after the rows came: its columns change width
     table = console.table
     row = max(range(table.rowCount()), key=lambda r: len(table.item(r, 2).text()))
@@ -72,17 +73,17 @@ def test_events_wrap_their_details(window, qtbot):
     needed = table.fontMetrics().horizontalAdvance(table.item(row, 2).text())
     lines = -(-needed // max(width, 1))
     assert lines > 1
-    qtbot.waitUntil(lambda: table.rowHeight(row) >= lines * table.fontMetrics().lineSpacing(), timeout=3000)  # all of it
+    qtbot.waitUntil(lambda: table.rowHeight(row) >= lines * table.fontMetrics().lineSpacing(), timeout=LIMIT_MS)  # all of it
 
 
 def test_the_small_labels_of_a_live_session(window, qtbot, tmp_path):
     window.bar.select("/dev/pts/0", 0)  # a port used before
     window.start_demo()
     view, uplink = window.live_view, window.uplink_panel
-    qtbot.waitUntil(lambda: window.session.view.config is not None, timeout=30000)
+    qtbot.waitUntil(lambda: window.session.view.config is not None, timeout=LIMIT_MS)
     mode = SPEC.enum_name(SPEC.frame("CONFIG").field("mode"), window.session.view.config["mode"])
     assert mode != uplink.mode_box.itemText(0)  # the demo's firmware is in "both", the box's first is "raw"
-    qtbot.waitUntil(lambda: uplink.mode_box.currentText() == mode, timeout=5000)  # the firmware's, at the next refresh
+    qtbot.waitUntil(lambda: uplink.mode_box.currentText() == mode, timeout=LIMIT_MS)  # the firmware's, at the next refresh
     colours = [spec.color.lower() for spec, _ in view.heading.curves]
     labels = [spec.label for spec, _ in view.heading.curves]
     compass = colours[labels.index("compass")]

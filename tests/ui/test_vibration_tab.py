@@ -7,6 +7,7 @@ import pytest
 from groundstation.cli import main
 
 from tests.ui.helpers import open_file, play_to_the_end
+from tests.waiting import LIMIT_MS
 
 MOTOR_HZ = 24.0
 
@@ -24,7 +25,7 @@ def test_the_vibration_tab_finds_the_motor_peak(window, qtbot, shaken):
     view = window.live_view
     tab = view.vibration
     view.tabs.setCurrentWidget(tab)  # computes when first shown
-    qtbot.waitUntil(lambda: tab.summary is not None, timeout=5000)
+    qtbot.waitUntil(lambda: tab.summary is not None, timeout=LIMIT_MS)
     assert not tab.banner.isVisible()
     tab.sensor_box.setCurrentText("accel")
     peak = max((p for p in tab.summary.peaks if p.sensor == "accel"), key=lambda p: p.amplitude)

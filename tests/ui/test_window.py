@@ -18,6 +18,7 @@ from groundstation.session.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 
 from tests.ui.helpers import open_file, play_to_the_end
+from tests.waiting import LIMIT_MS
 
 
 def new_window(qtbot, tmp_path, recordings_dir):
@@ -57,7 +58,7 @@ def test_recent_recordings_are_listed_and_remembered(window, qtbot, tmp_path, re
     actions = again.recent_menu.actions()
     assert [a.text() for a in actions][0].endswith(recording.name) and actions[0].data() == str(recording)
     actions[0].trigger()
-    qtbot.waitUntil(lambda: again.loading is None, timeout=20000)
+    qtbot.waitUntil(lambda: again.loading is None, timeout=LIMIT_MS)
     assert again.session.source.path == recording
 
 
@@ -78,20 +79,20 @@ def test_figures_do_not_stay_on_their_last_values_after_the_port_is_gone(window,
     writer.start()
     window.connect_serial(os.ttyname(slave), 115200)
     panel = window.link_panel
-    qtbot.waitUntil(lambda: panel.values["frames/s"].text() not in ("—", "0"), timeout=5000)
+    qtbot.waitUntil(lambda: panel.values["frames/s"].text() not in ("—", "0"), timeout=LIMIT_MS)
     stop.set()
     writer.join()
     os.close(master)  # the bridge is unplugged
-    qtbot.waitUntil(lambda: panel.headline.text().startswith("PORT GONE"), timeout=5000)
-    qtbot.wait(2500)
-    assert panel.values["frames/s"].text() in ("—", "0") and panel.values["bytes/s"].text() in ("—", "0")
+    qtbot.waitUntil(lambda: panel.headline.text().startswith("PORT GONE"), timeout=LIMIT_MS)
+    qtbot.waitUntil(lambda: panel.values["frames/s"].text() in ("—", "0") and panel.values["bytes/s"].text() in ("—", "0"),
+                    timeout=LIMIT_MS)  # once the rates' window has passed
     os.close(slave)
 
 
 def test_a_new_session_does_not_show_the_previous_ones_attitude(window, qtbot, recording):
     window.start_demo()
     panel = window.attitude_panel
-    qtbot.waitUntil(lambda: panel.readouts["pitch"].text() != "—", timeout=5000)
+    qtbot.waitUntil(lambda: panel.readouts["pitch"].text() != "—", timeout=LIMIT_MS)
     window.open_recording(recording)  # computed in a worker meanwhile
     assert panel.readouts["pitch"].text() == "—" and panel.indicator.pitch_deg != panel.indicator.pitch_deg  # NaN
 
@@ -100,12 +101,12 @@ def test_the_replay_ends_with_a_replay_button_that_plays_it_again(window, qtbot,
     open_file(window, qtbot, recording)
     bar = window.replay_bar
     play_to_the_end(window, qtbot)
-    qtbot.waitUntil(lambda: bar.play_button.text() == "Replay", timeout=2000)
+    qtbot.waitUntil(lambda: bar.play_button.text() == "Replay", timeout=LIMIT_MS)
     assert len(window.session.view.imu) == len(window.session.data.tables["imu"]["time_s"])  # every row shown
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(1.0))
     bar.play_button.click()
     assert window.session.running and window.session.source.position_s == 0.0 and bar.play_button.text() == "Pause"
-    qtbot.waitUntil(lambda: window.session.source.position_s > 0.2, timeout=3000)  # playing again
+    qtbot.waitUntil(lambda: window.session.source.position_s > 0.2, timeout=LIMIT_MS)  # playing again
     assert len(window.session.view.imu) < 100
 
 
@@ -145,14 +146,14 @@ def test_an_estimator_added_to_a_replay_recomputes_it_with_the_settings_asked(wi
     window.seek(12.0)
     panel.shown["hf"].setChecked(True)  # add HF to the replay: the file is computed again with it
     assert window.loading_row.isVisible()
-    qtbot.waitUntil(lambda: window.loading is None and "hf" in window.session.view.filters, timeout=20000)
+    qtbot.waitUntil(lambda: window.loading is None and "hf" in window.session.view.filters, timeout=LIMIT_MS)
     assert window.session.source.position_s == 12.0 and window.session.source.paused
     panel = window.estimator_panel
     assert panel.boxes["hf", "beta"].isEnabled()
     panel.boxes["hf", "beta"].setValue(0.2)
     panel.apply()  # the what-if: computed again with HF's beta forced
     qtbot.waitUntil(lambda: window.loading is None and window.session.view.settings()["hf"]["beta"] == 0.2,
-                    timeout=20000)
+                    timeout=LIMIT_MS)
     assert window.session.source.position_s == 12.0
     play_to_the_end(window, qtbot)
     shown = window.session.view.imu.to_dict()

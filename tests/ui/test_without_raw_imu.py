@@ -10,6 +10,7 @@ import pyqtgraph as pg
 from tests.ui.test_first_session import click_tab
 from tests.ui.test_mavlink_heard import sitl_on_udp  # noqa: F401 (a fixture)
 from tests.ui.test_first_session import type_in_source_box
+from tests.waiting import LIMIT_MS
 
 
 def set_mode(qtbot, window, mode: str) -> None:
@@ -17,7 +18,7 @@ def set_mode(qtbot, window, mode: str) -> None:
     click_tab(qtbot, window.controls, window.controls.indexOf(window.uplink_panel))
     window.uplink_panel.mode_box.setCurrentText(mode)
     qtbot.mouseClick(window.uplink_panel.mode_button, QtCore.Qt.LeftButton)
-    qtbot.waitUntil(lambda: "ACK ok" in window.uplink_panel.answers.text().split("\n")[0], timeout=10000)
+    qtbot.waitUntil(lambda: "ACK ok" in window.uplink_panel.answers.text().split("\n")[0], timeout=LIMIT_MS)
 
 
 def right_edge_s(window) -> float:
@@ -36,23 +37,21 @@ def badge_over(qtbot, window, seconds: float) -> set[str]:
 def test_estimated_mode_keeps_the_view_moving_on_the_onboard_estimate(window, qtbot):
     window.start_demo()
     session = window.session
-    qtbot.waitUntil(lambda: len(session.view.imu) > 200 and window.live_view.frames_drawn > 10, timeout=15000)
+    qtbot.waitUntil(lambda: len(session.view.imu) > 200 and window.live_view.frames_drawn > 10, timeout=LIMIT_MS)
     assert window.attitude_panel.title() == "Attitude (AHF2)"
     set_mode(qtbot, window, "estimated")
     switched_s = float(session.view.imu.tail(1)[0][0])
-    qtbot.waitUntil(lambda: len(session.view.onboard) and session.view.onboard.tail(1)[0][0] > switched_s + 5, timeout=15000)  # past one step of the axis (4 s)
-    qtbot.wait(500)  # a few redraws
+    qtbot.waitUntil(lambda: len(session.view.onboard) and session.view.onboard.tail(1)[0][0] > switched_s + 5, timeout=LIMIT_MS)  # past one step of the axis (4 s)
     onboard_s = float(session.view.onboard.tail(1)[0][0])
-    assert right_edge_s(window) >= onboard_s  # the time axis follows the aircraft's estimate
+    qtbot.waitUntil(lambda: right_edge_s(window) >= onboard_s, timeout=LIMIT_MS)  # the time axis follows the aircraft's estimate
     assert window.attitude_panel.title() == "Attitude (onboard — no raw IMU)"
     onboard = window.live_view.series["onboard"]
     pitch = float(onboard.recent.values["onboard_pitch_deg"][onboard.recent.count - 1])
     assert window.attitude_panel.readouts["pitch"].text() != "—"
     assert abs(float(window.attitude_panel.readouts["pitch"].text().rstrip("°")) - pitch) < 2.0  # moving with it
     set_mode(qtbot, window, "both")
-    qtbot.waitUntil(lambda: session.view.imu.tail(1)[0][0] > onboard_s + 1, timeout=15000)
-    qtbot.wait(500)
-    assert window.attitude_panel.title() == "Attitude (AHF2)"
+    qtbot.waitUntil(lambda: session.view.imu.tail(1)[0][0] > onboard_s + 1, timeout=LIMIT_MS)
+    qtbot.waitUntil(lambda: window.attitude_panel.title() == "Attitude (AHF2)", timeout=LIMIT_MS)
     plots = window.live_view.attitude
     shaded = [r.getRegion() for r in plots.items[0].items if isinstance(r, pg.LinearRegionItem)]
     assert not any(low < onboard_s < high for low, high in shaded)  # the onboard estimate never stopped
@@ -71,7 +70,7 @@ def test_a_4_hz_autopilot_shows_its_own_estimate_as_the_attitude_and_its_link_st
     window.uplink_panel.stream_rate_hz.setValue(4)
     qtbot.mouseClick(window.uplink_panel.streams_button, QtCore.Qt.LeftButton)
     session = window.session
-    qtbot.waitUntil(lambda: len(session.view.imu) > 30, timeout=30000)
+    qtbot.waitUntil(lambda: len(session.view.imu) > 30, timeout=LIMIT_MS)
     headlines = badge_over(qtbot, window, 8.0)
     assert window.attitude_panel.title().startswith("Attitude (onboard — IMU at 4.0 Hz")
     assert headlines == {"LINK OK"}
@@ -82,6 +81,6 @@ def test_a_healthy_4_hz_bridge_keeps_its_badge_ok_and_shows_the_onboard_attitude
     type_in_source_box(qtbot, window, "sim:?rate=4&sensors=&seed=8")
     qtbot.keyClick(window.bar.port_box.lineEdit(), QtCore.Qt.Key_Return)
     session = window.session
-    qtbot.waitUntil(lambda: len(session.view.imu) > 8, timeout=15000)
+    qtbot.waitUntil(lambda: len(session.view.imu) > 8, timeout=LIMIT_MS)
     assert badge_over(qtbot, window, 6.0) == {"LINK OK"}
     assert window.attitude_panel.title() == "Attitude (onboard — IMU at 4.0 Hz)"
