@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Callable
 
 from groundstation.autopilot.vehicle import MAX_SYSTEM, MIN_SYSTEM
