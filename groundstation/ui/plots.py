@@ -42,7 +42,7 @@ HEAD_S = 1.0  # a curve takes its head's samples when these span this: one whole
 Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
 READOUT_GAP_PX = 16  # between the cursor and the readout beside it
-LEGEND_COLUMNS = 6  # more entries (eight estimators, compass and GPS) wrap onto a second legend row
+LEGEND_COLUMNS = 6  # more entries (the live estimators, onboard, compass and GPS) wrap onto further legend rows
 
 
 def refit(low: float, high: float, shown: tuple[float, float], span: float | None = None) -> tuple[float, float] | None:
