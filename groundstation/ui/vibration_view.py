@@ -2,7 +2,9 @@
 shown so far: a live session's rows, or a file's up to the replay's position (the end, once played or
 sought there).
 
-An amplitude spectrum of the chosen sensor (three axes, the peaks marked and labelled), its
+An amplitude spectrum of the chosen sensor (three axes in dB on a log-frequency axis, as PX4 Flight Review
+and ArduPilot's WebTools show them; every peak marked, the strongest few labelled where their labels do
+not collide on screen), its
 spectrogram (the three axes' density summed) as an image (time across, frequency up, log colour), a
 time range (all the data, or from / to seconds of session time) and the text of the summary: peaks,
 levels, clipping, motors and the notch suggestion in the autopilot's parameters. It computes when the
@@ -34,6 +36,16 @@ AXIS_COLOURS = {"x": "#d62728", "y": "#2ca02c", "z": "#1f77b4"}  # red, green, b
 PEAK_BRUSH = "#222222"
 BEFORE_PEN, AFTER_PEN = "#777777", "#d62728"  # the spectrum before the filter grey, after it red
 BODE_FLOOR_DB = -60.0  # a notch's centre is -inf dB: drawn at this floor
+SPECTRUM_RANGE_DB = 120.0  # a bin of zero amplitude (-inf dB) is drawn this far below the strongest bin
+MOST_PEAK_LABELS = 5  # more labels than this crowd the plot; the text below lists every peak
+LABEL_GAP_PX = 4.0  # the least room between two labels' boxes on screen
+
+
+def amplitude_db(amplitude: np.ndarray, reference: float) -> np.ndarray:
+    """``20·log10(amplitude)`` (dB re 1 of the amplitude's unit), floored at ``SPECTRUM_RANGE_DB`` below
+    ``reference`` (the strongest bin shown) so a zero bin stays on the plot."""
+    floor = max(reference * 10.0 ** (-SPECTRUM_RANGE_DB / 20.0), np.finfo(float).tiny)
+    return 20.0 * np.log10(np.maximum(amplitude, floor))
 
 
 class VibrationView(QtWidgets.QWidget):
@@ -98,9 +110,12 @@ class VibrationView(QtWidgets.QWidget):
         self.banner.hide()
         self.spectrum_plot = pg.PlotWidget(background="w")
         self.spectrum_plot.setLabel("bottom", "frequency", "Hz")
+        self.spectrum_plot.setLogMode(x=True)  # curves are given in Hz; markers and labels sit at log10(Hz)
         self.spectrum_plot.addLegend(offset=(-10, 10))
         self.peak_marks = pg.ScatterPlotItem(size=10, symbol="t", brush=PEAK_BRUSH, pen=None)
-        self.peak_texts: list[pg.TextItem] = []
+        self.peak_texts: list[pg.TextItem] = []  # the strongest peaks' labels, strongest first; those that collide hidden
+        # a zoom or resize changes what collides: laid out again once the view's new transform is set
+        self.spectrum_plot.getViewBox().sigTransformChanged.connect(self._place_labels)
         self.spectrogram_plot = pg.PlotWidget(background="w")
         self.spectrogram_plot.setLabel("bottom", "time", "s")
         self.spectrogram_plot.setLabel("left", "frequency", "Hz")
@@ -198,18 +213,26 @@ class VibrationView(QtWidgets.QWidget):
         spectra = self.summary.spectra
         sensor = self.sensor_box.currentText() if self.sensor_box.currentText() in spectra else next(iter(spectra))
         sp = spectra[sensor]
-        self.spectrum_plot.setLabel("left", f"{sensor} amplitude", sp.unit)
+        self.spectrum_plot.setLabel("left", f"{sensor} amplitude", f"dB re 1 {sp.unit}")
+        frequency_hz = sp.frequency_hz[1:]  # the zero-frequency bin has no place on a log axis
+        reference = max(float(np.max(sp.amplitude[axis][1:])) for axis in AXES)
+        db = {axis: amplitude_db(sp.amplitude[axis][1:], reference) for axis in AXES}
         for axis in AXES:
-            self.spectrum_plot.plot(sp.frequency_hz, sp.amplitude[axis], pen=pg.mkPen(AXIS_COLOURS[axis], width=1), name=axis)
+            self.spectrum_plot.plot(frequency_hz, db[axis], pen=pg.mkPen(AXIS_COLOURS[axis], width=1), name=axis)
         peaks = [p for p in self.summary.peaks if p.sensor == sensor]
-        self.peak_marks.setData([p.frequency_hz for p in peaks], [float(np.interp(p.frequency_hz, sp.frequency_hz, sp.amplitude[p.axis]))
-                                                                 for p in peaks])
+        at = [(float(np.log10(p.frequency_hz)), float(np.interp(p.frequency_hz, frequency_hz, db[p.axis]))) for p in peaks]
+        self.peak_marks.setData([x for x, _ in at], [y for _, y in at])
         self.spectrum_plot.addItem(self.peak_marks)
-        for p in peaks:
+        strongest = sorted(zip(peaks, at), key=lambda pair: -pair[0].amplitude)[:MOST_PEAK_LABELS]
+        for p, position in strongest:
             text = pg.TextItem(f"{p.frequency_hz:.1f} Hz {p.axis}" + (f" {p.label}" if p.label else ""), color="#222222", anchor=(0.5, 1.2))
-            text.setPos(p.frequency_hz, float(np.interp(p.frequency_hz, sp.frequency_hz, sp.amplitude[p.axis])))
-            self.spectrum_plot.addItem(text)
+            text.setPos(*position)
+            self.spectrum_plot.addItem(text, ignoreBounds=True)  # labels never move the range they are laid out in
             self.peak_texts.append(text)
+        spectrum_box = self.spectrum_plot.getViewBox()
+        spectrum_box.updateAutoRange()  # the range and transform the labels are laid out in, now rather than at paint
+        spectrum_box.updateMatrix()
+        self._place_labels()
         t, image = sp.spectrogram_t_s, sp.spectrogram_psd
         floor = np.finfo(float).tiny
         self.image.setImage(np.log10(np.maximum(image.T, floor)), autoLevels=True)
@@ -219,6 +242,20 @@ class VibrationView(QtWidgets.QWidget):
         self.text.setPlainText("\n".join(self.summary.lines() + (self.change.lines() if self.change else [])))
         if self.change is not None:
             self._show_what_if(sensor)
+
+    def _place_labels(self) -> None:
+        """Show the labels strongest first, each only where its box on screen keeps ``LABEL_GAP_PX`` from
+        every label already shown."""
+        shown: list[QtCore.QRectF] = []
+        gap = LABEL_GAP_PX / 2
+        for text in self.peak_texts:
+            text.setVisible(True)
+            text.updateTransform(force=True)  # its box for the view as it is now, not as last painted
+            box = text.sceneBoundingRect().adjusted(-gap, -gap, gap, gap)
+            clear = not any(box.intersects(other) for other in shown)
+            text.setVisible(clear)
+            if clear:
+                shown.append(box)
 
     def _show_what_if(self, sensor: str) -> None:
         from groundstation.analysis.whatif import LAG_AT_HZ

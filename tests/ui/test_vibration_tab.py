@@ -1,6 +1,8 @@
 """The Vibration tab in the real window: a simulated vibrating recording opened, played to its end, and
 the tab's spectrum, peaks, spectrogram and notch text are the vibration view's."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -31,11 +33,11 @@ def test_the_vibration_tab_finds_the_motor_peak(window, qtbot, shaken):
     peak = max((p for p in tab.summary.peaks if p.sensor == "accel"), key=lambda p: p.amplitude)
     assert peak.frequency_hz == pytest.approx(MOTOR_HZ, abs=2.0) and peak.label == "motor 1×"
     x, y = tab.peak_marks.getData()
-    assert np.any(np.abs(x - peak.frequency_hz) < 1e-9)  # marked on the plot
+    assert np.any(np.abs(10.0 ** x - peak.frequency_hz) < 1e-9)  # marked on the plot (at log10(Hz), as the axis)
     assert any(f"{peak.frequency_hz:.1f} Hz" in t.textItem.toPlainText() for t in tab.peak_texts)
     curves = [c for c in tab.spectrum_plot.getPlotItem().listDataItems() if c is not tab.peak_marks]
     assert len(curves) == 3
-    np.testing.assert_allclose(curves[2].yData, tab.summary.spectra["accel"].amplitude["z"])
+    np.testing.assert_allclose(curves[2].yData, 20.0 * np.log10(tab.summary.spectra["accel"].amplitude["z"][1:]))
     assert tab.image.image.shape == tab.summary.spectra["accel"].spectrogram_psd.T.shape
     assert "INS_HNTCH_FREQ=24" in tab.text.toPlainText()
 
@@ -81,3 +83,63 @@ def test_the_tab_says_what_the_suggested_notch_would_do_and_refuses_one_above_ny
     tab.filter_button.click()
     assert tab.banner.isVisible() and "faster than 260 Hz" in tab.banner.text()
     assert tab.change is None and not tab.what_if_plots.isVisible()
+
+
+def shown_tab(window, qtbot, path, sensor):
+    """The Vibration tab of ``path`` played to its end, computed and showing ``sensor``."""
+    open_file(window, qtbot, path)
+    play_to_the_end(window, qtbot)
+    tab = window.live_view.vibration
+    window.live_view.tabs.setCurrentWidget(tab)  # computes when first shown
+    qtbot.waitUntil(lambda: tab.summary is not None, timeout=LIMIT_MS)
+    tab.sensor_box.setCurrentText(sensor)
+    return tab
+
+
+def overlapping(labels) -> bool:
+    """Whether any two of the labels' boxes on screen (scene coordinates) overlap."""
+    boxes = [t.sceneBoundingRect() for t in labels]
+    return any(a.intersects(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+
+
+def test_the_spectrum_is_in_db_on_a_log_frequency_axis(window, qtbot, shaken):
+    """x in log mode without the zero-frequency bin; y is 20·log10 of the analysis's amplitude (dB re 1 unit)."""
+    tab = shown_tab(window, qtbot, shaken, "gyro")
+    plot = tab.spectrum_plot.getPlotItem()
+    assert plot.getAxis("bottom").logMode and not plot.getAxis("left").logMode
+    sp = tab.summary.spectra["gyro"]
+    assert sp.frequency_hz[0] == 0.0
+    curves = [c for c in plot.listDataItems() if c is not tab.peak_marks]
+    assert [c.name() for c in curves] == ["x", "y", "z"]
+    for curve in curves:
+        amplitude = sp.amplitude[curve.name()][1:]
+        assert np.all(amplitude > 0)  # none drawn at the floor: each value is its own dB
+        np.testing.assert_allclose(curve.xData, sp.frequency_hz[1:])
+        np.testing.assert_allclose(curve.yData, 20.0 * np.log10(amplitude), rtol=1e-12)
+    assert f"dB re 1 {sp.unit}" in plot.getAxis("left").labelText + plot.getAxis("left").labelUnits
+    peaks = [p for p in tab.summary.peaks if p.sensor == "gyro"]
+    x, _ = tab.peak_marks.getData()
+    np.testing.assert_allclose(10.0 ** x, [p.frequency_hz for p in peaks])  # markers sit at log10(Hz), as the axis
+
+
+def test_labels_of_many_close_peaks_do_not_overlap(window, qtbot):
+    """PX4's bench sample: ten gyro peaks between 4 and 30 Hz. Every peak is marked, at most five labelled,
+    the strongest always, and no two labels shown overlap on screen, nor once zoomed in (where more fit); the
+    text still lists every peak."""
+    path = Path("/work/shared/datasets/flightlogs/px4_auavx21_bench_sample.ulg")
+    tab = shown_tab(window, qtbot, path, "gyro")
+    peaks = [p for p in tab.summary.peaks if p.sensor == "gyro"]
+    assert len(peaks) >= 8
+    x, _ = tab.peak_marks.getData()
+    assert len(x) == len(peaks)
+    tab.spectrum_plot.grab()  # painted: every item's transform is the one on screen
+    shown = [t for t in tab.peak_texts if t.isVisible()]
+    strongest = max(peaks, key=lambda p: p.amplitude)
+    assert 1 <= len(shown) <= 5 and shown[0].toPlainText().startswith(f"{strongest.frequency_hz:.1f} Hz")
+    assert not overlapping(shown)
+    tab.spectrum_plot.setXRange(np.log10(4.0), np.log10(14.0), padding=0)  # zoomed in: room for more labels
+    tab.spectrum_plot.grab()
+    zoomed = [t for t in tab.peak_texts if t.isVisible()]
+    assert len(zoomed) > len(shown) and not overlapping(zoomed)
+    text = tab.text.toPlainText()
+    assert all(f"{p.frequency_hz:>14.2f}" in text for p in peaks)
