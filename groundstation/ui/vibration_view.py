@@ -37,6 +37,9 @@ PEAK_BRUSH = "#222222"
 BEFORE_PEN, AFTER_PEN = "#777777", "#d62728"  # the spectrum before the filter grey, after it red
 BODE_FLOOR_DB = -60.0  # a notch's centre is -inf dB: drawn at this floor
 SPECTRUM_RANGE_DB = 120.0  # a bin of zero amplitude (-inf dB) is drawn this far below the strongest bin
+# The log-frequency axis labelled at 1, 2 and 5 of each decade, as Flight Review's and WebTools' read
+# (pyqtgraph's own log ticks label every minor step and their texts run together above 40 Hz)
+FREQUENCY_TICKS_HZ = [m * 10.0**k for k in range(-1, 5) for m in (1, 2, 5)]
 MOST_PEAK_LABELS = 5  # more labels than this crowd the plot; the text below lists every peak
 LABEL_GAP_PX = 4.0  # the least room between two labels' boxes on screen
 
@@ -111,6 +114,7 @@ class VibrationView(QtWidgets.QWidget):
         self.spectrum_plot = pg.PlotWidget(background="w")
         self.spectrum_plot.setLabel("bottom", "frequency", "Hz")
         self.spectrum_plot.setLogMode(x=True)  # curves are given in Hz; markers and labels sit at log10(Hz)
+        self.spectrum_plot.getAxis("bottom").setTicks([[(np.log10(f), f"{f:g}") for f in FREQUENCY_TICKS_HZ], []])
         self.spectrum_plot.addLegend(offset=(-10, 10))
         self.peak_marks = pg.ScatterPlotItem(size=10, symbol="t", brush=PEAK_BRUSH, pen=None)
         self.peak_texts: list[pg.TextItem] = []  # the strongest peaks' labels, strongest first; those that collide hidden

@@ -107,6 +107,9 @@ def test_the_spectrum_is_in_db_on_a_log_frequency_axis(window, qtbot, shaken):
     tab = shown_tab(window, qtbot, shaken, "gyro")
     plot = tab.spectrum_plot.getPlotItem()
     assert plot.getAxis("bottom").logMode and not plot.getAxis("left").logMode
+    major = dict(plot.getAxis("bottom")._tickLevels[0])  # the ticks set (pyqtgraph keeps them there): 1, 2, 5 a decade
+    shown = {text for value, text in major.items() if 0.0 <= value <= 3.0 + 1e-9}  # 1 Hz to 1 kHz
+    assert shown == {"1", "2", "5", "10", "20", "50", "100", "200", "500", "1000"}
     sp = tab.summary.spectra["gyro"]
     assert sp.frequency_hz[0] == 0.0
     curves = [c for c in plot.listDataItems() if c is not tab.peak_marks]
