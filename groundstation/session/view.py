@@ -57,7 +57,8 @@ def event_session_time_s(view: ProductView, event: dict) -> float:
 
 
 class Session(Protocol):
-    """What the window holds. ``seekable``: a file's playback (``seek`` moves its clock; live: never);
+    """What the window holds. ``seekable``: a file's playback (``seek`` moves its clock; its ``data``, the
+    whole file's product, ``playback.RevealSession``; live: never);
     ``setup``: the estimators and forced settings a file was computed with (live: ``(None, None)``)."""
 
     view: ProductView

@@ -151,7 +151,7 @@ class VibrationView(QtWidgets.QWidget):
             self.compute()
 
     def compute(self) -> None:
-        """The summary of the session's rows so far over the range; a refusal in the banner."""
+        """The summary of the session's rows (a file's: all of them; live: so far) over the range; a refusal in the banner."""
         self._due = False
         if self.session is None:
             return
@@ -175,8 +175,11 @@ class VibrationView(QtWidgets.QWidget):
             self.filter_bw.setValue(self.summary.notch["bandwidth_hz"])
         self._show()
 
-    def _snapshot(self) -> SimpleNamespace:
-        """The session's tables now (the reader thread goes on adding rows), with what the analysis reads."""
+    def _snapshot(self):
+        """What the analysis reads: a file's whole product (``RevealSession.data``: "All data" is the whole
+        file, not the part played so far); a live session's tables now (the reader goes on adding rows)."""
+        if self.session.seekable:
+            return self.session.data
         view = self.session.view
         with self.session.lock:
             return SimpleNamespace(tables={name: table.to_dict() for name, table in view.tables.items()},

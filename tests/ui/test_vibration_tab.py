@@ -11,6 +11,8 @@ from groundstation.cli import main
 from tests.ui.helpers import open_file, play_to_the_end
 from tests.waiting import LIMIT_MS
 
+FLIGHTLOGS = Path(__file__).resolve().parents[2].parent / "shared" / "datasets" / "flightlogs"
+
 MOTOR_HZ = 24.0
 
 
@@ -129,7 +131,7 @@ def test_labels_of_many_close_peaks_do_not_overlap(window, qtbot):
     """PX4's bench sample: ten gyro peaks between 4 and 30 Hz. Every peak is marked, at most five labelled,
     the strongest always, and no two labels shown overlap on screen, nor once zoomed in (where more fit); the
     text still lists every peak."""
-    path = Path("/work/shared/datasets/flightlogs/px4_auavx21_bench_sample.ulg")
+    path = FLIGHTLOGS / "px4_auavx21_bench_sample.ulg"
     tab = shown_tab(window, qtbot, path, "gyro")
     peaks = [p for p in tab.summary.peaks if p.sensor == "gyro"]
     assert len(peaks) >= 8
@@ -146,3 +148,18 @@ def test_labels_of_many_close_peaks_do_not_overlap(window, qtbot):
     assert len(zoomed) > len(shown) and not overlapping(zoomed)
     text = tab.text.toPlainText()
     assert all(f"{p.frequency_hz:>14.2f}" in text for p in peaks)
+
+
+def test_all_data_of_a_file_is_the_whole_file_not_the_part_played(window, qtbot):
+    """Issue 34: "All data" was the part played so far (a spectrum of 0.14 s after a log was reopened)."""
+    path = FLIGHTLOGS / "px4_auavx21_bench_sample.ulg"
+    open_file(window, qtbot, path)
+    window.replay_bar.play_button.click()  # paused near its start
+    played_s = window.session.source.position_s
+    view = window.live_view
+    tab = view.vibration
+    view.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.summary is not None or tab.banner.isVisible(), timeout=LIMIT_MS)
+    assert tab.summary is not None, tab.banner.text()
+    whole = window.session.data.time_s
+    assert tab.summary.end_s - tab.summary.start_s > 0.9 * (whole[-1] - whole[0]) > 10 * max(played_s, 1.0)
