@@ -41,7 +41,8 @@ def check_display() -> None:
     if not any(os.environ.get(v) for v in ("DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM")):
         raise UserError("no display found (DISPLAY and WAYLAND_DISPLAY are unset); run it in a desktop session, "
                         "or under Xvfb (xvfb-run groundstation app)")
-    if os.environ.get("QT_QPA_PLATFORM", "xcb") == "xcb":
+    # X11's plugin: asked for, or Qt's choice without a Wayland session (on Wayland Qt 6 takes its own plugin)
+    if os.environ.get("QT_QPA_PLATFORM", "" if os.environ.get("WAYLAND_DISPLAY") else "xcb") == "xcb":
         check_libraries(QT_XCB_LIBRARIES)
         check_x_server(os.environ.get("DISPLAY", ""))
 

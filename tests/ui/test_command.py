@@ -80,3 +80,14 @@ def test_a_display_that_does_not_answer_is_one_line(tmp_path):
     process = app_process(tmp_path, "--demo", DISPLAY=":987", QT_QPA_PLATFORM=None, WAYLAND_DISPLAY=None)
     _, stderr = process.communicate(timeout=120)
     assert process.returncode == 2 and expected in stderr and "Traceback" not in stderr
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="X11 and Wayland")
+def test_a_wayland_session_is_not_asked_for_an_x_server(monkeypatch):
+    """On Wayland without XWayland (no DISPLAY) Qt 6 takes its Wayland plugin: no X server is needed."""
+    from groundstation.ui.app import check_display
+
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("QT_QPA_PLATFORM", raising=False)
+    monkeypatch.setenv("WAYLAND_DISPLAY", "wayland-0")
+    check_display()  # nothing said
