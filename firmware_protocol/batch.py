@@ -97,9 +97,6 @@ class BatchDecode:
     def count(self) -> int:
         return self.stats.frames
 
-    def schema_matches(self) -> bool | None:
-        return None if self.remote_fingerprint is None else self.remote_fingerprint == SPEC.fingerprint
-
 
 def decode_chunks(chunks: Iterable[tuple[int, bytes]], spec: Spec = SPEC,
                   progress: Callable[[int, int], None] | None = None) -> BatchDecode:
@@ -136,7 +133,7 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
     # Intermediates of an hour's frames are ~6 MB each: each goes once used (the decode's peak memory).
     del type_ids, seqs, duplicate, known, keep
     chunk_of = np.searchsorted(scan.stops, kept.starts, side="right")  # the chunk whose feed reaches the frame
-    placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, progress)
+    placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, spec, progress)
     del kept.t32, kept.timestamped
 
     stats = placed.rules.stats
@@ -355,11 +352,11 @@ class _Placed:
     rules: SequenceRules  # holding the state and the counters it keeps
 
 
-def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tables, progress) -> _Placed:
+def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tables, spec: Spec, progress) -> _Placed:
     """The sequence and time rules over the kept frames: fast runs as arrays, the rest through
     ``SequenceRules`` as the incremental decoder calls it."""
     n = len(kept)
-    rules = SequenceRules(DecoderStats())
+    rules = SequenceRules(DecoderStats(), spec)
     ts, seqs, t32 = kept.timestamped, kept.seqs.astype(np.int64), kept.t32
     # Frame j continues a fast run after frame j-1 if both are timestamped, seq follows and the step is short.
     consecutive = np.zeros(n, dtype=bool)

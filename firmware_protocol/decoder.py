@@ -75,7 +75,7 @@ class DecoderStats:
     duplicates: int = 0  # a frame repeated byte for byte (same type, seq and values); dropped
     unknown_types: int = 0  # CRC-valid frames of a type this spec lacks; skipped
     bad_lengths: int = 0  # sync + type whose length byte is impossible for that type
-    schema_mismatches: int = 0  # CONFIG frames from firmware built from another spec
+    schema_mismatches: int = 0  # CONFIG frames from firmware whose spec has a frame type of ours otherwise, or is unknown
     implausible: int = 0  # CRC-valid frames whose timestamp did not fit the stream; dropped
     restarts: int = 0  # the sender's sequence and clock started over (reboot, clock jump)
 
@@ -91,7 +91,7 @@ class StreamDecoder:
         self.spec = spec
         self._types, self._sizes, self._unpackers, self._readers, self._timestamped = _lookup(spec)
         self.stats = DecoderStats()
-        self.rules = SequenceRules(self.stats)  # sequence, device time, plausibility, restarts
+        self.rules = SequenceRules(self.stats, spec)  # sequence, device time, plausibility, restarts
         self._pending = b""
         self._last_seq: int | None = None  # duplicate detection: the last frame accepted
         self._last_raw: tuple | bytes = ()
@@ -108,8 +108,14 @@ class StreamDecoder:
 
     @property
     def schema_matches(self) -> bool | None:
-        """True/False once a CONFIG frame has been seen, None before."""
+        """Whether the firmware's frame types decode as ours (``Spec.changed_frames``) once a CONFIG frame has
+        been seen, None before."""
         return self.rules.schema_matches
+
+    @property
+    def schema_warning(self) -> str | None:
+        """``Spec.schema_warning`` of the last CONFIG seen; None before one, or when its frame types decode as ours."""
+        return self.rules.schema_warning
 
     @property
     def pending_bytes(self) -> int:
@@ -220,8 +226,9 @@ class SequenceRules:
     ``schema_mismatches``) are in ``stats``.
     """
 
-    def __init__(self, stats: DecoderStats) -> None:
+    def __init__(self, stats: DecoderStats, spec: Spec = SPEC) -> None:
         self.stats = stats
+        self.spec = spec  # the ground station's: what a CONFIG's schema fingerprint is checked against
         self.remote_fingerprint: int | None = None  # from the last CONFIG seen
         self.rate_hz = DEFAULT_RATE_HZ  # from the last CONFIG seen
         self.next_seq: int | None = None
@@ -237,10 +244,14 @@ class SequenceRules:
 
     @property
     def schema_matches(self) -> bool | None:
-        """True/False once a CONFIG frame has been seen, None before."""
+        """Whether the firmware's frame types decode as ours once a CONFIG frame has been seen, None before."""
         if self.remote_fingerprint is None:
             return None
-        return self.remote_fingerprint == SPEC.fingerprint
+        return self.spec.changed_frames(self.remote_fingerprint) == ()
+
+    @property
+    def schema_warning(self) -> str | None:
+        return None if self.remote_fingerprint is None else self.spec.schema_warning(self.remote_fingerprint)
 
     def ran(self, next_seq: int | None, t32: int | None, t64: int, host_ns: int | None) -> None:
         """The fast path placed frames up to here: the last one's next seq, device times and arrival."""
@@ -337,7 +348,7 @@ class SequenceRules:
     def _config(self, raw: tuple, advances: int) -> None:
         fingerprint = raw[_FINGERPRINT_INDEX]
         self.remote_fingerprint = fingerprint
-        if fingerprint != SPEC.fingerprint:
+        if self.spec.changed_frames(fingerprint) != ():
             self.stats.schema_mismatches += 1
         rate_hz = raw[_RATE_INDEX]
         if 0 < rate_hz != self.rate_hz:  # another rate: measure again

@@ -1,4 +1,5 @@
-"""Generate everything that derives from ``spec.toml``: the C header, the golden vectors, docs/protocol.md.
+"""Generate everything that derives from ``spec.toml``: the C header, the golden vectors, docs/protocol.md, and
+the current spec's entry in ``known_specs.toml`` (whose older entries it keeps).
 
     python -m firmware_protocol.generate [--root REPO]
 
@@ -14,7 +15,7 @@ import struct
 from pathlib import Path
 
 from firmware_protocol.codec import encode, make_frame
-from firmware_protocol.spec import SPEC, Field, FrameType, Spec
+from firmware_protocol.spec import KNOWN_SPECS_PATH, SPEC, Field, FrameType, Spec, known_specs_text, load_known_specs
 
 PACKAGE_DIR = Path(__file__).parent
 HEADER_NAME = "gs_protocol.h"
@@ -164,15 +165,16 @@ def c_header(spec: Spec = SPEC) -> str:
         lines += [f"#define GS_SCALE_{upper}_{f.name.upper()} {f.scale!r}" for f in frame_type.fields if f.scale != 1.0]
     lines += ["", _C_HELPERS]
     for frame_type in spec.frames:
-        lines += _c_frame_block(frame_type)
+        lines += _c_frame_block(spec, frame_type)
     lines += _c_payload_size_function(spec)
     lines += ["#endif /* GS_PROTOCOL_H */", ""]
     return "\n".join(lines)
 
 
-def _c_frame_block(frame_type: FrameType) -> list[str]:
+def _c_frame_block(spec: Spec, frame_type: FrameType) -> list[str]:
     name = _c_name(frame_type)
-    lines = [f"/* {frame_type.name} (0x{frame_type.id:02X}, {frame_type.direction}): {frame_type.description} */", "typedef struct {"]
+    lines = [f"/* {frame_type.name} (0x{frame_type.id:02X}, {frame_type.direction}, frame fingerprint "
+             f"0x{spec.frame_fingerprint(frame_type):08X}): {frame_type.description} */", "typedef struct {"]
     for field in frame_type.fields:
         scale = "" if field.scale == 1.0 else f" x {field.scale!r}"
         lines.append(f"    {field.c_type} {field.name}; /* {field.unit}{scale}: {field.description} */")
@@ -250,6 +252,13 @@ def protocol_markdown(spec: Spec = SPEC) -> str:
         "(CRC-32 of the spec's names, ids, types, scales and enums, carried in `CONFIG` so that a firmware built "
         "from another spec is reported instead of silently mis-decoded).",
         "",
+        "Compatibility is checked per frame type, as MAVLink checks each message against its `crc_extra`: a frame "
+        "type's fingerprint (in its section below) covers its name, id and base fields, not the fields appended "
+        "later, so adding a frame type or growing one at its end leaves older firmware and recordings compatible. "
+        "`firmware_protocol/known_specs.toml` (generated, only ever added to) holds the frame fingerprints of every "
+        "schema fingerprint this project has had; a ground station warns only of the frame types a firmware's spec "
+        "has otherwise, by name, or of a spec it does not know (newer, or another project's).",
+        "",
         "## Framing",
         "",
         f"Every frame fits one nRF24L01+ payload ({spec.max_frame_bytes} bytes):",
@@ -288,7 +297,8 @@ def protocol_markdown(spec: Spec = SPEC) -> str:
         frame_bytes = ", ".join(str(size + spec.header_bytes + spec.crc_bytes) for size in sizes)
         out.append(f"| 0x{t.id:02X} | [`{t.name}`](#{t.name.lower()}) | {direction} | {payload} | {frame_bytes} |")
     for t in spec.frames:
-        out += ["", f"### {t.name}", "", t.description, "", "| offset | field | C type | scale | unit | description |", "|---|---|---|---|---|---|"]
+        out += ["", f"### {t.name}", "", t.description, "", f"Frame fingerprint `0x{spec.frame_fingerprint(t):08X}`.", "",
+                "| offset | field | C type | scale | unit | description |", "|---|---|---|---|---|---|"]
         offset = spec.header_bytes
         for f in t.fields:
             description = f.description + (f" (enum `{f.enum}`)" if f.enum else "") + _absent_note(spec, f)
@@ -320,6 +330,10 @@ def generated_files(root: Path, spec: Spec = SPEC) -> dict[Path, bytes]:
     files = {root / "firmware_protocol" / "c" / HEADER_NAME: c_header(spec).encode()}
     files.update({root / "firmware_protocol" / "golden" / name: data for name, data in golden_files(spec).items()})
     files[root / "docs" / "protocol.md"] = protocol_markdown(spec).encode()
+    known_path = root / "firmware_protocol" / KNOWN_SPECS_PATH.name
+    known = load_known_specs(known_path)
+    known[spec.fingerprint] = spec.frame_fingerprints  # replaced: fields marked absent later keep the spec's fingerprint
+    files[known_path] = known_specs_text(known).encode()
     return files
 
 

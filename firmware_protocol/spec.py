@@ -1,7 +1,15 @@
-"""The protocol spec (``spec.toml``) loaded and checked: frame types, fields, enums, fingerprint.
+"""The protocol spec (``spec.toml``) loaded and checked: frame types, fields, enums, fingerprints.
 
 Everything else in the package (codec, decoder, C and document generators) reads the spec through
 this module, so a field added to ``spec.toml`` reaches every output at once.
+
+Compatibility is checked per frame type, as MAVLink checks each message against its ``crc_extra``: a
+frame type's fingerprint covers its name, id and base fields (the fields every version sends), not the
+fields appended later (``absent``), so adding a frame type or growing one at its end leaves every other
+frame type's fingerprint, and so every older firmware and recording, compatible. The firmware sends one
+number, the whole spec's ``fingerprint`` (``CONFIG.schema_fingerprint``); ``known_specs.toml`` (generated,
+only ever added to) says which frame fingerprints each spec this project has had is made of, so the
+ground station names the frame types that differ (``Spec.changed_frames``).
 """
 
 from __future__ import annotations
@@ -29,6 +37,7 @@ TIMESTAMP_FIELD = "t_us"
 ABSENT_KEY = "absent"  # spec.toml: the field was appended later, and reads as this where an older sender left it out
 ABSENT_NAME = "unknown"  # what an absent enum field is called
 SPEC_PATH = Path(__file__).with_name("spec.toml")
+KNOWN_SPECS_PATH = Path(__file__).with_name("known_specs.toml")
 
 
 class SpecError(ValueError):
@@ -145,7 +154,8 @@ class Spec:
 
     @property
     def fingerprint(self) -> int:
-        """CRC-32 of everything that decides how bytes decode (like MAVLink's crc_extra).
+        """CRC-32 of everything that decides how bytes decode: the spec as a whole, what the firmware sends
+        in ``CONFIG`` and the key of ``known_specs.toml`` (compatibility is per frame type: ``changed_frames``).
 
         Names, ids, types, scales and enum values count; units and descriptions do not, so
         a documentation change does not make old firmware incompatible. Nor does ``absent``: what an older
@@ -153,11 +163,74 @@ class Spec:
         """
         parts = [f"v{self.protocol_version} sync{self.sync}"]
         for enum in self.enums.values():
-            parts.append(f"enum {enum.name} " + " ".join(f"{k}={v}" for k, v in enum.values.items()))
+            parts.append(_enum_line(enum))
         for frame_type in self.frames:
             parts.append(f"frame {frame_type.name} {frame_type.id}")
-            parts += [f"  {f.c_type} {f.name} {f.scale!r} {f.enum}" for f in frame_type.fields]
+            parts += [_field_line(f) for f in frame_type.fields]
         return zlib.crc32("\n".join(parts).encode())
+
+    def frame_fingerprint(self, frame_type: FrameType) -> int:
+        """CRC-32 of what decides how one frame type's bytes decode, as MAVLink's ``crc_extra``: its name, id
+        and base fields (types, names, scales, the values of their enums); fields appended later (``absent``)
+        are left out, so a frame type grown at its end stays compatible with its older senders."""
+        base = [f for f in frame_type.fields if f.absent is None]
+        parts = [f"frame {frame_type.name} {frame_type.id}", *map(_field_line, base)]
+        parts += [_enum_line(self.enums[name]) for name in dict.fromkeys(f.enum for f in base if f.enum)]
+        return zlib.crc32("\n".join(parts).encode())
+
+    @cached_property
+    def frame_fingerprints(self) -> dict[str, tuple[int, int]]:
+        """Frame type name -> (id, ``frame_fingerprint``): this spec's entry in ``known_specs.toml``."""
+        return {t.name: (t.id, self.frame_fingerprint(t)) for t in self.frames}
+
+    def changed_frames(self, remote: int) -> tuple[str, ...] | None:
+        """The names of this spec's frame types that firmware built from the spec whose ``fingerprint`` is
+        ``remote`` sends otherwise: () when none (frame types added since, or grown at their end, are
+        compatible), None when ``remote`` is no spec this project has had (``known_specs.toml``: newer
+        firmware, or another project's)."""
+        if remote == self.fingerprint:
+            return ()
+        if remote not in KNOWN_SPECS:
+            return None
+        theirs = dict(KNOWN_SPECS[remote].values())  # id -> frame fingerprint
+        return tuple(name for name, (type_id, frame) in self.frame_fingerprints.items()
+                     if type_id in theirs and theirs[type_id] != frame)
+
+    def schema_warning(self, remote: int) -> str | None:
+        """What a ground station built from this spec says of a CONFIG whose firmware was built from the
+        spec ``remote``; None when every frame type they share decodes alike (the one wording everywhere)."""
+        changed = self.changed_frames(remote)
+        if changed == ():
+            return None
+        built = f"the firmware was built from another protocol spec (schema fingerprint 0x{remote:08X})"
+        if changed is None:
+            return f"{built}, one this ground station does not know (newer, or another project's): its frames may be mis-decoded"
+        return f"{built} whose {', '.join(changed)} differ from this ground station's: those frames may be mis-decoded"
+
+
+def _enum_line(enum: Enum) -> str:
+    return f"enum {enum.name} " + " ".join(f"{k}={v}" for k, v in enum.values.items())
+
+
+def _field_line(field: Field) -> str:
+    return f"  {field.c_type} {field.name} {field.scale!r} {field.enum}"
+
+
+def known_specs_text(known: dict[int, dict[str, tuple[int, int]]]) -> str:
+    """``known_specs.toml``: each spec's fingerprint -> its frame types' (id, fingerprint) by name, oldest first."""
+    lines = ["# Generated by `python -m firmware_protocol.generate`, which adds the current spec and never removes one:",
+             "# every spec this project has had, by its schema fingerprint (what CONFIG carries), with each of its frame",
+             "# types' [id, fingerprint] (firmware_protocol/spec.py, Spec.frame_fingerprint). A ground station compares",
+             "# a firmware's frame types with its own through this table (Spec.changed_frames)."]
+    for fingerprint, frames in known.items():
+        lines += ["", f'["0x{fingerprint:08X}"]']
+        lines += [f"{name} = [0x{type_id:02X}, 0x{frame:08X}]" for name, (type_id, frame) in frames.items()]
+    return "\n".join(lines) + "\n"
+
+
+def load_known_specs(path: Path = KNOWN_SPECS_PATH) -> dict[int, dict[str, tuple[int, int]]]:
+    document = tomllib.loads(path.read_text(encoding="utf-8")) if path.exists() else {}
+    return {int(key, 16): {name: tuple(entry) for name, entry in frames.items()} for key, frames in document.items()}
 
 
 def _parse(document: dict) -> Spec:
@@ -234,3 +307,4 @@ def load_spec(text: str | None = None) -> Spec:
 
 
 SPEC = load_spec()
+KNOWN_SPECS = load_known_specs()

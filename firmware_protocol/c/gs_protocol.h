@@ -132,7 +132,7 @@ static inline size_t gs_finish_frame(uint8_t *out, uint8_t type, uint8_t seq, ui
     return (size_t)GS_HEADER_BYTES + payload_len + GS_CRC_BYTES;
 }
 
-/* IMU_RAW (0x01, down): One MPU-6050 sample in sensor axes at the output rate. Counts convert to g and deg/s with the datasheet sensitivity of CONFIG's full scales (e.g. 16384 LSB/g at 2 g, 131 LSB/(deg/s) at 250 deg/s; groundstation/units.py). */
+/* IMU_RAW (0x01, down, frame fingerprint 0x631E0E3E): One MPU-6050 sample in sensor axes at the output rate. Counts convert to g and deg/s with the datasheet sensitivity of CONFIG's full scales (e.g. 16384 LSB/g at 2 g, 131 LSB/(deg/s) at 250 deg/s; groundstation/units.py). */
 typedef struct {
     uint32_t t_us; /* us: device time of the sample; wraps every 71.6 min */
     int16_t acc_x; /* count: accelerometer x (specific force), sensor axes */
@@ -172,7 +172,7 @@ static inline void gs_unpack_imu_raw(const uint8_t *p, gs_imu_raw_t *m)
     m->temperature = (int16_t)gs_get_u16(p + 16);
 }
 
-/* ATTITUDE (0x02, down): The onboard AHF estimate: quaternion (w first) rotating body (forward-right-down) vectors into north-east-down, see docs/conventions.md. */
+/* ATTITUDE (0x02, down, frame fingerprint 0x78E86498): The onboard AHF estimate: quaternion (w first) rotating body (forward-right-down) vectors into north-east-down, see docs/conventions.md. */
 typedef struct {
     uint32_t t_us; /* us: device time of the IMU sample the estimate includes */
     int16_t q_w; /* 1 x 6.103515625e-05: quaternion w, Q2.14 fixed point */
@@ -209,10 +209,10 @@ static inline void gs_unpack_attitude(const uint8_t *p, gs_attitude_t *m)
     m->flags = (uint8_t)p[14];
 }
 
-/* CONFIG (0x03, down): The aircraft's configuration, sent at start and on request. protocol_version and schema_fingerprint stay the first two fields in every version. */
+/* CONFIG (0x03, down, frame fingerprint 0x5FD4506C): The aircraft's configuration, sent at start and on request. protocol_version and schema_fingerprint stay the first two fields in every version. */
 typedef struct {
     uint8_t protocol_version; /* 1: framing version (framing.protocol_version) */
-    uint32_t schema_fingerprint; /* 1: CRC-32 of the spec the firmware was built from; a mismatch is reported by the decoder */
+    uint32_t schema_fingerprint; /* 1: CRC-32 of the spec the firmware was built from; the ground station looks up its frame types in firmware_protocol/known_specs.toml and reports those that differ */
     uint8_t fw_major; /* 1: firmware version, major */
     uint8_t fw_minor; /* 1: firmware version, minor */
     uint8_t fw_patch; /* 1: firmware version, patch */
@@ -258,7 +258,7 @@ static inline void gs_unpack_config(const uint8_t *p, gs_config_t *m)
     m->gyro_calibration = (uint8_t)p[15];
 }
 
-/* STATUS (0x04, down): Heartbeat at 1 Hz: power, the aircraft radio's view of the link, load. */
+/* STATUS (0x04, down, frame fingerprint 0x24539ACE): Heartbeat at 1 Hz: power, the aircraft radio's view of the link, load. */
 typedef struct {
     uint32_t t_us; /* us: device time */
     uint16_t battery; /* V x 0.001: battery voltage */
@@ -292,7 +292,7 @@ static inline void gs_unpack_status(const uint8_t *p, gs_status_t *m)
     m->flags = (uint16_t)gs_get_u16(p + 11);
 }
 
-/* MAG_RAW (0x05, down): Magnetometer sample in sensor axes. */
+/* MAG_RAW (0x05, down, frame fingerprint 0x70619AF2): Magnetometer sample in sensor axes. */
 typedef struct {
     uint32_t t_us; /* us: device time */
     int16_t mag_x; /* uT x 0.15: magnetic field x */
@@ -320,7 +320,7 @@ static inline void gs_unpack_mag_raw(const uint8_t *p, gs_mag_raw_t *m)
     m->mag_z = (int16_t)gs_get_u16(p + 8);
 }
 
-/* BARO (0x06, down): Barometer sample. */
+/* BARO (0x06, down, frame fingerprint 0x94CBB3F4): Barometer sample. */
 typedef struct {
     uint32_t t_us; /* us: device time */
     uint32_t pressure; /* Pa x 0.01: static pressure */
@@ -345,7 +345,7 @@ static inline void gs_unpack_baro(const uint8_t *p, gs_baro_t *m)
     m->temperature = (int16_t)gs_get_u16(p + 8);
 }
 
-/* GPS (0x07, down): GNSS solution. */
+/* GPS (0x07, down, frame fingerprint 0xD7E10AB7): GNSS solution. */
 typedef struct {
     uint32_t t_us; /* us: device time of the solution */
     int32_t lat; /* deg x 1e-07: latitude */
@@ -391,7 +391,7 @@ static inline void gs_unpack_gps(const uint8_t *p, gs_gps_t *m)
     m->satellites = (uint8_t)p[25];
 }
 
-/* COMMAND (0x10, up): Ground to aircraft. The frame's seq identifies the command; the aircraft answers with ACK. */
+/* COMMAND (0x10, up, frame fingerprint 0xB7C2EF0C): Ground to aircraft. The frame's seq identifies the command; the aircraft answers with ACK. */
 typedef struct {
     uint8_t command; /* enum: what to do */
     uint8_t param; /* 1: set_mode: the mode; set_filter_param: the filter_param; otherwise 0 */
@@ -416,7 +416,7 @@ static inline void gs_unpack_command(const uint8_t *p, gs_command_t *m)
     m->value = gs_bits_float(gs_get_u32(p + 2));
 }
 
-/* ACK (0x11, down): The aircraft's answer to a COMMAND. */
+/* ACK (0x11, down, frame fingerprint 0x21082842): The aircraft's answer to a COMMAND. */
 typedef struct {
     uint8_t command_seq; /* 1: seq of the COMMAND frame answered */
     uint8_t command; /* enum: the command answered */

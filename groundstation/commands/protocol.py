@@ -46,8 +46,8 @@ def decode_file(path: Path, limit: int) -> None:
                 shown += 1
     counts = ", ".join(f"{k} {v}" for k, v in decoder.stats.as_dict().items())
     print(f"{path}: {counts}; {decoder.pending_bytes} bytes of an incomplete frame at the end")
-    if decoder.schema_matches is False:
-        print(f"warning: the firmware was built from another protocol spec (fingerprint 0x{decoder.remote_fingerprint:08X})")
+    if decoder.schema_warning is not None:
+        print(f"warning: {decoder.schema_warning}")
 
 
 def link_bytes(path: Path):

@@ -44,7 +44,7 @@ from groundstation.session.link import LinkStats
 from groundstation.session.pipeline import (
     ACC_FIELDS, DISCONTINUITY, GYR_FIELDS, HANDLER, LAMBDA_SCALE, MAG_FIELDS, Q_FIELDS, Q_SCALES, SETTINGS,
     TEMPERATURE_SCALE, ConfigGuard, ConfigWait, SensorConfig, conversions, gap_row, impossible_config_message, in_body_axes,
-    period_s, sample_dt_s, schema_message, sensor_of, stage_key, unexpected_frame_event,
+    period_s, sample_dt_s, sensor_of, stage_key, unexpected_frame_event,
 )
 from groundstation.session.replay import CONFIG_ANSWERS, RecordedSetup, SettingsSchedule, apply_event, recorded_setup
 from groundstation.session.product import estimate_columns
@@ -241,8 +241,8 @@ class _Builder:
             s.event(key, {"t_host_ns": t_host_ns, "kind": "config", **values})
             # The decoder had taken the whole chunk before the pipeline saw the frame: its last CONFIG.
             latest = fingerprints[np.searchsorted(columns.chunk, columns.chunk[k], side="right") - 1]
-            if latest != SPEC.fingerprint:
-                s.event(key, {"t_host_ns": t_host_ns, "kind": "warning", "message": schema_message(values)})
+            if (warning := SPEC.schema_warning(int(latest))) is not None:
+                s.event(key, {"t_host_ns": t_host_ns, "kind": "warning", "message": warning})
             try:
                 sensor = sensor_of(values)
             except (KeyError, ValueError):

@@ -215,19 +215,6 @@ def unexpected_frame_event(t_host_ns: int, name: str) -> dict:
                        "another sender?); it and any more are counted and ignored"}
 
 
-_APPENDED = [f for f in SPEC.frame("CONFIG").fields if f.absent is not None]  # fields older firmware leaves out
-
-
-def schema_message(config: dict) -> str:
-    """The warning of a CONFIG from firmware built from another spec; an older one's shorter CONFIG says which
-    fields it lacked (read as unknown)."""
-    lacking = [f.name for f in _APPENDED if config[f.name] == f.absent]
-    built = f"the firmware was built from another protocol spec (schema fingerprint 0x{config['schema_fingerprint']:08X})"
-    if lacking:
-        return f"{built}, an older one: its CONFIG lacks {', '.join(lacking)} (read as unknown); frames changed since may be mis-decoded"
-    return f"{built}; its frames may be mis-decoded"
-
-
 def impossible_config_message(values: dict) -> str:
     return f"CONFIG with impossible values {values}; keeping the previous conversion"
 
@@ -423,8 +410,8 @@ class Pipeline:
         self.config = frame.values
         self.tables["config"].append(self._row(frame))
         self.events.append({"t_host_ns": t_host_ns, "kind": "config", **self.config})
-        if self.front.decoder.schema_matches is False:
-            self._warn(t_host_ns, schema_message(self.config))
+        if (warning := self.front.decoder.schema_warning) is not None:
+            self._warn(t_host_ns, warning)
         try:
             sensor = sensor_of(self.config)
         except (KeyError, ValueError):

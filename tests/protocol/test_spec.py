@@ -1,9 +1,11 @@
 """The spec itself: required content, framing limits, and what the fingerprint covers."""
 
+import dataclasses
+
 import pytest
 
 from firmware_protocol import SPEC, load_spec
-from firmware_protocol.spec import SPEC_PATH, SpecError
+from firmware_protocol.spec import KNOWN_SPECS, SPEC_PATH, Field, SpecError
 
 REQUIRED = {
     "IMU_RAW": {"t_us", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z", "temperature"},
@@ -52,3 +54,25 @@ def test_a_frame_too_big_for_one_radio_payload_is_rejected():
     )
     with pytest.raises(SpecError, match="GPS.*exceeds 26"):
         load_spec(oversized)
+
+
+def test_every_spec_the_project_has_had_is_known_and_ours_decodes_their_frames():
+    """known_specs.toml holds this spec (the generator adds it) and the older one of tests/data, which differs
+    from ours only by CONFIG's gyro_calibration, appended since: compatible frame for frame."""
+    assert KNOWN_SPECS[SPEC.fingerprint] == SPEC.frame_fingerprints
+    assert SPEC.changed_frames(0x5B4C2EFE) == ()
+    assert SPEC.changed_frames(SPEC.fingerprint ^ 1) is None
+    assert "does not know" in SPEC.schema_warning(SPEC.fingerprint ^ 1)
+
+
+def test_a_frame_fingerprint_covers_base_fields_and_their_enums_not_appended_fields():
+    gps = SPEC.frame("GPS")
+    grown = dataclasses.replace(gps, fields=gps.fields + (Field("hdop", "uint16_t", "1", "", absent=0xFFFF),))
+    assert SPEC.frame_fingerprint(grown) == SPEC.frame_fingerprint(gps)
+    renamed = dataclasses.replace(gps, fields=tuple(dataclasses.replace(f, name="sats") if f.name == "satellites" else f
+                                                    for f in gps.fields))
+    assert SPEC.frame_fingerprint(renamed) != SPEC.frame_fingerprint(gps)
+    renumbered = dataclasses.replace(SPEC, enums={**SPEC.enums, "gps_fix": dataclasses.replace(
+        SPEC.enums["gps_fix"], values={**SPEC.enums["gps_fix"].values, "rtk": 6})})
+    assert renumbered.frame_fingerprint(gps) != SPEC.frame_fingerprint(gps)
+    assert renumbered.frame_fingerprint(SPEC.frame("IMU_RAW")) == SPEC.frame_fingerprint(SPEC.frame("IMU_RAW"))
