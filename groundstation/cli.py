@@ -28,7 +28,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "replay": ("groundstation.commands.replay", f"compute {FILES} headless and print its totals (--speed: paced, with a live summary)"),
     "record": ("groundstation.commands.record", "record a live source headless (--port SPEC), printing link health"),
     "import": ("groundstation.commands.import_csv", "turn a dataset CSV (raw IMU layout, plain or .gz) into a recording"),
-    "export": ("groundstation.commands.export", f"export {FILES} to {either(EXPORT_FORMATS.values())}"),
+    "export": ("groundstation.commands.export", f"export {FILES} to {either(f.name for f in EXPORT_FORMATS.values())}"),
     "vibration": ("groundstation.commands.vibration", f"vibration spectra, peaks, levels, clipping and a notch suggestion of {FILES}"),
     "report": ("groundstation.commands.report", f"a flight report of {FILES}: one HTML page that opens offline"),
     "experiments": ("groundstation.commands.experiments", "the seed papers' experiments on the simulator: tables and PNG figures"),

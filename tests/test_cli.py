@@ -117,7 +117,8 @@ def test_export_help_lists_every_format_of_the_one_registry():
 
     overview = " ".join(run_cli("--help").stdout.split())
     own = " ".join(run_cli("export", "--help").stdout.split())
-    for suffix, name in FORMATS.items():
+    for suffix, export_format in FORMATS.items():
+        name = export_format.name
         assert name in overview, f"'groundstation --help' does not name {name}"
         assert f"OUT{suffix}" in own and name in own, f"'groundstation export --help' does not list {suffix}"
 

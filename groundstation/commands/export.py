@@ -1,5 +1,5 @@
 """``groundstation export``: a session (a recording, a dataset CSV, a .tlog, .bin or .ulg) to any of
-``export.request.FORMATS`` (Excel, CSV, Parquet, MCAP).
+``export.request.FORMATS``.
 
 Everything given is checked before the decoding starts (``groundstation.export.request``).
 """
@@ -21,13 +21,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     parser.add_argument("file", metavar="FILE", help=formats.described())
     parser.add_argument("--out", required=True, type=Path, metavar="OUT",
-                        help=either(f"OUT{suffix} ({name})" for suffix, name in FORMATS.items()) + ", by its extension")
+                        help=either(f"OUT{f.suffix} ({f.name})" for f in FORMATS.values()) + ", by its extension")
     add_estimator_options(parser, None)
     add_config_option(parser)
     add_imu_option(parser)
     parser.add_argument("--from", dest="t_from", type=float, metavar="S", help="first second to export")
     parser.add_argument("--to", dest="t_to", type=float, metavar="S", help="last second to export")
-    parser.add_argument("--rate", type=float, metavar="HZ", help="decimate to about HZ samples per second")
+    every_row = either(f.name for f in FORMATS.values() if f.every_row)
+    parser.add_argument("--rate", type=float, metavar="HZ", help="decimate to about HZ samples per second"
+                        + (f" (not {every_row}: every row of every table at its own rate)" if every_row else ""))
     parser.add_argument("--overwrite", action="store_true", help="replace OUT if it exists")
 
 

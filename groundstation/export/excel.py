@@ -35,6 +35,13 @@ def cancel_check(cancel) -> Callable[[], bool]:
     return cancel.is_set if hasattr(cancel, "is_set") else cancel
 
 
+def export_workbook(data: SessionData, request, writing, cancel) -> tuple[str, list[str]]:
+    """``write_workbook`` as ``export.request.FORMATS`` calls it."""
+    sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,
+                            forced=request.overrides, overwrite=request.overwrite, progress=writing, cancel=cancel)
+    return f"sheets {', '.join(sheets)}", []
+
+
 def write_workbook(data: SessionData, path, *, t_from: float | None = None, t_to: float | None = None,
                    rate_hz: float | None = None, forced: dict | None = None, overwrite: bool = False,
                    max_rows: int = EXCEL_MAX_ROWS, progress: Callable[[int, int], None] | None = None,

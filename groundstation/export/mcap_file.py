@@ -28,6 +28,14 @@ def in_range(time_s: np.ndarray, t_from: float | None, t_to: float | None) -> np
 CHUNK_BYTES = 256 * 1024  # uncompressed: a few seconds of a busy log a chunk, so a seek reads little
 
 
+def export_mcap(data: SessionData, request, writing, cancel) -> tuple[str, list[str]]:
+    """``write_mcap`` as ``export.request.FORMATS`` calls it."""
+    writing(0, 1)
+    messages = write_mcap(data, request.out, request.overwrite, request.t_from, request.t_to)
+    writing(1, 1)
+    return f"{messages} messages on {len(data.tables)} tables, /tf, /attitude/* and /events", []
+
+
 def write_mcap(data: SessionData, path, overwrite: bool = False, t_from: float | None = None,
                t_to: float | None = None) -> int:
     """Writes every table, every attitude and every event of ``data`` between ``t_from`` and ``t_to``

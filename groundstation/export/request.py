@@ -1,4 +1,6 @@
-"""The one way to export a session, for the CLI's ``export`` and the app's export dialog alike.
+"""The one way to export a session, for the CLI's ``export`` and the app's export dialog alike, and the
+export formats' registry (``FORMATS``): a new format is its writer module and one ``register`` line here;
+the CLI's help, the app's export dialog and the README's formats table (checked by a test) derive from it.
 
 ``export_request`` checks everything the user chose before any decoding (format, source, destination
 folder and its permission, overwrite, Parquet's optional pyarrow, time range and rate), so a mistake
@@ -12,6 +14,7 @@ or a cancel leaves nothing at the destination.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 import os
 import secrets
 from collections.abc import Callable
@@ -19,9 +22,38 @@ from pathlib import Path
 
 from groundstation.errors import UserError
 
-# suffix -> what the user calls it: the one list of export formats (the CLI's help, the app's dialog). This
-# module imports nothing heavy at its top, so that ``groundstation --help`` can read it.
-FORMATS = {".xlsx": "Excel", ".csv": "CSV", ".parquet": "Parquet", ".mcap": "MCAP"}
+
+@dataclasses.dataclass(frozen=True)
+class ExportFormat:
+    suffix: str  # lower case with the dot: the destination's name chooses the format by it
+    name: str  # what the user calls it
+    # (data, request, writing(done, total), cancel) -> (what was written, for "wrote OUT: ...", warnings), or
+    # "module:function" naming it: imported when used, so that this module stays light (``groundstation --help``)
+    write: str | Callable
+    decode_share: float  # of a progress bar, the decoding's (the writing takes the rest): a workbook is slow to write
+    streamed: bool = False  # rows written a stretch at a time as the estimators run along (``stream_estimates``): the
+    #                         export's memory does not grow with the session's length
+    every_row: bool = False  # every row of every table at its own rate: ``--rate`` does not apply
+
+    def writer(self) -> Callable:
+        if callable(self.write):
+            return self.write
+        module, _, function = self.write.partition(":")
+        return getattr(importlib.import_module(module), function)
+
+
+FORMATS: dict[str, ExportFormat] = {}  # by suffix
+
+
+def register(export_format: ExportFormat) -> ExportFormat:
+    FORMATS[export_format.suffix] = export_format
+    return export_format
+
+
+register(ExportFormat(".xlsx", "Excel", "groundstation.export.excel:export_workbook", decode_share=0.4))
+register(ExportFormat(".csv", "CSV", "groundstation.export.tabular:export_csv", decode_share=0.9, streamed=True))
+register(ExportFormat(".parquet", "Parquet", "groundstation.export.tabular:export_parquet", decode_share=0.9, streamed=True))
+register(ExportFormat(".mcap", "MCAP", "groundstation.export.mcap_file:export_mcap", decode_share=0.5, every_row=True))
 
 
 def either(words) -> str:
@@ -60,11 +92,12 @@ def export_request(source, out, *, filters=None, overrides=None, t_from=None, t_
                             accept_config_changes)
     if request.format not in FORMATS:
         raise UserError(f"{request.out.name}: the name must end in {either(FORMATS)}")
-    from groundstation.export.columns import check_row_options  # numpy: not at the top (see FORMATS)
+    from groundstation.export.columns import check_row_options  # numpy: not at the top (see ExportFormat.write)
 
     check_row_options(t_from, t_to, rate_hz)
-    if request.format == ".mcap" and rate_hz is not None:
-        raise UserError("--rate does not apply to MCAP: it keeps every row of every table at its own rate")
+    if FORMATS[request.format].every_row and rate_hz is not None:
+        raise UserError(f"--rate does not apply to {FORMATS[request.format].name}: it keeps every row of every table "
+                        "at its own rate")
     if not request.source.is_file():
         raise UserError(f"{request.source}: no such file")
     if request.out.resolve() == request.source.resolve():
@@ -102,12 +135,10 @@ def met(data):
 def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, int, int], None] | None = None,
                cancel=None) -> ExportResult:
     """Computes ``request.source`` with ``load`` (``session.load.load_session``: the caller's, so that the
-    exports import no maker of sessions) and writes ``request.out``; ``progress(stage, done, total)``
-    with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises ExportCancelled,
-    nothing written."""
-    from groundstation.export.columns import export_stretches, select_rows
-    from groundstation.export.excel import ExportCancelled, write_workbook
-    from groundstation.export.tabular import write_csv, write_parquet
+    exports import no maker of sessions) and writes ``request.out`` with its format's writer; ``progress(stage,
+    done, total)`` with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises
+    ExportCancelled, nothing written."""
+    from groundstation.export.excel import ExportCancelled
     report = progress or (lambda stage, done, total: None)
 
     def decoding(done: int, total: int) -> None:
@@ -115,40 +146,11 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
             raise ExportCancelled("export cancelled; nothing was written")
         report("decoding", done, total)
 
-    # CSV and Parquet are written a stretch of rows at a time: the estimators run along (``stream_estimates``),
-    # so the export's memory does not grow with the session's length
-    stream = request.format in (".csv", ".parquet")
+    export_format = FORMATS[request.format]
     data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes,
-                stream_estimates=stream)
+                stream_estimates=export_format.streamed)
     decoding(1, 1)
     if request.filters is None:
         data = met(data)
-    renamed = []  # CSV and Parquet columns kept apart (``columns.aux_columns``): said with the session's warnings
-    if request.format == ".xlsx":
-        sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,
-                                forced=request.overrides, overwrite=request.overwrite,
-                                progress=lambda done, total: report("writing", done, total), cancel=cancel)
-        written = f"sheets {', '.join(sheets)}"
-    elif request.format == ".mcap":
-        from groundstation.export.mcap_file import write_mcap
-        report("writing", 0, 1)
-        messages = write_mcap(data, request.out, request.overwrite, request.t_from, request.t_to)
-        report("writing", 1, 1)
-        written = f"{messages} messages on {len(data.tables)} tables, /tf, /attitude/* and /events"
-    else:
-        rows = select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz)
-        stretches = export_stretches(data, rows, renamed=renamed)
-        first = next(stretches)
-        columns, chained = len(first), _first_then(first, stretches)
-        del first  # each stretch is freed once written
-        (write_csv if request.format == ".csv" else write_parquet)(chained, request.out, request.overwrite)
-        written = f"{len(rows)} rows, {columns} columns"
-    return ExportResult(f"wrote {request.out}: {written}", [*data.warnings, *renamed])
-
-
-def _first_then(first, rest):
-    """``first``, then the items of ``rest``, holding none once handed on (``itertools.chain([first], rest)``
-    would hold ``first`` to the end)."""
-    yield first
-    del first
-    yield from rest
+    written, warnings = export_format.writer()(data, request, lambda done, total: report("writing", done, total), cancel)
+    return ExportResult(f"wrote {request.out}: {written}", [*data.warnings, *warnings])

@@ -1,12 +1,41 @@
-"""CSV and Parquet from the export columns."""
+"""CSV and Parquet from the export columns: their writers in ``export.request.FORMATS``."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
+from groundstation.export.columns import export_stretches, select_rows
 from groundstation.export.files import atomic_output
+
+
+def export_csv(data, request, writing, cancel) -> tuple[str, list[str]]:
+    return _export_rows(write_csv, data, request)
+
+
+def export_parquet(data, request, writing, cancel) -> tuple[str, list[str]]:
+    return _export_rows(write_parquet, data, request)
+
+
+def _export_rows(write: Callable, data, request) -> tuple[str, list[str]]:
+    """The session's rows a stretch at a time; the columns kept apart (``columns.aux_columns``) said as warnings."""
+    rows = select_rows(data.time_s, request.t_from, request.t_to, request.rate_hz)
+    renamed: list[str] = []
+    stretches = export_stretches(data, rows, renamed=renamed)
+    first = next(stretches)
+    columns, chained = len(first), _first_then(first, stretches)
+    del first  # each stretch is freed once written
+    write(chained, request.out, request.overwrite)
+    return f"{len(rows)} rows, {columns} columns", renamed
+
+
+def _first_then(first, rest):
+    """``first``, then the items of ``rest``, holding none once handed on (``itertools.chain([first], rest)``
+    would hold ``first`` to the end)."""
+    yield first
+    del first
+    yield from rest
 
 
 def write_csv(columns: dict | Iterable[dict], path, overwrite: bool = False) -> None:

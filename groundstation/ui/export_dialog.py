@@ -12,7 +12,8 @@ from pathlib import Path
 from PySide6 import QtCore, QtWidgets
 
 from groundstation.errors import UserError
-from groundstation.ui.export_job import FORMATS, ExportJob
+from groundstation.export.request import FORMATS
+from groundstation.ui.export_job import ExportJob
 
 POLL_MS = 100
 STATUS_LINES = 4
@@ -44,8 +45,8 @@ class ExportDialog(QtWidgets.QDialog):
         self.setup = setup
         self.job: ExportJob | None = None
         self.format_box = QtWidgets.QComboBox()
-        for suffix, (label, _) in FORMATS.items():
-            self.format_box.addItem(f"{label} ({suffix})", suffix)
+        for export_format in FORMATS.values():
+            self.format_box.addItem(f"{export_format.name} ({export_format.suffix})", export_format.suffix)
         self.format_box.currentIndexChanged.connect(self._format_changed)
         name = self.source.with_suffix(self.format_box.currentData()).name
         self.path_edit = QtWidgets.QLineEdit(str(default_folder(settings) / name))

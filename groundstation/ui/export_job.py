@@ -14,11 +14,6 @@ from pathlib import Path
 from groundstation.errors import UserError
 from groundstation.export import request as export
 
-# The share of the progress bar the decoding takes (the writing takes the rest): a workbook is slow to write.
-DECODE_SHARE = {".xlsx": 0.4, ".csv": 0.9, ".parquet": 0.9, ".mcap": 0.5}
-# suffix -> (menu label, decoding's share of the progress bar)
-FORMATS = {suffix: (label, DECODE_SHARE[suffix]) for suffix, label in export.FORMATS.items()}
-
 
 class ExportJob:
     """``load``: how the file is computed (``session.load.load_session``, handed down from the window)."""
@@ -33,7 +28,7 @@ class ExportJob:
         self.done = False
         self.message = ""  # what happened, for the user
         self.error: str | None = None
-        self._decode_share = DECODE_SHARE[self.request.format]
+        self._decode_share = export.FORMATS[self.request.format].decode_share
         self._cancel = threading.Event()
         self._thread = threading.Thread(target=self._run, name="groundstation-export", daemon=True)
 
