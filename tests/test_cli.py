@@ -157,3 +157,23 @@ def test_what_the_registry_says_of_an_estimator_without_importing_it_is_what_its
         facts = about(name)
         assert (facts.module, facts.class_name) == (cls.__module__.rpartition(".")[2], cls.__name__)
         assert (facts.label, facts.colour, facts.needs, facts.live, facts.tunable) == (cls.label, cls.colour, cls.needs, cls.live, cls.tunable)
+
+
+def test_the_port_helps_and_the_error_list_every_source_form_of_the_one_registry(monkeypatch, capsys):
+    """The forms ``--port`` takes are ``sources.spec.SCHEMES``: a scheme registered (here, for the test) is in
+    ``app --help`` and ``record --help`` (which records live sources only: no recording) with no other edit."""
+    from groundstation.sources import SCHEMES, SourceError, parse_spec
+    from groundstation.sources.spec import SourceScheme
+
+    monkeypatch.setitem(SCHEMES, "can", SourceScheme("groundstation.sources.udp", ("can:IFACE",), "a CAN bus adapter"))
+    helps = {}
+    for command in ("app", "record"):
+        with pytest.raises(SystemExit):
+            main([command, "--help"])
+        helps[command] = "".join(capsys.readouterr().out.split())
+    for name, scheme in SCHEMES.items():
+        for form in scheme.forms:
+            assert form in helps["app"], f"'groundstation app --help' does not list {form}"
+            assert (form in helps["record"]) == (name != "recording"), form
+    with pytest.raises(SourceError, match="can:IFACE  —  a CAN bus adapter"):
+        parse_spec("nonsense://x")

@@ -14,13 +14,13 @@ from groundstation.errors import UserError
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from groundstation import formats
+    from groundstation.sources.spec import source_forms
 
     parser.add_argument("recording", nargs="?", metavar="FILE", help=f"open this file for replay: {formats.described()}")
     parser.add_argument("--demo", action="store_true",
                         help="stream from the built-in simulated radio bridge (also the default without --port or RECORDING)")
     parser.add_argument("--port", metavar="SPEC",
-                        help="connect to this source: COM3, /dev/ttyUSB0, udp://HOST:PORT, tcp://HOST:PORT, sim:?scenario=NAME, "
-                             "a pyserial URL, a recording (docs/sources.md)")
+                        help=f"connect to this source: {source_forms()} (docs/sources.md)")
     parser.add_argument("--baud", type=int, default=None, metavar="N",
                         help="serial baud rate unless the spec gives ?baud= (default: 115200, or 57600 for mavlink:PORT)")
     add_imu_option(parser)  # the window's File > "Full-rate IMU" starts checked with --imu fast

@@ -23,10 +23,10 @@ from groundstation.errors import UserError
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     from groundstation.estimation import live_estimators
+    from groundstation.sources.spec import source_forms
 
     parser.add_argument("--port", required=True, metavar="SPEC",
-                        help="the source: COM3, /dev/ttyUSB0, udp://HOST:PORT, tcp://HOST:PORT, sim:?scenario=NAME, "
-                             "a pyserial URL (docs/sources.md)")
+                        help=f"the live source: {source_forms(but=('recording',))} (docs/sources.md)")
     parser.add_argument("--duration", type=float, default=None, metavar="S", help="stop after S seconds (default: at Ctrl-C)")
     parser.add_argument("--baud", type=int, default=None, metavar="N",
                         help="serial baud rate unless the spec gives ?baud= (default: 115200, or 57600 for mavlink:PORT)")

@@ -7,10 +7,22 @@ clock at arrival (the I/O edge), and declares what it can do (``is_replay``, ``c
 ``can_send``). Nothing downstream knows which source it reads.
 """
 
-from groundstation.sources.base import Chunk, Source, SourceClosed, SourceError
-from groundstation.sources.replay import ReplaySource
-from groundstation.sources.serial_port import SerialSource, list_ports
-from groundstation.sources.spec import SCHEMES, open_source, parse_spec, whole_file
+import importlib
+
+# Each name's module, imported on first use: a replay imports numpy, which a command's ``--help`` (it lists
+# the source forms, ``spec.source_forms``) need not wait for.
+_MODULES = {
+    "Chunk": "base", "Source": "base", "SourceClosed": "base", "SourceError": "base", "ReplaySource": "replay",
+    "SerialSource": "serial_port", "list_ports": "serial_port", "SCHEMES": "spec", "open_source": "spec",
+    "parse_spec": "spec", "source_forms": "spec", "whole_file": "spec",
+}
+
+
+def __getattr__(name: str):
+    if name not in _MODULES:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(f"groundstation.sources.{_MODULES[name]}"), name)
+
 
 __all__ = ["SCHEMES", "Chunk", "ReplaySource", "SerialSource", "Source", "SourceClosed", "SourceError", "list_ports",
-           "open_source", "parse_spec", "whole_file"]
+           "open_source", "parse_spec", "source_forms", "whole_file"]

@@ -10,7 +10,9 @@ A spec is what the user types in the app's port field or after ``--port``:
     mavlink:...                        an autopilot (MAVLink 1/2)        -> mavlink.py
 
 ``SCHEMES`` is the registry: a new input is one module with ``open_spec(spec: Spec) -> Source`` and
-one entry here. Strings without a scheme are a recording when they name a file, else a serial port.
+one entry here; the ``--port`` helps, the app's source box and the error messages list its forms from
+here (``source_forms``, ``accepted_forms``). Strings without a scheme are a recording when they name a
+file, else a serial port.
 """
 
 from __future__ import annotations
@@ -22,35 +24,52 @@ import re
 import stat
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NamedTuple
 from urllib.parse import parse_qsl, urlsplit
 
 from groundstation import formats
 from groundstation.sources.base import Source, SourceError
 
-# scheme -> (module providing open_spec(spec), the form the user types, what it is).
-# "serial" and "recording" are also what a string without a scheme is taken for.
-SCHEMES: dict[str, tuple[str, str, str]] = {
-    "serial": ("groundstation.sources.serial_port", "COM3, /dev/ttyUSB0, socket://HOST:PORT, rfc2217://HOST:PORT, loop://",
-               "a serial port or any pyserial URL (?baud=N, default 115200)"),
-    "udp": ("groundstation.sources.udp", "udp://HOST:PORT",
-            "a UDP bridge: listen on HOST:PORT (0.0.0.0 for every interface), uplink to the last sender"),
-    "tcp": ("groundstation.sources.tcp", "tcp://HOST:PORT", "a TCP bridge: connect to HOST:PORT, reconnect when it drops"),
-    "sim": ("groundstation.sources.sim", "sim:[?scenario=NAME&seed=N&...]",
-            "the built-in simulated bridge (any bridge-sim option as a parameter)"),
-    "mavlink": ("groundstation.sources.mavlink", "mavlink:PORT[?baud=N], mavlink:udpin:HOST:PORT, mavlink:udpout:HOST:PORT, "
-                "mavlink:tcp:HOST:PORT, mavlink:FILE.tlog[?speed=X]",
-                "an autopilot speaking MAVLink (ArduPilot, PX4): a SiK radio (57600 baud unless ?baud=), SITL or a Wi-Fi "
-                "bridge over UDP or TCP, or a .tlog replayed"),
-    "recording": ("groundstation.sources.replay", "FILE.gsrec[?speed=X]",
-                  "a recording, replayed at X times real time (0.25-64, default 1; speed=max: as fast as possible)"),
+class SourceScheme(NamedTuple):
+    module: str  # providing open_spec(spec) -> Source
+    forms: tuple[str, ...]  # what the user types, the commonest first
+    what: str  # what it is, one line
+
+
+# scheme -> its entry. "serial" and "recording" are also what a string without a scheme is taken for.
+SCHEMES: dict[str, SourceScheme] = {
+    "serial": SourceScheme("groundstation.sources.serial_port",
+                           ("COM3", "/dev/ttyUSB0", "socket://HOST:PORT", "rfc2217://HOST:PORT", "loop://"),
+                           "a serial port or any pyserial URL (?baud=N, default 115200)"),
+    "udp": SourceScheme("groundstation.sources.udp", ("udp://HOST:PORT",),
+                        "a UDP bridge: listen on HOST:PORT (0.0.0.0 for every interface), uplink to the last sender"),
+    "tcp": SourceScheme("groundstation.sources.tcp", ("tcp://HOST:PORT",),
+                        "a TCP bridge: connect to HOST:PORT, reconnect when it drops"),
+    "sim": SourceScheme("groundstation.sources.sim", ("sim:[?scenario=NAME&seed=N&...]",),
+                        "the built-in simulated bridge (any bridge-sim option as a parameter)"),
+    "mavlink": SourceScheme("groundstation.sources.mavlink",
+                            ("mavlink:PORT[?baud=N]", "mavlink:udpin:HOST:PORT", "mavlink:udpout:HOST:PORT",
+                             "mavlink:tcp:HOST:PORT", "mavlink:FILE.tlog[?speed=X]"),
+                            "an autopilot speaking MAVLink (ArduPilot, PX4): a SiK radio (57600 baud unless ?baud=), SITL "
+                            "or a Wi-Fi bridge over UDP or TCP, or a .tlog replayed"),
+    "recording": SourceScheme("groundstation.sources.replay", ("FILE.gsrec[?speed=X]",),
+                              "a recording, replayed at X times real time (0.25-64, default 1; speed=max: as fast as possible)"),
 }
 URL = re.compile(r"^(?P<scheme>[A-Za-z][A-Za-z0-9+.-]+):(?P<rest>.*)$", re.DOTALL)  # 2+ letters: C:\ is a path
 COM_PORT = re.compile(r"^(\\\\\.\\)?COM\d+$", re.IGNORECASE)
 
 
 def accepted_forms() -> str:
-    """One line per scheme, for error messages."""
-    return "".join(f"\n  {form}  —  {what}" for _, form, what in SCHEMES.values())
+    """One line per scheme, for error messages and the app's source box."""
+    return "".join(f"\n  {', '.join(scheme.forms)}  —  {scheme.what}" for scheme in SCHEMES.values())
+
+
+def source_forms(commonest: bool = False, but: tuple[str, ...] = ()) -> str:
+    """Every form the user may type (``commonest``: each scheme's first two) of the schemes not in ``but``, on
+    one line, for help texts."""
+    forms = [form for name, scheme in SCHEMES.items() if name not in but
+             for form in (scheme.forms[:2] if commonest else scheme.forms)]
+    return ", ".join(forms[:-1]) + " or " + forms[-1]
 
 
 @dataclass(frozen=True)
@@ -136,7 +155,7 @@ def open_source(text: str, **defaults) -> Source:
     """The Source ``text`` names, opened. ``defaults`` are option values the spec may override
     (``baud=`` from the app's baud box, ``speed=`` from ``replay --speed``). SourceError says why not."""
     spec = parse_spec(text, **defaults)
-    module = importlib.import_module(SCHEMES[spec.scheme][0])
+    module = importlib.import_module(SCHEMES[spec.scheme].module)
     return module.open_spec(spec)
 
 

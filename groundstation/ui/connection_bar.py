@@ -7,13 +7,13 @@ from __future__ import annotations
 
 from PySide6 import QtCore, QtWidgets
 
+from groundstation.export.request import FORMATS as EXPORT_FORMATS, either
 from groundstation.sources import list_ports
+from groundstation.sources.spec import accepted_forms, source_forms
 
 BAUD_RATES = (9600, 57600, 115200, 230400, 460800, 921600, 1000000, 2000000)
 AUTO_BAUD = "auto"  # the source's own default: 115200 for the project's bridge, 57600 for a MAVLink radio
 PORT_REFRESH_MS = 1000
-SOURCE_HINT = ("A serial port (COM3, /dev/ttyUSB0), socket://HOST:PORT, udp://HOST:PORT, tcp://HOST:PORT, "
-               "sim:?scenario=NAME, mavlink:..., or a recording file")
 
 
 class ConnectionBar(QtWidgets.QWidget):
@@ -29,8 +29,8 @@ class ConnectionBar(QtWidgets.QWidget):
         self.port_box.setEditable(True)  # a pty, socket://, udp://, sim:, a recording: anything open_source takes
         self.port_box.setInsertPolicy(QtWidgets.QComboBox.NoInsert)
         self.port_box.setCompleter(None)  # the list's lines carry descriptions; completing with them garbles the text
-        self.port_box.lineEdit().setPlaceholderText(SOURCE_HINT)
-        self.port_box.setToolTip(SOURCE_HINT)
+        self.port_box.lineEdit().setPlaceholderText(source_forms(commonest=True))
+        self.port_box.setToolTip("The source, one of:" + accepted_forms())
         self.port_box.setMinimumContentsLength(28)
         self.port_box.setSizeAdjustPolicy(QtWidgets.QComboBox.AdjustToMinimumContentsLengthWithIcon)
         self.port_box.activated.connect(self._take_listed)
@@ -46,7 +46,8 @@ class ConnectionBar(QtWidgets.QWidget):
         self.demo_button = QtWidgets.QPushButton("Simulated bridge (demo)")
         self.open_button = QtWidgets.QPushButton("Open file…")
         self.export_button = QtWidgets.QPushButton("Export…")
-        self.export_button.setToolTip("The current or last session's recording to Excel, CSV or Parquet")
+        self.export_button.setToolTip("The current or last session's recording to "
+                                      + either(f.name for f in EXPORT_FORMATS.values()))
         self.export_button.clicked.connect(self.exportRequested)
         self.connect_button.clicked.connect(self._connect)
         self.disconnect_button.clicked.connect(self.disconnectRequested)

@@ -49,9 +49,9 @@ def test_each_form_is_recognised_without_opening_it(spec, scheme, target):
 def test_every_registered_scheme_has_an_opener_and_is_listed_in_the_error():
     with pytest.raises(SourceError) as error:
         parse_spec("nonsense://x")
-    for module_name, form, _ in SCHEMES.values():
-        assert callable(importlib.import_module(module_name).open_spec)
-        assert form in str(error.value)
+    for scheme in SCHEMES.values():
+        assert callable(importlib.import_module(scheme.module).open_spec)
+        assert ", ".join(scheme.forms) in str(error.value)
 
 
 @pytest.mark.parametrize(("spec", "message"), [

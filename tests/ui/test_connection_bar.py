@@ -87,3 +87,15 @@ def test_devices_coming_and_going_never_change_what_the_user_typed_or_picked(qtb
     bar.refresh_ports()
     assert bar.source == "/dev/ttyUSB7" and bar.listed() == ["udp://0.0.0.0:9000"]
     assert bar.connect_button.isEnabled()
+
+
+def test_the_source_box_says_every_registered_source_form(qtbot, ports):
+    """Its tooltip lists each scheme of ``sources.spec.SCHEMES`` with its forms and what it is; its placeholder
+    each scheme's commonest forms: from the registry, not a copy."""
+    from groundstation.sources import SCHEMES
+
+    bar = connection_bar.ConnectionBar()
+    qtbot.addWidget(bar)
+    for scheme in SCHEMES.values():
+        assert f"{', '.join(scheme.forms)}  —  {scheme.what}" in bar.port_box.toolTip()
+        assert scheme.forms[0] in bar.port_box.lineEdit().placeholderText()
