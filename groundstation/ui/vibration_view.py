@@ -19,7 +19,6 @@ the attitude difference or why there is none); a filter no data can carry is sai
 
 from __future__ import annotations
 
-from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -27,6 +26,7 @@ import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
 from groundstation.analysis.vibration import AXES, SENSORS, UNITS, VibrationError, VibrationSummary, vibration_summary
+from groundstation.session.product import SessionData, build_product
 from groundstation.session.view import Session
 
 if TYPE_CHECKING:
@@ -175,15 +175,16 @@ class VibrationView(QtWidgets.QWidget):
             self.filter_bw.setValue(self.summary.notch["bandwidth_hz"])
         self._show()
 
-    def _snapshot(self):
+    def _snapshot(self) -> SessionData:
         """What the analysis reads: a file's whole product (``RevealSession.data``: "All data" is the whole
-        file, not the part played so far); a live session's tables now (the reader goes on adding rows)."""
+        file, not the part played so far); a live session's product of its tables now (the reader goes on
+        adding rows)."""
         if self.session.seekable:
             return self.session.data
         view = self.session.view
         with self.session.lock:
-            return SimpleNamespace(tables={name: table.to_dict() for name, table in view.tables.items()},
-                                   catalogue=view.catalogue, settings_at_start=view.settings())
+            return build_product({}, view.catalogue, {name: table.to_dict() for name, table in view.tables.items()},
+                                 view.filters, settings_at_start=view.settings())
 
     def run_what_if(self) -> None:
         """What the filter set in the row would do over the summary's range; a refusal in the banner."""

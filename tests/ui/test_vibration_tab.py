@@ -163,3 +163,21 @@ def test_all_data_of_a_file_is_the_whole_file_not_the_part_played(window, qtbot)
     assert tab.summary is not None, tab.banner.text()
     whole = window.session.data.time_s
     assert tab.summary.end_s - tab.summary.start_s > 0.9 * (whole[-1] - whole[0]) > 10 * max(played_s, 1.0)
+
+
+def test_a_live_sessions_tab_reads_its_product_so_far(window, qtbot):
+    """A live session (the simulated bridge, vibrating): the tab's data is the session's product of the rows so
+    far (``SessionData``, built as a file's is), and finds the motor peak in them."""
+    from groundstation.session.product import SessionData
+
+    window.connect_serial(f"sim:?scenario=static&vibration={MOTOR_HZ:g}&seed=5")
+    assert window.session is not None and not window.session.seekable
+    qtbot.waitUntil(lambda: len(window.session.view.imu) >= 600, timeout=LIMIT_MS)  # 6 s at 100 Hz
+    tab = window.live_view.vibration
+    window.live_view.tabs.setCurrentWidget(tab)  # computes when first shown
+    qtbot.waitUntil(lambda: tab.summary is not None, timeout=LIMIT_MS)
+    snapshot = tab._snapshot()
+    assert isinstance(snapshot, SessionData) and len(snapshot) >= 600
+    peak = max((p for p in tab.summary.peaks if p.sensor == "accel"), key=lambda p: p.amplitude)
+    assert peak.frequency_hz == pytest.approx(MOTOR_HZ, abs=2.0)
+    window.disconnect()
