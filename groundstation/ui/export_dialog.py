@@ -90,6 +90,7 @@ class ExportDialog(QtWidgets.QDialog):
         layout.addWidget(self.status)
         layout.addLayout(buttons)
         self.timer = QtCore.QTimer(self, interval=POLL_MS, timeout=self._poll)
+        self._format_changed()  # the first format's rate box
 
     @staticmethod
     def _seconds(value: float, maximum: float) -> QtWidgets.QDoubleSpinBox:
@@ -99,6 +100,7 @@ class ExportDialog(QtWidgets.QDialog):
 
     def _format_changed(self) -> None:
         self.path_edit.setText(str(Path(self.path_edit.text()).with_suffix(self.format_box.currentData())))
+        self.rate.setEnabled(not FORMATS[self.format_box.currentData()].every_row)  # MCAP keeps every row
 
     def _browse(self) -> None:
         suffix = self.format_box.currentData()
@@ -110,7 +112,8 @@ class ExportDialog(QtWidgets.QDialog):
         whole = self.t_from.value() == 0.0 and self.t_to.value() == self.t_to.maximum()
         try:
             self.job = ExportJob(self._load, self.source, Path(self.path_edit.text()), None if whole else self.t_from.value(),
-                                 None if whole else self.t_to.value(), self.rate.value() or None,
+                                 None if whole else self.t_to.value(),
+                                 (self.rate.value() or None) if self.rate.isEnabled() else None,
                                  self.overwrite.isChecked(), *self.setup).start()
         except UserError as error:
             self.status.setText(str(error))

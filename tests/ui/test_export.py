@@ -73,3 +73,19 @@ def test_the_dialog_saves_into_documents_then_where_the_user_last_exported(windo
     again = window.export()
     qtbot.addWidget(again)
     assert Path(again.path_edit.text()).parent == elsewhere  # remembered, also across restarts (the settings)
+
+
+def test_the_rate_box_is_off_for_a_format_that_keeps_every_row(qtbot, recording, tmp_path):
+    """MCAP keeps every row of every table (``ExportFormat.every_row``): its rate box is disabled, and a rate set
+    before it was chosen does not refuse the export."""
+    dialog = ExportDialog(load_session, recording, 30.0)
+    qtbot.addWidget(dialog)
+    assert dialog.rate.isEnabled()
+    dialog.rate.setValue(10)
+    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".mcap"))
+    assert not dialog.rate.isEnabled()
+    out = tmp_path / "flight.mcap"
+    dialog.path_edit.setText(str(out))
+    dialog.export_button.click()
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=LIMIT_MS)
+    assert dialog.status.text().startswith(f"wrote {out}") and out.stat().st_size > 10_000
