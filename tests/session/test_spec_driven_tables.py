@@ -16,10 +16,11 @@ from groundstation.session.catalogue import COMPUTED_FROM
 from groundstation.session.load import from_pipeline
 from groundstation.session.pipeline import Pipeline
 
+ESC_ID = min(set(range(1, 256)) - {t.id for t in SPEC.frames})  # free in any version of the spec, not a fixed 0x08
 ESC_FRAME = """
 [[frames]]
 name = "ESC"
-id = 0x08
+id = ESC_ID
 direction = "down"
 description = "Motor controller telemetry."
 fields = [
@@ -27,7 +28,7 @@ fields = [
   { name = "rpm", type = "uint16_t", unit = "rpm", description = "motor speed" },
   { name = "current", type = "int16_t", scale = 0.01, unit = "A", description = "motor current" },
 ]
-"""
+""".replace("ESC_ID", str(ESC_ID))
 ESC_RATE_HZ, IMU_RATE_HZ, SECONDS = 10, 100, 3
 
 
