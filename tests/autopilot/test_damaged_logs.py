@@ -19,7 +19,7 @@ from groundstation.autopilot.session import read_log
 from groundstation.cli import main
 from groundstation.sim.profiles import make_profile
 
-from mavlink_helpers import FLIGHTLOGS, dataflash_record
+from mavlink_helpers import dataflash_record, flightlog
 
 
 BLOCK = 4096
@@ -99,7 +99,7 @@ def test_the_slow_imu_warning_is_in_every_output(old_plane_log, command, tmp_pat
 
 
 def damaged_copy(name: str, tmp_path, how: str):
-    data = bytearray((FLIGHTLOGS / name).read_bytes())
+    data = bytearray(flightlog(name).read_bytes())
     if how == "cut":
         data = data[: int(len(data) * CUT)]
     else:
@@ -127,7 +127,7 @@ def test_a_corrupt_block_in_a_bin_is_counted_not_printed(tmp_path, capfd):
     assert len(skipped) == 1
     # the block, plus at most the record it cut into (a DataFlash record is at most 255 bytes)
     assert BLOCK - 255 <= int(skipped[0].split()[0]) <= BLOCK + 255
-    clean, _ = warnings_of(["replay", str(FLIGHTLOGS / "arducopter_cubeorange_2023-07-06_10-12-18.bin")], capfd)
+    clean, _ = warnings_of(["replay", str(flightlog("arducopter_cubeorange_2023-07-06_10-12-18.bin"))], capfd)
     assert not any("damaged" in w for w in clean)
 
 
@@ -140,7 +140,7 @@ def test_a_cut_log_says_so_in_every_command(name, tmp_path, capfd):
         assert any("cut short" in w for w in warnings), (argv, warnings)
     assert main(["evaluate", str(path), "--filters", "hf", "--json"]) == 0
     assert any("cut short" in w for w in json.loads(capfd.readouterr().out)["warnings"])
-    whole, _ = warnings_of(["replay", str(FLIGHTLOGS / name)], capfd)
+    whole, _ = warnings_of(["replay", str(flightlog(name))], capfd)
     assert not any("cut short" in w for w in whole)
 
 
@@ -148,9 +148,9 @@ def test_a_corrupt_block_in_a_ulg_is_said(tmp_path, capfd):
     name = "px4_sitl_quad_groundtruth.ulg"
     path = damaged_copy(name, tmp_path, "corrupt")
     rows = len(read_log(path).imu)
-    assert rows < len(read_log(FLIGHTLOGS / name).imu)  # the block held sensor_combined rows
+    assert rows < len(read_log(flightlog(name)).imu)  # the block held sensor_combined rows
     for argv in (["replay", str(path)], ["export", str(path), "--out", str(tmp_path / "o.csv")]):
         warnings, _ = warnings_of(argv, capfd)
         assert any("damaged bytes" in w for w in warnings), (argv, warnings)
-    whole, _ = warnings_of(["replay", str(FLIGHTLOGS / name)], capfd)
+    whole, _ = warnings_of(["replay", str(flightlog(name))], capfd)
     assert not any("damaged" in w for w in whole)
