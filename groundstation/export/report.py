@@ -150,12 +150,19 @@ def flight_section(data: SessionData, file_name: str) -> str:
     return "\n".join(out)
 
 
+def data_attribute(name: str) -> str:
+    """A figure's name as an HTML data- attribute: lower case, every run of other characters than letters and
+    digits one hyphen (``level_m_s2`` -> ``data-level-m-s2``, ``gap (s)`` -> ``data-gap-s``), so that no name
+    breaks the tag it is written into."""
+    return "data-" + re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-")
+
+
 def findings_section(found: list[Finding]) -> str:
     if not found:
         return "<h2>Findings</h2><p>Nothing to point out.</p>"
     items = []
     for f in found[:MAX_FINDINGS]:
-        values = "".join(f" data-{k.replace('_', '-')}=\"{v:.6g}\"" for k, v in f.values.items())
+        values = "".join(f" {data_attribute(k)}=\"{v:.6g}\"" for k, v in f.values.items())
         when = f" data-t-s=\"{f.t_s:.3f}\"" if f.t_s is not None else ""
         items.append(f"<li class=\"finding {f.severity}\" data-kind=\"{f.kind}\"{when}{values}><span class=\"sev\">{f.severity}</span>"
                      f"{escaped(f.title)}" + (f"<div class=\"detail\">{escaped(f.detail)}</div>" if f.detail else "") + "</li>")

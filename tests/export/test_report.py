@@ -140,3 +140,15 @@ def test_the_report_says_what_the_suggested_notch_would_do(vibrating_flight):
         assert html.escape(line.strip()) in text
     assert change.attitude is not None and change.spectra["accel"].attenuation_db < -3.0
     assert f'data-lag-20-hz-deg="{change.phase_lag_deg[20.0]:.6g}"' in text
+
+
+def test_a_findings_figures_are_data_attributes_whatever_their_names():
+    """A figure's name becomes an attribute name: one with spaces or brackets (``gap (s)``) must not break the
+    tag (``data-gap (s)="1.5"`` is three attributes, one of them ``(s)``)."""
+    from groundstation.export.report import findings_section
+    from groundstation.export.report_findings import Finding
+
+    found = [Finding("low", "gap", "a gap", values={"gap (s)": 1.5, "level_m_s2": 2.0, 'odd"<name>': 3.0})]
+    (finding,) = Page(findings_section(found)).findings
+    figures = {name: value for name, value in finding.items() if name.startswith("data-") and name != "data-kind"}
+    assert figures == {"data-gap-s": "1.5", "data-level-m-s2": "2", "data-odd-name": "3"}
