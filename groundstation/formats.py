@@ -43,10 +43,10 @@ class FileFormat:
     read: str | Callable | None = None  # a flight log's reader, (path, progress) -> autopilot.flightlog.FlightLog
 
     def loader(self) -> Callable:
-        return _resolve(self.load)
+        return resolve(self.load)
 
     def reader(self) -> Callable | None:
-        return None if self.read is None else _resolve(self.read)
+        return None if self.read is None else resolve(self.read)
 
     def patterns(self) -> str:
         return " ".join(f"*{suffix}" for suffix in self.suffixes)
@@ -101,7 +101,9 @@ def dialog_filter() -> str:
                       "All files (*)"])
 
 
-def _resolve(target: str | Callable) -> Callable:
+def resolve(target: str | Callable) -> Callable:
+    """``target`` itself, or the function a ``"module:function"`` string names, imported now: how this registry
+    and ``export.request.FORMATS`` name their functions, so as to import nothing heavy until one is used."""
     if callable(target):
         return target
     module, _, function = target.partition(":")

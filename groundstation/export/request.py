@@ -14,13 +14,13 @@ or a cancel leaves nothing at the destination.
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import os
 import secrets
 from collections.abc import Callable
 from pathlib import Path
 
 from groundstation.errors import UserError
+from groundstation.formats import resolve
 
 
 @dataclasses.dataclass(frozen=True)
@@ -36,10 +36,7 @@ class ExportFormat:
     every_row: bool = False  # every row of every table at its own rate: ``--rate`` does not apply
 
     def writer(self) -> Callable:
-        if callable(self.write):
-            return self.write
-        module, _, function = self.write.partition(":")
-        return getattr(importlib.import_module(module), function)
+        return resolve(self.write)
 
 
 FORMATS: dict[str, ExportFormat] = {}  # by suffix
