@@ -426,6 +426,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._action(file, "Flight &report…", "Ctrl+Shift+R", self.flight_report)
         file.addAction(self.record_action)
         file.addAction(self.foxglove.action)
+        file.addAction("Foxglove port…").triggered.connect(lambda _=False: self.foxglove.choose_port())
         file.addSeparator()
         self._action(file, "&Quit", "Ctrl+Q", self.close)
         view = self.menuBar().addMenu("&View")
