@@ -60,6 +60,8 @@ class SessionList(QtWidgets.QWidget):
         self.tree.setHeaderLabels(list(COLUMNS))
         self.tree.setRootIsDecorated(False)
         self.tree.setUniformRowHeights(True)
+        for column in (0, 2):  # short: the name and the place on the axis; the source and state take the rest
+            self.tree.header().setSectionResizeMode(column, QtWidgets.QHeaderView.ResizeToContents)
         self.tree.currentItemChanged.connect(lambda *_: self._sync_buttons())
         self.buttons = {}
         grid = QtWidgets.QGridLayout()
@@ -244,7 +246,9 @@ class SessionList(QtWidgets.QWidget):
         dialog.setWindowTitle("Add a source beside the window's session")
         dialog.setLabelText("source: a port, socket://…, udp://…, sim:?seed=N, or a file")
         dialog.setComboBoxEditable(True)
-        dialog.setComboBoxItems([f"sim:?seed={self._count + 1}", *self.window.recent_sources()])
+        offered = [f"sim:?seed={self._count + 1}", *self.window.recent_sources()]  # another simulated board first
+        dialog.setComboBoxItems(offered)
+        dialog.setTextValue(offered[0])
         dialog.textValueSelected.connect(self.add_source)
         dialog.open()
         return dialog

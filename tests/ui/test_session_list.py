@@ -105,3 +105,30 @@ def test_two_boards_and_a_recording_on_one_time_axis(window, qtbot, recording, t
         assert len(table) == decoded_frames(path)["IMU_RAW"], path
         assert np.all(np.diff(table["time_s"]) > 0)
     assert s2_again.label == "S5"
+
+
+def test_a_file_beside_a_file_plays_along_with_it(window, qtbot, recording):
+    """Two recordings on one axis, both from their start: the added one follows the window's playback,
+    its seeks back too (its curves start over, not left ahead of the clock)."""
+    from tests.ui.helpers import open_file
+
+    open_file(window, qtbot, recording)
+    if not window.session.source.paused:
+        window.replay_bar.play_button.click()  # paused: the clock stays where the seeks put it
+    window.seek(20.0)
+    other = window.session_list.add_file(recording)
+    qtbot.waitUntil(lambda: other.session is not None and other.offset_s == 0.0, timeout=LIMIT_MS)
+    window.tick()
+    assert other.session.source.position_s == window.session.source.position_s == 20.0
+    channels = window.live_view.channels
+    window.live_view.tabs.setCurrentWidget(channels)
+    channels.add("S2:imu.acc_z_g")
+    window.tick()
+    series = channels.series[PREFIX + "S2:imu"]
+    assert 19.0 < series.end_s <= window.session.source.position_s + 0.1
+    window.seek(5.0)
+    window.tick()
+    assert other.session.source.position_s == window.session.source.position_s
+    window.tick()
+    again = channels.series[PREFIX + "S2:imu"]
+    assert again is not series and again.end_s <= 5.0 + 0.1  # started over at the new position
