@@ -17,9 +17,12 @@ No Qt here.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from groundstation.session.view import Session
+if TYPE_CHECKING:  # for the annotations only: the session's parts do not import the product
+    from groundstation.session.view import Session
 
 
 PLACE_AFTER_S = 1.0  # of samples before a live session is placed: its fastest delivery among them
