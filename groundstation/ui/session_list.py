@@ -101,6 +101,7 @@ class SessionList(QtWidgets.QWidget):
         except UserError as error:
             window.show_error(str(error))
             return None
+        window.show_error(None)  # an earlier refusal no longer stands
         entry = self._new_entry(spec)
         entry.session = session
         entry.foxglove.follow(session)

@@ -132,3 +132,14 @@ def test_a_file_beside_a_file_plays_along_with_it(window, qtbot, recording):
     window.tick()
     again = channels.series[PREFIX + "S2:imu"]
     assert again is not series and again.end_s <= 5.0 + 0.1  # started over at the new position
+
+
+def test_a_bad_source_is_said_in_one_line_and_the_next_good_one_clears_it(window, qtbot):
+    panel = window.session_list
+    assert panel.add_source("sim:?seed=2/tmp/flight.gsrec") is None  # a path typed after the offered source
+    assert window.banner.isVisible() and "option seed: not an integer" in window.banner.text()
+    assert "\n" not in window.banner.text() and panel.entries == []
+    board = panel.add_source("sim:?seed=2")
+    assert board is not None and not window.banner.isVisible()
+    panel.remove(board)
+    assert not board.session.running and panel.entries == []
