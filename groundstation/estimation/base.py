@@ -96,6 +96,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import threading
 from itertools import chain
 from pathlib import Path
 from typing import ClassVar, NamedTuple
@@ -503,6 +504,7 @@ def record(state, k, status, status_out, q_out, diag_out):
 
 
 _READY = set()  # the dispatchers compiled for their one signature
+_COMPILING = threading.Lock()
 # Sources every kernel and run loop compiles in besides its own file (guard, sample, record; tilt; compass)
 _SHARED_SOURCES = (Path(__file__), Path(tilt.__file__), Path(compass.__file__))
 
@@ -520,12 +522,16 @@ def drop_stale_cache(dispatcher, shared_sources=_SHARED_SOURCES) -> None:
 
 
 def _compiled(dispatcher, signature):
-    """The dispatcher compiled (or loaded from numba's cache) for exactly this signature, on first use."""
+    """The dispatcher compiled (or loaded from numba's cache) for exactly this signature, on first use;
+    one thread at a time (two files loading at once: a second thread calling it between another's compile
+    and ``_READY`` would meet "compilation disabled")."""
     if dispatcher not in _READY:
-        drop_stale_cache(dispatcher)
-        dispatcher.compile(signature)
-        dispatcher.disable_compile()  # other argument types are converted to these, never compiled anew
-        _READY.add(dispatcher)
+        with _COMPILING:
+            if dispatcher not in _READY:
+                drop_stale_cache(dispatcher)
+                dispatcher.compile(signature)
+                dispatcher.disable_compile()  # other argument types are converted to these, never compiled anew
+                _READY.add(dispatcher)
     return dispatcher
 
 

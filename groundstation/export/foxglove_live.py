@@ -37,6 +37,7 @@ from __future__ import annotations
 import asyncio
 import base64
 import collections
+import errno
 import json
 import struct
 import threading
@@ -177,6 +178,10 @@ class _Client:
         return dropped
 
 
+class PortTaken(UserError):
+    """The port is served already (another window or session, another program): the caller may try the next."""
+
+
 class FoxgloveBridge:
     """A Foxglove WebSocket server on ``host:port`` (UserError when it cannot listen there); ``serve(session)``
     (a ``view.Session``) before the session starts serves every row from the first; ``close()`` stops it.
@@ -206,7 +211,8 @@ class FoxgloveBridge:
             self._loop.call_soon_threadsafe(self._loop.stop)
             self._loop_thread.join()
             self._loop.close()
-            raise UserError(f"cannot serve Foxglove on {host}:{port}: {error.strerror or error}") from None
+            taken = PortTaken if error.errno == errno.EADDRINUSE else UserError
+            raise taken(f"cannot serve Foxglove on {host}:{port}: {error.strerror or error}") from None
         self.port: int = self._server.sockets[0].getsockname()[1]  # the one chosen when asked for port 0
         self._context = foxglove.Context()
         self._tap = McapTap()

@@ -89,12 +89,16 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
 
     from groundstation.ui import first_frame
     from groundstation.ui.main_window import MainWindow
+    from groundstation.ui.window_settings import window_settings
 
     app = QtWidgets.QApplication.instance() or QtWidgets.QApplication(sys.argv[:1])
     app.setOrganizationName(ORGANIZATION)
     app.setApplicationName(APPLICATION)
     pg.setConfigOptions(antialias=False)  # antialiased lines cost several times more per frame
-    window = MainWindow(QtCore.QSettings(), sessions)
+    # A settings file per window open at once (``ui.window_settings``): a second window overwrites nothing of the first's.
+    settings, claim = window_settings(lambda name: QtCore.QSettings(ORGANIZATION, name), APPLICATION)
+    window = MainWindow(settings, sessions)
+    window.setWindowTitle(claim.title(window.windowTitle()))
     first_frame.watch(app, window)  # the benchmark's stopwatch, when asked for
     # Ctrl-C or a kill closes the window as its close button does: the session stops, the recording
     # is closed and the settings saved. (Python runs the handler at the redraw timer's next tick.)
@@ -114,7 +118,10 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
     # read from the source before its session's estimators exist, so no sample waits or is lost.
     first_frame.on_first_paint(window, lambda: QtCore.QTimer.singleShot(0, open_source))
     window.show()
-    return app.exec()
+    try:
+        return app.exec()
+    finally:
+        claim.release()
 
 
 def prepare_estimators(app):

@@ -10,7 +10,8 @@ A custom series that cannot be computed (a layout's expression refused by this v
 channel this session lacks, or past its time budget at a redraw) is switched off for the session and
 said above the panes; the others draw on.
 The channels are the session's catalogue (``ProductView.catalogue``, derived from the protocol spec and
-the estimators): each listed by its label and unit.
+the estimators): each listed by its label and unit. The sessions beside the window's (``set_others``)
+list theirs under their name ("S2:imu.acc_x_g"), plotted on the window's time axis (``session.timeline``).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from groundstation.session.view import ProductView, Session
 from groundstation.ui.custom_series import BUDGET_S, CUSTOM, ExpressionDerive, expression_sources, try_on_latest_rows
 from groundstation.ui.plots import LEFT_AXIS_PX, PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
+from groundstation.ui.session_series import Other, SessionSeries
 
 PALETTE_HEX = tuple(PALETTE.values())  # the channels' curves take the palette's colours in turn
 
@@ -35,9 +37,11 @@ MIME = "application/x-groundstation-channels"  # dragged channels: "table.column
 LAYOUTS_KEY = "channel_layouts"  # the named layouts in the window's settings: JSON, name -> layout
 
 
-def channel_names(view: ProductView) -> set[str]:
-    """Every "table.column" the session can plot (all columns but the time)."""
-    return {f"{table.name}.{column.name}" for table, column in view.catalogue.channels()}
+def channel_names(view: ProductView, session: str = "") -> set[str]:
+    """Every "table.column" the session can plot (all columns but the time); "S2:table.column" for a
+    ``session`` beside the window's."""
+    prefix = f"{session}:" if session else ""
+    return {f"{prefix}{table.name}.{column.name}" for table, column in view.catalogue.channels()}
 
 
 def series_key(channel: str) -> str:
@@ -209,6 +213,7 @@ class ChannelsView(QtWidgets.QWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.session: Session | None = None
+        self.others: list[Other] = []  # the sessions beside it, whose channels are listed too
         self.settings: QtCore.QSettings | None = None  # where the named layouts are kept (``use_settings``)
         self.panes: list[list[str]] = [[]]
         self.xy: list[list[str]] = []
@@ -302,12 +307,21 @@ class ChannelsView(QtWidgets.QWidget):
         self.stacked.clear_data()  # the same panes: only their data is new (plots are slow to build)
         self._make_series()
 
+    def set_others(self, others: list[Other]) -> None:
+        """The sessions beside the window's: their channels listed and plotted under their name."""
+        self.others = list(others)
+        self._fill_tree()
+        self.stacked.clear_data()
+        self._make_series()
+
     def _fill_tree(self) -> None:
         self.tree.clear()
         if self.session is None:
             return
         parents: dict[str, QtWidgets.QTreeWidgetItem] = {}
         entries = [(t.name, t.label, f"{t.name}.{c.name}", c.header, c.description) for t, c in self.session.view.catalogue.channels()]
+        entries += [(o.name(t.name), f"{t.label} ({o.session.source.description})", f"{o.name(t.name)}.{c.name}", c.header,
+                     c.description) for o in self.others for t, c in o.session.view.catalogue.channels()]
         entries += [(CUSTOM, "custom series (expressions)", f"{CUSTOM}.{name}", name, text) for name, text in self.custom.items()]
         for table, label, channel, header, description in entries:
             if table not in parents:
@@ -484,7 +498,8 @@ class ChannelsView(QtWidgets.QWidget):
             self._show_disabled()
             return
         view = self.session.view
-        known = channel_names(view)
+        known = channel_names(view).union(*(channel_names(o.session.view, o.label) for o in self.others))
+        others = {o.label: o for o in self.others}
         sources = expression_sources(view)
         derives: dict[str, ExpressionDerive] = {}
         for name, text in self.custom.items():
@@ -503,8 +518,14 @@ class ChannelsView(QtWidgets.QWidget):
             elif table == CUSTOM and column in derives:
                 self.series[series_key(channel)] = Series(view.tables[derives[column].table], derives[column])
         for table, columns in wanted.items():
-            self.series[PREFIX + table] = Series(view.tables[table], lambda rows, names, columns=tuple(
-                columns): {c: rows[:, names.index(c)] for c in columns})
+            derive = lambda rows, names, columns=tuple(columns): {c: rows[:, names.index(c)] for c in columns}  # noqa: E731
+            label, _, own = table.rpartition(":")  # "S2:imu": session S2's table imu
+            if label:
+                other = others[label]
+                self.series[PREFIX + table] = SessionSeries(other.session.view.tables[own], derive, other.session.lock,
+                                                            other.offset_s)
+            else:
+                self.series[PREFIX + table] = Series(view.tables[table], derive)
         self._show_disabled()
 
     def _disable(self, name: str, reason: str) -> None:

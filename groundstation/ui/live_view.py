@@ -21,6 +21,7 @@ from groundstation.ui.mode_bands import ModeBands
 from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, clock_series, imu_quantities, onboard_quantities, truth_quantities
+from groundstation.ui.session_series import Other, other_series
 from groundstation.ui.vibration_view import VibrationView
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
@@ -58,9 +59,21 @@ def colour(name: str) -> str:
     return PALETTE.get(facts.colour, "#444444") if facts else "#444444"
 
 
-def attitude_plots(filters: tuple[str, ...], truth: bool = False) -> tuple[Plot, ...]:
-    return (Plot("pitch", "°", estimator_curves(filters, "pitch", truth=truth)),
-            Plot("roll", "°", estimator_curves(filters, "roll", truth=truth)))
+def attitude_plots(filters: tuple[str, ...], truth: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
+    """``others``: (label, filters, style) of each session beside the window's, whose curves are added."""
+    return tuple(Plot(angle, "°", estimator_curves(filters, angle, truth=truth) + other_curves(others, angle))
+                 for angle in ("pitch", "roll"))
+
+
+def other_curves(others: tuple, angle: str) -> tuple[Curve, ...]:
+    """Each other session's first host estimator and onboard estimate, in its own pen style and named by it
+    ("S2 AHF2"): the estimator's colour says which estimator, the style which session."""
+    curves = []
+    for label, filters, style in others:
+        curves += [Curve(f"{label}:imu", f"{name}_{angle}_deg", f"{label} {estimation.label(name)}", colour(name), style=style)
+                   for name in filters[:1]]
+        curves.append(Curve(f"{label}:onboard", f"onboard_{angle}_deg", f"{label} onboard", ONBOARD_COLOUR, style=style))
+    return tuple(curves)
 
 
 def heading_plots(filters: tuple[str, ...], truth: bool = False) -> tuple[Plot, ...]:
@@ -97,6 +110,7 @@ class LiveView(QtWidgets.QWidget):
     def __init__(self, hidden: frozenset[str] = frozenset(), parent=None):
         super().__init__(parent)
         self.session: Session | None = None
+        self.others: list[Other] = []  # the sessions beside it (``set_others``)
         self.series: dict[str, Series] = {}
         self._view = None
         self.frames_drawn = 0  # for the tests and the benchmark
@@ -123,6 +137,7 @@ class LiveView(QtWidgets.QWidget):
         live = estimation.live_estimators()
         self.attitude = self._add_tab(StackedPlots(attitude_plots(live), hidden), "Attitude")
         self._curves_of = (live, False)  # the estimators, and whether a truth is plotted
+        self._others_of: tuple = ()  # the other sessions' curves: (label, filters, style) each
         self._sensor_aiding: frozenset[str] = frozenset()
         self._later: dict[str, QtWidgets.QWidget] = {}  # a tab not built yet -> the blank page under its title
         for name, title in LATER_TABS.items():
@@ -198,7 +213,7 @@ class LiveView(QtWidgets.QWidget):
         if shown != self._curves_of:
             self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
-            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*shown), self._hidden))
+            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*shown, self._others_of), self._hidden))
             self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*shown), self._hidden))
             self.tabs.setCurrentIndex(current)
             self._curves_of = shown
@@ -208,6 +223,21 @@ class LiveView(QtWidgets.QWidget):
         self.channels.set_session(session)
         self.vibration.set_session(session)
         self._show_aiding_tabs()
+
+    def set_others(self, others: list[Other]) -> None:
+        """The sessions beside the window's: their attitude curves on the Attitude tab, their channels in
+        the Channels tab, from their oldest rows kept."""
+        self.others = list(others)
+        if self.series:  # else made with the window's own at the next refresh
+            self.series = {**{k: s for k, s in self.series.items() if ":" not in k}, **other_series(self.others)}
+        curves = tuple((o.label, o.session.view.filters, o.style) for o in self.others)
+        if curves != self._others_of:
+            self._hidden = self.hidden_labels()
+            current = self.tabs.currentIndex()
+            self._others_of = curves
+            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*self._curves_of, curves), self._hidden))
+            self.tabs.setCurrentIndex(current)
+        self.channels.set_others(self.others)
 
     def hidden_labels(self) -> frozenset[str]:
         """The attitude legend entries switched off, with those remembered from earlier sessions."""
@@ -281,7 +311,8 @@ class LiveView(QtWidgets.QWidget):
         if view is not self._view:  # a new session, or a replay restarted by a seek
             self._view = view
             self.series = {"imu": Series(view.imu, imu_quantities(view.filters)),
-                           "onboard": Series(view.onboard, onboard_quantities), **aiding_series(view.tables)}
+                           "onboard": Series(view.onboard, onboard_quantities), **aiding_series(view.tables),
+                           **other_series(self.others)}
             if view.tables.get("truth") is not None:  # a simulator's log: its truth, dashed
                 self.series["truth"] = Series(view.tables["truth"], truth_quantities)
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}

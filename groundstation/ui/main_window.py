@@ -37,6 +37,7 @@ from groundstation.ui.live_view import LiveView
 from groundstation.ui.config_banner import ConfigBanner
 from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
+from groundstation.ui.session_list import SessionList
 from groundstation.ui.uplink_panel import UplinkPanel
 from groundstation.ui.vehicle_badge import VehicleBadge
 
@@ -173,6 +174,8 @@ class MainWindow(QtWidgets.QMainWindow):
         self.foxglove_label = QtWidgets.QLabel("")
         self.statusBar().addPermanentWidget(self.foxglove_label)
         self.foxglove = FoxgloveSwitch(settings, self.foxglove_label.setText, self.show_error, self)
+        self.session_list = SessionList(self)  # sessions beside this one (``ui.session_list``): in the side tabs
+        self.controls.addTab(self.session_list, "Sessions")
         self._build_menus()
         self._sync_record_action()
         self.resize(1280, 800)
@@ -325,7 +328,10 @@ class MainWindow(QtWidgets.QMainWindow):
         if file is None:
             self.show_error("Nothing to export yet: connect, start the simulated bridge or open a recording first.")
             return None
-        setup = self.session.setup if self.session is not None else (None, None)
+        return self.export_file(file, self.session.setup if self.session is not None else (None, None))
+
+    def export_file(self, file: tuple[Path, float], setup: tuple) -> ExportDialog:
+        """The export dialog on ``file`` (path, length in s) computed with ``setup``."""
         dialog = ExportDialog(self.sessions.load_session, *file, parent=self, setup=setup, settings=self.settings)
         dialog.setModal(False)  # the live view goes on while it exports
         dialog.show()
@@ -379,6 +385,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.centralWidget().setFocus()  # out of the source box: the keys control the view
         self._sync_record_action()
         self.foxglove.follow(session)
+        self.session_list.primary_changed()
 
     def disconnect(self) -> None:
         self.cancel_loading()
@@ -398,6 +405,7 @@ class MainWindow(QtWidgets.QMainWindow):
     def _stop_session(self) -> None:
         session, self.session = self.session, None
         self.foxglove.follow(None)
+        self.session_list.primary_changed()
         session.stop()
         self.last_file = session.file()
         if not session.source.is_replay:  # a replay's settings are the recording's, not the user's
@@ -419,6 +427,10 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recent_menu = file.addMenu("Recent recordings")
         self._fill_recent_menu()
         self._action(file, "&Export…", "Ctrl+E", self.export)
+        file.addSeparator()
+        self._action(file, "Add source beside…", "Ctrl+Shift+N", self.session_list.ask_source)
+        file.addAction("Add file beside…").triggered.connect(lambda _=False: self.session_list.ask_file())
+        file.addSeparator()
         self.fast_imu_action = file.addAction("Full-rate IMU for flight logs (ISBD, sensor_gyro_fifo)")
         self.fast_imu_action.setCheckable(True)
         self.fast_imu_action.setChecked(self.sessions.imu == "fast")
@@ -426,6 +438,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self._action(file, "Flight &report…", "Ctrl+Shift+R", self.flight_report)
         file.addAction(self.record_action)
         file.addAction(self.foxglove.action)
+        file.addAction("Foxglove port…").triggered.connect(lambda _=False: self.foxglove.choose_port())
         file.addSeparator()
         self._action(file, "&Quit", "Ctrl+Q", self.close)
         view = self.menuBar().addMenu("&View")
@@ -494,6 +507,7 @@ class MainWindow(QtWidgets.QMainWindow):
         session = self.session
         if session is not None:
             session.advance()
+        self.session_list.tick()  # the sessions beside it: played along, placed on its time axis
         self.ticks += 1
         figures = self.ticks % FIGURES_EVERY == 0
         if figures:
@@ -598,6 +612,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def closeEvent(self, event) -> None:
         self.disconnect()
+        self.session_list.stop_all()
         # "" for none: QSettings reads an empty list back as None, which means "the defaults"
         self.settings.setValue("hidden_curves", sorted(self.live_view.hidden_labels()) or "")
         known = {spec.label for spec, _ in self.live_view.attitude.curves} | self._known_curves()

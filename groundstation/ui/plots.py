@@ -35,6 +35,8 @@ from groundstation.ui.series import Series, clock_series, shared_gaps
 PALETTE = {"indigo": "#332288", "wine": "#882255", "green": "#117733", "teal": "#44AA99", "rose": "#CC6677",
            "olive": "#999933", "cyan": "#88CCEE", "sand": "#DDCC77", "purple": "#AA4499", "black": "#000000",
            "orange": "#EE7733"}
+PEN_STYLES = {"solid": QtCore.Qt.SolidLine, "dash": QtCore.Qt.DashLine, "dot": QtCore.Qt.DotLine,
+              "dashdot": QtCore.Qt.DashDotLine, "dashdotdot": QtCore.Qt.DashDotDotLine}
 LEFT_AXIS_PX = 60
 GAP_BRUSH = (220, 60, 60, 50)
 FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a time
@@ -64,9 +66,10 @@ class Curve:
     color: str
     wraps_at: float | None = None  # the period of a circular quantity (360 for a heading in °)
     reference: bool = False  # dashed, beneath the others (the aircraft's own estimate under the host's)
+    style: str | None = None  # a key of PEN_STYLES: another session's curves (``ui.session_list``); None: solid, dashed for a reference
 
     def pen(self):
-        return pg.mkPen(self.color, width=1, style=QtCore.Qt.DashLine if self.reference else QtCore.Qt.SolidLine)
+        return pg.mkPen(self.color, width=1, style=PEN_STYLES[self.style or ("dash" if self.reference else "solid")])
 
     def connect(self, values: np.ndarray) -> dict:
         """``setData``'s ``connect``: for a circular quantity, no line across a jump of over half a turn."""

@@ -40,12 +40,43 @@ def test_the_switch_serves_the_live_session(window, qtbot):
     window.foxglove.action.trigger()
 
 
-def test_a_taken_port_is_said(window, qtbot):
+def test_a_taken_port_is_said_and_the_next_free_one_served(window, qtbot):
+    """A second window (or session) asking for the port a first one serves on (issue 34): the next free
+    port, said in the banner, instead of "Address already in use" and nothing served."""
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen()
-        window.settings.setValue("foxglove_port", taken.getsockname()[1])
+        busy = taken.getsockname()[1]
+        window.settings.setValue("foxglove_port", busy)
         window.start_demo()
         window.foxglove.action.trigger()
-    assert not window.foxglove.action.isChecked()
-    assert window.banner.isVisible() and "cannot serve Foxglove" in window.banner.text()
+        try:
+            assert window.foxglove.action.isChecked()
+            served = window.foxglove.bridge.port
+            assert served > busy
+            assert window.banner.isVisible() and f"port {busy} is taken" in window.banner.text()
+            assert f"serving on {served}" in window.banner.text()
+            assert window.foxglove_label.text().startswith(f"Foxglove: ws://127.0.0.1:{served}")
+            client = Client(served)
+            try:
+                assert client.ready.wait(10)
+            finally:
+                client.stop.set()
+                client.thread.join(5)
+        finally:
+            window.foxglove.action.trigger()
+    assert window.foxglove.bridge is None
+
+
+def test_the_port_is_chosen_in_a_dialog_and_remembered(window, qtbot):
+    window.start_demo()
+    window.foxglove.action.trigger()
+    port = free_port()
+    try:
+        dialog = window.foxglove.choose_port()
+        dialog.setIntValue(port)
+        dialog.accept()
+        assert window.foxglove.bridge.port == port  # served there at once
+        assert int(window.settings.value("foxglove_port")) == port
+    finally:
+        window.foxglove.action.trigger()
