@@ -12,7 +12,7 @@ from ahrs.filters import Madgwick
 from groundstation import quaternion as quat
 from groundstation.datasets import DatasetError, read_csv
 from groundstation.datasets import Trial
-from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score
+from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score, scores
 from groundstation.sim.profiles import make_profile
 
 TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
@@ -67,6 +67,23 @@ def test_heading_error_removes_one_constant_offset_and_ignores_inclination():
     q_true[:100] = np.nan
     error = heading_error_rad(quat.multiply(yaw_error, truth_ned), q_true, "NED")
     assert np.isnan(error[:100]).all() and np.abs(error[100:] - (wobble_rad[100:] - np.mean(wobble_rad[100:]))).max() < 1e-3
+
+
+def test_heading_offset_is_the_mean_over_the_moving_samples():
+    """The datasets README: the constant heading offset is the mean difference over the moving samples,
+    the ones scored. An estimate 5° off at rest and 1° + a zero-mean wobble off in motion scores the
+    wobble alone (before: the offset was the mean over every sample with truth, 3° here, and the score
+    was off by 2°)."""
+    t = np.arange(0.0, 60.0, 0.01)
+    truth_ned = make_profile("flight", 60.0, seed=2).truth(t).q_body_to_ned
+    moving = t >= 30.0
+    wobble_rad = np.radians(2.0) * np.sin(2 * np.pi * t / 10.0)  # three whole periods in motion: zero mean there
+    psi = np.where(moving, np.radians(1.0) + wobble_rad, np.radians(5.0))
+    yaw_error = np.column_stack([np.cos(psi / 2), np.zeros_like(t), np.zeros_like(t), np.sin(psi / 2)])
+    est = quat.multiply(yaw_error, truth_ned)
+    error = heading_error_rad(est, truth_ned, "NED", moving)
+    assert np.abs(error[moving] - wobble_rad[moving]).max() < 1e-9
+    assert scores(est, truth_ned, moving, "NED", heading=True)["heading_rmse_deg"] == pytest.approx(2.0 / np.sqrt(2.0), rel=1e-6)
 
 
 def test_resampled_to_the_boards_rate_keeps_slow_signals_and_the_truth():
