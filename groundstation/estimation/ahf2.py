@@ -34,12 +34,19 @@ Per sample, Δt the period:
    ``φ = atan2(‖(a_E,x, a_E,y)‖, -a_E,z)``; turn ``q_c`` about the horizontal axis ``u = a_E × (0, 0, -1)``
    by ``δ = min(φ, λ Δt)``: ``q_c ← [cos ½δ, u sin ½δ] ⊗ q_c``. λ is a rate in rad/s as in eq. 18, so
    the paper's adaptive idea sets how fast the estimate may follow the (already low-passed) gravity.
-5. Rest detection (VQF's):  low-pass gyro and accelerometer (``τ_rest``); at rest when
-   ``‖ω̄_rest‖ < th_gyr`` (a still gyro reads only its bias) and ``‖a - ā_rest‖ < th_acc`` have held for
-   ``rest_min_s``.
-6. Gyro bias at rest:  ``b ← b + Δt/(min(t_rest, τ_bias_rest) + Δt) (ω̄_rest - b)`` (all three axes,
-   yaw's too), t_rest the time since rest was detected: the mean over the rest so far, then a
-   first-order low-pass (VQF's Kalman filter does the same, gain high while its variance is).
+5. Rest detection, VQF's three tests (its low-pass first order here, VQF's second order): low-pass gyro
+   and accelerometer (``τ_rest``); at rest when ``‖ω̄_rest‖ < th_gyr`` (a still gyro reads only its
+   bias), ``‖ω - ω̄_rest‖ < th_gyr`` (the raw gyro against its low-pass: sees a turn start at once,
+   and a turn back and forth whose low-pass is small) and ``‖a - ā_rest‖ < th_acc`` have held for
+   ``rest_min_s``. Without the second test a 2 Hz turn back and forth at 9 °/s (low-pass 1.4 °/s) was
+   rest (issue 33; tests/estimation/test_ahf2.py).
+6. Gyro bias at rest, blended toward the rest's estimate, never set to it:  ``b ← b + Δt/(w_b + Δt)
+   (ω̄_rest - b)`` (all three axes, yaw's too), ``w_b ← min(w_b + Δt, τ_bias_rest)``; in motion the
+   weight fades, ``w_b ← w_b T_f/(T_f + Δt)`` (T_f VQF's bias forgetting time, 100 s). ``w_b`` is the
+   rest time the estimate is worth: 0 after switch-on, so the first rest takes the mean over the rest
+   so far, then a first-order low-pass at τ_bias_rest; a rest after motion starts from the settled
+   estimate (before: from nothing, with gain 1 on its first sample). VQF's Kalman filter does the
+   same, its gain high while its variance is.
 7. Gyro bias in motion (Mahony's integral, on the correction):  the correction turn ``δ u`` (NED) in
    body axes, ``r = L̄ᵀ δ u / Δt``; ``b ← b - k_i r Δt``; then ``|b_i| ≤ bias_max``. ``L̄ = R(q_c) R̄_g``,
    ``R̄_g`` the rotation matrix of ``q_g`` through the same low-pass as the accelerometer (2): the
@@ -127,6 +134,7 @@ class Ahf2Settings(CommonSettings):
     rest_acc_g: float = 0.05
     rest_min_s: float = 1.5
     tau_bias_rest_s: float = 2.0
+    bias_forget_s: float = 100.0  # in motion a rest estimate's weight fades with this time constant (VQF's)
     motion_bias_ki: float = 0.1  # 1/s; 0 = no bias estimation in motion
     bias_max_rad_s: float = 0.035  # |b_i| bound (2 °/s)
     tau_mag_s: float = 9.0  # ahf2m: heading follows the magnetometer with this time constant when still
@@ -170,11 +178,11 @@ def _matrix(q):
 
 # Parameters after the guard's (base.P_OWN): the settings in their order, then 1 for ahf2m (step 8)
 (_TAU_ACC, _RATE_REF, _TAU_RATE, _LAM_MAX, _LAM_MIN, _LOWPASS, _GAIN, _ADAPTIVE, _REST_BIAS, _TAU_REST, _REST_GYR_TH,
- _REST_ACC_TH, _REST_MIN, _TAU_BIAS_REST, _KI, _BIAS_MAX, _TAU_MAG, _FOLLOW_MAG) = range(P_OWN, P_OWN + 18)  # fmt: skip
+ _REST_ACC_TH, _REST_MIN, _TAU_BIAS_REST, _BIAS_FORGET, _KI, _BIAS_MAX, _TAU_MAG, _FOLLOW_MAG) = range(P_OWN, P_OWN + 19)  # fmt: skip
 # State after q and the guard's: the diagnostics (λ, e_a, rest, τ, b), then q_g, q_c, the low-pass's start
 # (1 while it runs, its elapsed time, ∫x dt), its rate v and output ā (x: a_I, then R(q_g) row-major),
 # ω̄, the rest detector's (1 once it has a sample, its gyro and accelerometer low-passes, t_rest), ψ_m
-# and 1 once it is known
+# and 1 once it is known, the bias's weight w_b (s)
 _LAM, _E_A, _REST, _TAU, _BIAS = range(STATE_DIAG, STATE_DIAG + 5)
 _QG = _BIAS + 3
 _QC = _QG + 4
@@ -184,6 +192,7 @@ _LP = _V + 12
 _RATE_LP = _LP + 12
 _REST_SEEN, _REST_GYR, _REST_ACC, _REST_T = _RATE_LP + 1, _RATE_LP + 2, _RATE_LP + 5, _RATE_LP + 8
 _HEADING, _HEADING_KNOWN = _REST_T + 1, _REST_T + 2
+_BIAS_WEIGHT = _HEADING_KNOWN + 1
 
 
 @register_jitable
@@ -323,7 +332,8 @@ def _detect_rest(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
     mx, my, mz = state[_REST_GYR], state[_REST_GYR + 1], state[_REST_GYR + 2]
     mx, my, mz = mx + k * (gx - mx), my + k * (gy - my), mz + k * (gz - mz)
     state[_REST_GYR], state[_REST_GYR + 1], state[_REST_GYR + 2] = mx, my, mz
-    still = mx * mx + my * my + mz * mz < p[_REST_GYR_TH] ** 2
+    deviation2 = (gx - mx) ** 2 + (gy - my) ** 2 + (gz - mz) ** 2  # sees a turn start at once
+    still = mx * mx + my * my + mz * mz < p[_REST_GYR_TH] ** 2 and deviation2 < p[_REST_GYR_TH] ** 2
     if acc_ok:
         nx, ny, nz = state[_REST_ACC], state[_REST_ACC + 1], state[_REST_ACC + 2]
         nx, ny, nz = nx + k * (ax - nx), ny + k * (ay - ny), nz + k * (az - nz)
@@ -331,11 +341,14 @@ def _detect_rest(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
         still = still and (ax - nx) ** 2 + (ay - ny) ** 2 + (az - nz) ** 2 < p[_REST_ACC_TH] ** 2
     state[_REST_T] = state[_REST_T] + dt_s if still else 0.0
     state[_REST] = 1.0 if state[_REST_T] >= p[_REST_MIN] else 0.0
+    w = state[_BIAS_WEIGHT]
     if state[_REST] != 0.0:
-        # the mean since rest began for the first τ_bias_rest, then a first-order low-pass
-        kb = dt_s / (min(state[_REST_T] - p[_REST_MIN], p[_TAU_BIAS_REST]) + dt_s)
+        kb = dt_s / (w + dt_s)
         for i in range(3):
             state[_BIAS + i] = state[_BIAS + i] + kb * (state[_REST_GYR + i] - state[_BIAS + i])
+        state[_BIAS_WEIGHT] = min(w + dt_s, p[_TAU_BIAS_REST])
+    else:
+        state[_BIAS_WEIGHT] = w * p[_BIAS_FORGET] / (p[_BIAS_FORGET] + dt_s)
 
 
 @njit(cache=True)
@@ -354,19 +367,20 @@ class Ahf2(CompiledEstimator):
 
     def __init__(self, settings=None, dtype=None):
         s = self.Settings() if settings is None else settings
-        if not (s.rate_ref_rad_s > 0.0 and s.tau_rate_s > 0.0 and 0.0 <= s.lambda_min <= s.lambda_max):
-            raise ValueError("need rate_ref_rad_s > 0, tau_rate_s > 0 and 0 <= lambda_min <= lambda_max")
+        if not (s.rate_ref_rad_s > 0.0 and s.tau_rate_s > 0.0 and s.bias_forget_s > 0.0 and 0.0 <= s.lambda_min <= s.lambda_max):
+            raise ValueError("need rate_ref_rad_s > 0, tau_rate_s > 0, bias_forget_s > 0 and 0 <= lambda_min <= lambda_max")
         super().__init__(s, dtype)
 
     def _parameters(self):
         s = self.settings
         own = [s.tau_acc_s, s.rate_ref_rad_s, s.tau_rate_s, s.lambda_max, s.lambda_min, s.lowpass, s.error_gain, s.adaptive, s.rest_bias,
-               s.tau_rest_s, s.rest_gyr_rad_s, s.rest_acc_g, s.rest_min_s, s.tau_bias_rest_s, s.motion_bias_ki, s.bias_max_rad_s, s.tau_mag_s]  # fmt: skip
+               s.tau_rest_s, s.rest_gyr_rad_s, s.rest_acc_g, s.rest_min_s, s.tau_bias_rest_s, s.bias_forget_s, s.motion_bias_ki,
+               s.bias_max_rad_s, s.tau_mag_s]  # fmt: skip
         return [float(v) for v in own] + [float(self.uses_magnetometer)]
 
     def _initial_state(self):
         s = self.settings
-        state = [0.0] * (_HEADING_KNOWN + 1 - STATE_DIAG)
+        state = [0.0] * (_BIAS_WEIGHT + 1 - STATE_DIAG)
         state[_LAM - STATE_DIAG], state[_TAU - STATE_DIAG] = s.lambda_max, s.tau_acc_s
         state[_QG - STATE_DIAG] = state[_QC - STATE_DIAG] = 1.0
         state[_STARTING - STATE_DIAG] = 1.0
