@@ -98,7 +98,8 @@ def sample_periods_s(time_s) -> np.ndarray:
 
 def resampled(trial, rate_hz: float):
     """The trial at ``rate_hz`` (a board's rate): the sensors through scipy's polyphase resampler (its
-    anti-aliasing low-pass, as a board's sensor filter), the truth interpolated between its two nearest
+    anti-aliasing low-pass, as a board's sensor filter, fed the edge values beyond the ends: zeros made
+    the first samples ring from 0), the truth interpolated between its two nearest
     samples (normalised linear, NaN if either is NaN), ``moving`` from the nearest sample. The rate ratio
     must be a ratio of small integers (BROAD's 2000/7 Hz to 100 Hz: 7/20)."""
     period_s = float(np.median(np.diff(trial.time_s)))
@@ -109,8 +110,8 @@ def resampled(trial, rate_hz: float):
 
     from scipy.signal import resample_poly  # here: scipy.signal costs the app's start a second (bench/bench_first_frame.py)
 
-    def sensor(values):
-        return None if values is None else resample_poly(values, up, down, axis=0)
+    def sensor(values):  # padded with the edge values: the sensor was on before and after, not at zero
+        return None if values is None else resample_poly(values, up, down, axis=0, padtype="edge")
 
     gyr = sensor(trial.gyr_rad_s)
     position = np.arange(len(gyr)) * down / up  # in input samples

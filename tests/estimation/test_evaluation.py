@@ -106,6 +106,19 @@ def test_resampled_to_the_boards_rate_keeps_slow_signals_and_the_truth():
     assert np.array_equal(r.moving[far], r.time_s[far] > 5.0) and r.mag_uT is None
 
 
+def test_resampled_starts_and_ends_on_the_signal_not_on_zero():
+    """A board streams a settled sensor: the resampler's filter starts and ends on the signal. Before, it
+    was padded with zeros, so a constant 44 µT field came out as 29.7, 47.4, 42.3 ... µT on the first
+    samples, and a magnetometer screen that learns the field from its first reading rejected a third of
+    an undisturbed trial at 100 Hz."""
+    t = np.arange(2000) * 0.0035
+    field = np.tile([30.0, -5.0, 33.0], (len(t), 1))
+    trial = Trial(time_s=t, gyr_rad_s=np.zeros_like(field), acc_m_s2=field / 3.0, mag_uT=field, true_q=None, moving=None)
+    r = resampled(trial, 100.0)
+    # within the polyphase filter's DC gain per phase (1 ± 5e-5)
+    assert np.abs(r.mag_uT - field[0]).max() < 0.01 and np.abs(r.acc_m_s2 - field[0] / 3.0).max() < 0.01
+
+
 def test_the_magnetometer_reaches_the_estimators_that_use_it(trial_slice):
     """On a trial with a magnetometer, hfm is not hf (before: it was, bit for bit, as the magnetometer
     never reached it), and heading is scored for the estimators that use it, VQF with its magnetometer
