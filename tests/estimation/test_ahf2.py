@@ -11,6 +11,7 @@ from scipy import signal
 
 from groundstation.datasets import read_csv
 from groundstation.estimation import create
+from groundstation.estimation.ahf2 import Ahf2Settings
 from groundstation.estimation.evaluation import evaluate_trial, inclination_error_rad
 from groundstation.sim.imu import MPU6050Settings
 from groundstation.sim.offline import simulate
@@ -42,7 +43,7 @@ def test_tilt_follows_a_swaying_force_as_a_second_order_butterworth():
 def test_time_constant_halves_at_the_reference_turn_rate():
     """Turning steadily at ω_ref for many τ_rate: τ = τ_acc / (1 + ω̄/ω_ref) → τ_acc / 2; still: τ_acc."""
     n = int(60.0 / DT_S)
-    est = create("ahf2", {"rate_ref_rad_s": 4.0, "tau_rate_s": 10.0, "rest_bias": False, "motion_bias_ki": 0.0})
+    est = create("ahf2", {"tau_acc_s": 5.0, "rate_ref_rad_s": 4.0, "tau_rate_s": 10.0, "rest_bias": False, "motion_bias_ki": 0.0})
     gyr = np.tile([0.0, 0.0, 4.0], (n, 1))  # yaw: gravity stays on z
     acc = np.tile([0.0, 0.0, -1.0], (n, 1))
     _, diag = est.run(gyr, acc, DT_S)
@@ -76,12 +77,13 @@ def test_invalid_settings_are_refused():
 
 
 def test_at_least_as_accurate_as_vqf_on_broad(broad_dir):
-    """Measured (bench/bench_estimators.out.md): ahf2 1.53°, 0.30°, 0.35° on these trials; VQF 1.72°,
-    0.42°, 0.37°. Bounds: the measured figures plus 0.03° for rounding across machines."""
+    """Measured (bench/bench_estimators.out.md): ahf2 1.19°, 0.30°, 0.33° on these trials (1.53°, 0.30°,
+    0.35° before the gyro scale was learnt in motion); VQF 1.72°, 0.42°, 0.37°. Bounds: the measured
+    figures plus 0.03° for rounding across machines."""
     figures = [evaluate_trial(read_csv(broad_dir / f"{name}.csv.gz"), ["ahf2", "vqf"]) for name in TRIALS]
     ahf2 = [f["ahf2"]["incl_rmse_deg"] for f in figures]
     vqf = [f["vqf"]["incl_rmse_deg"] for f in figures]
-    assert ahf2 == pytest.approx([1.53, 0.30, 0.35], abs=0.03)
+    assert ahf2 == pytest.approx([1.19, 0.30, 0.33], abs=0.03)
     assert np.mean(ahf2) <= np.mean(vqf) - 0.05, (ahf2, vqf)
 
 
@@ -163,3 +165,24 @@ def test_no_bias_step_above_the_gyro_noise_while_turning(seed, freq_hz, amplitud
     bias_dps = np.degrees(np.column_stack([diag[f"bias_{a}_rad_s"] for a in "xyz"]))
     step_dps = np.abs(np.diff(bias_dps, axis=0))[turning[1:]]
     assert step_dps.max() < 0.1, step_dps.max()
+
+
+def test_gyro_scale_errors_are_learnt_in_motion():
+    """Five minutes of aggressive flight with a gyro whose scale is off by +0.8 %, -0.5 % and +0.6 % on
+    x, y, z (and no other sensor error but noise and the boot calibration's bias): the scale estimate
+    (step 7) has each axis's sign and is within 0.3 % of it over the last 100 s, and the inclination
+    error there is lower than without it. Measured: 0.53 %, -0.54 %, 0.32 %; 1.28° against 1.43°."""
+    imu = MPU6050Settings(gyro_bias_tempco_dps_per_c=0.0, gyro_bias_walk_dps_rts=0.0, gyro_scale_tolerance=0.0, cross_axis_tolerance=0.0,
+                          accel_scale_tolerance=0.0)
+    run = simulate("aggressive", 300.0, seed=0, imu=imu)
+    scale_true = np.array([0.008, -0.005, 0.006])
+    gyr = run.gyr_rad_s * (1.0 + scale_true)
+    late = slice(int(200.0 / run.dt_s), None)
+    rmse_deg = {}
+    for k in (0.0, Ahf2Settings().motion_scale_k):
+        q, diag = create("ahf2", {"motion_scale_k": k}).run(gyr, run.acc_g, run.dt_s)
+        error_deg = np.degrees(inclination_error_rad(q[late], run.truth.q_body_to_ned[late], truth_frame="NED"))
+        rmse_deg[k] = np.sqrt(np.mean(error_deg**2))
+    scale = np.column_stack([diag[f"scale_{a}"] for a in "xyz"])[late].mean(axis=0)
+    assert scale == pytest.approx(scale_true, abs=0.003)
+    assert rmse_deg[Ahf2Settings().motion_scale_k] < 0.95 * rmse_deg[0.0], rmse_deg
