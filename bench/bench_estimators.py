@@ -9,17 +9,18 @@
    pipeline passes), imufusion's and ahrs's numpy arrays (what they need).
 2. ``run`` throughput in samples/s.
 3. Inclination RMSE (deg) over the moving samples of every BROAD trial in ../shared/datasets/broad (the
-   dev set) for every IMU-only estimator at its defaults (vqf is the vqf package behind our interface),
+   dev set: the held-out trials are not on this machine, and nothing here is chosen on them) for every IMU-only estimator at its defaults (vqf is the vqf package behind our interface),
    accelerometer-only (cf1 τ = 0), gyro-only (hf β = 0), ahrs Madgwick β = 0.033 and 0.1 (fed the data
    as they are: it runs BROAD's sensor upright), and imufusion (gain 0.5, 10° acceleration rejection,
    5 s rejection timeout), all in the same run.
    All start from the first accelerometer sample (imufusion from its own start-up).
-4. Heading RMSE (deg; one constant offset per trial removed, estimation/evaluation.py) and inclination
+4. Heading RMSE (deg; one constant offset per trial, the mean over the moving samples, removed:
+   estimation/evaluation.py, the datasets README's rule) and inclination
    of the estimators that use the magnetometer, fed it as ``evaluate`` does: hfm, ecfm, mcf, vqf (9D),
    ahf2m.
-5. AHF2's settings by leave-one-trial-out: for each trial, the setting of ``AHF2_GRID`` (inclination)
-   and of ``AHF2M_GRID`` (heading) with the lowest mean over the other nine trials, scored on that one.
-   The defaults are the setting with the lowest mean over all ten (no held-out data seen).
+5. AHF2's settings by leave-one-trial-out: for each dev trial, the setting of ``AHF2_GRID`` (inclination)
+   and of ``AHF2M_GRID`` (heading) with the lowest mean over the other dev trials, scored on that one.
+   The defaults are the setting with the lowest mean over all of them at the native rate.
 Sections 3-5 natively (285.7 Hz) and resampled to 100 Hz (the board's rate; ``evaluation.resampled``).
 """
 
@@ -124,10 +125,11 @@ OURS = {name: (name, None) for name in IMU_ONLY} | {
 }
 MAG = ["hfm", "ecfm", "mcf", "vqf", "ahf2m"]
 # A few settings around the defaults (the machine is shared): the accelerometer's low-pass and the
-# in-motion bias gain for the inclination, the magnetometer's time constant for the heading.
-AHF2_GRID = {f"τ_acc {tau:g} s, k_i {ki:g} /s": {"tau_acc_s": tau, "motion_bias_ki": ki} for tau in (4.0, 5.0, 6.0) for ki in (0.03, 0.1, 0.3)}
-AHF2M_GRID = {f"τ_mag {tau:g} s": {"tau_mag_s": tau} for tau in (5.0, 9.0, 20.0)}
-UNDISTURBED = 8  # the first eight trials; 25 (tapping) and 27 (vibration) are disturbed in motion, not magnetically
+# in-motion scale gain for the inclination, the scale gain and the magnetometer's time constant for the heading.
+AHF2_GRID = {f"τ_acc {tau:g} s, k_s {ks:g}": {"tau_acc_s": tau, "motion_scale_k": ks} for tau in (5.0, 6.0, 7.0) for ks in (0.1, 0.2, 0.4)}
+AHF2M_GRID = {f"k_s {ks:g}, τ_mag {tau:g} s": {"motion_scale_k": ks, "tau_mag_s": tau} for ks in (0.0, 0.01, 0.02) for tau in (9.0, 20.0, 30.0)}
+UNDISTURBED = ("02", "05", "07", "09", "11", "14", "16", "21")  # 25 (tapping), 27 (vibration): disturbed in motion
+MAGNET = ("31", "35")  # a magnet beside the resting sensor, one fixed to it
 RATES = {"native (285.7 Hz)": None, "100 Hz (resampled)": 100.0}
 
 
@@ -192,33 +194,52 @@ def broad_trial(path):
     return path.name.split(".")[0], rows
 
 
-def leave_one_out(values: dict[str, dict[str, float]], grid) -> tuple[dict[str, tuple[str, float]], str]:
-    """For each trial the grid setting best on the others and its figure there; and the setting best on all."""
+def trial_mean(values, trials, label):
+    return np.mean([values[t][label] for t in trials])
+
+
+def group_balanced_mean(values, trials, label):
+    """The mean of the undisturbed trials' mean and the magnet trials' (those in ``trials``): the two
+    kinds the heading is judged on count the same, however many trials each has."""
+    groups = [[t for t in trials if t[:2] in prefixes] for prefixes in (UNDISTURBED, MAGNET)]
+    return np.mean([trial_mean(values, members, label) for members in groups if members])
+
+
+def leave_one_out(values: dict[str, dict[str, float]], grid, objective=trial_mean) -> tuple[dict[str, tuple[str, float]], str]:
+    """For each trial the grid setting best on the others (lowest ``objective``) and its figure there;
+    and the setting best on all."""
     trials = list(values)
     held = {}
     for trial in trials:
         others = [t for t in trials if t != trial]
-        best = min(grid, key=lambda label: np.mean([values[t][label] for t in others]))
+        best = min(grid, key=lambda label: objective(values, others, label))
         held[trial] = (best, values[trial][best])
-    return held, min(grid, key=lambda label: np.mean([values[t][label] for t in trials]))
+    return held, min(grid, key=lambda label: objective(values, trials, label))
+
+
+def group_means(rows, columns):
+    """Mean of each column over the dev trials of each kind (``UNDISTURBED``, ``MAGNET``)."""
+    for group, prefixes in (("undisturbed", UNDISTURBED), ("magnet", MAGNET)):
+        members = [r for t, r in rows.items() if t[:2] in prefixes]
+        print(f"| mean, {group} ({len(members)}) | " + " | ".join(f"{np.mean([r[c] for r in members]):.3f}" for c in columns) + " |")
 
 
 def table(title, rows, columns, fmt="{:.2f}"):
-    print(f"\n### {title}\n")
+    print(f"\n### {title}, dev set\n")
     print("| trial | " + " | ".join(columns) + " |")
     print("|---|" + "---:|" * len(columns))
     for trial, row in rows.items():
         print(f"| {trial} | " + " | ".join(fmt.format(row[c]) for c in columns) + " |")
-    print("| **mean** | " + " | ".join(f"**{np.mean([r[c] for r in rows.values()]):.3f}**" for c in columns) + " |")
+    print(f"| **mean (dev, {len(rows)})** | " + " | ".join(f"**{np.mean([r[c] for r in rows.values()]):.3f}**" for c in columns) + " |")
+    group_means(rows, columns)
     print("| worst | " + " | ".join(f"{np.max([r[c] for r in rows.values()]):.2f}" for c in columns) + " |")
 
 
-def loo_table(title, values, grid, reference, undisturbed_only=False):
-    """Leave-one-out beside the reference (VQF, same run) and the defaults' dev figures."""
-    trials = list(values)[:UNDISTURBED] if undisturbed_only else list(values)
-    values = {t: values[t] for t in trials}
-    held, chosen = leave_one_out(values, grid)
-    print(f"\n### {title}\n")
+def loo_table(title, values, grid, reference, objective=trial_mean):
+    """Leave-one-out over the dev trials beside the reference (VQF, same run) and the defaults' dev figures."""
+    trials = list(values)
+    held, chosen = leave_one_out(values, grid, objective)
+    print(f"\n### {title}, dev set\n")
     print("| trial | setting chosen on the other trials | held out | VQF | held out − VQF |")
     print("|---|---|---:|---:|---:|")
     for trial, (label, figure) in held.items():
@@ -226,9 +247,12 @@ def loo_table(title, values, grid, reference, undisturbed_only=False):
     loo = np.mean([f for _, f in held.values()])
     vqf = np.mean([values[t][reference] for t in trials])
     worst = max(f - values[t][reference] for t, (_, f) in held.items())
-    print(f"| **leave-one-out mean** | | **{loo:.3f}** | **{vqf:.3f}** | {loo - vqf:+.3f} (worst trial {worst:+.3f}) |")
+    print(f"| **leave-one-out mean (dev, {len(trials)})** | | **{loo:.3f}** | **{vqf:.3f}** | {loo - vqf:+.3f} ({100 * (loo / vqf - 1):+.1f} %, worst trial {worst:+.3f}) |")
+    for group, prefixes in (("undisturbed", UNDISTURBED), ("magnet", MAGNET)):
+        members = [t for t in trials if t[:2] in prefixes]
+        print(f"| leave-one-out mean, {group} ({len(members)}) | | {np.mean([held[t][1] for t in members]):.3f} | {np.mean([values[t][reference] for t in members]):.3f} | |")
     dev = np.mean([values[t][chosen] for t in trials])
-    print(f"\nChosen on all {len(trials)} trials (the defaults' candidate): {chosen}, dev mean {dev:.3f} (VQF {vqf:.3f}).")
+    print(f"\nChosen on all {len(trials)} dev trials (the defaults' candidate; {objective.__name__}): {chosen}, dev mean {dev:.3f} (VQF {vqf:.3f}).")
 
 
 def bench_broad():
@@ -243,9 +267,8 @@ def bench_broad():
         table("With the magnetometer: heading RMSE (deg), one offset per trial removed", mag_rows(mag, "heading_rmse_deg"), MAG)
         table("With the magnetometer: inclination RMSE (deg)", mag_rows(mag, "incl_rmse_deg"), MAG)
         loo_table("AHF2 inclination, leave-one-trial-out over AHF2_GRID", incl, AHF2_GRID, "vqf")
-        heading = {t: {label: m[label]["heading_rmse_deg"] for label in [*AHF2M_GRID, "vqf"]} for t, m in mag.items()}
-        loo_table("AHF2M heading, leave-one-trial-out over AHF2M_GRID, all ten trials", heading, AHF2M_GRID, "vqf")
-        loo_table("AHF2M heading, leave-one-trial-out over AHF2M_GRID, the eight undisturbed trials", heading, AHF2M_GRID, "vqf", True)
+        heading = {t: {label: m[label]["heading_rmse_deg"] for label in [*AHF2M_GRID, "vqf"]} for t, m in mag.items() if t[:2] in UNDISTURBED + MAGNET}
+        loo_table("AHF2M heading, leave-one-trial-out over AHF2M_GRID, undisturbed and magnet trials", heading, AHF2M_GRID, "vqf", group_balanced_mean)
 
 
 def mag_rows(mag, key):

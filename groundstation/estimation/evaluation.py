@@ -10,7 +10,7 @@ turned into NED (ENU -> NED is the half turn about the north-east bisector), and
 estimate and truth, ``q_e = q_est ⊗ q_true⁻¹`` (earth frame), is split into a turn about the vertical
 after a turn about a horizontal axis, ``q_e = q_z(ψ) ⊗ q_h``; then ``ψ = 2 atan2(q_e,z, q_e,w)`` (q_h has
 no z part, so the product's z/w is tan ψ/2), positive clockwise seen from above as every yaw here. The truth's x axis is not magnetic north, so one constant offset per trial, the circular mean
-of ψ over every sample with truth, is removed first; turning the estimate about the vertical by that
+of ψ over the ``moving`` samples that have truth (the scored ones, as the datasets README says), is removed first; turning the estimate about the vertical by that
 offset moves ψ by exactly the offset. RMSE over the ``moving`` samples that have truth, in degrees.
 Scored for the estimators that use a magnetometer (``Estimator.uses_magnetometer``) on data that has one;
 the heading of the others is the gyro's and drifts by design.
@@ -50,12 +50,13 @@ def truth_in_ned(q_true, truth_frame: str = "ENU") -> np.ndarray:
     return quaternion.multiply(_TO_NED[truth_frame], q_true)
 
 
-def heading_error_rad(q_est, q_true, truth_frame: str = "ENU") -> np.ndarray:
+def heading_error_rad(q_est, q_true, truth_frame: str = "ENU", mask=None) -> np.ndarray:
     """Per-sample heading error (rad, in (-π, π]) of estimates (body -> NED) against the truth, after
-    removing the trial's constant offset (module docstring); NaN where the truth is NaN."""
+    removing the trial's constant offset, the circular mean over the samples in ``mask`` (the scored
+    ones; all when None) that have truth (module docstring); NaN where the truth is NaN."""
     q_e = quaternion.multiply(q_est, quaternion.conjugate(truth_in_ned(q_true, truth_frame)))
     psi = 2.0 * np.arctan2(q_e[..., 3], q_e[..., 0])
-    known = np.isfinite(psi)
+    known = np.isfinite(psi) if mask is None else np.isfinite(psi) & np.asarray(mask, dtype=bool)
     if not known.any():
         return psi
     offset = np.arctan2(np.mean(np.sin(psi[known])), np.mean(np.cos(psi[known])))
@@ -83,7 +84,7 @@ def scores(q_est, q_true, mask, truth_frame: str = "ENU", heading: bool = False)
     """Inclination figures (``score``), and the heading's too when ``heading``."""
     figures = score(inclination_error_rad(q_est, q_true, truth_frame), mask)
     if heading:
-        figures |= score(heading_error_rad(q_est, q_true, truth_frame), mask, "heading")
+        figures |= score(heading_error_rad(q_est, q_true, truth_frame, mask), mask, "heading")
     return figures
 
 
@@ -97,7 +98,8 @@ def sample_periods_s(time_s) -> np.ndarray:
 
 def resampled(trial, rate_hz: float):
     """The trial at ``rate_hz`` (a board's rate): the sensors through scipy's polyphase resampler (its
-    anti-aliasing low-pass, as a board's sensor filter), the truth interpolated between its two nearest
+    anti-aliasing low-pass, as a board's sensor filter, fed the edge values beyond the ends: zeros made
+    the first samples ring from 0), the truth interpolated between its two nearest
     samples (normalised linear, NaN if either is NaN), ``moving`` from the nearest sample. The rate ratio
     must be a ratio of small integers (BROAD's 2000/7 Hz to 100 Hz: 7/20)."""
     period_s = float(np.median(np.diff(trial.time_s)))
@@ -108,8 +110,8 @@ def resampled(trial, rate_hz: float):
 
     from scipy.signal import resample_poly  # here: scipy.signal costs the app's start a second (bench/bench_first_frame.py)
 
-    def sensor(values):
-        return None if values is None else resample_poly(values, up, down, axis=0)
+    def sensor(values):  # padded with the edge values: the sensor was on before and after, not at zero
+        return None if values is None else resample_poly(values, up, down, axis=0, padtype="edge")
 
     gyr = sensor(trial.gyr_rad_s)
     position = np.arange(len(gyr)) * down / up  # in input samples

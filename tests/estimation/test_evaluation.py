@@ -12,7 +12,7 @@ from ahrs.filters import Madgwick
 from groundstation import quaternion as quat
 from groundstation.datasets import DatasetError, read_csv
 from groundstation.datasets import Trial
-from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score
+from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score, scores
 from groundstation.sim.profiles import make_profile
 
 TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
@@ -69,6 +69,23 @@ def test_heading_error_removes_one_constant_offset_and_ignores_inclination():
     assert np.isnan(error[:100]).all() and np.abs(error[100:] - (wobble_rad[100:] - np.mean(wobble_rad[100:]))).max() < 1e-3
 
 
+def test_heading_offset_is_the_mean_over_the_moving_samples():
+    """The datasets README: the constant heading offset is the mean difference over the moving samples,
+    the ones scored. An estimate 5° off at rest and 1° + a zero-mean wobble off in motion scores the
+    wobble alone (before: the offset was the mean over every sample with truth, 3° here, and the score
+    was off by 2°)."""
+    t = np.arange(0.0, 60.0, 0.01)
+    truth_ned = make_profile("flight", 60.0, seed=2).truth(t).q_body_to_ned
+    moving = t >= 30.0
+    wobble_rad = np.radians(2.0) * np.sin(2 * np.pi * t / 10.0)  # three whole periods in motion: zero mean there
+    psi = np.where(moving, np.radians(1.0) + wobble_rad, np.radians(5.0))
+    yaw_error = np.column_stack([np.cos(psi / 2), np.zeros_like(t), np.zeros_like(t), np.sin(psi / 2)])
+    est = quat.multiply(yaw_error, truth_ned)
+    error = heading_error_rad(est, truth_ned, "NED", moving)
+    assert np.abs(error[moving] - wobble_rad[moving]).max() < 1e-9
+    assert scores(est, truth_ned, moving, "NED", heading=True)["heading_rmse_deg"] == pytest.approx(2.0 / np.sqrt(2.0), rel=1e-6)
+
+
 def test_resampled_to_the_boards_rate_keeps_slow_signals_and_the_truth():
     """BROAD's 2000/7 Hz to 100 Hz: a 1 Hz sine keeps its amplitude (the resampler's low-pass cuts
     near 50 Hz), and the truth, a steady turn about z at 100 °/s, lands on its value at the new times."""
@@ -87,6 +104,19 @@ def test_resampled_to_the_boards_rate_keeps_slow_signals_and_the_truth():
     assert (~known).sum() == 1 and np.degrees(quat.angle_between(r.true_q[known], expected[known])).max() < 1e-4
     far = np.abs(r.time_s - 5.0) > 0.0035  # within one input period of the switch, either is right
     assert np.array_equal(r.moving[far], r.time_s[far] > 5.0) and r.mag_uT is None
+
+
+def test_resampled_starts_and_ends_on_the_signal_not_on_zero():
+    """A board streams a settled sensor: the resampler's filter starts and ends on the signal. Before, it
+    was padded with zeros, so a constant 44 µT field came out as 29.7, 47.4, 42.3 ... µT on the first
+    samples, and a magnetometer screen that learns the field from its first reading rejected a third of
+    an undisturbed trial at 100 Hz."""
+    t = np.arange(2000) * 0.0035
+    field = np.tile([30.0, -5.0, 33.0], (len(t), 1))
+    trial = Trial(time_s=t, gyr_rad_s=np.zeros_like(field), acc_m_s2=field / 3.0, mag_uT=field, true_q=None, moving=None)
+    r = resampled(trial, 100.0)
+    # within the polyphase filter's DC gain per phase (1 ± 5e-5)
+    assert np.abs(r.mag_uT - field[0]).max() < 0.01 and np.abs(r.acc_m_s2 - field[0] / 3.0).max() < 0.01
 
 
 def test_the_magnetometer_reaches_the_estimators_that_use_it(trial_slice):
