@@ -105,6 +105,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
     exports import no maker of sessions) and writes ``request.out``; ``progress(stage, done, total)``
     with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises ExportCancelled,
     nothing written."""
+    from groundstation.estimation import unmet_warnings
     from groundstation.export.columns import export_stretches, select_rows
     from groundstation.export.excel import ExportCancelled, write_workbook
     from groundstation.export.tabular import write_csv, write_parquet
@@ -121,8 +122,11 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
     data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes,
                 stream_estimates=stream)
     decoding(1, 1)
+    # asked for by name, an estimator without its aiding is exported, and said to be little use so
+    asked = () if request.filters is None else data.filters
     if request.filters is None:
         data = met(data)
+    doubted = unmet_warnings(asked, data.aiding(), request.source)
     renamed = []  # CSV and Parquet columns kept apart (``columns.aux_columns``): said with the session's warnings
     if request.format == ".xlsx":
         sheets = write_workbook(data, request.out, t_from=request.t_from, t_to=request.t_to, rate_hz=request.rate_hz,
@@ -143,7 +147,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
         del first  # each stretch is freed once written
         (write_csv if request.format == ".csv" else write_parquet)(chained, request.out, request.overwrite)
         written = f"{len(rows)} rows, {columns} columns"
-    return ExportResult(f"wrote {request.out}: {written}", [*data.warnings, *renamed])
+    return ExportResult(f"wrote {request.out}: {written}", [*data.warnings, *doubted, *renamed])
 
 
 def _first_then(first, rest):
