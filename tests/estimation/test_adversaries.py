@@ -6,9 +6,10 @@ near the sensor moves it by less than 0.5° against the same run without the mag
 The truth is exact kinematics: a body rate held over each sample interval, so the gyro reads exactly the
 turn from one truth sample to the next (``2 log(q(k-1)⁻¹ q(k)) / Δt``, what the estimators integrate), the
 accelerometer gravity (plus any linear acceleration) and the magnetometer the earth field on the body axes,
-with seeded white noise of an MPU-6050's size. Each estimator gets the aiding it needs (``needs``): the
-field, and a GPS fix at 10 Hz (still craft: velocity zero, the true heading). The registry is read at
-collection, so a new estimator is covered without naming it here.
+with seeded white noise of an MPU-6050's size. Every estimator is handed the field and a GPS fix at 10 Hz
+(velocity zero: the craft turns in place; the true heading), as the live path hands them; those that need
+neither ignore them. The registry (``ESTIMATORS``, from ``BUILT_IN``) is read at collection, so a new
+estimator is covered without naming it here.
 """
 
 import math
