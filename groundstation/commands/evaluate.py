@@ -54,7 +54,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.commands.progress import ProgressBar
-    from groundstation.estimation import unmet_needs
+    from groundstation.estimation import unmet_warnings
     from groundstation.session.load import load_session
 
     names, overrides = estimator_options(args)
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
         bar.done()
     # an estimator asked for by name whose aiding the file lacks (ukf without GPS) is scored, and said to be so
     asked = data.estimated if args.filters != default_filters() else ()
-    warnings = [*data.warnings, *(f"{why}, and {args.file} has none" for name in asked if (why := unmet_needs(name, data.aiding())))]
+    warnings = [*data.warnings, *unmet_warnings(asked, data.aiding(), args.file)]
     for warning in warnings:  # on stderr beside the JSON, and in it
         print(f"warning: {clean(warning, visible=True)}", file=sys.stderr if args.json else sys.stdout)
     carried = {"warnings": warnings} if warnings else {}

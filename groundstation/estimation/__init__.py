@@ -172,6 +172,12 @@ def unmet_needs(name: str, capabilities) -> str | None:
     return "; ".join(f"{name} needs {_WITHOUT[need]}" for need in missing) or None
 
 
+def unmet_warnings(names, capabilities, source) -> list[str]:
+    """What evaluate and export say of the estimators of ``names`` asked for on ``source``, whose aiding
+    it lacks (``unmet_needs``): one line each."""
+    return [f"{why}, and {source} has none" for name in names if (why := unmet_needs(name, capabilities))]
+
+
 def aiding_estimator(filters, named: str | None = None) -> str | None:
     """The estimator that aids the compass heading and position among ``filters``: ``named`` if given
     (ValueError if it does not run), else ``AIDING_ESTIMATOR``; a session without that one is aided by

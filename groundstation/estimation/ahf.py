@@ -151,13 +151,13 @@ def ahf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
             k = lam * (1.0 / np.sqrt(n2))
             # (eq. 18) q̇ = q̇_ω - λ ∇f/‖∇f‖
             d1, d2, d3, d4 = d1 - k * s1, d2 - k * s2, d3 - k * s3, d4 - k * s4
-        if p[P_MAGNETOMETER] != 0.0:  # hfm: Madgwick's magnetometer term about the vertical, its own step (marg.py)
+        if p[P_MAGNETOMETER] != 0.0:  # hfm: Madgwick's magnetometer term about the vertical, its share of his step (marg.py)
             status, field = field_screen(state, status, gx, gy, gz, dt_s, mx, my, mz)
             if field:
                 b1, b2, b3, b4 = _field_gradient(q1, q2, q3, q4, mx, my, mz)
-                n2 = b1 * b1 + b2 * b2 + b3 * b3 + b4 * b4
-                if n2 > 0.0:
-                    k = lam / math.sqrt(n2)
+                nb2 = b1 * b1 + b2 * b2 + b3 * b3 + b4 * b4
+                if nb2 > 0.0:
+                    k = lam / math.sqrt(n2 + nb2)
                     d1, d2, d3, d4 = d1 - k * b1, d2 - k * b2, d3 - k * b3, d4 - k * b4
     # (eq. 19) q(k) = q(k-1) + q̇ Δt, normalised
     q1, q2, q3, q4 = q1 + d1 * dt_s, q2 + d2 * dt_s, q3 + d3 * dt_s, q4 + d4 * dt_s

@@ -55,11 +55,18 @@ def reading_headings_deg(q_rows: np.ndarray, mag_rows: np.ndarray) -> np.ndarray
 def _unwrapped_heading_rad(q_body_to_ned, mag_body):
     """``reading_heading_rad`` before its wrap into [-π, π]."""
     w, x, y, z = q_body_to_ned[0], q_body_to_ned[1], q_body_to_ned[2], q_body_to_ned[3]
-    mx, my, mz = mag_body[0], mag_body[1], mag_body[2]
+    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+    return yaw + heading_offset_rad(w, x, y, z, mag_body[0], mag_body[1], mag_body[2])
+
+
+@register_jitable  # also compiled: mcf's kernel
+def heading_offset_rad(w, x, y, z, mx, my, mz):
+    """The compass heading minus the attitude's yaw (unwrapped): the turn about the vertical that points the
+    reading's horizontal part, turned into NED by the attitude, north. Defined at any tilt (no Euler angle
+    is taken: at ±90° pitch yaw is not, but this turn still is), any unit for the reading."""
     north = (1 - 2 * (y * y + z * z)) * mx + 2 * (x * y - w * z) * my + 2 * (x * z + w * y) * mz
     east = 2 * (x * y + w * z) * mx + (1 - 2 * (x * x + z * z)) * my + 2 * (y * z - w * x) * mz
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    return yaw - math.atan2(east, north)
+    return -math.atan2(east, north)
 
 
 @njit(cache=True)

@@ -7,15 +7,19 @@ State q (w, x, y, z), covariance P (4×4). Per sample (digest §4; the structure
   ``q⁻ = F q`` normalised; ``W = ½ dt [-q_v; q_w I + [q_v]×]`` (∂q⁻/∂ω);
   ``P⁻ = F P Fᵀ + σ_g² W Wᵀ``
 - update:   ``h(q) = ĝ(q)``, the down direction in the body frame (seed 000 eq. 8), measured as
-  ``â = -acc_g/‖acc_g‖``; ``H = ∂h/∂q``; ``S = H P⁻ Hᵀ + σ_a² I``; ``K = P⁻ Hᵀ S⁻¹``;
+  ``â = -acc_g``, the specific force in g as it is; ``H = ∂h/∂q``; ``S = H P⁻ Hᵀ + σ_a² I``; ``K = P⁻ Hᵀ S⁻¹``;
   ``q = q⁻ + K (â - h(q⁻))`` normalised; ``P = (I - K H) P⁻``
 
 The three components of â are independent (R = σ_a² I), so the update is made one component at a time
 (sequential processing: ``k_i = P H_iᵀ / (H_i P H_iᵀ + σ_a²)``, ``δ += k_i (ν_i - H_i δ)``,
 ``P -= k_i H_i P``): exactly the batch update above in exact arithmetic, without a 3×3 inverse.
 
-Unlike ``ahrs.filters.EKF`` the predicted q⁻ is normalised before h and H are evaluated (ahrs evaluates
-h on the normalised and H on the unnormalised q⁻); the two agree to O((ω dt)²) per step.
+Unlike ``ahrs.filters.EKF`` the accelerometer is not normalised: the update is linear in the innovation, so
+it averages ``â``, and the mean of ``a/‖a‖`` under zero-mean linear acceleration is not gravity's direction
+(±3 g of vibration at 100 Hz along a tilted axis: 30° off it, where the EKF drifted; BROAD dev trial 16,
+shaken by a few g: 9.3° RMS normalised, 2.2° as measured; issue 33). And the predicted q⁻ is normalised
+before h and H are evaluated (ahrs evaluates h on the normalised and H on the unnormalised q⁻); the two
+agree to O((ω dt)²) per step.
 
 σ_g (``gyro_noise_rad_s``) is the per-sample gyro noise the filter assumes: the MPU-6050's own noise is
 far smaller (≈ 0.05 °/s at 100 Hz), so the default 0.03 rad/s (1.7 °/s) also covers an uncalibrated
@@ -115,8 +119,8 @@ def ekf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
     state[_INNOVATION] = 0.0
     if acc_ok:
         q0, q1, q2, q3 = q
-        r = -((ax * ax + ay * ay + az * az) ** -0.5)
-        nu = (ax * r - 2.0 * (q1 * q3 - q0 * q2), ay * r - 2.0 * (q0 * q1 + q2 * q3), az * r - (q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
+        # â = -acc_g as measured, not normalised (module docstring)
+        nu = (-ax - 2.0 * (q1 * q3 - q0 * q2), -ay - 2.0 * (q0 * q1 + q2 * q3), -az - (q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3))
         state[_INNOVATION] = math.sqrt(nu[0] * nu[0] + nu[1] * nu[1] + nu[2] * nu[2])
         # One component of â at a time (module docstring): H's rows, δ the correction so far
         delta = (0.0, 0.0, 0.0, 0.0)

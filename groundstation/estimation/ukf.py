@@ -59,15 +59,15 @@ from groundstation import quaternion
 from groundstation.estimation import sigma_points as sp
 from groundstation.estimation import small_linalg as sl
 from groundstation.estimation.base import (
-    INITIALISED, NO_UPDATE, P_ACC_MIN2, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, sample_fix,
+    INITIALISED, MAG_REJECTED, NO_UPDATE, P_ACC_MIN2, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, sample_fix,
 )
 from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 from groundstation.units import STANDARD_GRAVITY_M_S2 as G
 
-# diag.status bits of these filters (above base's)
-GPS_COMPENSATED = 128  # the tilt measurement had the manoeuvre acceleration removed
-HEADING_USED = 256  # a GPS heading was a measurement on this sample (or set yaw, the first time)
-COVARIANCE_RESET = 512  # the covariance was re-initialised: it lost positive definiteness, or the filter was lost
+# diag.status bits of these filters, above base's highest (128 was both MAG_REJECTED and GPS_COMPENSATED)
+GPS_COMPENSATED = MAG_REJECTED << 1  # the tilt measurement had the manoeuvre acceleration removed
+HEADING_USED = MAG_REJECTED << 2  # a GPS heading was a measurement on this sample (or set yaw, the first time)
+COVARIANCE_RESET = MAG_REJECTED << 3  # the covariance was re-initialised: it lost positive definiteness, or the filter was lost
 
 _N = 4
 _COS_PITCH_MIN = 0.05  # roll noise grows as 1/cos θ; capped near ±90° pitch, where roll is undefined
@@ -368,6 +368,10 @@ def ukf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, vn, ve, vd, h
     # 1.7° (test_intervals.py).
     if status & (INITIALISED | REINITIALISED) and state[_STARTING] != 0.0:
         _start(state, p)
+    if status & REINITIALISED:
+        # The craft may have turned any way during the gap: the yaw kept is as unknown as at the start, so
+        # the next heading sets it outright (a 90° yaw innovation through the update tilted the estimate 60°)
+        state[_YAW_KNOWN] = 0.0
     if not status & NO_UPDATE:
         state[_SINCE_FIX] += dt_s
         _take_fix(state, p, vn, ve, vd)

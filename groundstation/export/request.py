@@ -135,6 +135,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
     exports import no maker of sessions) and writes ``request.out`` with its format's writer; ``progress(stage,
     done, total)`` with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises
     ExportCancelled, nothing written."""
+    from groundstation.estimation import unmet_warnings
     from groundstation.export.excel import ExportCancelled
     report = progress or (lambda stage, done, total: None)
 
@@ -147,7 +148,10 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
     data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes,
                 stream_estimates=export_format.streamed)
     decoding(1, 1)
+    # asked for by name, an estimator without its aiding is exported, and said to be little use so
+    asked = () if request.filters is None else data.filters
     if request.filters is None:
         data = met(data)
+    doubted = unmet_warnings(asked, data.aiding(), request.source)
     written, warnings = export_format.writer()(data, request, lambda done, total: report("writing", done, total), cancel)
-    return ExportResult(f"wrote {request.out}: {written}", [*data.warnings, *warnings])
+    return ExportResult(f"wrote {request.out}: {written}", [*data.warnings, *doubted, *warnings])

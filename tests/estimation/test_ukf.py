@@ -250,3 +250,14 @@ def test_steps_in_a_work_space_equal_the_allocating_steps_bit_for_bit(name):
             assert plain[0] and in_work[0]
             for u, v in zip(plain[1:], in_work[1:]):
                 assert np.array_equal(u, v)
+
+
+def test_status_bits_are_their_own():
+    """ukf's own status bits are above base's: GPS_COMPENSATED was 128, base's MAG_REJECTED, so every
+    compensated sample read as a rejected magnetometer reading."""
+    from groundstation.estimation.base import STATUS_NAMES
+    from groundstation.estimation.ukf import COVARIANCE_RESET
+
+    base_bits = sum(STATUS_NAMES)
+    own = (GPS_COMPENSATED, HEADING_USED, COVARIANCE_RESET)
+    assert all(bit & base_bits == 0 for bit in own) and len(set(own)) == 3

@@ -95,3 +95,13 @@ def test_a_mavlink_session_sheet_does_not_wait_for_a_config_frame(tmp_path):
     text = [str(v) for row in sheet.iter_rows(values_only=True) for v in row if v is not None]
     assert not any("no CONFIG frame" in t for t in text)
     assert "MAVLink (an autopilot)" in text
+
+
+def test_an_estimator_asked_for_without_its_aiding_is_said_to_need_it(tmp_path, capsys):
+    """Issue 33: ukf without GPS flips; exported when asked for by name, and one line says why to doubt it,
+    as evaluate says (``estimation.unmet_needs``)."""
+    source = imu_only_recording(tmp_path / "imu.gsrec")
+    assert main(["export", str(source), "--out", str(tmp_path / "asked.csv"), "--filters", "hf,ukf"]) == 0
+    assert estimators_in(pd.read_csv(tmp_path / "asked.csv", nrows=1).columns) == {"hf", "ukf"}
+    said = [line for line in capsys.readouterr().out.splitlines() if line.startswith("warning:")]
+    assert said == [f"warning: ukf needs GPS velocity and heading: without them it is a slow tilt filter whose heading drifts and can flip, and {source} has none"]
