@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from groundstation import quaternion
+from groundstation.palette import ACTUAL_COLOUR, DESIRED_COLOUR, PALETTE
 from groundstation.session.catalogue import TIME, Catalogue, Column, TableInfo
 
 AXES = ("roll", "pitch", "yaw")
@@ -150,6 +151,8 @@ SECTIONS = (
     )),
 )
 
+NAMES = tuple(section.info.name for section in SECTIONS)
+
 
 def section_tables(tables: dict[str, dict[str, np.ndarray]], catalogue: Catalogue) -> dict[str, tuple[TableInfo, dict]]:
     """Each section the session's ``tables`` hold: its ``TableInfo`` (the columns it has) and its columns, by name."""
@@ -188,3 +191,67 @@ def attach_sections(data) -> None:
     if made:
         data.catalogue = Catalogue({**data.catalogue.tables, **{name: info for name, (info, _) in made.items()}})
         data.tables.update({name: columns for name, (_, columns) in made.items()})
+
+
+# -- how the sections are shown: the app's Flight tab and the report draw the same pages ---------------------
+
+
+@dataclasses.dataclass(frozen=True)
+class Trace:
+    table: str
+    column: str
+    label: str
+    colour: str
+
+
+@dataclasses.dataclass(frozen=True)
+class Figure:
+    title: str
+    unit: str  # as shown ("°/s"); "" for a count or a code
+    traces: tuple[Trace, ...]
+
+
+@dataclasses.dataclass(frozen=True)
+class Page:
+    title: str
+    figures: tuple[Figure, ...]
+
+    @property
+    def tables(self) -> tuple[str, ...]:
+        return tuple(dict.fromkeys(t.table for f in self.figures for t in f.traces))
+
+
+def _versus(setpoint: str, actual: str, suffix: str, unit: str, title: str) -> tuple[Figure, ...]:
+    """One figure per axis: what the controller asked for and what it had."""
+    return tuple(Figure(title.format(axis=axis), unit, (Trace(setpoint, f"{axis}_{suffix}", "desired", DESIRED_COLOUR),
+                                                        Trace(actual, f"{axis}_{suffix}", "actual", ACTUAL_COLOUR)))
+                 for axis in AXES)
+
+
+def _each(table: str, columns: tuple[tuple[str, str, str], ...]) -> tuple[Figure, ...]:
+    return tuple(Figure(title, unit, (Trace(table, column, title, ACTUAL_COLOUR),)) for column, title, unit in columns)
+
+
+OUTPUT_COLOURS = tuple(PALETTE.values())
+PAGES = (
+    Page("Attitude", _versus(ATTITUDE_SETPOINT.name, ATTITUDE.name, "deg", "°", "{axis}")),
+    Page("Rates", _versus(RATES_SETPOINT.name, RATES.name, "deg_s", "°/s", "{axis} rate")),
+    Page("Battery", _each(BATTERY.name, (("voltage_V", "voltage", "V"), ("current_A", "current", "A"),
+                                         ("remaining_pct", "remaining", "%")))),
+    Page("GPS", _each(GPS_QUALITY.name, (("fix_type", "fix type", ""), ("satellites", "satellites", ""), ("hdop", "HDOP", "")))),
+    Page("Outputs", (Figure("outputs", "µs", tuple(Trace(OUTPUTS.name, f"out_{i}_us", str(i), OUTPUT_COLOURS[(i - 1) % len(OUTPUT_COLOURS)])
+                                                   for i in range(1, MAX_OUTPUTS + 1))),)),
+)
+
+
+def pages_of(catalogue: Catalogue) -> list[Page]:
+    """The pages the session has, each with the traces whose columns it has (a tlog's desired attitude has no yaw,
+    RCOU 14 outputs of 16); a figure left with none is left out, and a page left with none."""
+    has = {(t.name, c.name) for t in catalogue if t.name in NAMES for c in t.columns}
+    pages = []
+    for page in PAGES:
+        figures = tuple(dataclasses.replace(f, traces=kept) for f in page.figures
+                        if (kept := tuple(t for t in f.traces if (t.table, t.column) in has)))
+        if figures:
+            pages.append(dataclasses.replace(page, figures=figures))
+    return pages

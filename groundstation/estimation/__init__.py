@@ -37,7 +37,7 @@ class About:
     module: str  # groundstation.estimation.<module> defines the class
     class_name: str
     label: str  # what the legend, the panel and the charts call it
-    colour: str  # a colour's name in the app's palette (``ui.plots.PALETTE``): Qt stays out of here
+    colour: str  # a colour's name in the app's palette (``groundstation.palette.PALETTE``): Qt stays out of here
     needs: frozenset[str] = frozenset()  # aiding it is no more than a tilt filter without: "mag", "gps"
     live: bool = True  # run on every live session (so showing it is a click, not a restart)
     tunable: tuple[tuple[str, str, str], ...] = ()  # settings the app offers to tune live: (setting, symbol, unit)

@@ -39,6 +39,7 @@ from groundstation.ui.recording_banner import RecordingBanner
 from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.uplink_panel import UplinkPanel
 from groundstation.ui.vehicle_badge import VehicleBadge
+from groundstation.ui.whole_flight import opening_playback
 
 REDRAW_HZ = 30
 # Every how many ticks the side panels redraw: the horizon at 15 Hz, the 3D view (its paint costs
@@ -249,7 +250,7 @@ class MainWindow(QtWidgets.QMainWindow):
             playback = {"paused": shown.source.paused, "position_s": shown.source.position_s}
             self._stop_session()
         else:
-            playback = {}
+            playback = opening_playback(loading.path)  # a flight log whole, at its end (``whole_flight``)
         self._adopt(RevealSession(loading.data, loading.path, loading.setup, speed=self.replay_bar.speed, **playback))
         self.source_label.setText(self.session.source.description)
         if shown is None:
@@ -605,6 +606,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("splitter", self.splitter.saveState())
         self.settings.setValue("channel_panes", self.live_view.channels.layout_json())
-        self.settings.setValue("time_window", self.live_view.window_box.currentText())
+        self.settings.setValue("time_window", self.live_view.chosen_window)
         self.settings.sync()
         super().closeEvent(event)
