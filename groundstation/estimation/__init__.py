@@ -20,6 +20,7 @@ import math
 from collections.abc import Iterator, MutableMapping
 from typing import TYPE_CHECKING
 
+from groundstation.palette import PALETTE, UNNAMED_COLOUR
 from groundstation.estimation.compiled_cache import use_user_cache_for_numba
 
 if TYPE_CHECKING:
@@ -108,6 +109,13 @@ class _Registry(MutableMapping):
         if isinstance(entry, str) or (facts is not None and entry.__name__ == facts.class_name):
             return facts
         return About(entry.__module__, entry.__name__, entry.label, entry.colour, entry.needs, entry.live, entry.tunable)
+
+
+def colour_of(name: str) -> str:
+    """An estimator's colour as the app's plots and the report draw it (``groundstation.palette``; grey if it
+    names none of the palette's)."""
+    facts = about(name)
+    return PALETTE.get(facts.colour, UNNAMED_COLOUR) if facts else UNNAMED_COLOUR
 
 
 # The one list of estimators: each name's class and facts (``About``). A new estimator is its module and

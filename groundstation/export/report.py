@@ -31,12 +31,12 @@ from groundstation.autopilot.messages import ALARM_SEVERITIES, MESSAGE_KIND, PAR
 from groundstation.autopilot.modes import STATUS_KIND, event_time_s, mode_spans
 from groundstation.autopilot.sections import pages_of
 from groundstation.errors import UserError
-from groundstation.estimation import label
+from groundstation.estimation import colour_of, label
 from groundstation.estimation.evaluation import truth_in_ned
 from groundstation.export.files import atomic_output
 from groundstation.export.report_figures import escaped, line_plot
 from groundstation.export.report_findings import Finding, differences_deg, findings
-from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR, estimator_colour
+from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR
 from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.product import ONBOARD, SessionData
 
@@ -194,13 +194,13 @@ def attitude_section(data: SessionData) -> str:
     marks = _reboot_marks(data)
     for angle, index in (("pitch", 1), ("roll", 2)):
         series = [(reference_name, t, quaternion.euler_deg(reference)[index], reference_colour, True)]
-        series += [(label(n), t, quaternion.euler_deg(data.quaternion(n))[index], estimator_colour(n))
+        series += [(label(n), t, quaternion.euler_deg(data.quaternion(n))[index], colour_of(n))
                    for n in data.estimated[:MAX_PLOTTED_ESTIMATORS]]
         out.append(line_plot(series, f"{angle}", "session time (s)", f"{angle} (°)", marks=marks))
     if data.estimated:
         diffs = differences_deg(data)
         y_label = "inclination error (°)" if data.true_q is not None else "max(|Δpitch|, |Δroll|) (°)"
-        out.append(line_plot([(label(n), t, d, estimator_colour(n)) for n, d in list(diffs.items())[:MAX_PLOTTED_ESTIMATORS]],
+        out.append(line_plot([(label(n), t, d, colour_of(n)) for n, d in list(diffs.items())[:MAX_PLOTTED_ESTIMATORS]],
                              f"difference from {reference_name}", "session time (s)", y_label, marks=marks))
     return "\n".join(out)
 

@@ -19,7 +19,8 @@ from groundstation.ui.navigation import aiding_series
 from groundstation.ui.channels import ChannelsView
 from groundstation.ui.flight_sections_view import SERIES as SECTION_SERIES, FlightSectionsView, section_series
 from groundstation.ui.mode_bands import ModeBands
-from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR, estimator_colour as colour
+from groundstation.estimation import colour_of as colour
+from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR
 from groundstation.ui.plots import Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, clock_series, imu_quantities, onboard_quantities, truth_quantities

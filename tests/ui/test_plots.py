@@ -10,7 +10,8 @@ from PySide6 import QtCore, QtGui
 
 from groundstation.session.table import Table
 from groundstation.estimation import ESTIMATORS, live_estimators
-from groundstation.palette import ONBOARD_COLOUR, PALETTE, estimator_colour as colour
+from groundstation.estimation import colour_of as colour
+from groundstation.palette import ONBOARD_COLOUR, PALETTE
 from groundstation.ui.live_view import attitude_plots, diagnostic_plots
 from groundstation.ui.plots import StackedPlots
 from groundstation.ui.series import Series
