@@ -39,7 +39,7 @@ class ModeBands:
 
     def __init__(self):
         self._drawn: dict[int, tuple[object, list[ModeSpan], list[list[pg.LinearRegionItem]]]] = {}
-        self._labels: dict[int, list[tuple[ModeSpan, pg.InfLineLabel]]] = {}  # each plot widget's, for ``_fit_labels``
+        self._labels: dict[int, list[pg.InfLineLabel]] = {}  # each plot widget's, a span's each (``_fit_labels``)
         self._watched: set[int] = set()  # the plot widgets whose time axis calls ``_fit_labels``
         self._events_seen = -1
         self.spans: list[ModeSpan] = []
@@ -71,7 +71,7 @@ class ModeBands:
                     item.removeItem(region)
             made = [self._bands(plots, span) for span in self.spans]
             regions = [bands for bands, _ in made]
-            self._labels[id(plots)] = [(span, text) for span, (_, text) in zip(self.spans, made)]
+            self._labels[id(plots)] = [text for _, text in made]
             if id(plots) not in self._watched:
                 self._watched.add(id(plots))
                 plots.items[0].getViewBox().sigXRangeChanged.connect(lambda *_, p=plots: self._fit_labels(p))
@@ -83,13 +83,14 @@ class ModeBands:
         labels = self._labels.get(id(plots), [])
         if not labels:
             return
+        spans = self._drawn[id(plots)][1]  # as drawn: the last one stretched since its label was made
         view = plots.items[0].getViewBox()
         (low, high), width_px = view.viewRange()[0], view.width()
         if width_px <= 0 or high <= low:
             return
         px_per_s = width_px / (high - low)
-        metrics = pg.QtGui.QFontMetricsF(labels[0][1].textItem.font())
-        for span, text in labels:
+        metrics = pg.QtGui.QFontMetricsF(labels[0].textItem.font())
+        for span, text in zip(spans, labels):
             room = (min(span.end_s, high) - max(span.start_s, low)) * px_per_s - LABEL_PAD_PX
             fits = [t for t in (label(span), span.mode) if metrics.horizontalAdvance(t) + 2 * LABEL_PAD_PX <= room]
             text.setFormat(fits[0] if fits else "")  # its format: what the label says again when its line moves
