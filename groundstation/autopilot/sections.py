@@ -209,6 +209,7 @@ class Figure:
     title: str
     unit: str  # as shown ("°/s"); "" for a count or a code
     traces: tuple[Trace, ...]
+    wraps_at: float | None = None  # the period of a circular quantity: no line across its wrap (a heading's 360°)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -224,7 +225,8 @@ class Page:
 def _versus(setpoint: str, actual: str, suffix: str, unit: str, title: str) -> tuple[Figure, ...]:
     """One figure per axis: what the controller asked for and what it had."""
     return tuple(Figure(title.format(axis=axis), unit, (Trace(setpoint, f"{axis}_{suffix}", "desired", DESIRED_COLOUR),
-                                                        Trace(actual, f"{axis}_{suffix}", "actual", ACTUAL_COLOUR)))
+                                                        Trace(actual, f"{axis}_{suffix}", "actual", ACTUAL_COLOUR)),
+                        360.0 if axis == "yaw" and suffix == "deg" else None)  # yaw: 0..360 or ±180
                  for axis in AXES)
 
 

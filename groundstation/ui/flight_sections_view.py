@@ -30,7 +30,7 @@ def _as_is(rows, columns: tuple[str, ...]) -> dict:
 
 
 def page_plots(page: Page) -> tuple[Plot, ...]:
-    return tuple(Plot(f.title, f.unit, tuple(Curve(PREFIX + t.table, t.column, t.label, t.colour) for t in f.traces))
+    return tuple(Plot(f.title, f.unit, tuple(Curve(PREFIX + t.table, t.column, t.label, t.colour, f.wraps_at) for t in f.traces))
                  for f in page.figures)
 
 

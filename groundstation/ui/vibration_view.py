@@ -133,6 +133,7 @@ class VibrationView(QtWidgets.QWidget):
         self.spectrum_plot.setLabel("bottom", "frequency", "Hz")
         self.spectrum_plot.setLogMode(x=True)  # curves are given in Hz; markers and labels sit at log10(Hz)
         self.spectrum_plot.getAxis("bottom").setTicks(frequency_ticks())
+        self.spectrum_plot.getAxis("bottom").enableAutoSIPrefix(False)  # ticks in Hz: it called them kHz (log10 > 1)
         self.spectrum_plot.addLegend(offset=(-10, 10))
         self.peak_marks = pg.ScatterPlotItem(size=10, symbol="t", brush=PEAK_BRUSH, pen=None)
         self.peak_texts: list[pg.TextItem] = []  # the strongest peaks' labels, strongest first; those that collide hidden
@@ -142,6 +143,7 @@ class VibrationView(QtWidgets.QWidget):
         self.spectrogram_plot.setLabel("bottom", "time", "s")
         self.spectrogram_plot.setLabel("left", "frequency", "Hz")
         self.spectrogram_plot.getAxis("left").setTicks(frequency_ticks())  # log10(Hz), as the spectrum's (issue 34)
+        self.spectrogram_plot.getAxis("left").enableAutoSIPrefix(False)
         self.image = pg.ImageItem(axisOrder="row-major")
         self.image.setColorMap(pg.colormap.get("viridis"))
         self.spectrogram_plot.addItem(self.image)

@@ -33,6 +33,7 @@ def test_a_dataflash_log_shows_desired_against_actual_and_its_battery_gps_and_ou
     finite = np.isfinite(desired.yData)
     np.testing.assert_allclose(desired.yData[finite], data.tables["attitude_setpoint"]["roll_deg"], atol=1e-4)
     qtbot.waitUntil(lambda: points(actual) >= len(data.tables["attitude"]["time_s"]), timeout=LIMIT_MS)
+    assert next(s for s, _ in flight.plots.curves if s.quantity == "yaw_deg").wraps_at == 360.0  # no line across 0/360
     for title, table, quantity in (("Rates", "rates_setpoint", "pitch_deg_s"), ("Battery", "battery", "voltage_V"),
                                    ("GPS", "gps_quality", "hdop"), ("Outputs", "outputs", "out_1_us")):
         flight = shown_page(window, qtbot, title)
