@@ -61,6 +61,7 @@ class Source:
     columns: dict[str, str] = dataclasses.field(default_factory=dict)
     units: dict[str, str] = dataclasses.field(default_factory=dict)
     quaternion: tuple[str, str, str, str] | None = None
+    unknown: dict[str, float] = dataclasses.field(default_factory=dict)  # a source column's "not measured" value: NaN
 
     def present(self, tables: dict) -> bool:
         """The table has rows, its quaternion's four columns if it gives one, and at least one other column."""
@@ -132,7 +133,8 @@ SECTIONS = (
         for name in ("bat_0", "bat")) + (
         Source("battery_status", {"voltage_V": "voltage_v", "current_A": "current_a", "remaining_pct": "remaining",
                                   "used_mAh": "discharged_mah"},
-               {"voltage_v": "V", "current_a": "A", "remaining": "fraction", "discharged_mah": "mAh"}),
+               {"voltage_v": "V", "current_a": "A", "remaining": "fraction", "discharged_mah": "mAh"},
+               unknown={"current_a": -1.0, "remaining": -1.0}),  # PX4: -1 if unknown
         Source("sys_status", {"voltage_V": "voltage_V", "current_A": "current_A", "remaining_pct": "remaining_pct"}),
     )),
     Section(GPS_QUALITY, tuple(
@@ -176,7 +178,10 @@ def _made(info: TableInfo, source: Source, table: dict[str, np.ndarray], catalog
         columns.update(roll_deg=roll, pitch_deg=pitch, yaw_deg=yaw)
     for name, column in source.columns.items():
         if column in table:  # a log's older or smaller form lacks some (BAT before RemPct, RCOU's 14 of 16)
-            columns[name] = converted(table[column], source.units.get(column) or units.get(column, "1"), wanted[name])
+            values = np.asarray(table[column], dtype=float)
+            if column in source.unknown:
+                values = np.where(values == source.unknown[column], np.nan, values)
+            columns[name] = converted(values, source.units.get(column) or units.get(column, "1"), wanted[name])
     return {name: columns[name] for name in wanted if name in columns}  # in the catalogue's order
 
 

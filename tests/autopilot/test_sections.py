@@ -116,3 +116,14 @@ def test_a_session_of_the_projects_own_aircraft_has_no_sections(tmp_path):
     assert main(["simulate", "--scenario", "flight", "--duration", "3", "--seed", "1", "--out", str(path)]) == 0
     data = load_session(path, filters=("ahf2",))
     assert not set(NAMES) & set(data.tables) and not any(name in data.catalogue for name in NAMES)
+
+
+def test_a_ulogs_unknown_battery_current_is_no_number():
+    """PX4 writes -1 for a current it does not measure (the SITL log): not a battery charging at 1 A."""
+    name = "px4_sitl_quad_groundtruth.ulg"
+    data = load_session(flightlog(name), filters=("ahf2",))
+    battery = next(d.data for d in ULog(str(flightlog(name))).data_list if d.name == "battery_status")
+    unknown = battery["current_a"] == -1.0
+    assert unknown.any()
+    assert np.isnan(data.tables["battery"]["current_A"][unknown]).all()
+    np.testing.assert_allclose(data.tables["battery"]["current_A"][~unknown], battery["current_a"][~unknown], rtol=1e-6)
