@@ -41,14 +41,15 @@ SPECTRUM_RANGE_DB = 120.0  # a bin of zero amplitude (-inf dB) is drawn this far
 # The log-frequency axis labelled at 1, 2 and 5 of each decade, as Flight Review's and WebTools' read
 # (pyqtgraph's own log ticks label every minor step and their texts run together above 40 Hz)
 FREQUENCY_TICKS_HZ = [m * 10.0**k for k in range(-1, 5) for m in (1, 2, 5)]
+DECADES_HZ = [f for f in FREQUENCY_TICKS_HZ if f == 10.0 ** round(np.log10(f))]  # the spectrogram's short axis: 1, 2, 5 crowd it
 LOG_ROWS = 256  # the spectrogram's rows on its log-frequency axis
 MOST_PEAK_LABELS = 5  # more labels than this crowd the plot; the text below lists every peak
 LABEL_GAP_PX = 4.0  # the least room between two labels' boxes on screen
 
 
-def frequency_ticks() -> list:
-    """``setTicks``' levels for an axis in log10(Hz): the 1, 2 and 5 of each decade, no minor labels."""
-    return [[(float(np.log10(f)), f"{f:g}") for f in FREQUENCY_TICKS_HZ], []]
+def frequency_ticks(frequencies_hz=FREQUENCY_TICKS_HZ) -> list:
+    """``setTicks``' levels for an axis in log10(Hz): ``frequencies_hz`` labelled, no minor labels."""
+    return [[(float(np.log10(f)), f"{f:g}") for f in frequencies_hz], []]
 
 
 def log_rows(frequency_hz: np.ndarray, density: np.ndarray) -> tuple[np.ndarray, float, float]:
@@ -142,7 +143,7 @@ class VibrationView(QtWidgets.QWidget):
         self.spectrogram_plot = pg.PlotWidget(background="w")
         self.spectrogram_plot.setLabel("bottom", "time", "s")
         self.spectrogram_plot.setLabel("left", "frequency", "Hz")
-        self.spectrogram_plot.getAxis("left").setTicks(frequency_ticks())  # log10(Hz), as the spectrum's (issue 34)
+        self.spectrogram_plot.getAxis("left").setTicks(frequency_ticks(DECADES_HZ))  # log10(Hz), as the spectrum's (issue 34)
         self.spectrogram_plot.getAxis("left").enableAutoSIPrefix(False)
         self.image = pg.ImageItem(axisOrder="row-major")
         self.image.setColorMap(pg.colormap.get("viridis"))

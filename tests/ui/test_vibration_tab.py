@@ -41,7 +41,7 @@ def test_the_vibration_tab_finds_the_motor_peak(window, qtbot, shaken):
     assert len(curves) == 3
     np.testing.assert_allclose(curves[2].yData, 20.0 * np.log10(tab.summary.spectra["accel"].amplitude["z"][1:]))
     # the spectrogram on the spectrum's log-frequency axis (issue 34: it was linear): its rows at log10(Hz), the
-    # motor's row the brightest, the axis labelled at 1, 2 and 5 of each decade
+    # motor's row the brightest, the axis labelled at each decade
     sp = tab.summary.spectra["accel"]
     rows, columns = tab.image.image.shape
     assert columns == len(sp.spectrogram_t_s)
@@ -52,7 +52,7 @@ def test_the_vibration_tab_finds_the_motor_peak(window, qtbot, shaken):
     row_hz = 10.0 ** (rect.top() + (brightest + 0.5) * rect.height() / rows)
     assert row_hz == pytest.approx(peak.frequency_hz, abs=2 * (sp.frequency_hz[1] - sp.frequency_hz[0]))
     ticks = tab.spectrogram_plot.getAxis("left")._tickLevels[0]
-    assert [label for _, label in ticks][:9] == ["0.1", "0.2", "0.5", "1", "2", "5", "10", "20", "50"]
+    assert [label for _, label in ticks][:4] == ["0.1", "1", "10", "100"]
     assert "INS_HNTCH_FREQ=24" in tab.text.toPlainText()
 
 
