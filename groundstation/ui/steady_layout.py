@@ -44,9 +44,12 @@ class BannerOverlay(QtWidgets.QWidget):
         self._place()
 
     def eventFilter(self, watched, event) -> bool:  # noqa: N802 (Qt's name)
-        if event.type() in (QtCore.QEvent.ShowToParent, QtCore.QEvent.HideToParent, QtCore.QEvent.Resize,
-                            QtCore.QEvent.Move, QtCore.QEvent.LayoutRequest):
-            QtCore.QTimer.singleShot(0, self._place)  # after the banner's own text and size are set
+        kind = event.type()
+        if kind in (QtCore.QEvent.ShowToParent, QtCore.QEvent.HideToParent):
+            self._place()  # at once: whoever showed a banner finds it shown
+        if kind in (QtCore.QEvent.ShowToParent, QtCore.QEvent.HideToParent, QtCore.QEvent.Resize,
+                    QtCore.QEvent.Move, QtCore.QEvent.LayoutRequest):
+            QtCore.QTimer.singleShot(0, self._place)  # and again once its text has set its height
         return False
 
     def _place(self) -> None:
