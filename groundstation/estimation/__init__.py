@@ -20,6 +20,7 @@ import math
 from collections.abc import Iterator, MutableMapping
 from typing import TYPE_CHECKING
 
+from groundstation.palette import PALETTE, UNNAMED_COLOUR
 from groundstation.estimation.compiled_cache import use_user_cache_for_numba
 
 if TYPE_CHECKING:
@@ -37,7 +38,7 @@ class About:
     module: str  # groundstation.estimation.<module> defines the class
     class_name: str
     label: str  # what the legend, the panel and the charts call it
-    colour: str  # a colour's name in the app's palette (``ui.plots.PALETTE``): Qt stays out of here
+    colour: str  # a colour's name in the app's palette (``groundstation.palette.PALETTE``): Qt stays out of here
     needs: frozenset[str] = frozenset()  # aiding it is no more than a tilt filter without: "mag", "gps"
     live: bool = True  # run on every live session (so showing it is a click, not a restart)
     tunable: tuple[tuple[str, str, str], ...] = ()  # settings the app offers to tune live: (setting, symbol, unit)
@@ -108,6 +109,13 @@ class _Registry(MutableMapping):
         if isinstance(entry, str) or (facts is not None and entry.__name__ == facts.class_name):
             return facts
         return About(entry.__module__, entry.__name__, entry.label, entry.colour, entry.needs, entry.live, entry.tunable)
+
+
+def colour_of(name: str) -> str:
+    """An estimator's colour as the app's plots and the report draw it (``groundstation.palette``; grey if it
+    names none of the palette's)."""
+    facts = about(name)
+    return PALETTE.get(facts.colour, UNNAMED_COLOUR) if facts else UNNAMED_COLOUR
 
 
 # The one list of estimators: each name's class and facts (``About``). A new estimator is its module and

@@ -248,7 +248,7 @@ class Estimator:
     # How the estimator describes itself to the app, evaluate and exports (``ESTIMATORS`` lists the classes;
     # a built-in one's from ``estimation.BUILT_IN``, see ``__init_subclass__``):
     label: ClassVar[str]  # what the legend, the panel and the charts call it
-    colour: ClassVar[str]  # a colour's name in the app's palette (``ui.plots.PALETTE``): Qt stays out of here
+    colour: ClassVar[str]  # a colour's name in the app's palette (``groundstation.palette.PALETTE``): Qt stays out of here
     needs: ClassVar[frozenset[str]] = frozenset()  # aiding it is no more than a tilt filter without: "mag", "gps"
     live: ClassVar[bool] = True  # run on every live session (so showing it is a click, not a restart)
     tunable: ClassVar[tuple[tuple[str, str, str], ...]] = ()  # settings the app offers to tune live: (setting, symbol, unit)

@@ -5,7 +5,8 @@ The page opens offline and alone: its figures are inline SVG (``report_figures``
 the page, it has no script and no external address. Its sections: the flight (vehicle, firmware,
 duration, modes), the findings ranked by severity (``report_findings``), attitude (the host
 estimators against the truth or the onboard estimate: the evaluation's or the agreement's table, and
-a plot), vibration (``analysis.vibration``: spectrum, peaks, levels, clipping, the notch
+a plot, each estimator in its colour of the app's palette), an autopilot's controller, battery, GPS and outputs
+(``autopilot.sections``), vibration (``analysis.vibration``: spectrum, peaks, levels, clipping, the notch
 suggestion, and what that notch would do: ``analysis.whatif``'s spectra before and after, its Bode view
 and the attitude difference where the IMU carries it), the link, and the events with the autopilot's messages.
 
@@ -28,11 +29,14 @@ from groundstation.analysis.whatif import LAG_AT_HZ, what_if
 from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.messages import ALARM_SEVERITIES, MESSAGE_KIND, PARAMETER_KIND
 from groundstation.autopilot.modes import STATUS_KIND, event_time_s, mode_spans
+from groundstation.autopilot.sections import pages_of
 from groundstation.errors import UserError
+from groundstation.estimation import colour_of, label
 from groundstation.estimation.evaluation import truth_in_ned
 from groundstation.export.files import atomic_output
 from groundstation.export.report_figures import escaped, line_plot
 from groundstation.export.report_findings import Finding, differences_deg, findings
+from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR
 from groundstation.session.clock import DISCONTINUITIES
 from groundstation.session.product import ONBOARD, SessionData
 
@@ -80,7 +84,7 @@ def report_html(data: SessionData, file_name: str = "") -> str:
     parts = [f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{escaped(title)}</title>"
              f"<style>{STYLE}</style></head><body>", f"<h1>{escaped(title)}</h1>",
              f"<p class=\"detail\">made by groundstation {__version__} on {datetime.date.today().isoformat()}</p>",
-             flight_section(data, file_name), findings_section(found), attitude_section(data),
+             flight_section(data, file_name), findings_section(found), attitude_section(data), controller_section(data),
              vibration_section(vibration, vibration_note), what_if_section(data, vibration), link_section(data),
              events_section(data), "</body></html>"]
     return "\n".join(parts)
@@ -181,29 +185,50 @@ def attitude_section(data: SessionData) -> str:
                  f"{s['heading_rmse_deg']:.3f}" if "heading_rmse_deg" in s else "-"] for n, s in scores.items()]
         out.append("<p>Against the truth (inclination: the angle between the estimated and the true down).</p>")
         out.append(_table(["estimator", "incl RMSE (°)", "incl max (°)", "heading RMSE (°)"], rows))
-        reference, reference_name = truth_in_ned(data.true_q, data.true_frame), "truth"
+        reference, reference_name, reference_colour = truth_in_ned(data.true_q, data.true_frame), "truth", TRUTH_COLOUR
     elif data.has_onboard() and data.estimated:
         rows = [[n, f"{a['pitch_rms_deg']:.3f}", f"{a['pitch_max_deg']:.3f}", f"{a['roll_rms_deg']:.3f}", f"{a['roll_max_deg']:.3f}", a["rows"]]
                 for n, a in onboard_agreement(data).items()]
         out.append("<p>Agreement with the onboard estimate: a difference, not an error (the onboard estimate is not truth).</p>")
         out.append(_table(["estimator", "pitch RMS (°)", "pitch max (°)", "roll RMS (°)", "roll max (°)", "rows"], rows))
-        reference, reference_name = data.quaternion(ONBOARD), ONBOARD
+        reference, reference_name, reference_colour = data.quaternion(ONBOARD), ONBOARD, ONBOARD_COLOUR
     elif data.has_onboard():
         out.append("<p>No IMU samples: the onboard estimate only.</p>")
-        reference, reference_name = data.quaternion(ONBOARD), ONBOARD
+        reference, reference_name, reference_colour = data.quaternion(ONBOARD), ONBOARD, ONBOARD_COLOUR
     else:
         return "\n".join([*out, "<p>No reference to compare the estimators with (no truth, no onboard estimate).</p>"])
     t = data.time_s
     marks = _reboot_marks(data)
     for angle, index in (("pitch", 1), ("roll", 2)):
-        series = [(reference_name, t, quaternion.euler_deg(reference)[index])]
-        series += [(n, t, quaternion.euler_deg(data.quaternion(n))[index]) for n in data.estimated[:MAX_PLOTTED_ESTIMATORS]]
+        series = [(reference_name, t, quaternion.euler_deg(reference)[index], reference_colour, True)]
+        series += [(label(n), t, quaternion.euler_deg(data.quaternion(n))[index], colour_of(n))
+                   for n in data.estimated[:MAX_PLOTTED_ESTIMATORS]]
         out.append(line_plot(series, f"{angle}", "session time (s)", f"{angle} (°)", marks=marks))
     if data.estimated:
         diffs = differences_deg(data)
-        label = "inclination error (°)" if data.true_q is not None else "max(|Δpitch|, |Δroll|) (°)"
-        out.append(line_plot([(n, t, d) for n, d in list(diffs.items())[:MAX_PLOTTED_ESTIMATORS]],
-                             f"difference from {reference_name}", "session time (s)", label, marks=marks))
+        y_label = "inclination error (°)" if data.true_q is not None else "max(|Δpitch|, |Δroll|) (°)"
+        out.append(line_plot([(label(n), t, d, colour_of(n)) for n, d in list(diffs.items())[:MAX_PLOTTED_ESTIMATORS]],
+                             f"difference from {reference_name}", "session time (s)", y_label, marks=marks))
+    return "\n".join(out)
+
+
+def controller_section(data: SessionData) -> str:
+    """The autopilot's own figures a flyer reads in Mission Planner or Flight Review (``autopilot.sections``: the
+    pages the app's Flight tab shows): desired against actual attitude and rates, battery, GPS, outputs; nothing
+    for a session without them (the project's own aircraft)."""
+    pages = pages_of(data.catalogue)
+    if not pages:
+        return ""
+    out = ["<h2>Controller, battery, GPS and outputs</h2>",
+           "<p>As the autopilot logged them: what its controller asked for against what it had, its battery, its GPS "
+           "fix and its actuator outputs.</p>"]
+    for page in pages:
+        out.append(f"<h3>{escaped(page.title)}</h3>")
+        for figure in page.figures:
+            unit = f" ({figure.unit})" if figure.unit else ""
+            out.append(line_plot([(t.label, data.tables[t.table]["time_s"], data.tables[t.table][t.column], t.colour)
+                                  for t in figure.traces], f"{page.title}: {figure.title}", "session time (s)",
+                                 f"{figure.title}{unit}", marks=_reboot_marks(data)))
     return "\n".join(out)
 
 

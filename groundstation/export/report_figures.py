@@ -14,9 +14,14 @@ import numpy as np
 
 from groundstation.text import clean
 
-WIDTH, HEIGHT = 760, 240
+WIDTH, HEIGHT = 760, 240  # the figure without its legend, which is laid out in rows below it
 MARGIN = {"left": 58, "right": 12, "top": 26, "bottom": 34}
-COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
+COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")  # series naming none
+FONT_PX = 11
+# A legend entry's text is given this many pixels per character: more than DejaVu Sans' widest capitals at 11 px
+# (a browser's sans-serif), so entries never run into each other; the swatch and the space after each entry.
+CHAR_PX = 0.72 * FONT_PX
+SWATCH_PX, ENTRY_GAP_PX, LEGEND_ROW_PX = 14, 18, 15
 
 
 def escaped(text) -> str:
@@ -64,30 +69,47 @@ def reduced(x: np.ndarray, y: np.ndarray, columns: int) -> tuple[np.ndarray, np.
     return x[index], y[index]
 
 
-def line_plot(series: list[tuple[str, np.ndarray, np.ndarray]], title: str, x_label: str, y_label: str,
+def legend_rows(labels: list[str], width: float) -> list[list[tuple[int, float]]]:
+    """Legend entries (index, x from the row's start) in rows no wider than ``width``, in order."""
+    rows, x = [[]], 0.0
+    for i, label in enumerate(labels):
+        size = SWATCH_PX + len(label) * CHAR_PX
+        if rows[-1] and x + size > width:
+            rows.append([])
+            x = 0.0
+        rows[-1].append((i, x))
+        x += size + ENTRY_GAP_PX
+    return rows if rows[0] else []
+
+
+def line_plot(series: list[tuple], title: str, x_label: str, y_label: str,
               log_y: bool = False, marks: list[tuple[float, str]] = ()) -> str:
-    """An SVG line plot of ``series`` (label, x, y), a legend, and vertical ``marks`` (x, label) such
-    as reboots; a plot with no finite point says so instead of drawing empty axes."""
+    """An SVG line plot of ``series`` (label, x, y[, colour[, dashed]]: a series without a colour takes the next of
+    ``COLOURS``; an estimator's is the app's, ``groundstation.palette``), a legend below it in rows that fit, and
+    vertical ``marks`` (x, label) such as reboots; a plot with no finite point says so instead of drawing empty axes."""
     plot_w = WIDTH - MARGIN["left"] - MARGIN["right"]
     plot_h = HEIGHT - MARGIN["top"] - MARGIN["bottom"]
     drawn = []
-    for label, x, y in series:
+    for i, (label, x, y, *style) in enumerate(series):
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
         if log_y:
             y = np.where(y > 0, y, np.nan)
         x, y = reduced(x, y, plot_w)
+        colour = style[0] if style and style[0] else COLOURS[i % len(COLOURS)]
         if len(x):
-            drawn.append((label, x, np.log10(y) if log_y else y))
-    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{HEIGHT}" viewBox="0 0 {WIDTH} {HEIGHT}" '
-           f'role="img" aria-label="{escaped(title)}" font-family="sans-serif" font-size="11">',
+            drawn.append((label, x, np.log10(y) if log_y else y, colour, len(style) > 1 and style[1]))
+    rows = legend_rows([d[0] for d in drawn], WIDTH - MARGIN["left"] - MARGIN["right"])
+    height = HEIGHT + len(rows) * LEGEND_ROW_PX + (6 if rows else 0)
+    out = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{WIDTH}" height="{height}" viewBox="0 0 {WIDTH} {height}" '
+           f'role="img" aria-label="{escaped(title)}" font-family="sans-serif" font-size="{FONT_PX}">',
            f'<text x="{WIDTH / 2}" y="15" text-anchor="middle" font-size="13" font-weight="bold">{escaped(title)}</text>']
     if not drawn:
         out.append(f'<text x="{WIDTH / 2}" y="{HEIGHT / 2}" text-anchor="middle" fill="#777">nothing to plot</text></svg>')
         return "\n".join(out)
-    x_lo = min(float(x.min()) for _, x, _ in drawn)
-    x_hi = max(float(x.max()) for _, x, _ in drawn)
-    y_lo = min(float(y.min()) for _, _, y in drawn)
-    y_hi = max(float(y.max()) for _, _, y in drawn)
+    x_lo = min(float(x.min()) for _, x, _, _, _ in drawn)
+    x_hi = max(float(x.max()) for _, x, _, _, _ in drawn)
+    y_lo = min(float(y.min()) for _, _, y, _, _ in drawn)
+    y_hi = max(float(y.max()) for _, _, y, _, _ in drawn)
     if x_hi <= x_lo:
         x_hi = x_lo + 1.0
     if y_hi <= y_lo:
@@ -102,7 +124,7 @@ def line_plot(series: list[tuple[str, np.ndarray, np.ndarray]], title: str, x_la
         return MARGIN["top"] + (y_hi - np.asarray(y)) / (y_hi - y_lo) * plot_h
 
     left, top, bottom = MARGIN["left"], MARGIN["top"], MARGIN["top"] + plot_h
-    out.append(f'<rect x="{left}" y="{top}" width="{plot_w}" height="{plot_h}" fill="#fff" stroke="#999"/>')
+    out.append(f'<rect class="area" x="{left}" y="{top}" width="{plot_w}" height="{plot_h}" fill="#fff" stroke="#999"/>')
     for tick in nice_ticks(x_lo, x_hi):
         out.append(f'<line x1="{px(tick):.1f}" x2="{px(tick):.1f}" y1="{top}" y2="{bottom}" stroke="#eee"/>'
                    f'<text x="{px(tick):.1f}" y="{bottom + 14}" text-anchor="middle">{tick:g}</text>')
@@ -115,15 +137,19 @@ def line_plot(series: list[tuple[str, np.ndarray, np.ndarray]], title: str, x_la
         if x_lo <= x <= x_hi:
             out.append(f'<line x1="{px(x):.1f}" x2="{px(x):.1f}" y1="{top}" y2="{bottom}" stroke="#000" stroke-dasharray="4 3"/>'
                        f'<text x="{px(x) + 3:.1f}" y="{top + 11}">{escaped(label)}</text>')
-    for i, (label, x, y) in enumerate(drawn):
+    for label, x, y, colour, dashed in sorted(drawn, key=lambda d: not d[4]):  # the dashed references beneath
         points = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(px(x), py(y)))
-        colour = COLOURS[i % len(COLOURS)]
-        out.append(f'<polyline fill="none" stroke="{colour}" stroke-width="1.2" points="{points}"/>')
-        lx = left + 8 + (i % 4) * 150
-        ly = top + 12 + (i // 4) * 13
-        out.append(f'<rect x="{lx}" y="{ly - 8}" width="10" height="3" fill="{colour}"/>'
-                   f'<text x="{lx + 14}" y="{ly - 4}">{escaped(label)}</text>')
-    out.append(f'<text x="{left + plot_w / 2}" y="{HEIGHT - 4}" text-anchor="middle">{escaped(x_label)}</text>')
+        dash = ' stroke-dasharray="5 3"' if dashed else ""
+        out.append(f'<polyline data-series="{escaped(label)}" fill="none" stroke="{colour}" stroke-width="1.2"{dash} points="{points}"/>')
+    for r, row in enumerate(rows):
+        ly = HEIGHT + 4 + r * LEGEND_ROW_PX + FONT_PX
+        for i, lx in row:
+            label, _, _, colour, dashed = drawn[i]
+            dash = ' stroke-dasharray="3 2"' if dashed else ""
+            out.append(f'<g class="legend-entry"><line x1="{left + lx:.1f}" x2="{left + lx + 10:.1f}" y1="{ly - 4}" y2="{ly - 4}" '
+                       f'stroke="{colour}" stroke-width="3"{dash}/>'
+                       f'<text x="{left + lx + SWATCH_PX:.1f}" y="{ly}">{escaped(label)}</text></g>')
+    out.append(f'<text x="{left + plot_w / 2}" y="{HEIGHT - 4}" text-anchor="middle">{escaped(x_label)}</text>')  # under the ticks
     out.append(f'<text x="12" y="{top + plot_h / 2}" text-anchor="middle" transform="rotate(-90 12 {top + plot_h / 2})">'
                f'{escaped(y_label)}</text>')
     out.append("</svg>")

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation import formats, mounting, quaternion
+from groundstation.autopilot.sections import attach_sections
 from groundstation.autopilot.session import FAST_IMU_FORMATS, attach_simstate_truth
 from groundstation.formats import IMU_STREAMS
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
@@ -41,6 +42,12 @@ def load_session(path, filters=None, forced=None, progress=None, accept_config_c
     ``stream_estimates``: a recording's estimators are not run whole but a stretch at a time for whoever reads
     ``SessionData.attitudes(rows)`` forward (an export: its memory then does not grow with the session's
     length); other files are computed whole in any case."""
+    data = _loaded(path, filters, forced, progress, accept_config_changes, imu, stream_estimates)
+    attach_sections(data)  # an autopilot's: what its controller asked for and had, battery, GPS, outputs
+    return data
+
+
+def _loaded(path, filters, forced, progress, accept_config_changes: bool, imu: str, stream_estimates: bool) -> SessionData:
     file_format = formats.sniff(path) or formats.FORMATS["recording"]
     filters = estimators_for(path) if filters is None else filters
     if imu != IMU_STREAMS[0]:

@@ -26,7 +26,8 @@ from PySide6 import QtCore, QtWidgets
 from groundstation.analysis.expression import Expression, ExpressionError, at_or_before
 from groundstation.session.view import ProductView, Session
 from groundstation.ui.custom_series import BUDGET_S, CUSTOM, ExpressionDerive, expression_sources, try_on_latest_rows
-from groundstation.ui.plots import LEFT_AXIS_PX, PALETTE, Curve, Plot, StackedPlots
+from groundstation.palette import PALETTE
+from groundstation.ui.plots import LEFT_AXIS_PX, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
 from groundstation.ui.session_series import Other, SessionSeries
 

@@ -58,6 +58,10 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.message.setFixedHeight(MESSAGE_LINES * self.message.fontMetrics().lineSpacing())
         self.message.setAlignment(QtCore.Qt.AlignTop | QtCore.Qt.AlignLeft)
         self._layout = QtWidgets.QFormLayout(self)
+        self._buttons = QtWidgets.QHBoxLayout()
+        # The buttons first: in sight as soon as the tab is (at 1280x800, below the fields they were under the fold).
+        self._layout.addRow(self._buttons)
+        self._layout.addRow(self.message)
         self._shown_row = QtWidgets.QGridLayout()
         self._layout.addRow("show", self._shown_row)
         # estimator -> (setting, symbol, unit), as the estimators offer them (``Estimator.tunable``)
@@ -73,11 +77,8 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         defaults_button.clicked.connect(self.restore_defaults)
         self.send_button = QtWidgets.QPushButton("Send AHF λ to aircraft")
         self.send_button.clicked.connect(lambda: self.sendToAircraft.emit(self.values("ahf")))
-        buttons = QtWidgets.QHBoxLayout()
         for button in (apply_button, defaults_button, self.send_button):
-            buttons.addWidget(button)
-        self._layout.addRow(buttons)
-        self._layout.addRow(self.message)
+            self._buttons.addWidget(button)
         self.setEnabled(False)
 
     def set_session(self, session: Session | None, visible_labels: set[str]) -> None:

@@ -17,31 +17,33 @@ from groundstation import estimation
 from groundstation.session.view import Session
 from groundstation.ui.navigation import aiding_series
 from groundstation.ui.channels import ChannelsView
+from groundstation.ui.flight_sections_view import SERIES as SECTION_SERIES, FlightSectionsView, section_series
 from groundstation.ui.mode_bands import ModeBands
-from groundstation.ui.plots import PALETTE, Curve, Plot, StackedPlots
+from groundstation.estimation import colour_of as colour
+from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR
+from groundstation.ui.plots import Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
 from groundstation.ui.series import Series, clock_series, imu_quantities, onboard_quantities, truth_quantities
 from groundstation.ui.session_series import Other, other_series
 from groundstation.ui.vibration_view import VibrationView
+from groundstation.ui.whole_flight import WHOLE_WINDOW, is_flight_log, replayed_path
 
 WINDOWS_S = {"10 s": 10.0, "30 s": 30.0, "60 s": 60.0, "10 min": 600.0, "whole session": None}
 DEFAULT_WINDOW = "30 s"
 # The eleven curves the app shows together (the live estimators and the onboard one) each get their own
 # colour of the palette, the one the estimator names (``Estimator.colour``); the estimators only a replay
 # of an older recording has (CF1, KF, EKF) share one. The aircraft's own estimate is wine.
-ONBOARD_COLOUR = PALETTE["wine"]
-TRUTH_COLOUR = "#000000"  # dashed black, as the figures draw truth
 AXIS_COLORS = ("#c0392b", "#2a9d3a", "#1f5fbf")
 # The sensors' headings in colours no estimator takes (the palette's are theirs; black is AHF2's).
 HEADING_COLORS = {"compass": "#8c8c8c", "GPS": "#b8860b"}
 SENSOR_AIDING = frozenset({"mag", "baro"})  # aiding sensors plotted on the Sensors tab once they have rows
 # The tabs that appear once a series of theirs has rows.
-AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position")}
+AIDING_TABS = {"heading": ("mag", "gps"), "position": ("gps", "baro", "position"), "flight": SECTION_SERIES}
 # The tabs after Attitude, in order. Those not in sight at the start are built when first asked for (a
 # session, a click on their title): their plots are two thirds of building the window, which its first
 # paint need not wait for (bench/bench_first_frame.py).
 LATER_TABS = {"sensors": "Sensors", "diagnostics": "AHF diagnostics", "heading": "Heading", "position": "Position",
-              "channels": "Channels", "vibration": "Vibration"}
+              "flight": "Flight", "channels": "Channels", "vibration": "Vibration"}
 
 
 def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None, truth: bool = False) -> tuple[Curve, ...]:
@@ -51,12 +53,6 @@ def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | Non
     onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", ONBOARD_COLOUR, wraps_at, reference=True)
     true = (Curve("truth", f"truth_{angle}_deg", "truth", TRUTH_COLOUR, wraps_at, reference=True),) if truth else ()
     return host[:1] + (onboard,) + host[1:] + true
-
-
-def colour(name: str) -> str:
-    """An estimator's colour (grey if it names none of the palette's)."""
-    facts = estimation.about(name)
-    return PALETTE.get(facts.colour, "#444444") if facts else "#444444"
 
 
 def attitude_plots(filters: tuple[str, ...], truth: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
@@ -120,6 +116,7 @@ class LiveView(QtWidgets.QWidget):
         self.window_box.addItems(list(WINDOWS_S))
         self.window_box.setCurrentText(DEFAULT_WINDOW)
         self.window_box.currentTextChanged.connect(lambda _: self.redraw())
+        self._window_before_log: str | None = None  # the window chosen before a flight log showed itself whole
         self.pause_button = QtWidgets.QPushButton("Pause view")
         self.pause_button.setCheckable(True)
         self.pause_button.setToolTip("Freeze the plots to zoom and pan; acquisition and recording go on")
@@ -167,7 +164,7 @@ class LiveView(QtWidgets.QWidget):
         built = {"sensors": lambda: StackedPlots(sensor_plots(self._sensor_aiding)),
                  "diagnostics": lambda: StackedPlots(diagnostic_plots()),
                  "heading": lambda: StackedPlots(heading_plots(*self._curves_of), self.hidden_labels()),
-                 "position": PositionView, "vibration": VibrationView}
+                 "position": PositionView, "vibration": VibrationView, "flight": FlightSectionsView}
         current = self.tabs.currentIndex()
         self.tabs.blockSignals(True)  # the current tab stays what it was; no half-built view is asked for
         for name, blank in later.items():
@@ -192,6 +189,21 @@ class LiveView(QtWidgets.QWidget):
         old.deleteLater()
         return self._add_tab(new, title, index)
 
+    def _show_whole(self, flight_log: bool) -> None:
+        """A flight log in the whole-session window (``whole_flight``); the window chosen before comes back
+        with the next other session."""
+        if flight_log and self._window_before_log is None:
+            self._window_before_log = self.window_box.currentText()
+            self.window_box.setCurrentText(WHOLE_WINDOW)
+        elif not flight_log and self._window_before_log is not None:
+            self.window_box.setCurrentText(self._window_before_log)
+            self._window_before_log = None
+
+    @property
+    def chosen_window(self) -> str:
+        """The time window the user chose (remembered for the next start), not the one a flight log imposed."""
+        return self._window_before_log or self.window_box.currentText()
+
     @property
     def window_s(self) -> float | None:
         return WINDOWS_S[self.window_box.currentText()]
@@ -205,6 +217,7 @@ class LiveView(QtWidgets.QWidget):
         estimators decide the attitude curves."""
         self.session = session
         self._view = None
+        self._show_whole(is_flight_log(replayed_path(session)))
         self.pause_button.setChecked(False)
         self._browsing = None
         self.series = {}
@@ -217,8 +230,9 @@ class LiveView(QtWidgets.QWidget):
             self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*shown), self._hidden))
             self.tabs.setCurrentIndex(current)
             self._curves_of = shown
-        for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position):
+        for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position, self.flight):
             plots.clear_data()
+        self.flight.set_session(session)
         self.position.protocol = session.view.protocol if session is not None else None
         self.channels.set_session(session)
         self.vibration.set_session(session)
@@ -294,7 +308,7 @@ class LiveView(QtWidgets.QWidget):
         """Pause, draw every sample once (the live draw holds only the window's), set the time range."""
         plots = self.current_plots()
         clock = clock_series(self.series)
-        if not isinstance(plots, (StackedPlots, ChannelsView)) or clock is None:
+        if not isinstance(plots, (StackedPlots, ChannelsView, FlightSectionsView)) or clock is None or not plots.items:
             return
         low, high = plots.items[0].getViewBox().viewRange()[0]
         self.pause_button.setChecked(True)
@@ -312,7 +326,7 @@ class LiveView(QtWidgets.QWidget):
             self._view = view
             self.series = {"imu": Series(view.imu, imu_quantities(view.filters)),
                            "onboard": Series(view.onboard, onboard_quantities), **aiding_series(view.tables),
-                           **other_series(self.others)}
+                           **section_series(view.tables), **other_series(self.others)}
             if view.tables.get("truth") is not None:  # a simulator's log: its truth, dashed
                 self.series["truth"] = Series(view.tables["truth"], truth_quantities)
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}

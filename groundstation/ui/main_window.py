@@ -40,6 +40,9 @@ from groundstation.ui.replay_bar import ReplayBar
 from groundstation.ui.session_list import SessionList
 from groundstation.ui.uplink_panel import UplinkPanel
 from groundstation.ui.vehicle_badge import VehicleBadge
+from groundstation.ui.whole_flight import opening_playback
+from groundstation.ui.elided_label import ElidedLabel
+from groundstation.ui.steady_layout import BannerOverlay, ReservedStrip
 
 REDRAW_HZ = 30
 # Every how many ticks the side panels redraw: the horizon at 15 Hz, the 3D view (its paint costs
@@ -151,15 +154,12 @@ class MainWindow(QtWidgets.QMainWindow):
         layout = QtWidgets.QVBoxLayout(central)
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
-        layout.addWidget(self.banner)
-        layout.addWidget(self.recording_banner)
-        layout.addWidget(self.config_banner)
-        layout.addWidget(self.loading_row)
-        layout.addWidget(self.replay_bar)
+        layout.addWidget(ReservedStrip(self.replay_bar, self.loading_row))  # the plots never move (ui/steady_layout.py)
         layout.addWidget(self.splitter, 1)
+        BannerOverlay(self.splitter, (self.banner, self.recording_banner, self.config_banner))
         self.setCentralWidget(central)
-        self.source_label = QtWidgets.QLabel("no source")
-        self.recording_label = QtWidgets.QLabel("not recording")
+        self.source_label = ElidedLabel("no source")  # a long path cut in the middle, whole in the tooltip
+        self.recording_label = ElidedLabel("not recording")
         self.statusBar().addWidget(self.source_label, 1)
         self.vehicle_badge = VehicleBadge()  # an autopilot's mode and arming, always in sight
         self.statusBar().addPermanentWidget(self.vehicle_badge)
@@ -252,7 +252,7 @@ class MainWindow(QtWidgets.QMainWindow):
             playback = {"paused": shown.source.paused, "position_s": shown.source.position_s}
             self._stop_session()
         else:
-            playback = {}
+            playback = opening_playback(loading.path)  # a flight log whole, at its end (``whole_flight``)
         self._adopt(RevealSession(loading.data, loading.path, loading.setup, speed=self.replay_bar.speed, **playback))
         self.source_label.setText(self.session.source.description)
         if shown is None:
@@ -620,6 +620,6 @@ class MainWindow(QtWidgets.QMainWindow):
         self.settings.setValue("geometry", self.saveGeometry())
         self.settings.setValue("splitter", self.splitter.saveState())
         self.settings.setValue("channel_panes", self.live_view.channels.layout_json())
-        self.settings.setValue("time_window", self.live_view.window_box.currentText())
+        self.settings.setValue("time_window", self.live_view.chosen_window)
         self.settings.sync()
         super().closeEvent(event)

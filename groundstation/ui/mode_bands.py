@@ -3,6 +3,10 @@ on the top plot (paler while disarmed), and the mode and arming now as a line fo
 
 The spans come from ``autopilot.modes.mode_spans`` over the view's events (the same function the flight
 report uses); a session that never reports a mode (the project's own aircraft, a dataset) draws none.
+
+A label is laid out again whenever the time axis moves (``_fit_labels``): it shows whole where its span has room
+for it on screen, else the mode's name alone, else nothing (the band's tooltip names it), so short modes' labels
+never run into each other (issue 34); zoomed in, they come back.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from groundstation.autopilot.modes import ModeSpan, mode_spans
 # across sessions (by a checksum of its name: Python's ``hash`` of a str changes from run to run).
 FILLS = ((68, 119, 170), (34, 136, 51), (204, 187, 68), (238, 102, 119), (170, 51, 119), (102, 204, 238), (187, 187, 187))
 ARMED_ALPHA, DISARMED_ALPHA = 46, 18
+LABEL_PAD_PX = 6  # between a label and the next span's start
 
 
 def fill(span: ModeSpan) -> pg.QtGui.QBrush:
@@ -34,6 +39,8 @@ class ModeBands:
 
     def __init__(self):
         self._drawn: dict[int, tuple[object, list[ModeSpan], list[list[pg.LinearRegionItem]]]] = {}
+        self._labels: dict[int, list[pg.InfLineLabel]] = {}  # each plot widget's, a span's each (``_fit_labels``)
+        self._watched: set[int] = set()  # the plot widgets whose time axis calls ``_fit_labels``
         self._events_seen = -1
         self.spans: list[ModeSpan] = []
 
@@ -62,18 +69,42 @@ class ModeBands:
             for bands in regions:
                 for item, region in zip(plots.items, bands):
                     item.removeItem(region)
-            regions = [self._bands(plots, span) for span in self.spans]
+            made = [self._bands(plots, span) for span in self.spans]
+            regions = [bands for bands, _ in made]
+            self._labels[id(plots)] = [text for _, text in made]
+            if id(plots) not in self._watched:
+                self._watched.add(id(plots))
+                plots.items[0].getViewBox().sigXRangeChanged.connect(lambda *_, p=plots: self._fit_labels(p))
         self._drawn[id(plots)] = (plots, list(self.spans), regions)
+        self._fit_labels(plots)
+
+    def _fit_labels(self, plots) -> None:
+        """Each label whole, shortened to its mode, or hidden: what its span's room on screen allows."""
+        labels = self._labels.get(id(plots), [])
+        if not labels:
+            return
+        spans = self._drawn[id(plots)][1]  # as drawn: the last one stretched since its label was made
+        view = plots.items[0].getViewBox()
+        (low, high), width_px = view.viewRange()[0], view.width()
+        if width_px <= 0 or high <= low:
+            return
+        px_per_s = width_px / (high - low)
+        metrics = pg.QtGui.QFontMetricsF(labels[0].textItem.font())
+        for span, text in zip(spans, labels):
+            room = (min(span.end_s, high) - max(span.start_s, low)) * px_per_s - LABEL_PAD_PX
+            fits = [t for t in (label(span), span.mode) if metrics.horizontalAdvance(t) + 2 * LABEL_PAD_PX <= room]
+            text.setFormat(fits[0] if fits else "")  # its format: what the label says again when its line moves
+            text.setVisible(bool(fits))
 
     @staticmethod
-    def _bands(plots, span: ModeSpan) -> list[pg.LinearRegionItem]:
-        out = []
+    def _bands(plots, span: ModeSpan) -> tuple[list[pg.LinearRegionItem], pg.InfLineLabel]:
+        out, text = [], None
         for row, item in enumerate(plots.items):
             region = pg.LinearRegionItem((span.start_s, span.end_s), movable=False, brush=fill(span), pen=pg.mkPen(None))
             region.setZValue(-20)  # beneath the curves and the gaps' shading
             region.setToolTip(label(span))
             if row == 0:
-                pg.InfLineLabel(region.lines[0], text=label(span), position=0.98, anchors=[(0, 0), (0, 0)], color="#333")
+                text = pg.InfLineLabel(region.lines[0], text=label(span), position=0.98, anchors=[(0, 0), (0, 0)], color="#333")
             item.addItem(region, ignoreBounds=True)
             out.append(region)
-        return out
+        return out, text

@@ -29,12 +29,6 @@ from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation.ui.series import Series, clock_series, shared_gaps
 
-# Paul Tol's "muted" palette (nine colours told apart by colour-blind readers and on white), with black
-# and the orange of his "vibrant" palette, which differs from all nine: eleven curves. By Tol's names,
-# which the estimators use for their colour (``Estimator.colour``).
-PALETTE = {"indigo": "#332288", "wine": "#882255", "green": "#117733", "teal": "#44AA99", "rose": "#CC6677",
-           "olive": "#999933", "cyan": "#88CCEE", "sand": "#DDCC77", "purple": "#AA4499", "black": "#000000",
-           "orange": "#EE7733"}
 PEN_STYLES = {"solid": QtCore.Qt.SolidLine, "dash": QtCore.Qt.DashLine, "dot": QtCore.Qt.DotLine,
               "dashdot": QtCore.Qt.DashDotLine, "dashdotdot": QtCore.Qt.DashDotDotLine}
 LEFT_AXIS_PX = 60

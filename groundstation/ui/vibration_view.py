@@ -5,7 +5,8 @@ sought there).
 An amplitude spectrum of the chosen sensor (three axes in dB on a log-frequency axis, as PX4 Flight Review
 and ArduPilot's WebTools show them; every peak marked, the strongest few labelled where their labels do
 not collide on screen), its
-spectrogram (the three axes' density summed) as an image (time across, frequency up, log colour), a
+spectrogram (the three axes' density summed) as an image (time across, frequency up on the same log axis, log
+colour), a
 time range (all the data, or from / to seconds of session time) and the text of the summary: peaks,
 levels, clipping, motors and the notch suggestion in the autopilot's parameters. It computes when the
 tab is first shown for a session and on "Compute"; a range without enough samples is said in the tab's
@@ -40,8 +41,26 @@ SPECTRUM_RANGE_DB = 120.0  # a bin of zero amplitude (-inf dB) is drawn this far
 # The log-frequency axis labelled at 1, 2 and 5 of each decade, as Flight Review's and WebTools' read
 # (pyqtgraph's own log ticks label every minor step and their texts run together above 40 Hz)
 FREQUENCY_TICKS_HZ = [m * 10.0**k for k in range(-1, 5) for m in (1, 2, 5)]
+DECADES_HZ = [f for f in FREQUENCY_TICKS_HZ if f == 10.0 ** round(np.log10(f))]  # the spectrogram's short axis: 1, 2, 5 crowd it
+LOG_ROWS = 256  # the spectrogram's rows on its log-frequency axis
 MOST_PEAK_LABELS = 5  # more labels than this crowd the plot; the text below lists every peak
 LABEL_GAP_PX = 4.0  # the least room between two labels' boxes on screen
+
+
+def frequency_ticks(frequencies_hz=FREQUENCY_TICKS_HZ) -> list:
+    """``setTicks``' levels for an axis in log10(Hz): ``frequencies_hz`` labelled, no minor labels."""
+    return [[(float(np.log10(f)), f"{f:g}") for f in frequencies_hz], []]
+
+
+def log_rows(frequency_hz: np.ndarray, density: np.ndarray) -> tuple[np.ndarray, float, float]:
+    """A spectrogram's (T, F) density on ``LOG_ROWS`` rows evenly spaced in log10(Hz) from the first bin above
+    zero to the last, each row the bin its centre falls in (nothing interpolated: a low bin spans several rows);
+    and log10 of the rows' lowest and highest frequency."""
+    step_hz = float(frequency_hz[1] - frequency_hz[0])  # Welch's bins: 0, df, 2 df, ...
+    low, high = float(np.log10(frequency_hz[1])), float(np.log10(frequency_hz[-1]))
+    centres_hz = 10.0 ** (low + (np.arange(LOG_ROWS) + 0.5) * (high - low) / LOG_ROWS)
+    bins = np.clip(np.rint(centres_hz / step_hz).astype(int), 1, len(frequency_hz) - 1)
+    return density[:, bins].T, low, high
 
 
 def amplitude_db(amplitude: np.ndarray, reference: float) -> np.ndarray:
@@ -114,7 +133,8 @@ class VibrationView(QtWidgets.QWidget):
         self.spectrum_plot = pg.PlotWidget(background="w")
         self.spectrum_plot.setLabel("bottom", "frequency", "Hz")
         self.spectrum_plot.setLogMode(x=True)  # curves are given in Hz; markers and labels sit at log10(Hz)
-        self.spectrum_plot.getAxis("bottom").setTicks([[(np.log10(f), f"{f:g}") for f in FREQUENCY_TICKS_HZ], []])
+        self.spectrum_plot.getAxis("bottom").setTicks(frequency_ticks())
+        self.spectrum_plot.getAxis("bottom").enableAutoSIPrefix(False)  # ticks in Hz: it called them kHz (log10 > 1)
         self.spectrum_plot.addLegend(offset=(-10, 10))
         self.peak_marks = pg.ScatterPlotItem(size=10, symbol="t", brush=PEAK_BRUSH, pen=None)
         self.peak_texts: list[pg.TextItem] = []  # the strongest peaks' labels, strongest first; those that collide hidden
@@ -123,6 +143,8 @@ class VibrationView(QtWidgets.QWidget):
         self.spectrogram_plot = pg.PlotWidget(background="w")
         self.spectrogram_plot.setLabel("bottom", "time", "s")
         self.spectrogram_plot.setLabel("left", "frequency", "Hz")
+        self.spectrogram_plot.getAxis("left").setTicks(frequency_ticks(DECADES_HZ))  # log10(Hz), as the spectrum's (issue 34)
+        self.spectrogram_plot.getAxis("left").enableAutoSIPrefix(False)
         self.image = pg.ImageItem(axisOrder="row-major")
         self.image.setColorMap(pg.colormap.get("viridis"))
         self.spectrogram_plot.addItem(self.image)
@@ -243,9 +265,10 @@ class VibrationView(QtWidgets.QWidget):
         self._place_labels()
         t, image = sp.spectrogram_t_s, sp.spectrogram_psd
         floor = np.finfo(float).tiny
-        self.image.setImage(np.log10(np.maximum(image.T, floor)), autoLevels=True)
+        rows, low, high = log_rows(sp.frequency_hz, image)
+        self.image.setImage(np.log10(np.maximum(rows, floor)), autoLevels=True)
         step_s = (t[1] - t[0]) if len(t) > 1 else sp.nperseg / sp.rate_hz
-        self.image.setRect(QtCore.QRectF(t[0] - step_s / 2, 0.0, step_s * len(t), float(sp.frequency_hz[-1])))
+        self.image.setRect(QtCore.QRectF(t[0] - step_s / 2, low, step_s * len(t), high - low))
         self.spectrogram_plot.setTitle(f"{sensor} spectrogram, '{sp.table}' (log density)")
         self.text.setPlainText("\n".join(self.summary.lines() + (self.change.lines() if self.change else [])))
         if self.change is not None:

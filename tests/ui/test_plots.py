@@ -10,7 +10,9 @@ from PySide6 import QtCore, QtGui
 
 from groundstation.session.table import Table
 from groundstation.estimation import ESTIMATORS, live_estimators
-from groundstation.ui.live_view import ONBOARD_COLOUR, PALETTE, attitude_plots, colour, diagnostic_plots
+from groundstation.estimation import colour_of as colour
+from groundstation.palette import ONBOARD_COLOUR, PALETTE
+from groundstation.ui.live_view import attitude_plots, diagnostic_plots
 from groundstation.ui.plots import StackedPlots
 from groundstation.ui.series import Series
 from tests.waiting import LIMIT_MS

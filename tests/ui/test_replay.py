@@ -125,11 +125,15 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     data = session.data
     assert len(data) > 100 and (data.link is not None) == name.endswith(".tlog")  # a tlog is a link's packets, as recorded
     assert not window.uplink_panel.isEnabled() and not window.estimator_panel.send_button.isEnabled()  # no uplink
-    assert window.link_panel.headline.text().startswith("LINK OK" if data.link else "NO LINK")  # a tlog's as its recording's
-    window.live_view.window_box.setCurrentText("whole session")
+    # a tlog's as its recording's: opened whole, at its end, its link has stopped
+    assert window.link_panel.headline.text().startswith("STOPPED" if data.link else "NO LINK")
+    # the whole flight at once (issue 34): paused at its end, in the whole-session window
+    assert session.source.paused and not session.running and window.live_view.window_box.currentText() == "whole session"
+    check_plotted_up_to(window, qtbot, data, AIDING_ESTIMATOR, float(data.time_s[-1]))
 
     bar.speed_box.setCurrentIndex(bar.speed_box.findData(8.0))
-    qtbot.waitUntil(lambda: points(pitch_curve(window, AIDING_ESTIMATOR)) > 3, timeout=LIMIT_MS)  # playing
+    bar.play_button.click()  # "Replay": from the start
+    qtbot.waitUntil(lambda: not session.source.paused and 0.0 < session.source.position_s, timeout=LIMIT_MS)  # playing
     bar.play_button.click()
     assert session.source.paused
     middle = float(data.time_s[len(data) // 2])
@@ -167,8 +171,7 @@ def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
     session = window.session
     assert session.view.filters == () and session.data.has_onboard()
     assert any("IMU" in e["message"] for e in session.view.events if e["kind"] == "warning")  # said, at 0 s
-    window.live_view.window_box.setCurrentText("whole session")
-    window.replay_bar.play_button.click()
+    assert window.session.source.paused  # opened whole (issue 34)
     window.seek(30.0)
     check_plotted_up_to(window, qtbot, session.data, "onboard", 30.0)
     qtbot.waitUntil(lambda: window.attitude_panel.readouts["pitch"].text() != "—", timeout=LIMIT_MS)
@@ -239,8 +242,7 @@ def test_a_tlogs_messages_are_channels_revealed_with_the_clock(window, qtbot):
     assert channel in {f"{t.name}.{c.name}" for t, c in data.catalogue.channels()}
     view.tabs.setCurrentWidget(view.channels)
     view.channels.add(channel)
-    window.live_view.window_box.setCurrentText("whole session")
-    window.replay_bar.play_button.click()
+    assert window.session.source.paused  # opened whole (issue 34)
     window.seek(120.0)
     curve = next(c for s, c in view.channels.stacked.curves if s.label == channel)
     table = data.tables["vfr_hud"]

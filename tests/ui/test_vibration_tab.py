@@ -48,7 +48,19 @@ def test_the_vibration_tab_finds_the_motor_peak(window, qtbot, shaken):
     curves = [c for c in tab.spectrum_plot.getPlotItem().listDataItems() if c is not tab.peak_marks]
     assert len(curves) == 3
     np.testing.assert_allclose(curves[2].yData, 20.0 * np.log10(tab.summary.spectra["accel"].amplitude["z"][1:]))
-    assert tab.image.image.shape == tab.summary.spectra["accel"].spectrogram_psd.T.shape
+    # the spectrogram on the spectrum's log-frequency axis (issue 34: it was linear): its rows at log10(Hz), the
+    # motor's row the brightest, the axis labelled at each decade
+    sp = tab.summary.spectra["accel"]
+    rows, columns = tab.image.image.shape
+    assert columns == len(sp.spectrogram_t_s)
+    rect = tab.image.mapRectToView(tab.image.boundingRect())
+    assert rect.top() == pytest.approx(np.log10(sp.frequency_hz[1]), abs=0.05)
+    assert rect.bottom() == pytest.approx(np.log10(sp.frequency_hz[-1]), abs=0.05)
+    brightest = int(np.argmax(tab.image.image.mean(axis=1)))
+    row_hz = 10.0 ** (rect.top() + (brightest + 0.5) * rect.height() / rows)
+    assert row_hz == pytest.approx(peak.frequency_hz, abs=2 * (sp.frequency_hz[1] - sp.frequency_hz[0]))
+    ticks = tab.spectrogram_plot.getAxis("left")._tickLevels[0]
+    assert [label for _, label in ticks][:4] == ["0.1", "1", "10", "100"]
     assert "INS_HNTCH_FREQ=24" in tab.text.toPlainText()
 
 
@@ -162,7 +174,7 @@ def test_all_data_of_a_file_is_the_whole_file_not_the_part_played(window, qtbot)
     """Issue 34: "All data" was the part played so far (a spectrum of 0.14 s after a log was reopened)."""
     path = shared_log("px4_auavx21_bench_sample.ulg")
     open_file(window, qtbot, path)
-    window.replay_bar.play_button.click()  # paused near its start
+    window.seek(0.5)  # the clock near its start (a flight log opens paused, whole)
     played_s = window.session.source.position_s
     view = window.live_view
     tab = view.vibration
