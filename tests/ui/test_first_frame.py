@@ -63,9 +63,9 @@ def test_the_tabs_out_of_sight_are_built_when_first_asked_for_with_their_titles_
     view = window.live_view
     tabs = view.tabs
     titles = [tabs.tabText(i) for i in range(tabs.count())]
-    assert titles == ["Attitude", "Sensors", "AHF diagnostics", "Heading", "Position", "Channels", "Vibration"]
-    assert not {"sensors", "diagnostics", "heading", "position", "vibration"} & view.__dict__.keys()
-    assert [tabs.isTabVisible(i) for i in range(tabs.count())] == [True, True, True, False, False, True, True]
+    assert titles == ["Attitude", "Sensors", "AHF diagnostics", "Heading", "Position", "Flight", "Channels", "Vibration"]
+    assert not {"sensors", "diagnostics", "heading", "position", "flight", "vibration"} & view.__dict__.keys()
+    assert [tabs.isTabVisible(i) for i in range(tabs.count())] == [True, True, True, False, False, False, True, True]
     tabs.setCurrentIndex(titles.index("Vibration"))  # a click on a tab not built: built, and shown
     assert "vibration" in view.__dict__ and tabs.currentWidget() is view.vibration
     tabs.setCurrentIndex(titles.index("Channels"))
@@ -73,7 +73,7 @@ def test_the_tabs_out_of_sight_are_built_when_first_asked_for_with_their_titles_
     qtbot.waitUntil(lambda: len(window.session.view.imu) > 50, timeout=LIMIT_MS)
     assert [tabs.tabText(i) for i in range(tabs.count())] == titles
     assert [tabs.widget(i) for i in range(tabs.count())] == [view.attitude, view.sensors, view.diagnostics, view.heading,
-                                                             view.position, view.channels, view.vibration]
+                                                             view.position, view.flight, view.channels, view.vibration]
     assert tabs.currentWidget() is view.channels
     tabs.setCurrentWidget(view.sensors)  # a built tab shows the session's samples
     qtbot.waitUntil(lambda: view.frames_drawn > 3 and view.current_plots() is view.sensors, timeout=LIMIT_MS)
