@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from groundstation.estimation import aiding_estimator, create, settings_as_json
+from groundstation.estimation import about, aiding_estimator, create, settings_as_json
+from groundstation.estimation.compiled_cache import warm_up
 from groundstation.estimation.calibration import RestBiasCalibrator
 
 # Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
@@ -19,14 +20,25 @@ RECONVERGE_S = 5.0
 
 class EstimatorBank:
     """``filters``: estimator names; ``aiding``: the one whose attitude the compass heading and the
-    position use (``estimation.aiding_estimator``); ``settings``/``forced``: name -> {setting: value}."""
+    position use (``estimation.aiding_estimator``); ``settings``/``forced``: name -> {setting: value}.
 
-    def __init__(self, filters, settings=None, forced=None, aiding=None):
+    ``compile_in_background`` (a live session): never wait for numba to compile a kernel: an estimator
+    whose kernel is not in the cache runs its source interpreted while another process compiles it
+    (``estimation.compiled_cache.warm_up``), and goes on compiled from the sample after it arrives, its
+    state kept (why, and why not a thread or the install: ``compiled_cache``'s docstring). The cheap
+    kernels are compiled first, ukf and sssrukf (the GPS-aided filters, 18 of the 30 CPU s) last."""
+
+    def __init__(self, filters, settings=None, forced=None, aiding=None, compile_in_background=False):
         self.filters = tuple(dict.fromkeys(filters))
         self.aiding = aiding_estimator(self.filters, aiding)
         self._settings = {name: dict((settings or {}).get(name, {})) for name in self.filters}
         self._forced = {name: dict((forced or {}).get(name, {})) for name in self.filters}
-        self.estimators = {name: create(name, self._effective(name)) for name in self.filters}
+        self._background = compile_in_background
+        self.estimators = {name: self._create(name, self._effective(name)) for name in self.filters}
+        self._warm_up, self._seen = None, 0
+        if self.interpreted():
+            slow_last = sorted(self.interpreted(), key=lambda name: "gps" in about(name).needs)
+            self._warm_up = warm_up(slow_last)
         self.last_q: dict[str, tuple | None] = {name: None for name in self.filters}
         self.at_start = self.settings()
         self.gyro_calibration = RestBiasCalibrator()  # restart() measures again (the user's command)
@@ -43,6 +55,8 @@ class EstimatorBank:
         Once the craft has been still long enough to measure the gyro bias (``RestBiasCalibrator``), the
         estimators that do not estimate their own get the gyro with that bias removed.
         """
+        if self._warm_up is not None and self._warm_up.generation != self._seen:
+            self._take_compiled()
         bias = self.gyro_calibration.step(gyr, acc, dt_s, self.armed, mag, gps)
         unbiased = gyr if bias is None else (gyr[0] - bias[0], gyr[1] - bias[1], gyr[2] - bias[2])
         row: list[float] = []
@@ -52,6 +66,20 @@ class EstimatorBank:
             row += q
             row += diag
         return row
+
+    def interpreted(self) -> tuple[str, ...]:
+        """The estimators running their kernel's source interpreted, their compiled kernel not yet there."""
+        return tuple(name for name, estimator in self.estimators.items() if estimator.interpreted)
+
+    def _take_compiled(self) -> None:
+        self._seen = self._warm_up.generation
+        for name in self._warm_up.compiled & set(self.interpreted()):
+            self.estimators[name].take_compiled()
+        if not self.interpreted():
+            self._warm_up = None
+
+    def _create(self, name: str, settings: dict):
+        return create(name, settings, compile=not self._background)
 
     def new_gyro_bias(self) -> tuple | None:
         """The gyro bias (rad/s) once, just after it was measured; None otherwise."""
@@ -82,7 +110,7 @@ class EstimatorBank:
         """New settings for one estimator from now on, keeping its attitude; ValueError before any change."""
         if name not in self.estimators:
             raise ValueError(f"{name} is not among this session's estimators ({', '.join(self.filters)})")
-        estimator = create(name, {**self._settings[name], **overrides, **self._forced[name]})  # validates first
+        estimator = self._create(name, {**self._settings[name], **overrides, **self._forced[name]})  # validates first
         self._settings[name].update(overrides)
         if self.last_q[name] is not None:
             estimator.reset(q0=self.last_q[name])

@@ -57,6 +57,10 @@ class PipelineView:
     def settings(self) -> dict[str, dict[str, float]]:
         return self._pipeline.settings()
 
+    def interpreted(self) -> tuple[str, ...]:
+        """The estimators still running interpreted, their compiled kernels not yet there (a first start)."""
+        return self._pipeline.bank.interpreted()
+
 
 class LiveSession:
     """``source`` through ``pipeline`` (``session.factory.open_session`` makes both from a spec); the
