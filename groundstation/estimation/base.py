@@ -86,7 +86,9 @@ and the interpreted path, and it installs from wheels (Windows, Linux, macOS) wi
 user's machine, where Cython or a C extension would need one or a wheel per platform built by us.
 Its cost is compiling: ``cache=True`` writes the machine code beside the sources (``__pycache__``) on
 the first use on a machine, and each kernel is compiled lazily, when its estimator is first created, so
-a command that uses none pays nothing (figures in bench/bench_kernels.out.md). numba checks a cached
+a command that uses none pays nothing (figures in bench/bench_kernels.out.md); a live session never waits
+for it: until another process has put a kernel in the cache, its estimator runs the kernel's source
+interpreted (``ready_or_interpreted``, ``take_compiled``; ``compiled_cache.warm_up``). numba checks a cached
 function against its own file only, so ``drop_stale_cache`` drops a kernel's cache when this module,
 ``tilt`` or ``compass`` (compiled into every kernel) is newer (tests/estimation/test_kernels.py also
 compares the compiled kernels with their interpreted source).

@@ -2,7 +2,7 @@
 
 numba's default cache sits in ``__pycache__`` next to each module, so re-installing the package (what
 a test command that installs it does) deletes it and the next start compiles every kernel again
-(tens of seconds under the splash). In the user's cache folder it survives a re-install. numba checks
+(about 30 CPU s). In the user's cache folder it survives a re-install. numba checks
 each cached kernel against its own source file (a hash of the file's bytes, numba 0.68) but not the
 modules it calls into ("Cache invalidation fails to recognize changes in symbols defined in a
 different file", numba's notes on caching): the folder is therefore named by a hash of every estimation
