@@ -14,7 +14,7 @@ to a temporary folder.
 The alternative to a compiling process: a compiling thread. ``--alternatives`` measures what it costs
 the process's other threads: the longest pause of a 10 ms tick in the main thread (as the window's
 redraw timer and the reader thread need the GIL) while ahf2's kernel compiles in a thread, and while it
-compiles in a process (``compiled_cache.WarmUp``).
+compiles in a process (``estimation.warm_up.WarmUp``).
 
     python bench/bench_first_data.py [--repeats 3] [--alternatives]   # from the worktree root; prints Markdown
 """
@@ -103,7 +103,7 @@ def alternatives() -> None:
 
     os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="bench-thread-")
     from groundstation.estimation import create
-    from groundstation.estimation.compiled_cache import WarmUp
+    from groundstation.estimation.warm_up import WarmUp
 
     def in_thread(done):
         threading.Thread(target=lambda: (create("ahf2"), done.set()), daemon=True).start()

@@ -88,7 +88,7 @@ Its cost is compiling: ``cache=True`` writes the machine code beside the sources
 the first use on a machine, and each kernel is compiled lazily, when its estimator is first created, so
 a command that uses none pays nothing (figures in bench/bench_kernels.out.md); a live session never waits
 for it: until another process has put a kernel in the cache, its estimator runs the kernel's source
-interpreted (``ready_or_interpreted``, ``take_compiled``; ``compiled_cache.warm_up``). numba checks a cached
+interpreted (``ready_or_interpreted``, ``take_compiled``; ``estimation.warm_up``). numba checks a cached
 function against its own file only, so ``drop_stale_cache`` drops a kernel's cache when this module,
 ``tilt`` or ``compass`` (compiled into every kernel) is newer (tests/estimation/test_kernels.py also
 compares the compiled kernels with their interpreted source).
@@ -608,7 +608,7 @@ class CompiledEstimator(Estimator):
 
     def take_compiled(self) -> bool:
         """An estimator made by ``ready_or_interpreted`` goes on with the compiled kernel, its state kept, once
-        the kernel is in numba's cache (another process compiled it: ``compiled_cache.warm_up``); whether it
+        the kernel is in numba's cache (another process compiled it: ``estimation.warm_up``); whether it
         runs compiled now."""
         if self._cast is None:
             return True

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 
 from groundstation.estimation import about, aiding_estimator, create, settings_as_json
-from groundstation.estimation.compiled_cache import warm_up
+from groundstation.estimation.warm_up import warm_up
 from groundstation.estimation.calibration import RestBiasCalibrator
 
 # Every estimator the app runs live is back on truth within this after a restart (``restart``), on a
@@ -24,8 +24,8 @@ class EstimatorBank:
 
     ``compile_in_background`` (a live session): never wait for numba to compile a kernel: an estimator
     whose kernel is not in the cache runs its source interpreted while another process compiles it
-    (``estimation.compiled_cache.warm_up``), and goes on compiled from the sample after it arrives, its
-    state kept (why, and why not a thread or the install: ``compiled_cache``'s docstring). The cheap
+    (``estimation.warm_up``), and goes on compiled from the sample after it arrives, its
+    state kept (why, and why not a thread or the install: ``estimation.warm_up``'s docstring). The cheap
     kernels are compiled first, ukf and sssrukf (the GPS-aided filters, 18 of the 30 CPU s) last."""
 
     def __init__(self, filters, settings=None, forced=None, aiding=None, compile_in_background=False):
