@@ -7,7 +7,7 @@ The moment: ``first data`` of the process's stopwatch (``groundstation/stopwatch
 (it then closes itself), ``record``'s first IMU sample with every estimator's estimate in its tables.
 CPU seconds of the whole process (every thread) since it started. "CPU s in all" is the process and its
 children (the background compiler, stopped when the process ends) until it ended: the app at its first
-data, ``record`` after ``--duration``. Also said: how many estimators still ran interpreted at the first
+data, ``record`` after ``--duration``. Also said: how many estimators were not compiled at the first
 data (their kernels compiling in the other process). Qt renders offscreen; settings and recordings go
 to a temporary folder.
 
@@ -34,7 +34,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from groundstation.stopwatch import INTERPRETED  # noqa: E402
+from groundstation.stopwatch import UNCOMPILED  # noqa: E402
 
 COMMANDS = {
     "groundstation app --demo": ["-m", "groundstation", "app", "--demo"],
@@ -44,15 +44,15 @@ FILL = ["-c", "from groundstation.estimation import create, live_estimators; [cr
 
 
 def run(argv: list[str], env: dict[str, str]) -> tuple[float, float, int]:
-    """(CPU s to the first data, CPU s in all, estimators interpreted at the first data)."""
+    """(CPU s to the first data, CPU s in all, estimators not compiled at the first data)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = subprocess.run([sys.executable, *argv], env=env, capture_output=True, text=True, check=True, timeout=900).stdout
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     lines = out.splitlines()
     first = next(float(line.split()[-1]) for line in lines if line.startswith("first data "))
-    interpreted = next(line.removeprefix(INTERPRETED).strip() for line in lines if line.startswith(INTERPRETED))
+    uncompiled = next(line.removeprefix(UNCOMPILED).strip() for line in lines if line.startswith(UNCOMPILED))
     total = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return first, total, len([name for name in interpreted.split(",") if name])
+    return first, total, len([name for name in uncompiled.split(",") if name])
 
 
 def row(label: str, runs: list[tuple[float, float, int]]) -> str:
@@ -68,7 +68,7 @@ def first_data(repeats: int) -> None:
                 "GROUNDSTATION_RECORDINGS": str(home / "recordings")}
         warm = {**base, "NUMBA_CACHE_DIR": str(home / "warm")}
         subprocess.run([sys.executable, *FILL], env=warm, check=True)  # the warm start's cache
-        print(f"| command, numba cache | CPU s to first data | CPU s in all | estimators interpreted at first data (median of {repeats}) |")
+        print(f"| command, numba cache | CPU s to first data | CPU s in all | estimators not compiled at first data (median of {repeats}) |")
         print("|---|---|---|---|")
         for label, argv in COMMANDS.items():
             run(argv, warm)  # byte code and page cache

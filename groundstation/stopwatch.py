@@ -1,9 +1,9 @@
 """The benchmarks' stopwatch (``bench/bench_first_frame.py``, ``bench/bench_first_data.py``) and the tests':
 with ``GROUNDSTATION_FIRST_FRAME=1`` in the environment, the app (``ui/first_frame.py``) and ``record``
 print a line ``<moment> <CPU s>`` at each moment they reach (``first paint``, ``first data``): the process's
-CPU seconds, every thread's, since it started. At the first data they also print which estimators were
-still running their kernel's source interpreted, their compiled kernel not yet there
-(``interpreted at first data: ahf2,ukf``; empty on a warm start)."""
+CPU seconds, every thread's, since it started. At the first data they also print the estimators whose
+compiled kernel was not there yet (``uncompiled at first data: ahf2,ukf``: running interpreted, or not yet
+run; empty on a warm start)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import os
 import time
 
 ENV = "GROUNDSTATION_FIRST_FRAME"
-INTERPRETED = "interpreted at first data:"
+UNCOMPILED = "uncompiled at first data:"
 
 
 def wanted() -> bool:
@@ -25,5 +25,5 @@ def note(moment: str) -> float:
     return cpu_s
 
 
-def note_interpreted(names) -> None:
-    print(f"{INTERPRETED} {','.join(names)}", flush=True)
+def note_uncompiled(names) -> None:
+    print(f"{UNCOMPILED} {','.join(names)}", flush=True)

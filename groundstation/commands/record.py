@@ -103,13 +103,13 @@ def run(args: argparse.Namespace) -> int:
 
 def first_data_stopwatch(session):
     """For ``follow``'s ``until``: notes the first IMU sample with its estimates in the session's tables
-    (``groundstation.stopwatch``: the CPU seconds, and which estimators ran interpreted then), once."""
+    (``groundstation.stopwatch``: the CPU seconds, and which estimators were not compiled then), once."""
     noted = []
 
     def check() -> None:
         if not noted and len(session.view.imu):
             noted.append(stopwatch.note("first data"))
-            stopwatch.note_interpreted(session.view.interpreted())
+            stopwatch.note_uncompiled(session.view.uncompiled())
 
     return check
 

@@ -30,11 +30,13 @@ class WarmUp:
     """A process compiling estimators' kernels into numba's cache, in the order named: their per-sample
     kernels first (what a live session waits for), then their batch loops (what a later export or
     replay would compile). ``compiled`` holds the names whose per-sample kernel is in the cache, as the
-    process says so; ``generation`` counts them (a cheap "anything new?" for the reader thread)."""
+    process says so, ``finished`` once it ended; ``generation`` counts both (a cheap "anything new?" for the
+    reader thread)."""
 
     def __init__(self, names):
         self.names = tuple(names)
         self.compiled: set[str] = set()
+        self.finished = False
         self.generation = 0
         context = multiprocessing.get_context("spawn")  # not fork: numba and Qt are not fork-safe; the bundle supports spawn
         receive, send = context.Pipe(duplex=False)
@@ -62,9 +64,11 @@ class WarmUp:
                 try:
                     name = receive.recv()
                 except (EOFError, OSError):
-                    return
+                    break
                 self.compiled.add(name)
                 self.generation += 1
+        self.finished = True  # done, or stopped: nothing more will come
+        self.generation += 1
 
     @property
     def running(self) -> bool:

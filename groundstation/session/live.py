@@ -57,9 +57,9 @@ class PipelineView:
     def settings(self) -> dict[str, dict[str, float]]:
         return self._pipeline.settings()
 
-    def interpreted(self) -> tuple[str, ...]:
-        """The estimators still running interpreted, their compiled kernels not yet there (a first start)."""
-        return self._pipeline.bank.interpreted()
+    def uncompiled(self) -> tuple[str, ...]:
+        """The estimators whose compiled kernels are not there yet (a first start: ``EstimatorBank``)."""
+        return self._pipeline.bank.uncompiled()
 
 
 class LiveSession:

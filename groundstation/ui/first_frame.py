@@ -7,7 +7,7 @@ thread's, since the process started; ``groundstation.stopwatch``) at
 - ``first paint``: the main window's first paint event (the window on screen, its plots still empty);
 - ``first data``: the first paint of any of its widgets after the live view drew with rows of the
   session taken (``LiveView.frames_drawn``, ``Series.taken``): a curve with data on screen; then the
-  estimators still interpreted then (a first start: their kernels compiling in the background);
+  estimators not compiled then (a first start: their kernels compiling in the background);
 
 then closes the window (the session stops, the recording closes, as at the close button) and so quits.
 """
@@ -64,7 +64,7 @@ class FirstFrame(QtCore.QObject):
             self.app.removeEventFilter(self)
             self._note("first data")
             view = self.window.session.view
-            stopwatch.note_interpreted(getattr(view, "interpreted", tuple)())  # a file's (computed whole) has none
+            stopwatch.note_uncompiled(getattr(view, "uncompiled", tuple)())  # a file's (computed whole) has none
             QtCore.QTimer.singleShot(0, self.window.close)
         return False
 

@@ -5,16 +5,22 @@ Ctrl-C then ends it with the recording closed. Real processes, each with a cache
 
 from __future__ import annotations
 
+import math
 import os
 import signal
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from tests.estimation.estimation_samples import flight_like_samples
+from groundstation.estimation import create
+from groundstation.estimation.ukf import Ukf
 from groundstation.recording import open_recording
-from groundstation.stopwatch import INTERPRETED
+from groundstation.session.estimators import _RESTART, _Deferred
+from groundstation.stopwatch import UNCOMPILED
 from tests.waiting import LIMIT_S, wait_for
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -65,11 +71,11 @@ def test_record_has_data_from_the_first_second_and_ctrl_c_during_compile_closes_
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         out = Lines(record)
-        wait_for(lambda: out.starting(INTERPRETED) or record.poll() is not None, what="the first data")
+        wait_for(lambda: out.starting(UNCOMPILED) or record.poll() is not None, what="the first data")
         assert record.poll() is None, record.stderr.read()
-        interpreted = out.starting(INTERPRETED).removeprefix(INTERPRETED).strip().split(",")
+        uncompiled = out.starting(UNCOMPILED).removeprefix(UNCOMPILED).strip().split(",")
         # The data came while the kernels were compiling: ukf's, the slowest (compiled last), still is.
-        assert "ukf" in interpreted and "ahf2" in interpreted
+        assert "ukf" in uncompiled and "ahf2" in uncompiled
         assert not compiled_kernels(tmp_path / "numba", "ukf")
         wait_for(lambda: len(processes_with(str(tmp_path / "numba"))) > 1, what="the compiling process")
         record.send_signal(signal.SIGINT)  # during the compile
@@ -84,3 +90,28 @@ def test_record_has_data_from_the_first_second_and_ctrl_c_during_compile_closes_
     (path,) = (tmp_path / "recordings").glob("*.gsrec")
     recording = open_recording(path)
     assert recording.closed_cleanly and recording.chunk_count > 0 and not recording.damage
+
+
+def test_a_slow_estimator_waiting_for_its_kernel_catches_up_as_the_bank_would_have_run_it():
+    """ukf is not run interpreted (``EstimatorBank``): its samples, a restart and a settings change wait
+    (``_Deferred``), then run through the compiled kernel once it is there: the same estimate, bit for bit,
+    as the bank gives an estimator compiled from the start (step; restart from its last q; new settings
+    from its last q)."""
+    gyr, acc, dt = flight_like_samples(400, 5)
+    reference, waiting = create("ukf"), _Deferred(Ukf(dtype=np.float64))  # as a first start makes it
+    changed = {"gyro_noise_rad_s": 0.02}
+    q = None
+    for k in range(400):
+        if k == 150:
+            reference.restart(q0=q)
+            waiting.backlog.append(_RESTART)
+        if k == 300:
+            reference = create("ukf", changed)
+            reference.reset(q0=q)
+            waiting.backlog.append(Ukf(create("ukf", changed).settings, dtype=np.float64))
+        q, _ = reference.step(gyr[k].tolist(), acc[k].tolist(), float(dt[k]), None, None)
+        assert all(math.isnan(v) for v in waiting.missed(gyr[k].tolist(), acc[k].tolist(), float(dt[k]), None, None))
+    estimator, q_caught = waiting.caught_up()
+    assert not estimator.interpreted and estimator.settings.gyro_noise_rad_s == 0.02
+    assert q_caught == q
+    assert estimator.step([0.1, 0.0, 0.0], [0.0, 0.0, -1.0], 0.01) == reference.step([0.1, 0.0, 0.0], [0.0, 0.0, -1.0], 0.01)

@@ -14,20 +14,20 @@ import numpy as np
 from groundstation.estimation import live_estimators
 from groundstation.recording import open_recording
 from groundstation.session.load import load_session
-from groundstation.stopwatch import INTERPRETED
+from groundstation.stopwatch import UNCOMPILED
 from tests.session.test_first_start import Lines, compiled_kernels, first_start_env, posix_only, processes_with
 from tests.waiting import LIMIT_S, wait_for
 
 
 def test_the_first_start_shows_data_while_the_kernels_compile(tmp_path):
-    """The stopwatch closes the window at the first data: every estimator had a value on every sample from
-    the first, most of them from their interpreted source."""
+    """The stopwatch closes the window at the first data, which came while the kernels were compiling; the
+    recording, replayed, has every estimator on every sample from the first."""
     env = {**first_start_env(tmp_path), "QT_QPA_PLATFORM": "offscreen"}
     done = subprocess.run([sys.executable, "-m", "groundstation", "app", "--demo"], env=env, cwd=tmp_path,
                           capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-2000:]
-    (line,) = [line for line in done.stdout.splitlines() if line.startswith(INTERPRETED)]
-    assert {"ahf2", "ukf", "sssrukf"} <= set(line.removeprefix(INTERPRETED).strip().split(","))
+    (line,) = [line for line in done.stdout.splitlines() if line.startswith(UNCOMPILED)]
+    assert {"ahf2", "ukf", "sssrukf"} <= set(line.removeprefix(UNCOMPILED).strip().split(","))
     (recording,) = (tmp_path / "recordings").glob("*.gsrec")
     data = load_session(recording)
     assert len(data) > 0 and data.estimated == live_estimators()
