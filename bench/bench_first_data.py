@@ -16,7 +16,11 @@ the process's other threads: the longest pause of a 10 ms tick in the main threa
 redraw timer and the reader thread need the GIL) while ahf2's kernel compiles in a thread, and while it
 compiles in a process (``estimation.warm_up.WarmUp``).
 
-    python bench/bench_first_data.py [--repeats 3] [--alternatives]   # from the worktree root; prints Markdown
+Install time instead (``--portable``): numba's only portable cache is one compiled for a generic CPU
+(``NUMBA_CPU_NAME=generic``). Whether a process finds ahf2's kernel in such a cache, with the host's CPU
+and with the generic one named, what it then costs to have it ready, and its speed in ``run``.
+
+    python bench/bench_first_data.py [--repeats 3] [--alternatives] [--portable]   # from the worktree root; prints Markdown
 """
 
 from __future__ import annotations
@@ -127,13 +131,49 @@ def alternatives() -> None:
         print(f"| {label} | {longest:.3f} | {wall:.1f} |", flush=True)
 
 
+PORTABLE = """
+import sys, time
+import numpy as np
+from groundstation.estimation import create
+from groundstation.estimation.ahf2 import Ahf2
+from groundstation.estimation.base import KERNEL_SIGNATURE, _loaded
+t = time.process_time()
+found = _loaded(Ahf2.kernel, KERNEL_SIGNATURE)
+t_ready = time.process_time() - t
+t = time.process_time()
+estimator = create("ahf2")
+t_ready += time.process_time() - t
+rows = 200_000
+gyr, acc = np.random.default_rng(1).normal(0, 0.1, (rows, 3)), np.tile([0.0, 0.0, -1.0], (rows, 1))
+estimator.run(gyr[:10], acc[:10], 0.01)
+t = time.process_time()
+estimator.run(gyr, acc, 0.01)
+print(found, t_ready, (time.process_time() - t) / rows * 1e9)
+"""
+
+
+def portable() -> None:
+    print("| ahf2's kernel: cache made for, process run as | found in the cache | CPU s to have it ready | run, ns a sample |")
+    print("|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as home:
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        for made, run_as in (("generic", "generic"), ("generic", "host"), ("generic", "generic"), ("host", "host"), ("host", "host")):
+            cpu = {"NUMBA_CPU_NAME": "generic"} if run_as == "generic" else {}
+            out = subprocess.run([sys.executable, "-c", PORTABLE], env={**env, **cpu, "NUMBA_CACHE_DIR": os.path.join(home, made)},
+                                 capture_output=True, text=True, check=True).stdout.split()
+            print(f"| {made}, {run_as} | {out[0]} | {float(out[1]):.2f} | {float(out[2]):.0f} |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--alternatives", action="store_true", help="a compiling thread against a compiling process")
+    parser.add_argument("--portable", action="store_true", help="a cache made for a generic CPU (install time)")
     args = parser.parse_args()
     if args.alternatives:
         alternatives()
+    elif args.portable:
+        portable()
     else:
         first_data(args.repeats)
 

@@ -13,8 +13,11 @@ our GIL for the whole 30 CPU s (the main thread's 10 ms tick paused up to 0.68 s
 a thread, 0.06 s while it compiled in a process; the compile's CPU counted against us too:
 bench/bench_first_data.out.md). Why not at install
 time: a wheel has no post-install step, numba's ahead-of-time ``numba.pycc`` is deprecated and needs a C
-compiler, and a cache made elsewhere is for that machine's CPU (numba keys each entry by CPU name and
-features), so a shipped cache would be ignored on another CPU and compiled anyway.
+compiler, and numba keys each cached kernel by the CPU it was made for: a cache shipped from another
+machine is ignored and compiled anew. Only a cache made for a generic CPU (``NUMBA_CPU_NAME=generic``)
+travels, and only to processes that name the generic CPU too, which then run about 5 % slower; it would
+have to be built by us per platform and Python, or by ``pip install .`` (about 30 CPU s more, with no
+hook to do it) (bench/bench_first_data.out.md).
 """
 
 from __future__ import annotations
