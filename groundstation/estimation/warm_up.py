@@ -1,13 +1,14 @@
 """The first start on a machine: numba's cache (``compiled_cache``) filled by another process.
 
-A live session starts at once with the estimators whose kernels are in the cache, the others running their kernel's
-source interpreted (``CompiledEstimator.ready_or_interpreted``; 0.03-0.15 ms a sample, ukf and sssrukf
-about 1 ms), while another process compiles the kernels into the cache; each estimator goes on compiled,
-its state kept, as its kernel arrives (``EstimatorBank``). So every estimator has every sample from the
-first: the session's tables are a batch run's within the 1e-12 that separates the interpreted source
-from the compiled kernel, with no hole to fill afterwards (the other way, a hole filled by running the
-history through the kernel once compiled, would rewrite rows the window has drawn and repeat the bias
-calibration, restarts and settings changes the bank applied: a second path for what it does). Why a
+A live session starts at once with the estimators whose kernels are in the cache, the others running
+their kernel's source interpreted (``CompiledEstimator.ready_or_interpreted``; 0.03-0.15 ms a sample)
+while another process compiles the kernels into the cache; each estimator goes on compiled, its state
+kept, as its kernel arrives (``session.estimators.EstimatorBank``). So these estimators have every sample
+from the first: the session's tables are a batch run's within the 1e-12 that separates the interpreted
+source from the compiled kernel, with no hole. The other way, a hole filled once compiled, would rewrite
+rows the window has drawn, the plots' and a Foxglove client's. Only ukf and sssrukf, about 1 ms a sample
+interpreted, wait (NaN rows) for their kernels, compiled last, and then run the samples they missed at
+once, so that from there on they are what a batch run gives. Why a
 process and not a thread: numba's compiler is Python and LLVM under the GIL, so a thread would share
 our GIL for the whole 30 CPU s (the main thread's 10 ms tick paused up to 0.68 s while ahf2 compiled in
 a thread, 0.06 s while it compiled in a process; the compile's CPU counted against us too:

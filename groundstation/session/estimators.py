@@ -95,7 +95,7 @@ class EstimatorBank:
         if self._warm_up.finished:
             self._warm_up = None
             for deferred in self._deferred.values():
-                deferred.backlog.clear()
+                deferred.give_up()
 
     def _create(self, name: str, settings: dict):
         return create(name, settings, compile=not self._background)
@@ -124,7 +124,7 @@ class EstimatorBank:
         """
         for name, estimator in self.estimators.items():
             if name in self._deferred:
-                self._deferred[name].backlog.append(_RESTART)
+                self._deferred[name].missed_event(_RESTART)
             else:
                 estimator.restart(q0=self.last_q[name])
 
@@ -135,7 +135,7 @@ class EstimatorBank:
         estimator = self._create(name, {**self._settings[name], **overrides, **self._forced[name]})  # validates first
         self._settings[name].update(overrides)
         if name in self._deferred:
-            self._deferred[name].backlog.append(estimator)
+            self._deferred[name].missed_event(estimator)
         elif self.last_q[name] is not None:
             estimator.reset(q0=self.last_q[name])
         self.estimators[name] = estimator
@@ -167,13 +167,24 @@ class _Deferred:
 
     def __init__(self, estimator):
         self.estimator = estimator  # as the session made it
-        self.backlog: list = []
+        self.backlog: list | None = []  # None: its kernel will not come in this session, nothing is kept
         self._blank = [math.nan] * (4 + len(estimator.Diagnostics._fields))
 
     def missed(self, *sample) -> list[float]:
         """A sample kept for later; its row part NaN (not computed)."""
-        self.backlog.append(sample)
+        if self.backlog is not None:
+            self.backlog.append(sample)
         return self._blank
+
+    def missed_event(self, event) -> None:
+        """A restart (``_RESTART``) or new settings (the estimator made with them), kept for later."""
+        if self.backlog is not None:
+            self.backlog.append(event)
+
+    def give_up(self) -> None:
+        """The compiling process ended without this kernel (it failed): NaN for the rest of the session,
+        with nothing kept that nobody will run."""
+        self.backlog = None
 
     def caught_up(self):
         """``(estimator, its last q)`` after the samples it missed, compiled; None while the kernel is not there."""

@@ -104,11 +104,11 @@ def test_a_slow_estimator_waiting_for_its_kernel_catches_up_as_the_bank_would_ha
     for k in range(400):
         if k == 150:
             reference.restart(q0=q)
-            waiting.backlog.append(_RESTART)
+            waiting.missed_event(_RESTART)
         if k == 300:
             reference = create("ukf", changed)
             reference.reset(q0=q)
-            waiting.backlog.append(Ukf(create("ukf", changed).settings, dtype=np.float64))
+            waiting.missed_event(Ukf(create("ukf", changed).settings, dtype=np.float64))
         q, _ = reference.step(gyr[k].tolist(), acc[k].tolist(), float(dt[k]), None, None)
         assert all(math.isnan(v) for v in waiting.missed(gyr[k].tolist(), acc[k].tolist(), float(dt[k]), None, None))
     estimator, q_caught = waiting.caught_up()

@@ -1,5 +1,6 @@
 """The app's start (issue 25): the window paints before numba and the estimators' kernels load, and the
-simulated bridge's data follows once they are ready. A real ``groundstation app --demo`` process, Qt
+simulated bridge's data follows once its session's estimators exist (on a machine's first start, while
+their kernels compile: tests/ui/test_first_start.py). A real ``groundstation app --demo`` process, Qt
 offscreen, stopped by its own first-frame stopwatch (``ui/first_frame.py``)."""
 
 from __future__ import annotations
