@@ -649,14 +649,14 @@ class CompiledEstimator(Estimator):
         gx, gy, gz = gyr_rad_s
         ax, ay, az = acc_g
         mx, my, mz = _NO_FIELD if mag is None else mag
-        if self._cast is not None:
+        fix = (_NO_FIX if gps is None else gps) if self.gps_aided else ()
+        if self._cast is None:
+            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, *fix)
+        else:
             c = self._cast
             gx, gy, gz, ax, ay, az, dt_s = c(gx), c(gy), c(gz), c(ax), c(ay), c(az), c(dt_s)
-        if self.gps_aided:
-            fix = _NO_FIX if gps is None else gps
-            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, fix[0], fix[1], fix[2], fix[3])
-        else:
-            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+            with np.errstate(all="ignore"):  # an inf - inf is NaN without a word, as in the compiled kernel and the C core
+                status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, *fix)
         v = self._values()
         return (v[0], v[1], v[2], v[3]), _new_tuple(self.Diagnostics, (status, *v[STATE_DIAG : self._diag_end]))
 
