@@ -12,7 +12,7 @@ source, so a change to any of them (``base.py``'s guard, a helper) starts a fres
 ``use_user_cache_for_numba``: hashing the sources costs as much as a command's ``--help`` may in all,
 bench/bench_help.py) and also on ``numba.config`` in case something imported numba first.
 
-The first start on a machine fills it in another process: ``warm_up``.
+The first start on a machine fills it in another process (``estimation.warm_up``), never making a session wait.
 """
 
 from __future__ import annotations
