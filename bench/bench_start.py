@@ -1,6 +1,6 @@
-"""How long the app's estimators take to be ready at a start (what the splash waits for,
-``ui.app.prepare_estimators``): the first start after an install, the second, and the start after the
-package is installed again (what a test command that installs it does).
+"""How long the app's estimators take to be compiled or loaded at a start (what a splash waited for before
+a first start compiled in another process, bench/bench_first_data.py): the first start after an install,
+the second, and the start after the package is installed again (what a test command that installs it does).
 
 Each start is a new process that imports the estimators and makes every live one (``create``: the
 numba kernels compiled, or loaded from the cache). The package is "installed" by copying its sources

@@ -43,7 +43,7 @@ def estimator_options(args: argparse.Namespace) -> tuple[list[str] | None, dict[
     try:
         overrides = parse_overrides(args.overrides)
         for name in set(names or []) | set(overrides):
-            create(name, overrides.get(name))
+            create(name, overrides.get(name), compile=False)  # checked, not compiled: numba takes seconds at a first start
         if names is not None and set(overrides) - set(names):
             raise ValueError(f"--set names {', '.join(sorted(set(overrides) - set(names)))}, which is not in --filters")
     except ValueError as error:

@@ -17,6 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
+from groundstation import stopwatch
 from groundstation.commands.options import add_estimator_options, estimator_options
 from groundstation.errors import UserError
 
@@ -71,9 +72,10 @@ def run(args: argparse.Namespace) -> int:
     previous = {signum: signal.signal(signum, lambda signum, _: stopping.append(signum))
                 for signum in (signal.SIGINT, signal.SIGTERM)}
     deadline = None if args.duration is None else time.monotonic() + args.duration
+    first_data = first_data_stopwatch(session) if stopwatch.wanted() else lambda: None
     try:
         with session:
-            follow(session, until=lambda: bool(stopping) or (deadline is not None and time.monotonic() >= deadline))
+            follow(session, until=lambda: first_data() or bool(stopping) or (deadline is not None and time.monotonic() >= deadline))
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
@@ -97,6 +99,19 @@ def run(args: argparse.Namespace) -> int:
         print(f"groundstation record: the session stopped: {session.error}", file=sys.stderr)
         status = 1
     return status
+
+
+def first_data_stopwatch(session):
+    """For ``follow``'s ``until``: notes the first IMU sample with its estimates in the session's tables
+    (``groundstation.stopwatch``: the CPU seconds, and which estimators were not compiled then), once."""
+    noted = []
+
+    def check() -> None:
+        if not noted and len(session.view.imu):
+            noted.append(stopwatch.note("first data"))
+            stopwatch.note_uncompiled(session.view.uncompiled())
+
+    return check
 
 
 def unrecorded_stretches(events: list[dict], ended_ns: int) -> list[tuple[str, float]]:

@@ -234,8 +234,10 @@ def settings_from_json(name: str, raw) -> tuple[dict[str, float | bool], list[st
     return kept, left_out
 
 
-def create(name: str, overrides: dict[str, float] | None = None) -> Estimator:
-    """An estimator by name with some settings replaced; ValueError names what is wrong."""
+def create(name: str, overrides: dict[str, float] | None = None, compile: bool = True) -> Estimator:
+    """An estimator by name with some settings replaced; ValueError names what is wrong. ``compile``
+    False: never wait for numba, run the kernel interpreted if it is not in the cache
+    (``Estimator.ready_or_interpreted``, a live session's)."""
     try:
         cls = ESTIMATORS[name]
     except KeyError:
@@ -247,7 +249,8 @@ def create(name: str, overrides: dict[str, float] | None = None) -> Estimator:
         # inf can be meant ("no limit"); NaN only where the default is NaN ("from the data", e.g. mcf's dip)
         if math.isnan(value) and not math.isnan(defaults[param]):
             raise ValueError(f"{name}.{param} must be a number, not NaN")
-    return cls(dataclasses.replace(cls.Settings(), **(overrides or {})))
+    settings = dataclasses.replace(cls.Settings(), **(overrides or {}))
+    return cls(settings) if compile else cls.ready_or_interpreted(settings)
 
 
 def parse_overrides(items: list[str]) -> dict[str, dict[str, float]]:

@@ -86,7 +86,9 @@ and the interpreted path, and it installs from wheels (Windows, Linux, macOS) wi
 user's machine, where Cython or a C extension would need one or a wheel per platform built by us.
 Its cost is compiling: ``cache=True`` writes the machine code beside the sources (``__pycache__``) on
 the first use on a machine, and each kernel is compiled lazily, when its estimator is first created, so
-a command that uses none pays nothing (figures in bench/bench_kernels.out.md). numba checks a cached
+a command that uses none pays nothing (figures in bench/bench_kernels.out.md); a live session never waits
+for it: until another process has put a kernel in the cache, its estimator runs the kernel's source
+interpreted (``ready_or_interpreted``, ``take_compiled``; ``estimation.warm_up``). numba checks a cached
 function against its own file only, so ``drop_stale_cache`` drops a kernel's cache when this module,
 ``tilt`` or ``compass`` (compiled into every kernel) is newer (tests/estimation/test_kernels.py also
 compares the compiled kernels with their interpreted source).
@@ -297,6 +299,17 @@ class Estimator:
         else:
             self._set_attitude(tuple(quaternion.normalise(q0).tolist()))
             self._waiting = False
+
+    @classmethod
+    def ready_or_interpreted(cls, settings=None) -> Estimator:
+        """The estimator, never waiting for a compiler (``CompiledEstimator``'s may run interpreted at first)."""
+        return cls(settings)
+
+    interpreted = False  # running an interpreted kernel until ``take_compiled``
+
+    def take_compiled(self) -> bool:
+        """Go on compiled once the kernel is (``CompiledEstimator``); whether it runs compiled now."""
+        return True
 
     def restart(self, q0=None) -> None:
         """After the sensor's board restarted (its gyro offset may have changed): forget what was learnt of
@@ -535,6 +548,25 @@ def _compiled(dispatcher, signature):
     return dispatcher
 
 
+def _loaded(dispatcher, signature) -> bool:
+    """Whether the dispatcher is ready for this signature without compiling it here: compiled or loaded
+    before, or loaded now from numba's cache (some milliseconds). Never compiles (seconds, holding the GIL):
+    a live session runs the kernel's source interpreted meanwhile (``CompiledEstimator.ready_or_interpreted``).
+    The cache is read as ``Dispatcher.compile`` reads it first (numba 0.68's private ``_cache``, there is no
+    public "load only"); a signature the cache lacks (or one made on another CPU) is False."""
+    if dispatcher in _READY:
+        return True
+    drop_stale_cache(dispatcher)
+    cres = dispatcher._cache.load_overload(signature, dispatcher.targetctx)
+    if cres is None:
+        return False
+    dispatcher.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+    dispatcher.add_overload(cres)
+    dispatcher.disable_compile()  # as ``_compiled``
+    _READY.add(dispatcher)
+    return True
+
+
 _new_tuple = tuple.__new__
 _NO_FIELD = (math.nan, math.nan, math.nan)
 _NO_FIX = (math.nan, math.nan, math.nan, math.nan)
@@ -562,10 +594,35 @@ class CompiledEstimator(Estimator):
         self._dtype = np.dtype(np.float64 if dtype is None else dtype)
         self._cast = None if dtype is None else self._dtype.type
         kernel = type(self).kernel
-        signature = GPS_KERNEL_SIGNATURE if self.gps_aided else KERNEL_SIGNATURE
-        self._kernel = _compiled(kernel, signature) if dtype is None else kernel.py_func
+        self._kernel = _compiled(kernel, self._signature()) if dtype is None else kernel.py_func
         self._diag_end = STATE_DIAG + len(self.Diagnostics._fields) - 1
         super().__init__(settings)
+
+    @classmethod
+    def _signature(cls):
+        return GPS_KERNEL_SIGNATURE if cls.gps_aided else KERNEL_SIGNATURE
+
+    @classmethod
+    def ready_or_interpreted(cls, settings=None) -> CompiledEstimator:
+        """Compiled if its kernel is compiled or in numba's cache, else its source interpreted on float64 (the
+        same numbers within 1e-12, tests/estimation/test_kernels.py) until ``take_compiled``."""
+        return cls(settings) if _loaded(cls.kernel, cls._signature()) else cls(settings, dtype=np.float64)
+
+    @property
+    def interpreted(self) -> bool:
+        return self._cast is not None
+
+    def take_compiled(self) -> bool:
+        """An estimator made by ``ready_or_interpreted`` goes on with the compiled kernel, its state kept, once
+        the kernel is in numba's cache (another process compiled it: ``estimation.warm_up``); whether it
+        runs compiled now."""
+        if self._cast is None:
+            return True
+        if self._dtype != np.float64 or not _loaded(type(self).kernel, self._signature()):
+            return False  # a float32 model stays one
+        self._kernel, self._cast = type(self).kernel, None
+        self._params = np.asarray(self._params, dtype=np.float64)  # the interpreted one's is a list
+        return True
 
     def _parameters(self) -> list[float]:
         raise NotImplementedError
@@ -598,14 +655,14 @@ class CompiledEstimator(Estimator):
         gx, gy, gz = gyr_rad_s
         ax, ay, az = acc_g
         mx, my, mz = _NO_FIELD if mag is None else mag
-        if self._cast is not None:
+        fix = (_NO_FIX if gps is None else gps) if self.gps_aided else ()
+        if self._cast is None:
+            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, *fix)
+        else:
             c = self._cast
             gx, gy, gz, ax, ay, az, dt_s = c(gx), c(gy), c(gz), c(ax), c(ay), c(az), c(dt_s)
-        if self.gps_aided:
-            fix = _NO_FIX if gps is None else gps
-            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, fix[0], fix[1], fix[2], fix[3])
-        else:
-            status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz)
+            with np.errstate(all="ignore"):  # an inf - inf is NaN without a word, as in the compiled kernel and the C core
+                status = self._kernel(self._state, self._params, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz, *fix)
         v = self._values()
         return (v[0], v[1], v[2], v[3]), _new_tuple(self.Diagnostics, (status, *v[STATE_DIAG : self._diag_end]))
 

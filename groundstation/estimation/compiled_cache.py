@@ -2,7 +2,7 @@
 
 numba's default cache sits in ``__pycache__`` next to each module, so re-installing the package (what
 a test command that installs it does) deletes it and the next start compiles every kernel again
-(tens of seconds under the splash). In the user's cache folder it survives a re-install. numba checks
+(about 30 CPU s). In the user's cache folder it survives a re-install. numba checks
 each cached kernel against its own source file (a hash of the file's bytes, numba 0.68) but not the
 modules it calls into ("Cache invalidation fails to recognize changes in symbols defined in a
 different file", numba's notes on caching): the folder is therefore named by a hash of every estimation
@@ -11,6 +11,8 @@ source, so a change to any of them (``base.py``'s guard, a helper) starts a fres
 ``NUMBA_CACHE_DIR`` set by the user wins. Set just before numba is imported (numba reads it at import;
 ``use_user_cache_for_numba``: hashing the sources costs as much as a command's ``--help`` may in all,
 bench/bench_help.py) and also on ``numba.config`` in case something imported numba first.
+
+The first start on a machine fills it in another process (``estimation.warm_up``), never making a session wait.
 """
 
 from __future__ import annotations
@@ -71,3 +73,4 @@ def use_user_cache_for_numba() -> None:
         use_user_cache()
     elif not any(isinstance(finder, _BeforeNumba) for finder in sys.meta_path):
         sys.meta_path.insert(0, _BeforeNumba())
+

@@ -52,7 +52,8 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
     vehicle_system = getattr(source, "vehicle_system", None)  # MAVLink: the vehicle the user picked
     # Bounded tables (``table.LIVE_KEEP_ROWS``): a flight of hours must not grow the app; the recording keeps every byte.
     pipeline = Pipeline(live_estimators() if filters is None else filters, settings, protocol=getattr(source, "protocol", "gs"),
-                        vehicle_system=vehicle_system, keep_rows=LIVE_KEEP_ROWS)  # MAVLink sources say so
+                        vehicle_system=vehicle_system, keep_rows=LIVE_KEEP_ROWS,  # MAVLink sources say so
+                        compile_in_background=True)  # data from the first second, also on a first start
     metadata = {"source_spec": spec, **({"vehicle_system": vehicle_system} if vehicle_system is not None else {})}
     return LiveSession(source, pipeline, record=record, recordings_dir=recordings_dir, metadata=metadata)
 

@@ -57,6 +57,10 @@ class PipelineView:
     def settings(self) -> dict[str, dict[str, float]]:
         return self._pipeline.settings()
 
+    def uncompiled(self) -> tuple[str, ...]:
+        """The estimators whose compiled kernels are not there yet (a first start: ``EstimatorBank``)."""
+        return self._pipeline.bank.uncompiled()
+
 
 class LiveSession:
     """``source`` through ``pipeline`` (``session.factory.open_session`` makes both from a spec); the

@@ -303,16 +303,17 @@ class Pipeline:
     including settings changed later in the session (the what-if ``--set`` of replay and export).
     ``vehicle_system``: on a MAVLink link, the system id the user picked as the vehicle (else the first
     autopilot heard). ``keep_rows``: a live session's bound on every table's rows (``table.LIVE_KEEP_ROWS``;
-    None: every row stays, as a replay or a file needs).
+    None: every row stays, as a replay or a file needs). ``compile_in_background``: a live session's, which
+    starts before numba has compiled its estimators (``EstimatorBank``).
     """
 
     def __init__(self, filters=DEFAULT_FILTERS, settings=None, forced=None, assumed_sensor: SensorConfig | None = None,
                  spec: Spec = SPEC, protocol: str = "gs", aiding: str | None = None, vehicle_system: int | None = None,
-                 accept_config_changes: bool = False, keep_rows: int | None = None):
+                 accept_config_changes: bool = False, keep_rows: int | None = None, compile_in_background: bool = False):
         if protocol not in PROTOCOLS:
             raise ValueError(f"unknown protocol {protocol!r} (known: {', '.join(PROTOCOLS)})")
         self.protocol = protocol
-        self.bank = EstimatorBank(filters, settings, forced, aiding)
+        self.bank = EstimatorBank(filters, settings, forced, aiding, compile_in_background)
         self.filters = self.bank.filters
         self.assumed_sensor = assumed_sensor or SensorConfig()
         self.clock = SessionClock()

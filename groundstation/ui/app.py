@@ -106,7 +106,6 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
         signal.signal(signum, lambda *_: window.close())
 
     def open_source() -> None:
-        prepare_estimators(app).finish(window)
         if recording:
             window.open_recording(recording)
         elif port:
@@ -114,31 +113,13 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
         else:
             window.start_demo("no port given: streaming from the simulated bridge")
 
-    # The window on screen first, then the estimators' kernels (a second warm) and the source: nothing is
-    # read from the source before its session's estimators exist, so no sample waits or is lost.
+    # The window on screen first, then the source: its session starts with the estimators whose kernels
+    # numba has in its cache and runs the others interpreted while another process compiles them
+    # (``session.estimators.EstimatorBank``), so the first start shows data at once too, and nothing in
+    # this process compiles for seconds: Ctrl-C and Close are answered at the next tick.
     first_frame.on_first_paint(window, lambda: QtCore.QTimer.singleShot(0, open_source))
     window.show()
     try:
         return app.exec()
     finally:
         claim.release()
-
-
-def prepare_estimators(app):
-    """The live session's estimators made once, before the source opens, under a splash screen that
-    says so. The first start on a machine compiles their numba kernels (some seconds; later starts, also after a re-install, load
-    them from the user's cache folder: ``estimation.compiled_cache``), which would otherwise freeze the window without a word."""
-    from PySide6 import QtCore, QtGui, QtWidgets
-
-    from groundstation.estimation import create, live_estimators
-
-    blank = QtGui.QPixmap(560, 90)
-    blank.fill(QtGui.QColor("#263238"))
-    splash = QtWidgets.QSplashScreen(blank)
-    splash.show()
-    for name in live_estimators():
-        splash.showMessage(f"groundstation: preparing the {name} estimator…\n(compiled on the first start on this "
-                           "machine, then loaded from a cache)", QtCore.Qt.AlignCenter, QtGui.QColor("white"))
-        app.processEvents()
-        create(name)
-    return splash

@@ -2,23 +2,21 @@
 (``ui.app.run``), and the benchmark's stopwatch (``bench/bench_first_frame.py``).
 
 With ``GROUNDSTATION_FIRST_FRAME=1`` in the environment the app prints the process's CPU seconds (every
-thread's, since the process started) at
+thread's, since the process started; ``groundstation.stopwatch``) at
 
 - ``first paint``: the main window's first paint event (the window on screen, its plots still empty);
 - ``first data``: the first paint of any of its widgets after the live view drew with rows of the
-  session taken (``LiveView.frames_drawn``, ``Series.taken``): a curve with data on screen;
+  session taken (``LiveView.frames_drawn``, ``Series.taken``): a curve with data on screen; then the
+  estimators not compiled then (a first start: their kernels compiling in the background);
 
 then closes the window (the session stops, the recording closes, as at the close button) and so quits.
 """
 
 from __future__ import annotations
 
-import os
-import time
-
 from PySide6 import QtCore, QtWidgets
 
-ENV = "GROUNDSTATION_FIRST_FRAME"
+from groundstation import stopwatch
 
 
 class _FirstPaint(QtCore.QObject):
@@ -65,14 +63,15 @@ class FirstFrame(QtCore.QObject):
         if event.type() == QtCore.QEvent.Paint and isinstance(watched, QtWidgets.QWidget) and watched.window() is self.window:
             self.app.removeEventFilter(self)
             self._note("first data")
+            view = self.window.session.view
+            stopwatch.note_uncompiled(getattr(view, "uncompiled", tuple)())  # a file's (computed whole) has none
             QtCore.QTimer.singleShot(0, self.window.close)
         return False
 
     def _note(self, moment: str) -> None:
-        self.moments[moment] = time.process_time()
-        print(f"{moment} {self.moments[moment]:.3f}", flush=True)
+        self.moments[moment] = stopwatch.note(moment)
 
 
 def watch(app: QtWidgets.QApplication, window) -> FirstFrame | None:
     """A ``FirstFrame`` on ``window`` when the environment asks for one."""
-    return FirstFrame(app, window) if os.environ.get(ENV) else None
+    return FirstFrame(app, window) if stopwatch.wanted() else None

@@ -265,3 +265,22 @@ def test_vqf_run_is_batched_on_jittered_times_with_readings_on_some_samples(monk
     assert batches == [len(gyr)]  # the first sample's initialising from gravity included (Vqf._batch)
     q_step, table_step = vqf_stepped(gyr, acc, dt, mag)
     assert_same(q, diag, q_step, table_step, ESTIMATORS["vqf"].Diagnostics._fields)
+
+
+@pytest.mark.parametrize("name", COMPILED)
+def test_an_estimator_interpreted_until_its_kernel_is_compiled_goes_on_as_a_batch_run(name):
+    """A first start's live estimator (``ready_or_interpreted``: numba's cache empty) runs its source
+    interpreted, then goes on with the compiled kernel from its state (``take_compiled``, the kernel in
+    the cache now): every sample equals the compiled batch run to ``INTERPRETED_ATOL``, with no hole."""
+    gyr, acc, dt, mag, gps = samples(300, 7, [(40, "gap"), (90, "acc nan")], 2)
+    cls = ESTIMATORS[name]
+    live = cls(dtype=np.float64)  # as ready_or_interpreted makes it when the kernel is not in the cache
+    assert live.interpreted
+    first, rest = slice(0, 150), slice(150, None)
+    q1, table1 = stepped(live, gyr[first], acc[first], dt[first], mag[first], gps[first])
+    q, diag = create(name).run(gyr, acc, dt, mag=mag, gps=gps)  # the kernel compiled (here, not by a warm-up process)
+    assert live.take_compiled() and not live.interpreted
+    q2, table2 = stepped(live, gyr[rest], acc[rest], dt[rest], mag[rest], gps[rest])
+    assert_same(np.vstack([q1, q2]), {f: np.concatenate([table1[:, i], table2[:, i]]) for i, f in enumerate(cls.Diagnostics._fields)},
+                q, np.column_stack([diag[f] for f in cls.Diagnostics._fields]), cls.Diagnostics._fields, atol=INTERPRETED_ATOL)
+    assert type(q2[0, 0]) is np.float64 and np.isfinite(q2).all()

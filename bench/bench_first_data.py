@@ -1,0 +1,182 @@
+"""The first data of a first start (issue 34): ``groundstation app --demo`` and ``groundstation record
+--port sim:`` with numba's cache EMPTY (``NUMBA_CACHE_DIR`` a fresh temporary folder for each run, as
+after an install) against the warm start (the cache filled), in the same run.
+
+The moment: ``first data`` of the process's stopwatch (``groundstation/stopwatch.py``,
+``GROUNDSTATION_FIRST_FRAME=1``): the app's first paint with a curve of the simulated bridge on screen
+(it then closes itself), ``record``'s first IMU sample with every estimator's estimate in its tables.
+CPU seconds of the whole process (every thread) since it started. "CPU s in all" is the process and its
+children (the background compiler, stopped when the process ends) until it ended: the app at its first
+data, ``record`` after ``--duration``. Also said: how many estimators were not compiled at the first
+data (their kernels compiling in the other process). Qt renders offscreen; settings and recordings go
+to a temporary folder.
+
+The alternative to a compiling process: a compiling thread. ``--alternatives`` measures what it costs
+the process's other threads: the longest pause of a 10 ms tick in the main thread (as the window's
+redraw timer and the reader thread need the GIL) while ahf2's kernel compiles in a thread, and while it
+compiles in a process (``estimation.warm_up.WarmUp``).
+
+Install time instead (``--portable``): numba's only portable cache is one compiled for a generic CPU
+(``NUMBA_CPU_NAME=generic``). Whether a process finds ahf2's kernel in such a cache, with the host's CPU
+and with the generic one named, what it then costs to have it ready, and its speed in ``run``.
+
+    python bench/bench_first_data.py [--repeats 3] [--alternatives] [--portable]   # from the worktree root; prints Markdown
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from groundstation.stopwatch import UNCOMPILED  # noqa: E402
+
+COMMANDS = {
+    "groundstation app --demo": ["-m", "groundstation", "app", "--demo"],
+    "groundstation record --port sim: --duration 3": ["-m", "groundstation", "record", "--port", "sim:", "--duration", "3"],
+}
+FILL = ["-c", "from groundstation.estimation import create, live_estimators; [create(n) for n in live_estimators()]"]
+
+
+def run(argv: list[str], env: dict[str, str]) -> tuple[float, float, int]:
+    """(CPU s to the first data, CPU s in all, estimators not compiled at the first data)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    out = subprocess.run([sys.executable, *argv], env=env, capture_output=True, text=True, check=True, timeout=900).stdout
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    lines = out.splitlines()
+    first = next(float(line.split()[-1]) for line in lines if line.startswith("first data "))
+    uncompiled = next(line.removeprefix(UNCOMPILED).strip() for line in lines if line.startswith(UNCOMPILED))
+    total = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return first, total, len([name for name in uncompiled.split(",") if name])
+
+
+def row(label: str, runs: list[tuple[float, float, int]]) -> str:
+    first, total, interpreted = (statistics.median(r[i] for r in runs) for i in range(3))
+    return f"| {label} | {first:.2f} | {total:.2f} | {interpreted:.0f} |"
+
+
+def first_data(repeats: int) -> None:
+    with tempfile.TemporaryDirectory() as home:
+        home = Path(home)
+        base = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(ROOT),
+                "QT_QPA_PLATFORM": "offscreen", "GROUNDSTATION_FIRST_FRAME": "1", "XDG_CONFIG_HOME": str(home / "config"),
+                "GROUNDSTATION_RECORDINGS": str(home / "recordings")}
+        warm = {**base, "NUMBA_CACHE_DIR": str(home / "warm")}
+        subprocess.run([sys.executable, *FILL], env=warm, check=True)  # the warm start's cache
+        print(f"| command, numba cache | CPU s to first data | CPU s in all | estimators not compiled at first data (median of {repeats}) |")
+        print("|---|---|---|---|")
+        for label, argv in COMMANDS.items():
+            run(argv, warm)  # byte code and page cache
+            runs = {"empty": [], "warm": []}
+            for k in range(repeats):  # interleaved: the machine's load weighs on both alike
+                runs["empty"].append(run(argv, {**base, "NUMBA_CACHE_DIR": str(home / f"cold{label[14:17]}{k}")}))
+                runs["warm"].append(run(argv, warm))
+            for cache, measured in runs.items():
+                print(row(f"{label}, {cache}", measured), flush=True)
+        print(f"\nload average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs")
+
+
+def longest_pause_s(work, seconds_after: float = 0.0) -> tuple[float, float]:
+    """The longest interval between 10 ms ticks of this thread while ``work()`` (started) runs; and its wall time."""
+    import threading
+
+    done = threading.Event()
+    t0 = time.perf_counter()
+    handle = work(done)
+    longest, last = 0.0, time.perf_counter()
+    while not done.is_set():
+        time.sleep(0.01)
+        now = time.perf_counter()
+        longest, last = max(longest, now - last), now
+    if handle is not None:
+        handle()
+    return longest, time.perf_counter() - t0
+
+
+def alternatives() -> None:
+    import threading
+
+    os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="bench-thread-")
+    from groundstation.estimation import create
+    from groundstation.estimation.warm_up import WarmUp
+
+    def in_thread(done):
+        threading.Thread(target=lambda: (create("ahf2"), done.set()), daemon=True).start()
+
+    def in_process(done):
+        os.environ["NUMBA_CACHE_DIR"] = tempfile.mkdtemp(prefix="bench-process-")
+        warm = WarmUp(["ahf2"])
+
+        def watch():
+            while "ahf2" not in warm.compiled:
+                time.sleep(0.01)
+            done.set()
+
+        threading.Thread(target=watch, daemon=True).start()
+        return warm.stop
+
+    print("| ahf2's kernel compiled in | longest pause of a 10 ms tick in the main thread, s | wall s |")
+    print("|---|---|---|")
+    for label, work in (("a thread", in_thread), ("a process (WarmUp)", in_process)):
+        longest, wall = longest_pause_s(work)
+        print(f"| {label} | {longest:.3f} | {wall:.1f} |", flush=True)
+
+
+PORTABLE = """
+import sys, time
+import numpy as np
+from groundstation.estimation import create
+from groundstation.estimation.ahf2 import Ahf2
+from groundstation.estimation.base import KERNEL_SIGNATURE, _loaded
+t = time.process_time()
+found = _loaded(Ahf2.kernel, KERNEL_SIGNATURE)
+t_ready = time.process_time() - t
+t = time.process_time()
+estimator = create("ahf2")
+t_ready += time.process_time() - t
+rows = 200_000
+gyr, acc = np.random.default_rng(1).normal(0, 0.1, (rows, 3)), np.tile([0.0, 0.0, -1.0], (rows, 1))
+estimator.run(gyr[:10], acc[:10], 0.01)
+t = time.process_time()
+estimator.run(gyr, acc, 0.01)
+print(found, t_ready, (time.process_time() - t) / rows * 1e9)
+"""
+
+
+def portable() -> None:
+    print("| ahf2's kernel: cache made for, process run as | found in the cache | CPU s to have it ready | run, ns a sample |")
+    print("|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as home:
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        for made, run_as in (("generic", "generic"), ("generic", "host"), ("generic", "generic"), ("host", "host"), ("host", "host")):
+            cpu = {"NUMBA_CPU_NAME": "generic"} if run_as == "generic" else {}
+            out = subprocess.run([sys.executable, "-c", PORTABLE], env={**env, **cpu, "NUMBA_CACHE_DIR": os.path.join(home, made)},
+                                 capture_output=True, text=True, check=True).stdout.split()
+            print(f"| {made}, {run_as} | {out[0]} | {float(out[1]):.2f} | {float(out[2]):.0f} |", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--alternatives", action="store_true", help="a compiling thread against a compiling process")
+    parser.add_argument("--portable", action="store_true", help="a cache made for a generic CPU (install time)")
+    args = parser.parse_args()
+    if args.alternatives:
+        alternatives()
+    elif args.portable:
+        portable()
+    else:
+        first_data(args.repeats)
+
+
+if __name__ == "__main__":
+    main()
