@@ -24,6 +24,7 @@ from groundstation.estimation.evaluation import scores, uses_magnetometer
 from groundstation.session.catalogue import Catalogue
 from groundstation.session.figures import loss_pct, rate_hz, span_s
 
+AIDING_TABLES = {"mag": "mag_raw", "gps": "gps"}  # an aiding an estimator needs (``Estimator.needs``): the table whose rows give it
 ONBOARD = "onboard"  # the aircraft's own estimate: a table, and an attitude scored beside the host estimators
 
 
@@ -109,8 +110,8 @@ class SessionData:
 
     def aiding(self) -> frozenset[str]:
         """The aiding the estimators had ("mag", "gps"; ``Estimator.needs``): a sensor with readings in the session."""
-        has_rows = {name for name in ("mag_raw", "gps") if len(self.tables.get(name, {}).get("time_s", ()))}
-        return frozenset({"mag"} if self.magnetometer or "mag_raw" in has_rows else set()) | ({"gps"} if "gps" in has_rows else set())
+        had = {need for need, table in AIDING_TABLES.items() if len(self.tables.get(table, {}).get("time_s", ()))}
+        return frozenset(had | ({"mag"} if self.magnetometer else set()))
 
     def has_onboard(self) -> bool:
         return ONBOARD in self.tables and bool(np.isfinite(self.tables[ONBOARD]["qw"]).any())

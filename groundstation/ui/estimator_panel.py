@@ -15,7 +15,8 @@ import dataclasses
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.estimation import ESTIMATORS, about, label
+from groundstation.estimation import ESTIMATORS, about, label, unmet_needs
+from groundstation.session.product import AIDING_TABLES
 from groundstation.session.view import Session
 
 SHOWN_COLUMNS = 4  # "show" check boxes per row
@@ -120,9 +121,16 @@ class EstimatorPanel(QtWidgets.QGroupBox):
 
     def _shown_changed(self, name: str, on: bool) -> None:
         self.visibilityChanged.emit(label(name), on)
+        if on and (why := unmet_needs(name, self._aiding())):  # shown, and said to be little use so far
+            self.message.setText(f"{why}; this session has none so far")
         filters = self.session.view.filters
         if on and name not in filters:  # only a replay offers it: compute it again with this estimator too
             self.replayAsked.emit((*filters, name), self._forced())
+
+    def _aiding(self) -> set[str]:
+        """The aiding the session has had so far (``product.AIDING_TABLES``: a sensor table with rows)."""
+        tables = self.session.view.tables
+        return {need for need, table in AIDING_TABLES.items() if table in tables and len(tables[table])}
 
     def _forced(self) -> dict[str, dict[str, float]]:
         """The fields of every estimator the session runs: the settings a recomputed replay is to use."""

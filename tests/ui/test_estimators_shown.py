@@ -155,3 +155,19 @@ def test_settings_from_before_the_new_estimators_keep_them_hidden(window, qtbot,
     qtbot.addWidget(third)
     third.start_demo()
     assert third.estimator_panel.shown["ukf"].isChecked() and not third.estimator_panel.shown["mcf"].isChecked()
+
+
+def test_a_gps_aided_estimator_shown_without_gps_is_said_to_need_it(window, qtbot):
+    """Issue 33: shown on a session without GPS, UKF says in the panel why it is little use; with GPS it does not."""
+    window.connect_serial("sim:?sensors=mag")
+    qtbot.waitUntil(lambda: window.session is not None and len(window.session.view.imu) > 50, timeout=LIMIT_MS)
+    panel = window.estimator_panel
+    panel.shown["ukf"].setChecked(True)
+    assert "ukf needs GPS velocity and heading" in panel.message.text()
+    panel.shown["ukf"].setChecked(False)
+    panel.message.clear()
+    window.start_demo()  # the demo has GPS
+    qtbot.waitUntil(lambda: window.session.source.description.startswith("simulated")
+                    and len(window.session.view.tables.get("gps", ())) > 0, timeout=LIMIT_MS)
+    window.estimator_panel.shown["ukf"].setChecked(True)
+    assert "needs" not in window.estimator_panel.message.text()
