@@ -24,8 +24,10 @@ Steps (van der Merwe and Wan's square-root UKF with additive noise, which seed 0
   (weight wc0); ``Sy`` likewise with ``√R``; ``K = (Pxy / Syᵀ) / Sy``; ``S = cholupdate(S⁻, K Sy, -1)``
   column by column. The factor is carried instead of P, never re-factorised.
 
-Measurements here are angles (rad): sigma-point outputs are unwrapped around the centre point's and
-the innovation wrapped into [-π, π).
+Measurements: the first ``linear_rows`` outputs are plain numbers (ukf's gravity direction), the rest
+angles (rad): an angle row's sigma-point outputs are unwrapped around the centre point's and its
+innovation wrapped into [-π, π); a linear row is taken as it is (wrapping a gravity component of up to
+±4 g under vibration would fold it).
 
 The steps are ``register_jitable`` (``small_linalg``): compiled into the ukf kernel (ukf.py), plain
 Python on numpy arrays elsewhere; on n = 4 LAPACK's per-call cost (``qr`` ~20-50 µs) would hide the
@@ -231,10 +233,11 @@ def sqrt_time_update(chi_f, wm, wc, sqrt_wc, sqrt_q, work=None):
 
 
 @register_jitable
-def _output_spread(x, chi, y_sigma, y, wm, work):
-    """``(dy, dx, innovation, work, offset)`` of angle outputs ``h(χ)`` (m, L), each row unwrapped around
-    its centre point's when it spans π or more, and the innovation wrapped into [-π, π); in ``work`` (a new
-    one for None; ``offset``: what they use of it), the measurement updates' first step."""
+def _output_spread(x, chi, y_sigma, y, wm, work, linear_rows):
+    """``(dy, dx, innovation, work, offset)`` of outputs ``h(χ)`` (m, L): rows from ``linear_rows`` on are
+    angles, each unwrapped around its centre point's when it spans π or more, its innovation wrapped into
+    [-π, π); in ``work`` (a new one for None; ``offset``: what they use of it), the measurement updates'
+    first step."""
     m, count = y_sigma.shape
     n = x.shape[0]
     work = _work(work, work_size(n, count, m))
@@ -248,13 +251,13 @@ def _output_spread(x, chi, y_sigma, y, wm, work):
             v = y_sigma[i, point]
             low, high = min(low, v), max(high, v)
         for point in range(count):
-            dy[i, point] = y_sigma[i, point] if high - low < math.pi else r0 + wrap_pi(y_sigma[i, point] - r0)
+            dy[i, point] = y_sigma[i, point] if i < linear_rows or high - low < math.pi else r0 + wrap_pi(y_sigma[i, point] - r0)
     _spread(dy, wm, True, y_hat, dy)
     for i in range(n):
         for point in range(count):
             dx[i, point] = chi[point, i] - x[i]
     for i in range(m):
-        innovation[i] = wrap_pi(y[i] - y_hat[i])
+        innovation[i] = y[i] - y_hat[i] if i < linear_rows else wrap_pi(y[i] - y_hat[i])
     return dy, dx, innovation, work, offset
 
 
@@ -270,12 +273,12 @@ def _corrected(x, k, innovation, out):
 
 
 @register_jitable
-def measurement_update(x, p, chi, y_sigma, y, r_diag, wm, wc, work=None):
-    """Dense: prior ``(x, P)``, its points ``χ`` (L, n), their angle outputs ``h(χ)`` (m, L), the
-    measured angles ``y`` and the noise's diagonal -> ``(ok, x, P, innovation)`` (views of ``work``
-    when given)."""
+def measurement_update(x, p, chi, y_sigma, y, r_diag, wm, wc, work=None, linear_rows=0):
+    """Dense: prior ``(x, P)``, its points ``χ`` (L, n), their outputs ``h(χ)`` (m, L), the measurements
+    ``y`` (the first ``linear_rows`` plain numbers, the rest angles) and the noise's diagonal ->
+    ``(ok, x, P, innovation)`` (views of ``work`` when given)."""
     n, m = x.shape[0], y.shape[0]
-    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work)
+    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work, linear_rows)
     p_yy, offset = _take(work, offset, m, m)
     p_xy, offset = _take(work, offset, n, m)
     low, offset = _take(work, offset, m, m)
@@ -292,12 +295,12 @@ def measurement_update(x, p, chi, y_sigma, y, r_diag, wm, wc, work=None):
 
 
 @register_jitable
-def sqrt_measurement_update(x, s, chi, y_sigma, y, sqrt_r, wm, wc, sqrt_wc, work=None):
+def sqrt_measurement_update(x, s, chi, y_sigma, y, sqrt_r, wm, wc, sqrt_wc, work=None, linear_rows=0):
     """Square root: as ``measurement_update`` with the factor ``S`` and √R's diagonal -> ``(ok, x, S,
     innovation)``: ``Sy`` by QR and cholupdate, ``K = Pxy (Sy Syᵀ)⁻¹``, ``S`` downdated by each column of
     ``K Sy``."""
     n, m = x.shape[0], y.shape[0]
-    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work)
+    dy, dx, innovation, work, offset = _output_spread(x, chi, y_sigma, y, wm, work, linear_rows)
     k, offset = _take(work, offset, n, m)
     s_new, offset = _take(work, offset, n, n)
     x_new = work[offset : offset + n]

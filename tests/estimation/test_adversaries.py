@@ -152,21 +152,7 @@ def adversary(key):
     return _RUNS[key]
 
 
-# Known to fail, with why: the unscented filters measure pitch and roll as ``acc_pitch_roll`` of each reading,
-# and under ±3 g of vibration those angles average 30-45° off gravity's (mean of atan2 is not atan2 of the
-# mean); the large innovations also read as "lost" every 0.25 s, and each covariance restart takes the
-# biased angles in at the initial gain. A measurement linear in the reading (as ekf's) is the cure.
-KNOWN = {
-    ("ukf", "vibration_100hz"): "ukf's Euler-angle tilt measurement is biased under vibration (comment above)",
-    ("sssrukf", "vibration_100hz"): "sssrukf's Euler-angle tilt measurement is biased under vibration (comment above)",
-}
-
-
-@pytest.mark.parametrize(
-    ("name", "key"),
-    [pytest.param(name, key, marks=[pytest.mark.xfail(strict=True, reason=KNOWN[name, key])] if (name, key) in KNOWN else [])
-     for name in ESTIMATORS for key in ADVERSARIES],
-)
+@pytest.mark.parametrize(("name", "key"), [(name, key) for name in ESTIMATORS for key in ADVERSARIES])
 def test_no_inclination_excursion_above_20_degrees(name, key):
     run = adversary(key)
     excursion = run.excursion_deg(run.estimate(name))

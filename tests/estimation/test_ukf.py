@@ -95,6 +95,32 @@ def test_square_root_steps_equal_the_dense_steps_on_the_same_sigma_points(name):
     assert np.trace(p1) < np.trace(p_d)  # the measurement informed the state
 
 
+@pytest.mark.parametrize("name", list(SETS))
+def test_linear_rows_give_the_kalman_update_and_are_not_wrapped(name):
+    """ukf's gravity rows are linear (``linear_rows``): for a linear h the unscented update is exactly the
+    Kalman filter's, here with innovations of ±4 (a shaken accelerometer in g), which wrapping as angles
+    would fold to ∓2.28; the last row stays an angle, its 2π-apart measurement wrapped."""
+    sigma = SETS[name]
+    rng = np.random.default_rng(4)
+    x = quat.from_euler_zyx(0.3, -0.2, 0.1)
+    a = rng.normal(0.0, 0.05, (4, 4))
+    p = a @ a.T + 1e-6 * np.eye(4)
+    s = np.linalg.cholesky(p)
+    h = rng.normal(size=(3, 4))
+    chi = sp.points(x, s, sigma.z)
+    y = h @ x + np.array([4.0, -4.0, 2.0 * math.pi + 0.01])
+    r = np.array([1e-2, 2e-2, 1e-3])
+    wanted_nu = np.array([4.0, -4.0, 0.01])
+    k = p @ h.T @ np.linalg.inv(h @ p @ h.T + np.diag(r))
+    ok1, x1, p1, nu1 = sp.measurement_update(x, p, chi, h @ chi.T, y, r, sigma.wm, sigma.wc, None, 2)
+    ok2, x2, s2, nu2 = sp.sqrt_measurement_update(x, s, chi, h @ chi.T, y, np.sqrt(r), sigma.wm, sigma.wc, sigma.sqrt_wc, None, 2)
+    assert ok1 and ok2
+    for nu, x_new, p_new in ((nu1, x1, p1), (nu2, x2, s2 @ s2.T)):
+        np.testing.assert_allclose(nu, wanted_nu, atol=1e-12)
+        np.testing.assert_allclose(x_new, x + k @ wanted_nu, atol=1e-12)
+        np.testing.assert_allclose(p_new, p - k @ h @ p, atol=1e-12)
+
+
 def test_both_filters_converge_to_truth_on_the_car_and_beat_the_raw_accelerometer(car, car_estimates):
     after = car.truth.t_s > 15.0  # converged
     acc_tilt = np.degrees(np.array([base.acc_pitch_roll(*a) for a in car.acc_g]))
@@ -198,7 +224,8 @@ def test_recovers_after_half_a_second_at_gyro_full_scale_then_rest_with_gps_head
     q, diag = create(name).run(run.gyr_rad_s, run.acc_g, run.dt_s, gps=run.gps)
     error_deg = np.degrees(quat.angle_between(q, run.truth.q_body_to_ned))
     t = run.truth.t_s
-    assert error_deg[(t > 2.5) & (t < 3.0)].max() > 20.0  # the spin did put it off
+    # the spin (2.0-2.5 s) did put it off (the lost test may restart the covariance within the spin)
+    assert error_deg[(t > 2.0) & (t < 3.0)].max() > 20.0
     assert error_deg[t >= 12.5].max() < 3.0
 
 
