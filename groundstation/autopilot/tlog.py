@@ -23,6 +23,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from firmware_protocol.decoder import BACK_TOLERANCE_US
 
@@ -30,7 +31,9 @@ from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder, new_parser
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, cut_message, series
 from groundstation.autopilot.imu_choice import ImuChoice, said_choice
-from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
+from groundstation.autopilot.mapping import (
+    MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, PRESSURE_TYPES, SCALED_IMU_TYPES, MessageMapper,
+)
 from groundstation.errors import UserError
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.clock import DRIFT_TOLERANCE, JUMP_TOLERANCE_S
@@ -150,6 +153,17 @@ def session_packets(data: bytes) -> SessionPackets:
     return SessionPackets(stamped, bad_bytes, bad_runs, compressed, unfinished)
 
 
+# The messages whose records time the autopilot clock or choose the vehicle (``Vehicle.choose``): the
+# clock decodes these only (a fifth of a log's packets: the session decodes every packet again after it)
+_CLOCK_MESSAGE_IDS = frozenset(getattr(mavlink, f"MAVLINK_MSG_ID_{name}") for name in (
+    "HEARTBEAT", "RAW_IMU", "HIGHRES_IMU", "ATTITUDE", "ATTITUDE_QUATERNION", *SCALED_IMU_TYPES, *PRESSURE_TYPES))
+
+
+def _message_id(packet: bytes) -> int:
+    """The message id in a whole packet's header (MAVLink 1: one byte; 2: three, little-endian)."""
+    return packet[5] if packet[0] == MAGIC_V1 else int.from_bytes(packet[7:10], "little")
+
+
 def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
     """Each packet's time on the vehicle's clock (ns from the first packet's receive time: the autopilot
     time reached so far), if the log's receive times are compressed; else None. Judged over the log's
@@ -158,6 +172,9 @@ def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
     decoder, vehicle = MavlinkDecoder(), Vehicle()  # the front-end's choice of the vehicle
     reached_us, latest_us, times = 0, None, []
     for t_ns, packet in stamped:
+        if decoder.idle and _message_id(packet) not in _CLOCK_MESSAGE_IDS:  # (its records neither time nor choose)
+            times.append(reached_us)
+            continue
         for r in decoder.feed(packet, t_ns):
             vehicle.choose(r)
             timed = isinstance(r, (rec.ImuSample, rec.OnboardAttitude, rec.MagReading, rec.BaroReading))

@@ -129,3 +129,22 @@ def test_a_sitl_tlog_opens_on_the_autopilot_clock_and_a_live_one_on_its_receive_
     write_tlog(path, packets)
     stamped = session_packets(path.read_bytes())
     assert not stamped.compressed and [t for t, _ in stamped.packets] == [t * 1000 for t, _ in packets]
+
+
+def test_the_autopilot_clock_decodes_only_the_messages_that_time_it(monkeypatch):
+    """Issue 35: the clock's pass decoded every packet, which the session decodes again after it (a third
+    of opening a .tlog). It decodes the messages whose records time the clock or choose the vehicle: the
+    same clock as every packet decoded (the boat's start: compressed, damaged bytes at its start)."""
+    from groundstation.autopilot import tlog
+    from groundstation.autopilot.decoder import MavlinkDecoder
+
+    data = flightlog("ardurover_boat_sitl_autotest.tlog").read_bytes()[:400_000]
+    fed = []
+    feed = MavlinkDecoder.feed
+    monkeypatch.setattr(MavlinkDecoder, "feed", lambda self, *args: fed.append(1) or feed(self, *args))
+    stamped = tlog.session_packets(data)
+    decoded = len(fed)
+    monkeypatch.setattr(tlog, "_message_id", lambda packet: mavutil.mavlink.MAVLINK_MSG_ID_HEARTBEAT)  # every one decoded
+    every = tlog.session_packets(data)
+    assert stamped.compressed and stamped.packets == every.packets
+    assert len(fed) - decoded == len(stamped.packets) and decoded < len(stamped.packets) / 3
