@@ -64,17 +64,24 @@ UNFINISHED = b""  # packets(): the file ends inside this record
 def packets(data: bytes) -> Iterator[tuple[int, bytes | None]]:
     """(receive time µs since 1970, packet bytes) in file order; ``(skipped_bytes, None)`` for junk, and
     last ``(its bytes, UNFINISHED)`` when the file ends inside a record (a cut log)."""
+    for stamp_us, start, stop in _records(data):
+        yield stamp_us, (data[start:stop] if stop is not None else start)
+
+
+def _records(data: bytes) -> Iterator[tuple[int, int | bytes | None, int | None]]:
+    """``packets`` as places in ``data``: (receive time µs, start, stop) of each packet; junk and the
+    unfinished end as ``packets`` says them, with a stop of None."""
     at, last_us, end = 0, None, len(data)
     while at + 8 < end:
         (stamp_us,) = STAMP.unpack_from(data, at)
         length = packet_length(data, at + 8)
         plausible = _plausible(stamp_us, last_us)
         if length is not None and plausible and at + 8 + length <= end:
-            yield stamp_us, data[at + 8 : at + 8 + length]
+            yield stamp_us, at + 8, at + 8 + length
             last_us, at = stamp_us, at + 8 + length
             continue
         if length is not None and plausible:  # a record that runs past the end
-            yield end - at, UNFINISHED
+            yield end - at, UNFINISHED, None
             return
         start = at
         at += 1
@@ -82,9 +89,9 @@ def packets(data: bytes) -> Iterator[tuple[int, bytes | None]]:
             at += 1
         if at + 8 >= end:  # junk to the end
             at = end
-        yield at - start, None
+        yield at - start, None, None
     if at < end:  # a record cut inside its receive time
-        yield end - at, UNFINISHED
+        yield end - at, UNFINISHED, None
 
 
 def _looks_like_record(data, at: int, last_us: int | None) -> bool:
@@ -117,11 +124,36 @@ def messages(path, progress=None) -> Iterator[tuple[int, object]]:
             yield len(packet) + 8, None
 
 
+class Packets:
+    """(receive time ns, packet bytes) of a log's packets in file order, as a sequence: kept as the file's
+    bytes and columns of places and times (a list of tuples of bytes took ~4x the file), each packet's
+    bytes cut when it is asked."""
+
+    def __init__(self, data: bytes, starts: np.ndarray, stops: np.ndarray, times_ns: np.ndarray):
+        self._data, self._starts, self._stops, self.times_ns = data, starts, stops, times_ns
+
+    def __len__(self) -> int:
+        return len(self.times_ns)
+
+    def __getitem__(self, i: int) -> tuple[int, bytes]:
+        return int(self.times_ns[i]), self._data[self._starts[i] : self._stops[i]]
+
+    def __iter__(self) -> Iterator[tuple[int, bytes]]:
+        data, block = self._data, 65_536  # places as Python ints a block at a time
+        for first in range(0, len(self), block):
+            rows = slice(first, first + block)
+            for t_ns, start, stop in zip(self.times_ns[rows].tolist(), self._starts[rows].tolist(), self._stops[rows].tolist()):
+                yield t_ns, data[start:stop]
+
+    def __eq__(self, other) -> bool:
+        return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+
+
 @dataclasses.dataclass
 class SessionPackets:
     """A ``.tlog``'s packets as a session receives them: (receive time ns, packet) in file order."""
 
-    packets: list[tuple[int, bytes]]
+    packets: Packets
     bad_bytes: int  # bytes between the records, skipped
     bad_runs: int
     compressed: bool  # receive times replaced by the autopilot's clock (the module's rule)
@@ -138,18 +170,23 @@ class SessionPackets:
 
 def session_packets(data: bytes) -> SessionPackets:
     """The packets of a ``.tlog``'s bytes with the receive times a session feeds them at."""
-    stamped, bad_bytes, bad_runs, unfinished = [], 0, 0, 0
-    for stamp_us, packet in packets(data):
-        if packet is UNFINISHED:
+    data = bytes(data)
+    stamps, starts, stops, bad_bytes, bad_runs, unfinished = [], [], [], 0, 0, 0
+    for stamp_us, start, stop in _records(data):
+        if start is UNFINISHED:
             unfinished = stamp_us
-        elif packet is None:
+        elif start is None:
             bad_bytes, bad_runs = bad_bytes + stamp_us, bad_runs + 1
         else:  # a packet that fails its check is the decoder's to count, as on a live link
-            stamped.append((stamp_us * 1000, bytes(packet)))
+            stamps.append(stamp_us)
+            starts.append(start)
+            stops.append(stop)
+    stamped = Packets(data, np.array(starts, dtype=np.int64), np.array(stops, dtype=np.int64), np.array(stamps, dtype=np.int64) * 1000)
+    del stamps, starts, stops
     on_autopilot = _autopilot_clock(stamped)
     compressed = on_autopilot is not None
     if compressed:
-        stamped = list(zip(on_autopilot, (packet for _, packet in stamped)))
+        stamped.times_ns = np.array(on_autopilot, dtype=np.int64)
     return SessionPackets(stamped, bad_bytes, bad_runs, compressed, unfinished)
 
 
@@ -164,7 +201,7 @@ def _message_id(packet: bytes) -> int:
     return packet[5] if packet[0] == MAGIC_V1 else int.from_bytes(packet[7:10], "little")
 
 
-def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
+def _autopilot_clock(stamped: Packets) -> list[int] | None:
     """Each packet's time on the vehicle's clock (ns from the first packet's receive time: the autopilot
     time reached so far), if the log's receive times are compressed; else None. Judged over the log's
     later half by receive time: a live link's backlog at the start (bytes queued before the session

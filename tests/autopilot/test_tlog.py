@@ -148,3 +148,23 @@ def test_the_autopilot_clock_decodes_only_the_messages_that_time_it(monkeypatch)
     every = tlog.session_packets(data)
     assert stamped.compressed and stamped.packets == every.packets
     assert len(fed) - decoded == len(stamped.packets) and decoded < len(stamped.packets) / 3
+
+
+def test_a_logs_packets_are_kept_as_columns_not_a_list_of_tuples_of_bytes():
+    """Issue 35: the packets a session is fed took ~4x the file as a list of (time, bytes) tuples; kept as
+    the file's bytes and columns of places and times, they take the file and a few bytes a packet."""
+    import tracemalloc
+
+    from groundstation.autopilot.tlog import session_packets
+
+    data = flightlog("ardusub_rov_surface.tlog").read_bytes()
+    session_packets(data)  # what it imports on first use, imported
+    tracemalloc.start()
+    try:
+        stamped = session_packets(data)
+        held = tracemalloc.get_traced_memory()[0]
+    finally:
+        tracemalloc.stop()
+    assert len(stamped.packets) > 10_000
+    assert held < 0.75 * len(data)  # the file's bytes are the caller's; 24 bytes a packet beside them
+    assert [len(p) for _, p in stamped.packets][:3] == [len(stamped.packets[i][1]) for i in range(3)]
