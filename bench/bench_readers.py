@@ -118,6 +118,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--flightlogs-only", action="store_true")
     parser.add_argument("--suffixes", default=".tlog,.bin,.ulg", help="the flight logs measured, by suffix")
+    parser.add_argument("--logs", default="*.*", help="the flight logs measured, by a pattern of their names")
     parser.add_argument("--readers", default="whole,flightlog,open,pymavlink", help="the readers of flight logs")
     parser.add_argument("--tree", type=Path, action="append", help="a checkout to run the rows from (default: this one)")
     args = parser.parse_args()
@@ -138,7 +139,7 @@ def main() -> None:
         if not args.flightlogs_only:
             path = sparse_zeros(folder, "zeros")
             print(measure_row("2 GiB of zeros (sparse)", "recording", path), flush=True)
-        for log in sorted(FLIGHT_LOGS.glob("*.*")):
+        for log in sorted(FLIGHT_LOGS.glob(args.logs)):
             if log.suffix in args.suffixes.split(","):
                 for reader in args.readers.split(","):
                     if reader != "pymavlink" or log.suffix == ".tlog":  # pymavlink's parse: the .tlog's baseline
