@@ -19,6 +19,12 @@ process time, imports excluded. The cases, all in the same run:
 ``open`` and ``export`` run with the three filters of the issue's table (ahf,hf,ecf) at every length and
 with the app's live set of ten at ``--live-minutes``. MB per hour is the slope of the export's peak
 between the shortest and the longest length.
+
+``--whole-process`` measures the commands as a user runs them instead, the issue's table: each under
+``/usr/bin/time -v`` (CPU seconds user + system, peak RSS, libraries included), with the live set, on
+flights with the demo's sensors (``simulate --scenario flight --sensors mag,baro,gps``) of ``--minutes``
+and of 20 s: ``export X.parquet``, ``replay`` (the open), ``export X.xlsx``; each run ``--repeats`` times,
+the checkouts of ``--tree`` (default: this one; e.g. a baseline's beside it) interleaved; minimum and median.
 """
 
 from __future__ import annotations
@@ -93,9 +99,17 @@ def main() -> None:
     parser.add_argument("--minutes", default="10,60,240", help="session lengths in minutes (default 10,60,240)")
     parser.add_argument("--live-minutes", type=float, default=60.0, help="the length opened with the live set too")
     parser.add_argument("--child", nargs=5, help=argparse.SUPPRESS)
+    parser.add_argument("--whole-process", action="store_true", help="the commands under /usr/bin/time -v (above)")
+    parser.add_argument("--tree", type=Path, action="append", help="with --whole-process: a checkout to run from")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--cases", default="parquet,replay,xlsx", help="with --whole-process: which commands")
     args = parser.parse_args()
     if args.child:
         child(*args.child)
+        return
+    if args.whole_process:
+        whole_process([float(m) for m in args.minutes.split(",")], [t.resolve() for t in args.tree or [ROOT]],
+                      args.repeats, args.cases.split(","))
         return
     from groundstation.estimation import live_estimators
 
@@ -126,6 +140,48 @@ def main() -> None:
         print(f"\nexport ({THREE}): MB per hour of session (slope {m0:g} -> {m1:g} min): {(b1 - b0) / ((m1 - m0) / 60):.0f}")
         for (ma, ba), (mb, bb) in zip(exports, exports[1:]):
             print(f"  {ma:g} -> {mb:g} min: {(bb - ba) / ((mb - ma) / 60):.0f} MB per hour")
+
+
+def timed(command: list[str], tree: Path) -> tuple[float, float]:
+    """CPU seconds (user + system) and peak RSS (MB) of ``command`` run from ``tree`` (/usr/bin/time -v)."""
+    out = subprocess.run(["/usr/bin/time", "-v", *command], cwd=tree, env={**os.environ, "PYTHONPATH": str(tree)},
+                         capture_output=True, text=True)
+    if out.returncode:
+        sys.exit(f"{' '.join(command)} in {tree} failed:\n{out.stderr[-2000:]}")
+    field = {line.split(":")[0].strip(): line.rsplit(":", 1)[1].strip() for line in out.stderr.splitlines() if ":" in line}
+    return float(field["User time (seconds)"]) + float(field["System time (seconds)"]), int(field["Maximum resident set size (kbytes)"]) / 1024
+
+
+def whole_process(minutes: list[float], trees: list[Path], repeats: int, cases: list[str]) -> None:
+    import statistics
+
+    from groundstation.estimation import live_estimators
+
+    live = ",".join(live_estimators())
+    print(f"python {sys.version.split()[0]}, load average {os.getloadavg()[0]:.1f} at the start; trees: {', '.join(map(str, trees))}\n")
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="bench_export_memory.") as folder:
+        for length_s in [20.0, *(60 * m for m in minutes)]:
+            recording = Path(folder) / f"{length_s:g}s.gsrec"
+            subprocess.run([sys.executable, "-m", "groundstation", "simulate", "--scenario", "flight", "--sensors", "mag,baro,gps",
+                            "--duration", str(length_s), "--out", str(recording)], check=True, capture_output=True,
+                           env={**os.environ, "PYTHONPATH": str(ROOT)})
+            commands = {"parquet": ["export", str(recording), "--filters", live, "--out", f"{folder}/out.parquet", "--overwrite"],
+                        "xlsx": ["export", str(recording), "--filters", live, "--out", f"{folder}/out.xlsx", "--overwrite"],
+                        "replay": ["replay", str(recording), "--filters", live]}
+            for case in cases:
+                runs: dict[Path, list] = {tree: [] for tree in trees}
+                for _ in range(repeats):
+                    for tree in trees:
+                        runs[tree].append(timed([sys.executable, "-m", "groundstation", *commands[case]], tree))
+                for tree, measured in runs.items():
+                    cpu, rss = [c for c, _ in measured], [r for _, r in measured]
+                    rows.append((f"{length_s / 60:g} min", case, tree.name, min(cpu), statistics.median(cpu), min(rss), statistics.median(rss)))
+                    print("| {} | {} | {} | {:.2f} | {:.2f} | {:.0f} | {:.0f} |".format(*rows[-1]), flush=True)
+            recording.unlink()
+    print("\n| session | command (live set) | tree | CPU s min | CPU s median | peak RSS MB min | peak RSS MB median |\n|---|---|---|---:|---:|---:|---:|")
+    for row in rows:
+        print("| {} | {} | {} | {:.2f} | {:.2f} | {:.0f} | {:.0f} |".format(*row))
 
 
 if __name__ == "__main__":

@@ -57,6 +57,11 @@ class MavlinkDecoder:
         self.stats.messages += len(out)
         return out
 
+    @property
+    def idle(self) -> bool:
+        """No bytes of an unfinished message wait in the parser: the next packet is parsed on its own."""
+        return self._parser.buf_len() == 0
+
     def feed(self, data: bytes, t_host_ns: int = 0) -> list:
         """Records of every message completed by ``data``, in arrival order."""
         records = []

@@ -104,16 +104,21 @@ class ImuRateMonitor:
 
     def __init__(self, window: int = 50):
         self._times_us: deque[int] = deque(maxlen=window)
+        self._rate_hz: float | None = None  # of the samples held (None: to be taken again)
 
     def add(self, time_us: int) -> None:
         if not self._times_us or time_us > self._times_us[-1]:
             self._times_us.append(time_us)
+            self._rate_hz = None
 
     @property
     def rate_hz(self) -> float:
+        """Asked after every chunk the front-end is fed: the median is taken again only when a sample came."""
         if len(self._times_us) < 3:
             return float("nan")
-        return rate_hz(np.array(self._times_us, dtype=float) / 1e6)
+        if self._rate_hz is None:
+            self._rate_hz = rate_hz(np.array(self._times_us, dtype=float) / 1e6)
+        return self._rate_hz
 
     @property
     def too_slow(self) -> bool:

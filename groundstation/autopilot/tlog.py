@@ -23,6 +23,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from firmware_protocol.decoder import BACK_TOLERANCE_US
 
@@ -30,7 +31,9 @@ from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder, new_parser
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, cut_message, series
 from groundstation.autopilot.imu_choice import ImuChoice, said_choice
-from groundstation.autopilot.mapping import MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, MessageMapper
+from groundstation.autopilot.mapping import (
+    MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_AUTOPILOT_INVALID, MAV_AUTOPILOT_PX4, PRESSURE_TYPES, SCALED_IMU_TYPES, MessageMapper,
+)
 from groundstation.errors import UserError
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session.clock import DRIFT_TOLERANCE, JUMP_TOLERANCE_S
@@ -61,17 +64,24 @@ UNFINISHED = b""  # packets(): the file ends inside this record
 def packets(data: bytes) -> Iterator[tuple[int, bytes | None]]:
     """(receive time µs since 1970, packet bytes) in file order; ``(skipped_bytes, None)`` for junk, and
     last ``(its bytes, UNFINISHED)`` when the file ends inside a record (a cut log)."""
+    for stamp_us, start, stop in _records(data):
+        yield stamp_us, (data[start:stop] if stop is not None else start)
+
+
+def _records(data: bytes) -> Iterator[tuple[int, int | bytes | None, int | None]]:
+    """``packets`` as places in ``data``: (receive time µs, start, stop) of each packet; junk and the
+    unfinished end as ``packets`` says them, with a stop of None."""
     at, last_us, end = 0, None, len(data)
     while at + 8 < end:
         (stamp_us,) = STAMP.unpack_from(data, at)
         length = packet_length(data, at + 8)
         plausible = _plausible(stamp_us, last_us)
         if length is not None and plausible and at + 8 + length <= end:
-            yield stamp_us, data[at + 8 : at + 8 + length]
+            yield stamp_us, at + 8, at + 8 + length
             last_us, at = stamp_us, at + 8 + length
             continue
         if length is not None and plausible:  # a record that runs past the end
-            yield end - at, UNFINISHED
+            yield end - at, UNFINISHED, None
             return
         start = at
         at += 1
@@ -79,9 +89,9 @@ def packets(data: bytes) -> Iterator[tuple[int, bytes | None]]:
             at += 1
         if at + 8 >= end:  # junk to the end
             at = end
-        yield at - start, None
+        yield at - start, None, None
     if at < end:  # a record cut inside its receive time
-        yield end - at, UNFINISHED
+        yield end - at, UNFINISHED, None
 
 
 def _looks_like_record(data, at: int, last_us: int | None) -> bool:
@@ -114,11 +124,36 @@ def messages(path, progress=None) -> Iterator[tuple[int, object]]:
             yield len(packet) + 8, None
 
 
+class Packets:
+    """(receive time ns, packet bytes) of a log's packets in file order, as a sequence: kept as the file's
+    bytes and columns of places and times (a list of tuples of bytes took ~4x the file), each packet's
+    bytes cut when it is asked."""
+
+    def __init__(self, data: bytes, starts: np.ndarray, stops: np.ndarray, times_ns: np.ndarray):
+        self._data, self._starts, self._stops, self.times_ns = data, starts, stops, times_ns
+
+    def __len__(self) -> int:
+        return len(self.times_ns)
+
+    def __getitem__(self, i: int) -> tuple[int, bytes]:
+        return int(self.times_ns[i]), self._data[self._starts[i] : self._stops[i]]
+
+    def __iter__(self) -> Iterator[tuple[int, bytes]]:
+        data, block = self._data, 65_536  # places as Python ints a block at a time
+        for first in range(0, len(self), block):
+            rows = slice(first, first + block)
+            for t_ns, start, stop in zip(self.times_ns[rows].tolist(), self._starts[rows].tolist(), self._stops[rows].tolist()):
+                yield t_ns, data[start:stop]
+
+    def __eq__(self, other) -> bool:
+        return len(self) == len(other) and all(a == b for a, b in zip(self, other))
+
+
 @dataclasses.dataclass
 class SessionPackets:
     """A ``.tlog``'s packets as a session receives them: (receive time ns, packet) in file order."""
 
-    packets: list[tuple[int, bytes]]
+    packets: Packets
     bad_bytes: int  # bytes between the records, skipped
     bad_runs: int
     compressed: bool  # receive times replaced by the autopilot's clock (the module's rule)
@@ -135,22 +170,38 @@ class SessionPackets:
 
 def session_packets(data: bytes) -> SessionPackets:
     """The packets of a ``.tlog``'s bytes with the receive times a session feeds them at."""
-    stamped, bad_bytes, bad_runs, unfinished = [], 0, 0, 0
-    for stamp_us, packet in packets(data):
-        if packet is UNFINISHED:
+    data = bytes(data)
+    stamps, starts, stops, bad_bytes, bad_runs, unfinished = [], [], [], 0, 0, 0
+    for stamp_us, start, stop in _records(data):
+        if start is UNFINISHED:
             unfinished = stamp_us
-        elif packet is None:
+        elif start is None:
             bad_bytes, bad_runs = bad_bytes + stamp_us, bad_runs + 1
         else:  # a packet that fails its check is the decoder's to count, as on a live link
-            stamped.append((stamp_us * 1000, bytes(packet)))
+            stamps.append(stamp_us)
+            starts.append(start)
+            stops.append(stop)
+    stamped = Packets(data, np.array(starts, dtype=np.int64), np.array(stops, dtype=np.int64), np.array(stamps, dtype=np.int64) * 1000)
+    del stamps, starts, stops
     on_autopilot = _autopilot_clock(stamped)
     compressed = on_autopilot is not None
     if compressed:
-        stamped = list(zip(on_autopilot, (packet for _, packet in stamped)))
+        stamped.times_ns = np.array(on_autopilot, dtype=np.int64)
     return SessionPackets(stamped, bad_bytes, bad_runs, compressed, unfinished)
 
 
-def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
+# The messages whose records time the autopilot clock or choose the vehicle (``Vehicle.choose``): the
+# clock decodes these only (a fifth of a log's packets: the session decodes every packet again after it)
+_CLOCK_MESSAGE_IDS = frozenset(getattr(mavlink, f"MAVLINK_MSG_ID_{name}") for name in (
+    "HEARTBEAT", "RAW_IMU", "HIGHRES_IMU", "ATTITUDE", "ATTITUDE_QUATERNION", *SCALED_IMU_TYPES, *PRESSURE_TYPES))
+
+
+def _message_id(packet: bytes) -> int:
+    """The message id in a whole packet's header (MAVLink 1: one byte; 2: three, little-endian)."""
+    return packet[5] if packet[0] == MAGIC_V1 else int.from_bytes(packet[7:10], "little")
+
+
+def _autopilot_clock(stamped: Packets) -> list[int] | None:
     """Each packet's time on the vehicle's clock (ns from the first packet's receive time: the autopilot
     time reached so far), if the log's receive times are compressed; else None. Judged over the log's
     later half by receive time: a live link's backlog at the start (bytes queued before the session
@@ -158,6 +209,9 @@ def _autopilot_clock(stamped: list[tuple[int, bytes]]) -> list[int] | None:
     decoder, vehicle = MavlinkDecoder(), Vehicle()  # the front-end's choice of the vehicle
     reached_us, latest_us, times = 0, None, []
     for t_ns, packet in stamped:
+        if decoder.idle and _message_id(packet) not in _CLOCK_MESSAGE_IDS:  # (its records neither time nor choose)
+            times.append(reached_us)
+            continue
         for r in decoder.feed(packet, t_ns):
             vehicle.choose(r)
             timed = isinstance(r, (rec.ImuSample, rec.OnboardAttitude, rec.MagReading, rec.BaroReading))

@@ -87,14 +87,19 @@ def record_batches(columns: dict | Iterable[dict], empty_nan: bool | None):
     unless the table has a single column (its null would be a blank CSV line, which readers skip)."""
     import pyarrow as pa
 
-    for stretch in [columns] if isinstance(columns, dict) else columns:
-        values = [np.asarray(v) for v in stretch.values()]
-        for name, v in zip(stretch, values):
-            if v.dtype.kind not in "fiub":
-                raise TypeError(f"export: column {name!r} has dtype {v.dtype}, not a number")
-        as_null = len(values) > 1 if empty_nan is None else empty_nan
-        batch = pa.RecordBatch.from_arrays([pa.array(v, from_pandas=as_null and v.dtype.kind == "f") for v in values],
-                                           names=list(stretch))
-        del stretch, values  # nothing of this stretch held here while the next one is made
+    whole = isinstance(columns, dict)
+    for stretch in [columns] if whole else columns:
+        names = list(stretch)
+        for name, v in stretch.items():
+            if np.asarray(v).dtype.kind not in "fiub":
+                raise TypeError(f"export: column {name!r} has dtype {np.asarray(v).dtype}, not a number")
+        as_null = len(names) > 1 if empty_nan is None else empty_nan
+        arrays = []
+        for name in names:  # a stretch's column goes once converted (arrow copies it): not the stretch twice at once
+            v = np.asarray(stretch[name] if whole else stretch.pop(name))
+            arrays.append(pa.array(v, from_pandas=as_null and v.dtype.kind == "f"))
+            del v
+        batch = pa.RecordBatch.from_arrays(arrays, names=names)
+        del stretch, arrays  # nothing of this stretch held here while the next one is made
         yield batch
         del batch

@@ -118,9 +118,9 @@ def _handed(stream, kind: int, valid: np.ndarray | None = None) -> tuple[np.ndar
         at = at[valid[index[at]]]
     samples_at = np.flatnonzero(kinds == SAMPLE)
     taker = np.searchsorted(samples_at, at)  # the next sample's rank among the samples
-    restarts = np.cumsum(kinds == RESTART)
-    kept = taker < len(samples_at)
-    kept[kept] = restarts[samples_at[taker[kept]]] == restarts[at[kept]]
+    restarts_at = np.flatnonzero(kinds == RESTART)
+    kept = taker < len(samples_at)  # and no restart between the reading and its sample
+    kept[kept] = np.searchsorted(restarts_at, samples_at[taker[kept]]) == np.searchsorted(restarts_at, at[kept])
     at, taker = at[kept], taker[kept]
     last = np.append(taker[1:] != taker[:-1], True)[: len(taker)]  # the latest reading before each sample
     return samples_at[taker[last]], index[at[last]]
@@ -169,37 +169,62 @@ def heading_and_position(stream, mag_body: np.ndarray, pressure_pa: np.ndarray, 
     q = np.asarray(aiding_q, dtype=float)
     samples_at, mags_at = np.flatnonzero(kinds == SAMPLE), np.flatnonzero(kinds == MAG)
     before = np.searchsorted(samples_at, mags_at) - 1  # the last sample before each reading (-1: none yet)
-    seen = before >= 0
-    heading[index[mags_at[seen]]] = reading_headings_deg(q[index[samples_at[before[seen]]]], mag_body[index[mags_at[seen]]])
+    seen = np.flatnonzero(before >= 0)
+    for piece in _pieces(len(seen)):  # (the attitudes gathered a piece at a time: not a session's copy of them)
+        readings = mags_at[seen[piece]]
+        heading[index[readings]] = reading_headings_deg(q[index[samples_at[before[seen[piece]]]]], mag_body[index[readings]])
+    del mags_at, before, seen
     fixed = _fixed(gps)
     gps_events = kinds == GPS
     fixes = np.zeros(len(kinds), dtype=bool)
     fixes[gps_events] = fixed[index[gps_events]]
+    del gps_events
     aids_at = np.flatnonzero((kinds == BARO) | fixes)
     if not len(aids_at):
         return heading, *nothing
     stepping = samples_at[samples_at > aids_at[0]]  # the position is on from the first aiding reading
+    del samples_at
     at, n = index[stepping], len(stepping)
-    baro_alt, gps_pos, gps_vel = np.full(n, math.nan), np.full((n, 3), math.nan), np.full((n, 3), math.nan)
+    # The readings each stepping sample is handed (few: a rate of the IMU's), by the sample's row
+    baro_rows, baro_alt = np.zeros(0, dtype=int), np.zeros(0)
     if len(pressure_pa):
         pressure_pa = np.asarray(pressure_pa, dtype=float)
         taking, taken = _handed(stream, BARO)
         ground_pa = pressure_pa[index[np.flatnonzero(kinds == BARO)[0]]]  # kept across restarts
-        baro_alt[np.searchsorted(stepping, taking)] = geodesy.pressure_altitude_m(pressure_pa[taken], ground_pa)
+        baro_rows, baro_alt = np.searchsorted(stepping, taking), geodesy.pressure_altitude_m(pressure_pa[taken], ground_pa)
+    gps_rows, gps_pos, gps_vel = np.zeros(0, dtype=int), np.zeros((0, 3)), np.zeros((0, 3))
     if fixes.any():
         taking, taken = _handed(stream, GPS, fixed)
         first = index[np.flatnonzero(fixes)[0]]
         origin = (gps["lat"][first], gps["lon"][first], gps["alt"][first])  # kept across restarts
-        rows = np.searchsorted(stepping, taking)
-        gps_pos[rows] = geodesy.ned_from_geodetic(gps["lat"][taken], gps["lon"][taken], gps["alt"][taken], origin)
-        gps_vel[rows] = np.column_stack([gps["vel_n"][taken], gps["vel_e"][taken], gps["vel_d"][taken]])
-    acc_ned = linear_acc_ned_m_s2(np.asarray(acc_g, dtype=float)[at], q[at])
-    dt = np.asarray(dt_s, dtype=float)[at]
-    restarts = np.cumsum(kinds == RESTART)[stepping]
+        gps_rows = np.searchsorted(stepping, taking)
+        gps_pos = geodesy.ned_from_geodetic(gps["lat"][taken], gps["lon"][taken], gps["alt"][taken], origin)
+        gps_vel = np.column_stack([gps["vel_n"][taken], gps["vel_e"][taken], gps["vel_d"][taken]])
+    # The filter's state carries from piece to piece (``DualChannel.run`` continues): a restart forgets it
+    # (``Aiding.restart``) before the first sample after it; between restarts, pieces of samples, so that its
+    # inputs are a piece's, not a session's
+    resets = np.unique(np.searchsorted(stepping, np.flatnonzero(kinds == RESTART)))
+    resets = set(resets[resets < n].tolist())
+    del stepping, fixes
+    starts = np.union1d(list(resets), np.arange(0, n, _PIECE)).astype(int)
+    acc_g, dt_s = np.asarray(acc_g, dtype=float), np.asarray(dt_s, dtype=float)
     position, rows = DualChannel(), np.empty((n, 6))
-    for segment in np.split(np.arange(n), np.flatnonzero(np.diff(restarts)) + 1):
-        if len(segment) and restarts[segment[0]]:  # a restart forgets the position's state (``Aiding.restart``)
+    for start, end in zip(starts.tolist(), [*starts[1:].tolist(), n]):
+        if start in resets:
             position.reset()
-        pos, vel = position.run(acc_ned[segment], dt[segment], baro_alt[segment], gps_pos[segment], gps_vel[segment])
-        rows[segment] = np.column_stack([pos, vel])
+        piece = at[start:end]
+        baro, pos, vel = np.full(end - start, math.nan), np.full((end - start, 3), math.nan), np.full((end - start, 3), math.nan)
+        b = slice(*np.searchsorted(baro_rows, [start, end]))
+        baro[baro_rows[b] - start] = baro_alt[b]
+        g = slice(*np.searchsorted(gps_rows, [start, end]))
+        pos[gps_rows[g] - start], vel[gps_rows[g] - start] = gps_pos[g], gps_vel[g]
+        rows[start:end, :3], rows[start:end, 3:] = position.run(linear_acc_ned_m_s2(acc_g[piece], q[piece]), dt_s[piece], baro, pos, vel)
     return heading, at, rows
+
+
+_PIECE = 1 << 16  # samples a piece: 0.5 MB a column, a session of any length in memory of that size
+
+
+def _pieces(n: int):
+    """Consecutive slices of at most ``_PIECE`` over ``range(n)``."""
+    return (slice(start, min(start + _PIECE, n)) for start in range(0, n, _PIECE))

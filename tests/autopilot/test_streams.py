@@ -7,6 +7,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.records import ImuSample, VehicleStatus
 from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ, StreamRequester, slow_imu_note
+from groundstation.session.figures import rate_hz as figures_rate_hz
 
 ARDUPILOT = VehicleStatus(1, 1, 0, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 2, "STABILIZE", False, 3, 0)
 CAMERA = VehicleStatus(1, 100, 0, mavlink.MAV_AUTOPILOT_INVALID, 30, "Mode(0x00000000)", False, 3, 0)
@@ -60,3 +61,21 @@ def test_the_users_request_goes_to_the_vehicle_and_sets_the_rate_for_later():
     for bad in (0.0, -5.0, float("nan"), 1e4):
         with pytest.raises(ValueError, match="stream rate"):
             requester.request_now(bad, 3)
+
+
+def test_the_imu_rate_is_computed_once_per_new_sample_not_each_time_it_is_asked(monkeypatch):
+    """Issue 35: the front-end asks the rate after every chunk it is fed (a .tlog: every packet); the median
+    was taken each time (27 % of opening a .tlog). It is taken again only when a sample has come since."""
+    from groundstation.autopilot import streams
+
+    taken = []
+    monkeypatch.setattr(streams, "rate_hz", lambda times: taken.append(len(times)) or figures_rate_hz(times))
+    monitor = streams.ImuRateMonitor()
+    for i in range(10):
+        monitor.add(i * 20_000)
+    rates = [monitor.rate_hz for _ in range(100)]
+    assert rates == [50.0] * 100 and len(taken) == 1
+    monitor.add(9 * 20_000)  # not later than the last: not kept, the rate stands
+    monitor.add(10 * 20_000 + 5_000)
+    assert monitor.rate_hz == 50.0 and monitor.too_slow is False and len(taken) == 2
+

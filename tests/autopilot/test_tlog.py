@@ -129,3 +129,42 @@ def test_a_sitl_tlog_opens_on_the_autopilot_clock_and_a_live_one_on_its_receive_
     write_tlog(path, packets)
     stamped = session_packets(path.read_bytes())
     assert not stamped.compressed and [t for t, _ in stamped.packets] == [t * 1000 for t, _ in packets]
+
+
+def test_the_autopilot_clock_decodes_only_the_messages_that_time_it(monkeypatch):
+    """Issue 35: the clock's pass decoded every packet, which the session decodes again after it (a third
+    of opening a .tlog). It decodes the messages whose records time the clock or choose the vehicle: the
+    same clock as every packet decoded (the boat's start: compressed, damaged bytes at its start)."""
+    from groundstation.autopilot import tlog
+    from groundstation.autopilot.decoder import MavlinkDecoder
+
+    data = flightlog("ardurover_boat_sitl_autotest.tlog").read_bytes()[:400_000]
+    fed = []
+    feed = MavlinkDecoder.feed
+    monkeypatch.setattr(MavlinkDecoder, "feed", lambda self, *args: fed.append(1) or feed(self, *args))
+    stamped = tlog.session_packets(data)
+    decoded = len(fed)
+    monkeypatch.setattr(tlog, "_message_id", lambda packet: mavutil.mavlink.MAVLINK_MSG_ID_HEARTBEAT)  # every one decoded
+    every = tlog.session_packets(data)
+    assert stamped.compressed and stamped.packets == every.packets
+    assert len(fed) - decoded == len(stamped.packets) and decoded < len(stamped.packets) / 3
+
+
+def test_a_logs_packets_are_kept_as_columns_not_a_list_of_tuples_of_bytes():
+    """Issue 35: the packets a session is fed took ~4x the file as a list of (time, bytes) tuples; kept as
+    the file's bytes and columns of places and times, they take the file and a few bytes a packet."""
+    import tracemalloc
+
+    from groundstation.autopilot.tlog import session_packets
+
+    data = flightlog("ardusub_rov_surface.tlog").read_bytes()
+    session_packets(data)  # what it imports on first use, imported
+    tracemalloc.start()
+    try:
+        stamped = session_packets(data)
+        held = tracemalloc.get_traced_memory()[0]
+    finally:
+        tracemalloc.stop()
+    assert len(stamped.packets) > 10_000
+    assert held < 0.75 * len(data)  # the file's bytes are the caller's; 24 bytes a packet beside them
+    assert [len(p) for _, p in stamped.packets][:3] == [len(stamped.packets[i][1]) for i in range(3)]

@@ -8,6 +8,7 @@ pipeline reads frames by field name, so a spec that orders the fields otherwise 
 import math
 
 import numpy as np
+import pytest
 
 from firmware_protocol import SPEC, StreamDecoder, encode
 from firmware_protocol.codec import new_frame
@@ -50,10 +51,13 @@ def recording_calls(monkeypatch, cls, names):
     return calls
 
 
-def test_the_batch_path_gives_what_the_pipelines_aiding_stage_gives_call_for_call(tmp_path, monkeypatch):
+@pytest.mark.parametrize("piece", [1, 7, 64, 1 << 16])
+def test_the_batch_path_gives_what_the_pipelines_aiding_stage_gives_call_for_call(tmp_path, monkeypatch, piece):
     """With a reboot: restarts, readings waiting for samples, heading and position. The batch path runs
-    the stage's rules on whole columns (the hand-over, ``reading_heading_rad``, the position filter's
-    ``advance`` compiled): what each of the pipeline's calls returned, it gives, to the last bit."""
+    the stage's rules on columns (the hand-over, ``reading_heading_rad``, the position filter's
+    ``advance`` compiled), a piece of samples at a time (pieces of every size: their ends fall on readings,
+    on the reboot, anywhere): what each of the pipeline's calls returned, it gives, to the last bit."""
+    monkeypatch.setattr(aiding_module, "_PIECE", piece)
     path = tmp_path / "aided.gsrec"
     write_recording(path, simulated_chunks(8.0, reboot_after_s=4.0, **SENSORS), {"filters": ["ahf", "hf"]})
     recording = open_recording(path)
