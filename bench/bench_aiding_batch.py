@@ -2,7 +2,7 @@
 
     python bench/bench_aiding_batch.py [--minutes M] [--repeats R]
 
-Since the batch path drives the pipeline's own aiding stage (``session.aiding.Aiding``: readings
+Since the batch path drives the pipeline's own aiding stage (``session_parts.aiding.Aiding``: readings
 handed to the IMU samples, compass heading, position) over its columns instead of re-deriving it with
 array code, a recording with a magnetometer (50 Hz), a barometer (25 Hz) and GPS (5 Hz) costs the
 batch path a Python loop over its samples. This measures what that costs: ``batch_replay`` with ahf
@@ -19,8 +19,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from groundstation.recording import RecordingWriter, open_recording  # noqa: E402
-from groundstation.session.batch import batch_replay  # noqa: E402
-from groundstation.session.replay import replay  # noqa: E402
+from groundstation.session_makers.batch import batch_replay  # noqa: E402
+from groundstation.session_makers.replay import replay  # noqa: E402
 from groundstation.sim.firmware import FirmwareSettings  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
 from timing import median_seconds  # noqa: E402

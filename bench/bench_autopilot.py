@@ -21,7 +21,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.decoder import MavlinkDecoder
-from groundstation.autopilot.session import load_log
+from groundstation.session_makers.flight_log_session import load_log
 from groundstation.autopilot.tlog import packets
 from groundstation.estimation import runnable
 from groundstation.formats import FILE_AIDING

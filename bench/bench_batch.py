@@ -61,13 +61,13 @@ elif kind == "framing":
     t0 = time.perf_counter()
     result["frames"] = len(_scan(np.frombuffer(data, dtype=np.uint8), ends, _Tables(SPEC), SPEC).starts)
 elif kind == "build":
-    from groundstation.session.batch import batch_replay
+    from groundstation.session_makers.batch import batch_replay
     session = batch_replay(open_recording(path), ())
     result["samples"] = len(session.imu)
 elif kind == "estimators":
     import numpy as np
     from groundstation.estimation import create
-    from groundstation.session.batch import batch_replay
+    from groundstation.session_makers.batch import batch_replay
     imu = batch_replay(open_recording(path), ()).imu.to_dict()
     gyr = np.column_stack([imu[f"gyr_{a}_rad_s"] for a in "xyz"])
     acc = np.column_stack([imu[f"acc_{a}_g"] for a in "xyz"])
@@ -79,8 +79,8 @@ elif kind == "estimators":
         result[name] = time.perf_counter() - t
     result["samples"] = len(dt)
 elif kind in ("load_session", "incremental"):
-    from groundstation.session.load import from_pipeline, load_session
-    from groundstation.session.replay import replay
+    from groundstation.session_makers.load import from_pipeline, load_session
+    from groundstation.session_makers.replay import replay
     if kind == "load_session":
         data = load_session(path, ("ahf", "hf", "ecf"))
     else:

@@ -31,7 +31,7 @@ from groundstation.export.excel_columns import attitude_block, chart_block, link
 from groundstation.export.excel_stream import CHUNK_ROWS, layout, table_rows
 from groundstation.export.tabular import write_csv, write_parquet
 from groundstation.recording import RecordingWriter
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.sim.stream import Scenario, SimStream
 
 

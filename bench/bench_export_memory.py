@@ -59,7 +59,7 @@ def child(case: str, recording: str, out: str, filters: str, warm_up: str) -> No
     from groundstation.estimation import create
     from groundstation.export.request import export_request, run_export
     from groundstation.recording import open_recording
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     def run(path: str) -> None:
         if case in ("decode", "bare"):

@@ -37,9 +37,9 @@ from PySide6 import QtWidgets  # noqa: E402
 
 from bench_ui import rss_mb  # noqa: E402
 from groundstation.estimation import live_estimators  # noqa: E402
-from groundstation.session.live import LiveSession  # noqa: E402
-from groundstation.session.pipeline import Pipeline  # noqa: E402
-from groundstation.session.table import LIVE_KEEP_ROWS  # noqa: E402
+from groundstation.session_makers.live import LiveSession  # noqa: E402
+from groundstation.session_makers.pipeline import Pipeline  # noqa: E402
+from groundstation.session_parts.table import LIVE_KEEP_ROWS  # noqa: E402
 from groundstation.sim.stream import SimStream  # noqa: E402
 from groundstation.sources.base import Chunk, SourceClosed  # noqa: E402
 from groundstation.sources.sim import parse_scenario  # noqa: E402

@@ -16,7 +16,7 @@ import statistics
 import time
 
 from firmware_protocol import StreamDecoder
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 

@@ -48,8 +48,8 @@ import json, sys, time, tracemalloc, zlib
 from pathlib import Path
 from groundstation.recording import open_recording
 from groundstation.recording.format import RecordingError
-from groundstation.autopilot.session import read_log
-from groundstation.session.load import load_session
+from groundstation.session_makers.flight_log_session import read_log
+from groundstation.session_makers.load import load_session
 def parse_all(path):
     from pymavlink import mavutil
     connection = mavutil.mavlink_connection(str(path))

@@ -26,10 +26,10 @@ from timing import median_seconds  # noqa: E402
 from PySide6 import QtCore, QtWidgets  # noqa: E402
 
 from groundstation.recording import RecordingWriter, open_recording  # noqa: E402
-from groundstation.session.load import load_session  # noqa: E402
-from groundstation.session.replay import pipeline_for  # noqa: E402
+from groundstation.session_makers.load import load_session  # noqa: E402
+from groundstation.session_makers.replay import pipeline_for  # noqa: E402
 from groundstation.session.playback import RevealSession  # noqa: E402
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.main_window import MainWindow  # noqa: E402
 
 

@@ -37,8 +37,8 @@ if sys.argv[2] == "decode":
 else:
     from groundstation.export.columns import export_columns
     from groundstation.export.tabular import write_csv
-    from groundstation.session.load import from_pipeline
-    from groundstation.session.replay import replay
+    from groundstation.session_makers.load import from_pipeline
+    from groundstation.session_makers.replay import replay
     pipeline = replay(recording, filters=("ahf", "hf", "ecf"))
     t_replay = time.perf_counter() - t0
     columns = export_columns(from_pipeline(recording, pipeline))
@@ -92,8 +92,8 @@ def bench_replay(hours: float, repeats: int) -> None:
 
 
 def bench_live(seconds: float) -> None:
-    from groundstation.session.live import LiveSession
-    from groundstation.session.pipeline import Pipeline
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.pipeline import Pipeline
     from groundstation.sources import SerialSource
 
     bridge = subprocess.Popen([sys.executable, "-m", "groundstation", "bridge-sim", "--scenario", "flight", "--mode", "both"],

@@ -17,7 +17,7 @@ import numpy as np
 
 from timing import median_seconds
 
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 
 
 def main() -> None:

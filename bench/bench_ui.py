@@ -38,14 +38,14 @@ import numpy as np  # noqa: E402
 from PySide6 import QtCore, QtTest, QtWidgets  # noqa: E402
 
 from groundstation.recording import open_recording  # noqa: E402
-from groundstation.session.pipeline import Pipeline  # noqa: E402
-from groundstation.session.table import Table  # noqa: E402
+from groundstation.session_makers.pipeline import Pipeline  # noqa: E402
+from groundstation.session_parts.table import Table  # noqa: E402
 from groundstation.sim.stream import Scenario, SimStream  # noqa: E402
 from groundstation.estimation import live_estimators  # noqa: E402
-from groundstation.session.factory import replay_session  # noqa: E402
+from groundstation.session_makers.factory import replay_session  # noqa: E402
 from groundstation.sources import ReplaySource  # noqa: E402
 from groundstation.ui.live_view import attitude_plots  # noqa: E402
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.main_window import MainWindow  # noqa: E402
 from groundstation.ui.plots import StackedPlots  # noqa: E402
 from groundstation.ui.series import Series, imu_quantities, onboard_quantities  # noqa: E402

@@ -26,9 +26,9 @@ from pathlib import Path
 
 import pyulog
 
-from groundstation.autopilot import session as log_session_module
+from groundstation.session_makers import flight_log_session as log_session_module
 from groundstation.autopilot import ulog as ulog_module
-from groundstation.session.load import estimators_for, load_session
+from groundstation.session_makers.load import estimators_for, load_session
 
 LOGS = Path(__file__).resolve().parents[1] / ".." / "shared" / "datasets" / "flightlogs"
 STAGES = ("parse", "tables", "estimators")

@@ -3,10 +3,10 @@
 As PlotJuggler's ``DataLoader::compatibleFileExtensions()``: each format says its suffixes, what it is,
 the first bytes its files start with (when they have any) and the loader that turns a file into the
 session product, ``load(path, filters, forced, progress) -> SessionData`` (``loaders``, or
-``autopilot.session.load_log`` for flight logs, which also name their reader into a ``FlightLog``).
-The app's Open dialog, the CLI's help and ``session.load.load_session`` (which the app, ``export``,
+``session_makers.flight_log_session.load_log`` for flight logs, which also name their reader into a ``FlightLog``).
+The app's Open dialog, the CLI's help and ``session_makers.load.load_session`` (which the app, ``export``,
 ``evaluate`` and ``replay`` open files with) derive from it; so do ``sources`` (which files replay as a
-link) and ``autopilot.session.read_log`` (which reader a flight log takes). A new format is its loader module
+link) and ``session_makers.flight_log_session.read_log`` (which reader a flight log takes). A new format is its loader module
 and one ``register`` line here (or a call from anywhere, before the file is opened).
 
 Loaders and readers are named as ``"module:function"`` and imported on first use: this module imports
@@ -27,7 +27,7 @@ from groundstation.recording.format import MAGIC as RECORDING_MAGIC
 # aiding (a tlog's GPS has no vertical speed, a dataset none), so the GPS-aided filters (slow tilt filters
 # without it, at ~100x the others' cost) run only when asked for (``estimation.runnable``).
 FILE_AIDING = frozenset({"mag"})
-# What a flight log's estimators run on: its logged IMU, or its full-rate one (``autopilot.session``): here,
+# What a flight log's estimators run on: its logged IMU, or its full-rate one (``session_makers.flight_log_session``): here,
 # where the command line's help can name them without importing the readers.
 IMU_STREAMS = ("regular", "fast")
 
@@ -60,14 +60,14 @@ def register(file_format: FileFormat) -> FileFormat:
     return file_format
 
 
-register(FileFormat("recording", (".gsrec",), "recording", "groundstation.loaders.recording:load",
+register(FileFormat("recording", (".gsrec",), "recording", "groundstation.session_makers.loaders.recording:load",
                     magic=RECORDING_MAGIC, replayable=True))
-register(FileFormat("dataset", (".csv", ".csv.gz", ".gz"), "dataset CSV", "groundstation.loaders.dataset_csv:load"))
-register(FileFormat("tlog", (".tlog",), "MAVLink telemetry log", "groundstation.loaders.tlog:load",
+register(FileFormat("dataset", (".csv", ".csv.gz", ".gz"), "dataset CSV", "groundstation.session_makers.loaders.dataset_csv:load"))
+register(FileFormat("tlog", (".tlog",), "MAVLink telemetry log", "groundstation.session_makers.loaders.tlog:load",
                     read="groundstation.autopilot.tlog:read_tlog"))
-register(FileFormat("dataflash", (".bin",), "ArduPilot DataFlash log", "groundstation.autopilot.session:load_log",
+register(FileFormat("dataflash", (".bin",), "ArduPilot DataFlash log", "groundstation.session_makers.flight_log_session:load_log",
                     magic=b"\xa3\x95", read="groundstation.autopilot.dataflash:read_dataflash"))
-register(FileFormat("ulog", (".ulg",), "PX4 ULog", "groundstation.autopilot.session:load_log",
+register(FileFormat("ulog", (".ulg",), "PX4 ULog", "groundstation.session_makers.flight_log_session:load_log",
                     magic=b"ULog\x01\x12\x35", read="groundstation.autopilot.ulog:read_ulog"))
 
 

@@ -35,7 +35,7 @@ def collect_in_the_main_thread():
 def compiled_estimators():
     """The live estimators' kernels compiled (or loaded from the cache: about a second) before any test. A
     live session does not wait for them: until they are compiled it runs them interpreted (within 1e-12)
-    and leaves ukf and sssrukf out (``session.estimators.EstimatorBank``); the tests that compare a live
+    and leaves ukf and sssrukf out (``session_parts.estimators.EstimatorBank``); the tests that compare a live
     session with a batch run bit for bit see what every start but a machine's first gives. The first
     start itself is tested in processes with an empty cache of their own (tests/session/test_first_start.py)."""
     from groundstation.estimation import create, live_estimators

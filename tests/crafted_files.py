@@ -169,7 +169,7 @@ def forged_config_recording(folder: Path, name: str = "forged", at_s: float = 4.
     ``accel_fs_g=16``): a forged or corrupted CONFIG from another sender, its checksum valid. ``events``:
     (t_host_ns, event) recorded as well (a live session's answer to the held CONFIG)."""
     from firmware_protocol import encode, make_frame
-    from groundstation.session.pipeline import Pipeline
+    from groundstation.session_makers.pipeline import Pipeline
     from groundstation.sim.firmware import FirmwareSettings
 
     stream = SimStream(Scenario(profile="hover", duration_s=duration_s, seed=3, firmware=firmware or FirmwareSettings()))

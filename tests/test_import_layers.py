@@ -24,16 +24,16 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("entry points", ("groundstation.cli", "groundstation.__main__", "groundstation.commands")),
     ("window", ("groundstation.ui",)),
     ("makers and exports", (
-        "groundstation.export", "groundstation.loaders", "groundstation.session.factory", "groundstation.session.load",
-        "groundstation.session.live", "groundstation.session.batch", "groundstation.session.estimate_run",
-        "groundstation.session.replay",
-        "groundstation.session.pipeline", "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session",
+        "groundstation.export", "groundstation.session_makers.loaders", "groundstation.session_makers.factory", "groundstation.session_makers.load",
+        "groundstation.session_makers.live", "groundstation.session_makers.batch", "groundstation.session_makers.estimate_run",
+        "groundstation.session_makers.replay",
+        "groundstation.session_makers.pipeline", "groundstation.session_makers.mavlink_front", "groundstation.session_makers.flight_log_session",
         "groundstation.logbook",
     )),
     ("playback and the product", (
         "groundstation.session.playback", "groundstation.session.product", "groundstation.session.view",
     )),
-    ("the session's parts", ("groundstation.session", "groundstation.autopilot", "groundstation.formats", "groundstation.sources",
+    ("the session's parts", ("groundstation.session_parts", "groundstation.autopilot", "groundstation.formats", "groundstation.sources",
                              "groundstation.recording", "groundstation.experiments", "groundstation.sim")),
     ("computation", ("groundstation.estimation", "groundstation.position", "groundstation.analysis",
                      "groundstation.datasets", "firmware_protocol")),
@@ -41,9 +41,9 @@ LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
 )
 # What the window and the exports read is the product (``session.product``, ``session.view``); these
 # make it, and neither may reach them, not even through another module.
-MAKERS = ("groundstation.session.pipeline", "groundstation.session.batch", "groundstation.session.estimate_run",
-          "groundstation.session.live", "groundstation.session.factory", "groundstation.session.load", "groundstation.session.replay",
-          "groundstation.autopilot.mavlink_front", "groundstation.autopilot.session", "groundstation.loaders")
+MAKERS = ("groundstation.session_makers.pipeline", "groundstation.session_makers.batch", "groundstation.session_makers.estimate_run",
+          "groundstation.session_makers.live", "groundstation.session_makers.factory", "groundstation.session_makers.load", "groundstation.session_makers.replay",
+          "groundstation.session_makers.mavlink_front", "groundstation.session_makers.flight_log_session", "groundstation.session_makers.loaders")
 READERS = ("groundstation.ui", "groundstation.export")
 
 
@@ -185,12 +185,12 @@ def test_the_window_and_the_exports_reach_no_maker_of_the_session():
 
 def test_the_checker_sees_an_indirect_import_a_circle_and_an_upward_import():
     """The checks can fail: a made-up window module importing a helper that imports the pipeline."""
-    edges = {"groundstation.ui.fake": {"groundstation.ui.helper"}, "groundstation.ui.helper": {"groundstation.session.pipeline"},
-             "groundstation.session.pipeline": {"groundstation.ui.fake"}}
-    assert forbidden_paths(edges) == [["groundstation.ui.fake", "groundstation.ui.helper", "groundstation.session.pipeline"],
-                                      ["groundstation.ui.helper", "groundstation.session.pipeline"]]
+    edges = {"groundstation.ui.fake": {"groundstation.ui.helper"}, "groundstation.ui.helper": {"groundstation.session_makers.pipeline"},
+             "groundstation.session_makers.pipeline": {"groundstation.ui.fake"}}
+    assert forbidden_paths(edges) == [["groundstation.ui.fake", "groundstation.ui.helper", "groundstation.session_makers.pipeline"],
+                                      ["groundstation.ui.helper", "groundstation.session_makers.pipeline"]]
     assert circles(edges) == [sorted(edges)]
-    assert upward(edges) == [("groundstation.session.pipeline", "groundstation.ui.fake")]
+    assert upward(edges) == [("groundstation.session_makers.pipeline", "groundstation.ui.fake")]
 
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ import pytest
 from groundstation.errors import UserError
 from groundstation.logbook.folder import evaluate_folder
 from groundstation.logbook.summary import LOG_COLUMNS, log_id
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 LOGS = Path(__file__).resolve().parents[1].parent / "shared" / "datasets" / "flightlogs"
 CHOSEN = ("px4_fmuv5_quad_hop.ulg", "arduplane_omnibusf4_ground_pilot_0004.bin", "px4_sitl_quad_groundtruth.ulg")

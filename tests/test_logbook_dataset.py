@@ -15,7 +15,7 @@ import pytest
 
 from groundstation.logbook.folder import evaluate_folder
 from groundstation.logbook.summary import log_id
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from tests.simulated import simulated_chunks, write_recording
 
 LOGS = Path(__file__).resolve().parents[1].parent / "shared" / "datasets" / "flightlogs"

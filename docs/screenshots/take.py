@@ -18,7 +18,7 @@ from pathlib import Path
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.ui.main_window import MainWindow
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 
 LOG = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs" / "arducopter_cubeorange_2023-07-06_10-12-18.bin"

@@ -1,5 +1,5 @@
 """A logged message's field in a session table: the column named ``field``, or ``field_<unit>`` as
-``session.catalogue.message_table`` names it (``Vcc`` -> ``Vcc_V``, ``Clip`` -> ``Clip``)."""
+``session_parts.catalogue.message_table`` names it (``Vcc`` -> ``Vcc_V``, ``Clip`` -> ``Clip``)."""
 
 from __future__ import annotations
 

@@ -53,7 +53,7 @@ import re
 import numpy as np
 
 from groundstation.analysis.fields import message_field
-from groundstation.analysis.spectrum import WINDOWS
+from groundstation.spectrum import WINDOWS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 hann = WINDOWS["hann"]  # the periodic Hann window, scipy's ``get_window("hann", n)``

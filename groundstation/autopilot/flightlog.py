@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from groundstation.session.figures import rate_hz
+from groundstation.session_parts.figures import rate_hz
 
 
 Q_COLUMNS = ("qw", "qx", "qy", "qz")

@@ -32,7 +32,7 @@ import numpy as np
 
 from groundstation import quaternion
 from groundstation.palette import ACTUAL_COLOUR, DESIRED_COLOUR, PALETTE
-from groundstation.session.catalogue import TIME, Catalogue, Column, TableInfo
+from groundstation.session_parts.catalogue import TIME, Catalogue, Column, TableInfo
 
 AXES = ("roll", "pitch", "yaw")
 # (from, to) -> factor: the one place a source's unit becomes a section's

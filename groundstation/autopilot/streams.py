@@ -19,7 +19,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation.autopilot.records import ImuSample, VehicleStatus
 from groundstation.autopilot.vehicle import AUTOPILOTS, Vehicle
-from groundstation.session.figures import rate_hz
+from groundstation.session_parts.figures import rate_hz
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only

@@ -6,7 +6,7 @@ signature) and lets pymavlink decode and check each packet; where the bytes do n
 truncated end), it resynchronises on the next plausible timestamp followed by a packet start.
 
 A session opens a ``.tlog`` as the live link it was: its packets at their receive times through the
-pipeline's MAVLink front-end (``session_packets``, ``loaders.tlog``, ``sources.mavlink``). One rule
+pipeline's MAVLink front-end (``session_packets``, ``session_makers.loaders.tlog``, ``sources.mavlink``). One rule
 first: a log whose autopilot clock advanced, over its later half, more than its receive clock by more than the session
 clock lets a frame arrive early (``SessionClock``'s ``JUMP_TOLERANCE_S`` plus ``DRIFT_TOLERANCE`` of the
 time elapsed) has *compressed* receive times (SITL autotests log 308 s of autopilot time in 12 s);
@@ -36,7 +36,7 @@ from groundstation.autopilot.mapping import (
 )
 from groundstation.errors import UserError
 from groundstation.autopilot.vehicle import Vehicle
-from groundstation.session.clock import DRIFT_TOLERANCE, JUMP_TOLERANCE_S
+from groundstation.session_parts.clock import DRIFT_TOLERANCE, JUMP_TOLERANCE_S
 
 STAMP = struct.Struct(">Q")
 MAGIC_V1, MAGIC_V2 = 0xFE, 0xFD

@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
         from groundstation.sources import parse_spec
 
         parse_spec(args.port)  # a garbled spec is said here (status 2); a port that fails to open, in the window
-    from groundstation.session.factory import Sessions
+    from groundstation.session_makers.factory import Sessions
     from groundstation.ui.app import run as run_app  # Qt is imported only here
 
     return run_app(args.port, args.baud, args.recording, Sessions(imu=args.imu))

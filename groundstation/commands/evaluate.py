@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.commands.progress import ProgressBar
     from groundstation.estimation import unmet_warnings
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     names, overrides = estimator_options(args)
     if Path(args.file).is_dir():

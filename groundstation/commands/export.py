@@ -35,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundstation.export.request import export_request, run_export
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     filters, overrides = estimator_options(args)
     request = export_request(args.file, args.out, filters=filters, overrides=overrides, t_from=args.t_from,

@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.commands.summary import follow, totals_line
     from groundstation.export.foxglove_live import FoxgloveBridge, parse_address
     from groundstation.recording import default_recordings_dir
-    from groundstation.session.factory import open_session
+    from groundstation.session_makers.factory import open_session
     from groundstation.sources import parse_spec
 
     if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):

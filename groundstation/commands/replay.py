@@ -26,7 +26,7 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.commands.progress import ProgressBar
     from groundstation.commands.summary import follow, totals_line
     from groundstation.errors import UserError
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
     from groundstation.session.playback import RevealSession, check_speed
 
     filters, overrides = estimator_options(args)

@@ -31,7 +31,7 @@ def run(args: argparse.Namespace) -> int:
     from groundstation.errors import UserError
     from groundstation.export.report import write_report
     from groundstation.export.request import check_destination
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     filters, overrides = estimator_options(args)
     if Path(args.file).is_dir():

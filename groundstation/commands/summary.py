@@ -9,7 +9,7 @@ import time
 import numpy as np
 
 from groundstation import quaternion
-from groundstation.session.figures import loss_pct, rate_hz, span_s
+from groundstation.session_parts.figures import loss_pct, rate_hz, span_s
 from groundstation.session.view import Session
 
 

@@ -38,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from groundstation.analysis.vibration import VibrationError, vibration_summary
     from groundstation.commands.progress import ProgressBar
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     if args.t_from is not None and args.t_to is not None and not args.t_from < args.t_to:
         raise UserError(f"--from ({args.t_from:g} s) must come before --to ({args.t_to:g} s)")

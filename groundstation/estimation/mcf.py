@@ -60,7 +60,7 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.analysis.spectrum import amplitude_spectrum
+from groundstation.spectrum import amplitude_spectrum
 from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, integrate_rate, record, sample
 from groundstation.estimation.compass import field_tilt_rad, heading_offset_rad
 from groundstation.estimation.tilt import euler_of, quaternion_product, unit_field, wrap_pi
@@ -207,7 +207,7 @@ def crossover_from_spectra(gyro_error, absolute_error, dt_s: float, bands_per_de
     """The frequency (Hz) above which the gyro's angle error spectrum stays below the absolute source's.
 
     Both errors (N,) against the same truth, in the same unit. Their amplitude spectra (mean removed,
-    Hann window: ``analysis.spectrum``) are averaged over log-spaced bands (``bands_per_decade``) so that
+    Hann window: ``spectrum``) are averaged over log-spaced bands (``bands_per_decade``) so that
     single bins' scatter does not decide; the crossover is the geometric centre of the lowest band from
     which the gyro's band level is below the absolute source's in every band up to Nyquist.
     """

@@ -3,7 +3,7 @@
 A live session starts at once with the estimators whose kernels are in the cache, the others running
 their kernel's source interpreted (``CompiledEstimator.ready_or_interpreted``; 0.03-0.15 ms a sample)
 while another process compiles the kernels into the cache; each estimator goes on compiled, its state
-kept, as its kernel arrives (``session.estimators.EstimatorBank``). So these estimators have every sample
+kept, as its kernel arrives (``session_parts.estimators.EstimatorBank``). So these estimators have every sample
 from the first: the session's tables are a batch run's within the 1e-12 that separates the interpreted
 source from the compiled kernel, with no hole. The other way, a hole filled once compiled, would rewrite
 rows the window has drawn, the plots' and a Foxglove client's. Only ukf and sssrukf, about 1 ms a sample

@@ -5,7 +5,7 @@ yaw with periods 47 s, 35 s, 15 s), magnetometer at 100 Hz calibrated by the ell
 calibration flight of the same part (``flight`` then ``fast``, same seed: same hard iron). Errors are
 against the simulator's truth (the paper's AHRS reference), over the motion after the rest.
 
-- Figures 1-3 of the paper: the FFT amplitude spectrum (``analysis.spectrum``) of the pitch error of the
+- Figures 1-3 of the paper: the FFT amplitude spectrum (``spectrum``) of the pitch error of the
   integrated gyro, the accelerometer tilt and the compass tilt (the field at the true heading,
   ``compass.tilt_from_field_rad``), plus the heading error of the gyro and of the compass heading.
 - Figure 10: the same for the filters ahf, hf, ecf (IMU), hfm, ecfm (MARG) and mcf.
@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from groundstation import quaternion as quat
-from groundstation.analysis.spectrum import amplitude_spectrum
+from groundstation.spectrum import amplitude_spectrum
 from groundstation.estimation import create
 from groundstation.estimation.compass import heading_rad, tilt_from_field_rad
 from groundstation.estimation.magcal import fit

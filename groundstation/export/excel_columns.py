@@ -12,7 +12,7 @@ import numpy as np
 
 from groundstation.export.columns import attitude_columns, reading_tables, select_rows, sensor_columns
 from groundstation.export.excel_stream import Block, Column
-from groundstation.session.catalogue import LINK_TABLES
+from groundstation.session_parts.catalogue import LINK_TABLES
 from groundstation.session.product import SessionData
 
 SECONDS = "0.000"

@@ -16,7 +16,7 @@ from groundstation import mounting
 from groundstation.errors import UserError
 from groundstation.export.excel_columns import DATE_TIME, start_time
 from groundstation.export.excel_stream import text_cell
-from groundstation.session.figures import rate_hz
+from groundstation.session_parts.figures import rate_hz
 from groundstation.session.product import SessionData
 
 WIDTHS = {"A": 38, "B": 24, "C": 24, "D": 70, "E": 24}

@@ -29,7 +29,7 @@ import numpy as np
 
 from groundstation import quaternion
 from groundstation.export.protobuf_rows import RowEncoder, descriptor_set, message_name
-from groundstation.session.catalogue import Catalogue
+from groundstation.session_parts.catalogue import Catalogue
 from groundstation.text import clean
 
 NED_FRAME = "ned"  # the parent frame of every attitude: the quaternions are body -> NED (w-first)

@@ -37,7 +37,7 @@ from groundstation.export.files import atomic_output
 from groundstation.export.report_figures import escaped, line_plot
 from groundstation.export.report_findings import Finding, differences_deg, findings
 from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR
-from groundstation.session.clock import DISCONTINUITIES
+from groundstation.session_parts.clock import DISCONTINUITIES
 from groundstation.session.product import ONBOARD, SessionData
 
 MAX_EVENTS = 300  # rows of the events table; the rest are counted

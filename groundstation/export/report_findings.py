@@ -26,7 +26,7 @@ from groundstation.autopilot.messages import ALARM_SEVERITIES, MESSAGE_KIND
 from groundstation.autopilot.modes import event_time_s, mode_spans
 from groundstation.estimation.evaluation import inclination_error_rad
 from groundstation.estimation.tilt import wrap_pi
-from groundstation.session.clock import DISCONTINUITIES
+from groundstation.session_parts.clock import DISCONTINUITIES
 from groundstation.session.product import ONBOARD, SessionData
 
 SEVERITIES = ("critical", "high", "medium", "low")  # the order findings are listed in
@@ -88,7 +88,7 @@ def link_loss(data: SessionData) -> list[Finding]:
     sent = c.get("frames", 0) + c.get("frames_lost", 0)
     if not sent or not c.get("frames_lost"):
         return []
-    share = data.link_loss_pct() / 100.0  # the one figure every place gives (``session.figures``)
+    share = data.link_loss_pct() / 100.0  # the one figure every place gives (``session_parts.figures``)
     severity = "high" if share >= LINK_LOSS_HIGH else "medium" if share >= LINK_LOSS_MEDIUM else "low"
     per = data.link.per_second
     worst = int(np.argmax(per["frames_lost"])) if len(per.get("frames_lost", ())) else None

@@ -131,7 +131,7 @@ def met(data):
 
 def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, int, int], None] | None = None,
                cancel=None) -> ExportResult:
-    """Computes ``request.source`` with ``load`` (``session.load.load_session``: the caller's, so that the
+    """Computes ``request.source`` with ``load`` (``session_makers.load.load_session``: the caller's, so that the
     exports import no maker of sessions) and writes ``request.out`` with its format's writer; ``progress(stage,
     done, total)`` with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises
     ExportCancelled, nothing written."""

@@ -1,7 +1,7 @@
 """A folder of logs at once: ``groundstation evaluate DIR --out OUT`` (and ``report DIR``).
 
 Engineers keep hundreds of logs; a lab thousands. Every recording and flight log under a folder is opened
-as the app opens it (``session.load.load_session``), one process per log on every core (or the tasks of a
+as the app opens it (``session_makers.load.load_session``), one process per log on every core (or the tasks of a
 Dask cluster), and the results go to one Parquet dataset that DuckDB or pandas read without loading all
 of it:
 

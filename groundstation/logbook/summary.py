@@ -77,7 +77,7 @@ def _rows(path: Path, out: Path, filters, page: bool, fields: dict) -> list[dict
     from groundstation.autopilot.agreement import onboard_agreement
     from groundstation.export.report import NOT_RECORDED, firmware, vehicle, vibration_of, write_report
     from groundstation.export.report_findings import findings
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     data = load_session(path, filters)
     said = {"vehicle": vehicle(data), "firmware": firmware(data)}

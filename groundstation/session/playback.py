@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from groundstation.session.link import LATENCY_WINDOW, PER_SECOND_COLUMNS, clock_figures
+from groundstation.session_parts.link import LATENCY_WINDOW, PER_SECOND_COLUMNS, clock_figures
 from groundstation.session.product import LinkSummary, SessionData, event_time_s
 from groundstation.sources.replay import check_speed
 

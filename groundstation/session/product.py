@@ -21,8 +21,8 @@ import numpy as np
 
 from groundstation.errors import UserError
 from groundstation.estimation.evaluation import scores, uses_magnetometer
-from groundstation.session.catalogue import Catalogue
-from groundstation.session.figures import loss_pct, rate_hz, span_s
+from groundstation.session_parts.catalogue import Catalogue
+from groundstation.session_parts.figures import loss_pct, rate_hz, span_s
 
 AIDING_TABLES = {"mag": "mag_raw", "gps": "gps"}  # an aiding an estimator needs (``Estimator.needs``): the table whose rows give it
 ONBOARD = "onboard"  # the aircraft's own estimate: a table, and an attitude scored beside the host estimators
@@ -33,7 +33,7 @@ class LinkSummary:
     """How the link did: the decoder's counters over the whole session, and per second of host time."""
 
     counters: dict[str, int]  # firmware_protocol.DecoderStats fields
-    per_second: dict[str, np.ndarray]  # session.link.PER_SECOND_COLUMNS, each (seconds,)
+    per_second: dict[str, np.ndarray]  # session_parts.link.PER_SECOND_COLUMNS, each (seconds,)
 
 
 @dataclasses.dataclass
@@ -55,7 +55,7 @@ class SessionData:
     moving: np.ndarray | None = None  # (N,) bool on the sample rows: the samples an evaluation scores
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)  # an autopilot's: name -> last value
     # Host estimators whose ``imu`` columns are not in ``tables`` but made a stretch of rows at a time, forward
-    # only (an export's: ``session.estimate_run.Streamed``); read through ``attitudes(rows)``
+    # only (an export's: ``session_makers.estimate_run.Streamed``); read through ``attitudes(rows)``
     estimates: object | None = None
 
     @property

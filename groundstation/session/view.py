@@ -12,11 +12,11 @@ import threading
 from pathlib import Path
 from typing import Protocol
 
-from groundstation.session.catalogue import Catalogue
+from groundstation.session_parts.catalogue import Catalogue
 
 
 class LinkView(Protocol):
-    """Link figures (``session.link.LinkStats`` live, ``playback.RevealedLink`` from a file)."""
+    """Link figures (``session_parts.link.LinkStats`` live, ``playback.RevealedLink`` from a file)."""
 
     per_second: object  # a table of ``link.PER_SECOND_COLUMNS``
     last_chunk_ns: int | None

@@ -82,7 +82,7 @@ def check_libraries(libraries: dict[str, tuple[str, str]]) -> None:
 
 def run(port: str | None, baud: int | None, recording: str | None, sessions) -> int:
     """Open the window on ``recording``, else ``port``, else the simulated bridge; ``sessions`` opens
-    them (``session.factory.Sessions``)."""
+    them (``session_makers.factory.Sessions``)."""
     check_display()
     import pyqtgraph as pg
     from PySide6 import QtCore, QtWidgets
@@ -115,7 +115,7 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
 
     # The window on screen first, then the source: its session starts with the estimators whose kernels
     # numba has in its cache and runs the others interpreted while another process compiles them
-    # (``session.estimators.EstimatorBank``), so the first start shows data at once too, and nothing in
+    # (``session_parts.estimators.EstimatorBank``), so the first start shows data at once too, and nothing in
     # this process compiles for seconds: Ctrl-C and Close are answered at the next tick.
     first_frame.on_first_paint(window, lambda: QtCore.QTimer.singleShot(0, open_source))
     window.show()

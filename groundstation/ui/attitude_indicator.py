@@ -15,8 +15,8 @@ import math
 from PySide6 import QtCore, QtGui, QtWidgets
 
 from groundstation import quaternion
-from groundstation.session.clock import DISCONTINUITIES
-from groundstation.session.estimators import RECONVERGE_S
+from groundstation.session_parts.clock import DISCONTINUITIES
+from groundstation.session_parts.estimators import RECONVERGE_S
 from groundstation.session.view import Session
 from groundstation.ui.attitude_3d import AttitudeView3D
 from groundstation.ui.navigation import heading_now

@@ -34,7 +34,7 @@ def default_folder(settings: QtCore.QSettings | None) -> Path:
 class ExportDialog(QtWidgets.QDialog):
     def __init__(self, load, source: Path, duration_s: float, parent=None, setup: tuple = (None, None),
                  settings: QtCore.QSettings | None = None):
-        """``load``: how the file is computed (``session.load.load_session``); ``setup``: the estimators
+        """``load``: how the file is computed (``session_makers.load.load_session``); ``setup``: the estimators
         and forced settings it is computed with (None: its own), those the window shows; ``settings``:
         where the export folder is remembered."""
         super().__init__(parent)

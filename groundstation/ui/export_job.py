@@ -16,7 +16,7 @@ from groundstation.export import request as export
 
 
 class ExportJob:
-    """``load``: how the file is computed (``session.load.load_session``, handed down from the window)."""
+    """``load``: how the file is computed (``session_makers.load.load_session``, handed down from the window)."""
 
     def __init__(self, load, source: Path, out: Path, t_from: float | None = None, t_to: float | None = None,
                  rate_hz: float | None = None, overwrite: bool = False, filters=None, overrides=None):

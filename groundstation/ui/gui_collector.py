@@ -1,6 +1,6 @@
 """Python's garbage collector only in the GUI thread.
 
-A file's loading thread (``session.load.Loading``) allocates enough to start a collection; a cycle it
+A file's loading thread (``session_makers.load.Loading``) allocates enough to start a collection; a cycle it
 then frees may hold a closed window's Qt objects, whose C++ destructors run in that thread and wait for
 the GUI thread (Shiboken's ``runDeletionInMainThread`` takes the GIL) while the GUI thread waits for the
 GIL: a deadlock (seen with ``py-spy dump --native`` on two stuck test workers). pyqtgraph's

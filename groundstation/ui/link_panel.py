@@ -14,7 +14,7 @@ import time
 
 from PySide6 import QtWidgets
 
-from groundstation.session.figures import loss_pct
+from groundstation.session_parts.figures import loss_pct
 from groundstation.session.view import Session
 from groundstation.ui.sample_streams import stream_interval_s
 
@@ -29,7 +29,7 @@ STYLES = {
     "idle": "background:#9e9e9e; color:white; padding:4px; font-weight:bold",
 }
 FIELDS = ("frames/s", "loss", "CRC failures", "bytes/s", "since last frame", "latency p50 / p99")
-# A MAVLink session's radio and battery (autopilot/mavlink_front.py tables), shown once they have a row:
+# A MAVLink session's radio and battery (session_makers/mavlink_front.py tables), shown once they have a row:
 # row label -> (table, format of its last row's columns). RSSI and noise are in the radio's own units
 # (SiK: about 1.9 per dB above -127 dBm), as Mission Planner and QGroundControl show them.
 RADIO_FIELDS = {

@@ -69,7 +69,7 @@ def default_hidden() -> frozenset[str]:
 
 
 class MainWindow(QtWidgets.QMainWindow):
-    """``sessions``: how sessions are opened (``session.factory.Sessions``): handed in, so that the
+    """``sessions``: how sessions are opened (``session_makers.factory.Sessions``): handed in, so that the
     window reads sessions (``session.view``) and imports nothing that makes them."""
 
     def __init__(self, settings: QtCore.QSettings, sessions, recordings_dir: Path | None = None):

@@ -18,7 +18,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from firmware_protocol import SPEC
 from groundstation.geodesy import ned_from_geodetic, pressure_altitude_m
 from groundstation.session.view import ProductView
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 from groundstation.ui.series import Series
 
 FIX_2D = SPEC.enums["gps_fix"].values["fix_2d"]

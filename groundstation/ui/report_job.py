@@ -13,7 +13,7 @@ from groundstation.export.request import check_destination
 
 
 class ReportJob:
-    """``load``: how the file is computed (``session.load.load_session``, handed down from the window);
+    """``load``: how the file is computed (``session_makers.load.load_session``, handed down from the window);
     ``setup``: the estimators and forced settings the window shows (None: the file's own)."""
 
     def __init__(self, load, source: Path, out: Path, setup: tuple = (None, None)):

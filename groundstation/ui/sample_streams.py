@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ
-from groundstation.session.figures import rate_hz
+from groundstation.session_parts.figures import rate_hz
 from groundstation.session.view import ProductView
 from groundstation.ui.series import GAP_S
 

@@ -20,7 +20,7 @@ from collections.abc import Callable
 import numpy as np
 
 from groundstation import quaternion
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 
 INITIAL_ROWS = 8192
 GAP_S = 0.25  # samples further apart than this mark a gap (port gone, radio lost): 25 at 100 Hz

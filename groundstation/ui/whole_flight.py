@@ -1,6 +1,6 @@
 """A flight log is looked at whole (issue 34): a flyer opening a ``.tlog``, ``.bin`` or ``.ulg`` expects the
 whole flight at once, as Mission Planner and Flight Review show it, not a 1x playback in a 30 s window.
-The file is computed whole anyway (``session.load``), so it opens with the playback clock at its end and
+The file is computed whole anyway (``session_makers.load``), so it opens with the playback clock at its end and
 paused, every row revealed, in the "whole session" time window; Play (from the start: Home) still plays it.
 A recording or a dataset CSV opens as before: played from its start in the window the user chose."""
 

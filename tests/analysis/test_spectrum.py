@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.signal import periodogram
 
-from groundstation.analysis.spectrum import amplitude_spectrum
+from groundstation.spectrum import amplitude_spectrum
 
 DT_S = 0.01
 

@@ -72,7 +72,7 @@ def _session(t, gyr_rad_s, acc_g):
     """The least a session offers the vibration view: its tables and the catalogue describing them."""
     from types import SimpleNamespace
 
-    from groundstation.session.catalogue import Catalogue, session_catalogue
+    from groundstation.session_parts.catalogue import Catalogue, session_catalogue
 
     columns = {"time_s": t, **{f"gyr_{a}_rad_s": gyr_rad_s[:, i] for i, a in enumerate("xyz")},
                **{f"acc_{a}_g": acc_g[:, i] for i, a in enumerate("xyz")}}

@@ -9,7 +9,7 @@ import pytest
 from scipy.signal import welch
 
 from groundstation.analysis.vibration import MIN_ROTOR_HZ, vibration_summary
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 TRIAL = Path("/work/shared/datasets/broad/27_disturbed_phone_vibration_B.csv.gz")
 pytestmark = pytest.mark.skipif(not TRIAL.exists(), reason="the BROAD datasets are not here")

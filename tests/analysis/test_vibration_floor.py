@@ -12,7 +12,7 @@ import pytest
 from groundstation.analysis import vibration as vib
 from groundstation.cli import main
 from groundstation.export.report_findings import vibration_findings
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from crafted_files import dataset_csv  # noqa: E402

@@ -7,7 +7,7 @@ from scipy.signal import butter, freqz, lfilter, lfilter_zi
 from groundstation import cli
 from groundstation.analysis import whatif
 from groundstation.analysis.vibration import VibrationError
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 RATE_HZ = 100.0
 

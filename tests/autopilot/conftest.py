@@ -12,7 +12,7 @@ def window(qtbot, tmp_path):
     """A real main window, its settings and recordings in the test's folder."""
     from PySide6 import QtCore
 
-    from groundstation.session.factory import Sessions
+    from groundstation.session_makers.factory import Sessions
 
     from groundstation.ui.main_window import MainWindow
 

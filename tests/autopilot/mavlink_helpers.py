@@ -178,7 +178,7 @@ class Flying:
 def pty_session(aircraft, seconds: float, **session_options):
     """A live session of ``aircraft`` through a real pseudo-terminal (bridge-sim's), run for ``seconds``
     and stopped; ``session_options`` go to ``open_session``."""
-    from groundstation.session.factory import open_session
+    from groundstation.session_makers.factory import open_session
     from groundstation.sim.pty_bridge import PtyBridge
 
     bridge = PtyBridge(aircraft)
@@ -198,10 +198,10 @@ def pty_session(aircraft, seconds: float, **session_options):
 
 def live_aiding_stage(stream, readings, q, acc_g, dt_s, samples: int):
     """The live session's aiding stage (``Aiding``, driven as ``pipeline`` drives it, one call per reading
-    and sample) over a log's merged events (``stream``, ``readings``: ``autopilot.session._Readings``)
+    and sample) over a log's merged events (``stream``, ``readings``: ``session_makers.flight_log_session._Readings``)
     with the aiding estimator's attitudes ``q``: what each sample hands the estimators (mag, GPS fix
     rows, NaN for none), the headings, the samples with a position row and the rows."""
-    from groundstation.session import aiding
+    from groundstation.session_parts import aiding
 
     stage = aiding.Aiding()
     mag, fix = np.full((samples, 3), np.nan), np.full((samples, 4), np.nan)

@@ -11,8 +11,8 @@ import pytest
 from pymavlink import mavutil
 
 from groundstation.autopilot.agreement import onboard_agreement
-from groundstation.autopilot.session import load_log
-from groundstation.session.load import load_session
+from groundstation.session_makers.flight_log_session import load_log
+from groundstation.session_makers.load import load_session
 from groundstation.cli import main
 from groundstation.recording import RecordingWriter
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft

@@ -17,7 +17,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from groundstation.autopilot.messages import StatusTexts
 from groundstation.autopilot.modes import mode_spans
 from groundstation.autopilot.records import StatusText
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 from groundstation.sim.stream import Scenario
 from mavlink_helpers import Sender, flightlog, pty_session

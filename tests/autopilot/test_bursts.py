@@ -18,7 +18,7 @@ from groundstation.analysis.vibration import LOBE_BINS, VibrationError, vibratio
 from groundstation.analysis.whatif import LAG_AT_HZ, what_if
 from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.logtables import BATCH, fast_name
-from groundstation.autopilot.session import log_session, read_log
+from groundstation.session_makers.flight_log_session import log_session, read_log
 
 LOG = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs" / "arducopter_cubeorange_2023-07-06_10-12-18.bin"
 pytestmark = pytest.mark.skipif(not LOG.exists(), reason="the shared flight logs are not here")
@@ -155,7 +155,7 @@ def test_the_attenuation_at_the_peak_is_scipys_filtering_of_the_bursts(change, b
 
 def test_vibration_imu_fast_what_if_json_carries_the_same(fast, monkeypatch, capsys):
     from groundstation import cli
-    from groundstation.session import load
+    from groundstation.session_makers import load
 
     asked = []
     monkeypatch.setattr(load, "load_session", lambda path, progress=None, imu="regular": asked.append(imu) or fast)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from groundstation.cli import main
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 from mavlink_helpers import Sender, ardupilot_heartbeat, dataflash_fmt, dataflash_record, px4_flight, write_ulog
 

@@ -15,7 +15,7 @@ import pytest
 from pymavlink import DFReader
 
 from groundstation import quaternion
-from groundstation.autopilot.session import read_log
+from groundstation.session_makers.flight_log_session import read_log
 from groundstation.cli import main
 from groundstation.sim.profiles import make_profile
 

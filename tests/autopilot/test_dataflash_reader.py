@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from groundstation import quaternion
-from groundstation.autopilot.session import read_log
+from groundstation.session_makers.flight_log_session import read_log
 from groundstation.errors import UserError
 from groundstation.sim.profiles import make_profile
 from groundstation.units import STANDARD_GRAVITY_M_S2

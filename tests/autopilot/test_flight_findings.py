@@ -8,7 +8,7 @@ import pytest
 from pymavlink import DFReader
 
 from groundstation.export.report_findings import findings
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 from mavlink_helpers import flightlog, write_dataflash

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from groundstation.autopilot.agreement import onboard_agreement, pitch_roll_rad
-from groundstation.autopilot.session import read_log
-from groundstation.autopilot.session import load_log
+from groundstation.session_makers.flight_log_session import read_log
+from groundstation.session_makers.flight_log_session import load_log
 from groundstation.export.columns import export_columns
 
 from mavlink_helpers import flightlog

@@ -8,7 +8,7 @@ from pymavlink import DFReader
 from pyulog import ULog
 
 from groundstation.autopilot.modes import mode_spans
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from mavlink_helpers import flightlog, write_dataflash
 
 FILTERS = ("ahf2",)

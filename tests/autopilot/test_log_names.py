@@ -11,7 +11,7 @@ from pymavlink import DFReader
 from pyulog import ULog
 
 from groundstation.cli import main
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from tests.autopilot.mavlink_helpers import BOOT_US, px4_flight, write_ulog
 from tests.crafted_files import dataflash_types, ulog_topics
 
@@ -75,7 +75,7 @@ def test_a_topic_named_as_a_session_table_keeps_both(tmp_path):
 def test_columns_that_flattening_or_units_would_merge_are_kept_apart(tmp_path):
     """A ULog array ``a[2]`` beside a field ``a_0`` (both column ``a_0`` once flattened), and a field ``Alt``
     in metres beside a field ``Alt_m`` (both ``Alt_m`` once the unit is a suffix)."""
-    from groundstation.session.catalogue import message_table
+    from groundstation.session_parts.catalogue import message_table
 
     flight, _ = px4_flight(duration_s=2.0)
     rows = 10

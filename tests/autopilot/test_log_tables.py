@@ -15,12 +15,12 @@ from pymavlink import DFReader
 from pyulog import ULog
 
 from groundstation import quaternion
-from groundstation.autopilot.session import _Readings, read_log
+from groundstation.session_makers.flight_log_session import _Readings, read_log
 from groundstation.estimation import aiding_estimator
 from groundstation.estimation.evaluation import sample_periods_s
-from groundstation.session.catalogue import POSITION
+from groundstation.session_parts.catalogue import POSITION
 from groundstation.errors import UserError
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 from mavlink_helpers import BOOT_US, live_aiding_stage, px4_flight, write_dataflash, write_ulog

@@ -14,7 +14,7 @@ import pytest
 from groundstation import quaternion
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
-from groundstation.autopilot.session import read_log
+from groundstation.session_makers.flight_log_session import read_log
 from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ, StreamRequester
 from groundstation.autopilot.tlog import packets_of_chunks, write_tlog
 from groundstation.sim.mavlink_aircraft import ACC_NOISE_G, GYR_NOISE_RAD_S, MavlinkAircraft

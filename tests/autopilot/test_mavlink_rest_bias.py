@@ -8,7 +8,7 @@ import random
 import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.pipeline import Pipeline
 from mavlink_helpers import Sender, ardupilot_heartbeat
 
 BIAS_MRAD_S = (7, -12, 9)  # RAW_IMU's unit

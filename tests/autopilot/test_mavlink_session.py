@@ -22,9 +22,9 @@ from groundstation.autopilot.streams import slow_imu_note
 from groundstation.commands.bridge_sim import add_arguments
 from groundstation.estimation.evaluation import inclination_error_rad
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
-from groundstation.session.factory import open_session
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.factory import open_session
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sim.mavlink_aircraft import ACC_NOISE_G, GYR_NOISE_RAD_S, MavlinkAircraft
 from groundstation.sim.options import scenario_from_args
 from groundstation.sim.stream import Scenario

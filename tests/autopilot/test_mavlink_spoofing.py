@@ -13,7 +13,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation.autopilot.decoder import new_parser
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sources.base import SourceError
 from groundstation.sources.spec import open_source
 from mavlink_helpers import Sender, ardupilot_heartbeat
@@ -152,8 +152,8 @@ def test_the_picked_vehicle_is_recorded_and_replayed_over_a_real_udp_link(tmp_pa
     the picked system 1, and so does the replay of its recording."""
     import socket
 
-    from groundstation.session.load import load_session
-    from groundstation.session.factory import open_session
+    from groundstation.session_makers.load import load_session
+    from groundstation.session_makers.factory import open_session
     from tests.waiting import wait_for
 
     session = open_session("mavlink:udpin:127.0.0.1:0?system=1", filters=("ahf",), recordings_dir=tmp_path)

@@ -50,7 +50,7 @@ def test_link_panel_shows_both_radios_signal_and_the_battery(qtbot, mavlink_wind
 def test_the_projects_own_link_shows_no_radio_rows_and_its_own_uplink(qtbot, tmp_path):
     from PySide6 import QtCore
 
-    from groundstation.session.factory import Sessions
+    from groundstation.session_makers.factory import Sessions
 
     from groundstation.ui.main_window import MainWindow
 

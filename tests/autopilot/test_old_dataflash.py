@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from pymavlink import DFReader, mavutil
 
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 from mavlink_helpers import dataflash_record
 

@@ -12,7 +12,7 @@ from pyulog import ULog
 
 from groundstation import quaternion
 from groundstation.autopilot.sections import SECTIONS
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 from mavlink_helpers import flightlog
 

@@ -7,7 +7,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.records import ImuSample, VehicleStatus
 from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ, StreamRequester, slow_imu_note
-from groundstation.session.figures import rate_hz as figures_rate_hz
+from groundstation.session_parts.figures import rate_hz as figures_rate_hz
 
 ARDUPILOT = VehicleStatus(1, 1, 0, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 2, "STABILIZE", False, 3, 0)
 CAMERA = VehicleStatus(1, 100, 0, mavlink.MAV_AUTOPILOT_INVALID, 30, "Mode(0x00000000)", False, 3, 0)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from pymavlink import mavutil
 
-from groundstation.autopilot.session import read_log
+from groundstation.session_makers.flight_log_session import read_log
 from groundstation.autopilot.tlog import packets_of_chunks, write_tlog
 from groundstation.errors import UserError
 
@@ -103,8 +103,8 @@ def test_a_sitl_tlog_opens_on_the_autopilot_clock_and_a_live_one_on_its_receive_
     """The rule of ``autopilot.tlog``: compressed receive times (the autopilot clock runs ~25x faster) are
     replaced by the autopilot's clock, so the session sees no clock jumps; a log at real time keeps its own."""
     from groundstation.autopilot.tlog import session_packets
-    from groundstation.session.clock import DISCONTINUITIES
-    from groundstation.session.load import load_session
+    from groundstation.session_parts.clock import DISCONTINUITIES
+    from groundstation.session_makers.load import load_session
 
     trimmed = tmp_path / "rover_start.tlog"
     trimmed.write_bytes(flightlog("ardurover_boat_sitl_autotest.tlog").read_bytes()[:400_000])

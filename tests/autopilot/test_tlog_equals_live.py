@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 from groundstation.sim.stream import Scenario
 from mavlink_helpers import pty_session

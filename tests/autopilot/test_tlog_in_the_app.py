@@ -4,7 +4,7 @@ window opens them whole (tests/ui/test_replay.py)."""
 
 import pytest
 
-from groundstation.session.factory import open_session
+from groundstation.session_makers.factory import open_session
 from groundstation.sources import SourceError, whole_file
 
 from mavlink_helpers import flightlog

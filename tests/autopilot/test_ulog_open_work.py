@@ -12,11 +12,11 @@ import pytest
 from pyulog import ULog
 
 from groundstation.autopilot.flightlog import GPS_COLUMNS
-from groundstation.autopilot.session import _Readings, read_log
+from groundstation.session_makers.flight_log_session import _Readings, read_log
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import sample_periods_s
-from groundstation.session import aiding
-from groundstation.session.load import load_session
+from groundstation.session_parts import aiding
+from groundstation.session_makers.load import load_session
 
 from mavlink_helpers import flightlog, live_aiding_stage
 

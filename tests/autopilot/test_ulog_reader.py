@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from groundstation.autopilot.agreement import onboard_agreement
-from groundstation.autopilot.session import read_log
-from groundstation.autopilot.session import load_log
+from groundstation.session_makers.flight_log_session import read_log
+from groundstation.session_makers.flight_log_session import load_log
 from groundstation.estimation import create
 from groundstation.estimation.evaluation import inclination_error_rad, score
 from groundstation.errors import UserError

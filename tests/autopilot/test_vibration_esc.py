@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from groundstation.analysis.vibration import vibration_summary
-from groundstation.autopilot.session import load_log
+from groundstation.session_makers.flight_log_session import load_log
 
 from mavlink_helpers import write_dataflash
 

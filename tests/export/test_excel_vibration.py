@@ -8,7 +8,7 @@ from openpyxl import load_workbook
 from groundstation import cli
 from groundstation.analysis.vibration import vibration_summary
 from groundstation.export.excel import write_workbook
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from groundstation.export import excel_columns
 from groundstation.export.columns import select_rows, sensor_columns
 from groundstation.export.excel import write_workbook
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 from .conftest import CHANGE_AT_S, simulated_recording
 

@@ -24,8 +24,8 @@ from websockets.sync.client import connect
 
 from groundstation.export.foxglove_live import SUBPROTOCOLS, FoxgloveBridge, origin_allowed
 from groundstation.export.protobuf_rows import field_names
-from groundstation.session.factory import open_session
-from groundstation.session.load import load_session
+from groundstation.session_makers.factory import open_session
+from groundstation.session_makers.load import load_session
 from tests.waiting import wait_for
 
 JS = Path(__file__).resolve().parents[1] / "js_ws"

@@ -13,7 +13,7 @@ from groundstation.errors import UserError
 
 from groundstation.export.foxglove_live import FoxgloveBridge, parse_address
 from groundstation.export.protobuf_rows import field_names
-from groundstation.session.factory import open_session
+from groundstation.session_makers.factory import open_session
 from tests.foxglove_client import Client, decoded
 
 def test_ten_seconds_of_a_live_session_arrive_whole(tmp_path):

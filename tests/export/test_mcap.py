@@ -16,7 +16,7 @@ from groundstation.export.foxglove_topics import origin_ns
 from groundstation.export.mcap_file import write_mcap
 from groundstation.export.protobuf_rows import field_names
 from groundstation.export.request import export_request, run_export
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.session.product import event_time_s
 from tests.export.conftest import START_UTC
 

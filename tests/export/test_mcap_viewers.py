@@ -16,7 +16,7 @@ from groundstation import quaternion
 from groundstation.export.foxglove_topics import origin_ns
 from groundstation.export.mcap_file import write_mcap
 from groundstation.export.protobuf_rows import field_names
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from tests.export.conftest import DATASETS, simulated_recording
 
 LOGS = sorted(p for p in (DATASETS / "flightlogs").glob("*") if p.suffix in (".bin", ".ulg", ".tlog"))

@@ -127,7 +127,7 @@ def test_the_report_says_what_the_suggested_notch_would_do(vibrating_flight):
     view, its phase lag at 10-30 Hz and the attitude difference, as ``analysis.whatif`` computes them."""
     from groundstation.analysis.vibration import vibration_summary
     from groundstation.analysis.whatif import what_if
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     path, out = vibrating_flight
     text = out.read_text(encoding="utf-8")

@@ -10,7 +10,7 @@ import numpy as np
 from pymavlink import DFReader
 
 from groundstation.export.report import MAX_EVENTS, MAX_FINDINGS, write_report
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "autopilot"))
 from mavlink_helpers import write_dataflash  # noqa: E402

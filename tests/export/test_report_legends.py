@@ -15,7 +15,7 @@ from groundstation.export.report import report_html
 from groundstation.export.report_figures import FONT_PX, line_plot
 from groundstation.estimation import colour_of as estimator_colour
 from groundstation.palette import ONBOARD_COLOUR
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 SVG = "{http://www.w3.org/2000/svg}"
 

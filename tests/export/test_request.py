@@ -9,7 +9,7 @@ import pytest
 from groundstation.cli import main
 from groundstation.errors import UserError
 from groundstation.export.request import export_request, run_export
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.ui.export_job import ExportJob
 from tests.session.full_disk import tiny_tmpfs
 
@@ -17,7 +17,7 @@ from tests.session.full_disk import tiny_tmpfs
 @pytest.fixture
 def no_decoding(monkeypatch):
     """Decoding is what takes seconds: these mistakes must be found without it."""
-    import groundstation.session.load as data
+    import groundstation.session_makers.load as data
 
     def decode(*args, **kwargs):
         raise AssertionError("decoded before the mistake was found")

@@ -4,7 +4,7 @@ reads each to a result or a one-line message, and what it could not use is said,
 import pytest
 
 from groundstation.cli import main
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from tests.crafted_files import CRAFTED, write_all
 
 # What the session's warning must name for each crafted header or event it could not use.

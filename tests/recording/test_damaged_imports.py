@@ -4,7 +4,7 @@ own times, and records repeated by a duplicated byte range are said once, never 
 import numpy as np
 
 from groundstation.cli import main
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from tests.crafted_files import byte_range_duplicated, dataset_csv, first_samples_block_damaged
 
 

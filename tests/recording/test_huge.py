@@ -13,7 +13,7 @@ import pytest
 from firmware_protocol import DecoderStats
 from groundstation.recording import open_recording
 from groundstation.recording.format import RecordingError
-from groundstation.session.link import LinkStats
+from groundstation.session_parts.link import LinkStats
 from tests.crafted_files import chunk_time_jump, false_markers, link_recording, sparse_zeros
 
 
@@ -94,7 +94,7 @@ def test_opening_a_recording_allocates_a_fraction_of_its_size(tmp_path):
 
 
 def test_a_jump_of_2_62_ns_in_chunk_time_is_damage_and_costs_nothing(tmp_path):
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
 
     path = chunk_time_jump(tmp_path, "jump", jump_ns=2**62)
     tracemalloc.start()

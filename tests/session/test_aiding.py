@@ -5,9 +5,9 @@ import numpy as np
 
 from groundstation import quaternion as quat
 from groundstation.geodesy import ned_from_geodetic
-from groundstation.session.aiding import gps_fix
-from groundstation.session.catalogue import HEADING
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_parts.aiding import gps_fix
+from groundstation.session_parts.catalogue import HEADING
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 
@@ -111,7 +111,7 @@ def test_fused_position_follows_truth_closer_than_the_raw_gps_and_barometer():
 def test_the_aiding_estimator_is_a_named_setting_not_the_first_of_the_filters(tmp_path):
     """The compass heading and the position come from the estimator the session names, wherever it stands
     in the filters, live and from a recording (which records the name); unnamed, AHF2 when it runs."""
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
     from tests.simulated import simulated_chunks, write_recording
 
     chunks = simulated_chunks(8.0, seed=4, mode="raw", mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=10)
@@ -146,7 +146,7 @@ def test_heading_and_position_hold_a_piece_of_samples_not_copies_of_the_session(
     a time (was 4.8x the output: every input held whole, for an hour of 100 Hz ~100 MB)."""
     import tracemalloc
 
-    from groundstation.session import aiding
+    from groundstation.session_parts import aiding
 
     rng = np.random.default_rng(35)
     n = 200_000

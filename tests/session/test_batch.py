@@ -1,4 +1,4 @@
-"""The batch path (session.batch) against the incremental pipeline fed chunk by chunk (replay).
+"""The batch path (session_makers.batch) against the incremental pipeline fed chunk by chunk (replay).
 
 The incremental pipeline is the oracle: every table bit for bit (NaN where it has NaN), every event
 in order, the link's counters and per-second figures, the last CONFIG and the estimators' settings
@@ -22,9 +22,9 @@ import pytest
 
 from firmware_protocol import StreamDecoder, encode
 from groundstation.recording import open_recording
-from groundstation.session.batch import batch_replay
-from groundstation.session.load import from_pipeline, load_session
-from groundstation.session.replay import replay
+from groundstation.session_makers.batch import batch_replay
+from groundstation.session_makers.load import from_pipeline, load_session
+from groundstation.session_makers.replay import replay
 from tests.simulated import simulated_chunks, write_recording
 
 SENSORS = dict(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)

@@ -11,7 +11,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from groundstation.session.clock import SessionClock
+from groundstation.session_parts.clock import SessionClock
 
 PERIOD_US = 10_000
 WRAP = 2**32

@@ -8,8 +8,8 @@ import pytest
 
 from groundstation.cli import main
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
-from groundstation.session.replay import replay
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.replay import replay
 from groundstation.sim.firmware import FirmwareSettings
 from tests.crafted_files import forged_config_recording
 
@@ -123,7 +123,7 @@ def test_the_commands_say_so_and_accept_on_request(forged, tmp_path, command, ca
 
 
 def test_the_guard_holds_until_a_restart_or_an_answer_and_says_each_conflict_once():
-    from groundstation.session.pipeline import ConfigGuard, SensorConfig
+    from groundstation.session_makers.pipeline import ConfigGuard, SensorConfig
 
     real, forged = SensorConfig(accel_fs_g=4, gyro_fs_dps=500), SensorConfig(accel_fs_g=16, gyro_fs_dps=500, mounting=3)
     guard = ConfigGuard()

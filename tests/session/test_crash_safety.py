@@ -10,15 +10,15 @@ import time
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.replay import replay
+from groundstation.session_makers.replay import replay
 
 pytestmark = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals and SIGKILL are POSIX only")
 
 RECORDER = textwrap.dedent(
     """
     import sys, time
-    from groundstation.session.live import LiveSession
-    from groundstation.session.pipeline import Pipeline
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.pipeline import Pipeline
     from groundstation.sources import SerialSource
     session = LiveSession(SerialSource(sys.argv[1]), Pipeline(("ahf",)), recordings_dir=sys.argv[2]).start()
     print(session.recording_path, flush=True)

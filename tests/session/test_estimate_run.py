@@ -1,4 +1,4 @@
-"""The estimators run a stretch at a time (session.estimate_run): where a stretch ends changes no number.
+"""The estimators run a stretch at a time (session_makers.estimate_run): where a stretch ends changes no number.
 
 The whole run (the ``imu`` table of ``load_session``) and the streamed one (an export's,
 ``stream_estimates``) run the same code, ``Estimator.run`` over stretches with the state carried, so
@@ -14,8 +14,8 @@ import pytest
 from groundstation.export.columns import export_stretches, select_rows
 from groundstation.export.request import export_request, run_export
 from groundstation.export.tabular import write_parquet
-from groundstation.session import estimate_run
-from groundstation.session.load import load_session
+from groundstation.session_makers import estimate_run
+from groundstation.session_makers.load import load_session
 from tests.session.test_batch import SENSORS, assert_same_session
 from tests.simulated import simulated_chunks, write_recording
 

@@ -8,10 +8,10 @@ import numpy as np
 
 from groundstation.recording import open_recording
 from groundstation.estimation import live_estimators
-from groundstation.session.factory import open_session
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import replay
+from groundstation.session_makers.factory import open_session
+from groundstation.session_makers.live import LiveSession
+from groundstation.session_makers.pipeline import Pipeline
+from groundstation.session_makers.replay import replay
 from groundstation.sources import open_source
 from tests.waiting import wait_for
 

@@ -16,7 +16,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation.cli import main
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "autopilot"))
 from mavlink_helpers import flightlog  # noqa: E402

@@ -19,7 +19,7 @@ from tests.estimation.estimation_samples import flight_like_samples
 from groundstation.estimation import create
 from groundstation.estimation.ukf import Ukf
 from groundstation.recording import open_recording
-from groundstation.session.estimators import _RESTART, _Deferred
+from groundstation.session_parts.estimators import _RESTART, _Deferred
 from groundstation.stopwatch import UNCOMPILED
 from tests.waiting import LIMIT_S, wait_for
 

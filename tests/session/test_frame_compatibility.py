@@ -8,7 +8,7 @@ from pathlib import Path
 from firmware_protocol import SPEC
 from firmware_protocol.spec import Field, FrameType
 from groundstation.recording import open_recording
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.pipeline import Pipeline
 
 OLDER = Path(__file__).resolve().parents[2] / "recordings" / "samples" / "flight-both-lossy.gsrec"
 SCHEMA_WORDS = "protocol spec"

@@ -12,9 +12,9 @@ import time
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import replay
+from groundstation.session_makers.live import LiveSession
+from groundstation.session_makers.pipeline import Pipeline
+from groundstation.session_makers.replay import replay
 from tests.session.full_disk import grow, simulated_source, tiny_tmpfs
 from tests.waiting import LIMIT_S, wait_for
 
@@ -92,8 +92,8 @@ FILE_LIMIT_BYTES = 12_000
 RLIMIT_SCRIPT = textwrap.dedent(
     f"""
     import json, resource, signal, sys
-    from groundstation.session.live import LiveSession
-    from groundstation.session.pipeline import Pipeline
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.pipeline import Pipeline
     from tests.session.full_disk import simulated_source
     from tests.waiting import LIMIT_S, wait_for
 

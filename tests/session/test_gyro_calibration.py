@@ -5,7 +5,7 @@ and the estimators that do not estimate their own bias get the gyro without it."
 import numpy as np
 
 from groundstation import mounting
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import replay
+from groundstation.session_makers.live import LiveSession
+from groundstation.session_makers.pipeline import Pipeline
+from groundstation.session_makers.replay import replay
 from groundstation.sources import SerialSource
 from tests.waiting import wait_for
 

@@ -6,13 +6,13 @@ import time
 import numpy as np
 
 from groundstation.cli import main
-from groundstation.session.live import LiveSession
-from groundstation.session.load import load_session
-from groundstation.session.replay import pipeline_for
+from groundstation.session_makers.live import LiveSession
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.replay import pipeline_for
 from groundstation.recording import open_recording
 from groundstation.sources.replay import open_replay
-from groundstation.session.factory import open_session
-from groundstation.session.table import LIVE_KEEP_ROWS
+from groundstation.session_makers.factory import open_session
+from groundstation.session_parts.table import LIVE_KEEP_ROWS
 
 
 class Unpaced:

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
-from groundstation.session.pipeline import SensorConfig, without_config
-from groundstation.session.replay import replay
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.pipeline import SensorConfig, without_config
+from groundstation.session_makers.replay import replay
 
 from tests.recording.helpers import recording_without_config
 

@@ -9,8 +9,8 @@ import numpy as np
 from firmware_protocol import SPEC
 from groundstation.export.excel_session import describe_event, firmware
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
-from groundstation.session.replay import replay
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.replay import replay
 
 OLD_RECORDING = Path(__file__).resolve().parents[1] / "data" / "hover-raw-config-15-bytes.gsrec"
 UNKNOWN = SPEC.frame("CONFIG").field("gyro_calibration").absent

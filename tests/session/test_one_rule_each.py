@@ -14,12 +14,12 @@ from firmware_protocol import SPEC, StreamDecoder, encode
 from firmware_protocol.codec import new_frame
 from firmware_protocol.spec import SPEC_PATH, load_spec
 from groundstation.recording import open_recording
-from groundstation.session import aiding as aiding_module
-from groundstation.session import pipeline as pipeline_module
-from groundstation.session.batch import batch_replay
-from groundstation.session.catalogue import POSITION
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import replay
+from groundstation.session_parts import aiding as aiding_module
+from groundstation.session_makers import pipeline as pipeline_module
+from groundstation.session_makers.batch import batch_replay
+from groundstation.session_parts.catalogue import POSITION
+from groundstation.session_makers.pipeline import Pipeline
+from groundstation.session_makers.replay import replay
 from tests.simulated import simulated_chunks, write_recording
 
 SENSORS = dict(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)

@@ -12,8 +12,8 @@ from groundstation import quaternion
 from groundstation.autopilot.tlog import write_tlog
 from groundstation.recording import RecordingWriter
 from groundstation.session import view
-from groundstation.session.load import load_session
-from groundstation.session.factory import open_session
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.factory import open_session
 from groundstation.session.playback import RevealSession
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 from groundstation.ui.series import attitude_deg

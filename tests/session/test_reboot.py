@@ -9,8 +9,8 @@ import pytest
 
 from groundstation.estimation.base import INITIALISED
 from groundstation.recording import RecordingWriter
-from groundstation.session.load import load_session
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 

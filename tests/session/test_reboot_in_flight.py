@@ -13,9 +13,9 @@ import pytest
 from groundstation.estimation import live_estimators
 from groundstation.estimation.evaluation import inclination_error_rad
 from groundstation.recording import RecordingWriter, open_recording
-from groundstation.session.batch import batch_replay
-from groundstation.session.load import from_pipeline, load_session
-from groundstation.session.replay import replay
+from groundstation.session_makers.batch import batch_replay
+from groundstation.session_makers.load import from_pipeline, load_session
+from groundstation.session_makers.replay import replay
 from groundstation.sim.firmware import GYRO_CALIBRATION, FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.sim.truth_file import TruthTable

@@ -89,8 +89,8 @@ def test_wrong_inputs_get_a_message_exit_2_and_leave_no_file(tmp_path):
 @posix_only
 def test_the_summary_says_when_the_port_is_gone_or_silent(tmp_path):
     from groundstation.commands.summary import summary_line
-    from groundstation.session.live import LiveSession
-    from groundstation.session.pipeline import Pipeline
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.pipeline import Pipeline
     from groundstation.sim.stream import Scenario, SimStream
     from groundstation.sources import SerialSource
 

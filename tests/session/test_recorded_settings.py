@@ -9,8 +9,8 @@ import pytest
 
 from groundstation.estimation import ESTIMATORS, live_estimators
 from groundstation.recording import RecordingWriter, open_recording
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import SettingsSchedule, pipeline_for
+from groundstation.session_makers.pipeline import Pipeline
+from groundstation.session_makers.replay import SettingsSchedule, pipeline_for
 
 
 def test_the_live_estimators_settings_survive_the_recording_header(tmp_path):
@@ -72,7 +72,7 @@ def test_every_setting_of_every_estimator_round_trips_without_a_warning(tmp_path
 
 def test_a_warning_about_the_recording_itself_is_dated_at_its_start(tmp_path):
     """Issue 34: the Session sheet dated such a warning at -4376.88 s (host time 0 less the first byte's)."""
-    from groundstation.session.load import load_session
+    from groundstation.session_makers.load import load_session
     from tests.simulated import simulated_chunks, write_recording
 
     path = tmp_path / "old.gsrec"

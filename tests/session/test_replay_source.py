@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.replay import replay
+from groundstation.session_makers.replay import replay
 from groundstation.sources import ReplaySource, SourceClosed
 
 SAMPLE = Path(__file__).resolve().parents[2] / "recordings" / "samples" / "hover-raw.gsrec"

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
-from groundstation.session.replay import replay
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.replay import replay
 from groundstation.session.playback import Playback, RevealedTable, RevealSession, check_speed
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 
 SAMPLES = Path(__file__).resolve().parents[2] / "recordings" / "samples"
 LOSSY = SAMPLES / "flight-both-lossy.gsrec"  # losses, CRC failures, both raw and estimated frames

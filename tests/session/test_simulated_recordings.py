@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 
 SAMPLES = Path(__file__).resolve().parents[2] / "recordings" / "samples"
 

@@ -12,9 +12,9 @@ from groundstation.export.columns import export_columns
 from groundstation.export.excel import write_workbook
 from groundstation.export.tabular import write_csv
 from groundstation.recording import RecordingWriter, open_recording
-from groundstation.session.catalogue import COMPUTED_FROM
-from groundstation.session.load import from_pipeline
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_parts.catalogue import COMPUTED_FROM
+from groundstation.session_makers.load import from_pipeline
+from groundstation.session_makers.pipeline import Pipeline
 
 ESC_ID = min(set(range(1, 256)) - {t.id for t in SPEC.frames})  # free in any version of the spec, not a fixed 0x08
 ESC_FRAME = """

@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 
 COLUMNS = ("time_s", "a", "b")
 

@@ -12,9 +12,9 @@ import pytest
 from firmware_protocol import SPEC, encode, make_frame
 from groundstation import cli
 from groundstation.recording import open_recording
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import replay
+from groundstation.session_makers.live import LiveSession
+from groundstation.session_makers.pipeline import Pipeline
+from groundstation.session_makers.replay import replay
 from groundstation.sources import open_source
 from tests.session.test_batch import assert_same_session
 from tests.simulated import simulated_chunks, write_recording
@@ -101,7 +101,7 @@ def test_a_failure_in_the_reader_is_the_session_error_not_a_dead_thread(tmp_path
 
 
 def test_record_exits_non_zero_with_the_reason_when_the_reader_fails(tmp_path, monkeypatch, capsys):
-    monkeypatch.setattr("groundstation.session.pipeline.Pipeline", FailingPipeline)  # open_session imports it when it runs
+    monkeypatch.setattr("groundstation.session_makers.pipeline.Pipeline", FailingPipeline)  # open_session imports it when it runs
     status = cli.main(["record", "--port", "sim:", "--duration", "10", "--recordings", str(tmp_path)])
     assert status == 1
     assert "ZeroDivisionError: float division by zero" in capsys.readouterr().err

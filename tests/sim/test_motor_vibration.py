@@ -7,7 +7,7 @@ import pytest
 
 from groundstation import cli
 from groundstation.analysis.vibration import find_peaks, spectrum, vibration_summary, ImuTable
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.sim.imu import MPU6050Settings
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.sim.vibration import VibrationSettings, MotorVibration

@@ -109,9 +109,9 @@ def test_a_board_rebooting_mid_session_through_the_pty(tmp_path):
     time monotonic and in step with the host clock, and a replay of its recording finds the same."""
     import numpy as np
 
-    from groundstation.session.load import load_session
-    from groundstation.session.live import LiveSession
-    from groundstation.session.pipeline import Pipeline
+    from groundstation.session_makers.load import load_session
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.pipeline import Pipeline
     from groundstation.sources import SerialSource
 
     process, path = start_cli("--scenario", "hover", "--seed", "4", "--reboot-after", "3")

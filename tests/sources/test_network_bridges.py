@@ -3,7 +3,7 @@ into a session opened by spec: every byte arrives, is recorded, decoded, and upl
 aircraft (its ACKs come back)."""
 
 from groundstation.recording import open_recording
-from groundstation.session.factory import open_session
+from groundstation.session_makers.factory import open_session
 from tests.waiting import LIMIT_S, wait_for
 
 from .bridges import TcpBridge, UdpBridge

@@ -12,8 +12,8 @@ import threading
 import pytest
 from serial.tools.list_ports_common import ListPortInfo
 
-from groundstation.session.live import LiveSession
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.live import LiveSession
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sim.link import LinkSettings
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.sources import SerialSource

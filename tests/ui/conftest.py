@@ -3,7 +3,7 @@
 import pytest
 from PySide6 import QtCore
 
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 
 from groundstation.ui.main_window import MainWindow
 

@@ -6,7 +6,7 @@ import json
 import numpy as np
 from PySide6 import QtWidgets
 
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 
 from groundstation.ui.main_window import MainWindow
 from tests.waiting import LIMIT_MS

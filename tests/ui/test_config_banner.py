@@ -9,7 +9,7 @@ import pytest
 from PySide6 import QtCore
 
 from groundstation.recording import open_recording
-from groundstation.session.factory import replay_session
+from groundstation.session_makers.factory import replay_session
 from groundstation.sources import ReplaySource
 from tests.crafted_files import forged_config_recording
 from tests.waiting import LIMIT_MS

@@ -4,7 +4,7 @@ calibration (tests/data/README.md), and a lost CONFIG as a warning (issue 22).""
 from pathlib import Path
 
 from groundstation.recording import open_recording
-from groundstation.session.replay import replay
+from groundstation.session_makers.replay import replay
 from groundstation.ui.event_console import ALARMS, describe
 
 from tests.recording.helpers import recording_without_config

@@ -6,7 +6,7 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.sources import SourceError, open_source
 from groundstation.ui import connection_bar
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 
 FTDI = {"device": "/dev/ttyUSB7", "description": "FT232R USB UART", "vid_pid": "0403:6001"}

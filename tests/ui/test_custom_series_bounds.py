@@ -7,7 +7,7 @@ import json
 import numpy as np
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.channels import PREFIX
 from groundstation.ui.main_window import MainWindow
 from tests.ui.test_channels import listed, roll_deg

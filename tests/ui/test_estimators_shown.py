@@ -9,8 +9,8 @@ import pytest
 from groundstation import quaternion
 from groundstation.recording import RecordingWriter
 from groundstation.estimation import ESTIMATORS, label, live_estimators
-from groundstation.session.load import load_session
-from groundstation.session.factory import DEMO_SPEC, Sessions
+from groundstation.session_makers.load import load_session
+from groundstation.session_makers.factory import DEMO_SPEC, Sessions
 from groundstation.sim.stream import SimStream
 from groundstation.sources import parse_spec
 from groundstation.sources.sim import parse_scenario

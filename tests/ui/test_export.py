@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.ui.export_dialog import ExportDialog
 
 from tests.ui.helpers import open_file

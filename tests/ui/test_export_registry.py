@@ -11,7 +11,7 @@ from groundstation.cli import main
 from groundstation.export import request
 from groundstation.export.columns import export_columns, select_rows
 from groundstation.export.files import atomic_output
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.ui.export_dialog import ExportDialog
 
 from tests.waiting import LIMIT_MS

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from groundstation.estimation import live_estimators
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from tests.waiting import LIMIT_MS
 
 ROOT = Path(__file__).resolve().parents[2]

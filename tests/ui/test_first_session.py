@@ -9,7 +9,7 @@ import sys
 import pytest
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 from tests.waiting import LIMIT_MS
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from groundstation.estimation import live_estimators
 from groundstation.recording import open_recording
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.stopwatch import UNCOMPILED
 from tests.session.test_first_start import Lines, compiled_kernels, first_start_env, posix_only, processes_with
 from tests.waiting import LIMIT_S, wait_for

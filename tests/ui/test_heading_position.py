@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from groundstation import geodesy, quaternion
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.sim.extra_sensors import AuxSettings
 from groundstation.sim.profiles import make_profile
 from groundstation.ui.navigation import heading_now, newest_row

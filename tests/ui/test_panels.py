@@ -44,7 +44,7 @@ def test_uplink_commands_are_acknowledged(window, qtbot):
 
 
 def test_tuned_settings_and_shown_estimators_are_remembered(window, qtbot, tmp_path):
-    from groundstation.session.factory import Sessions
+    from groundstation.session_makers.factory import Sessions
     from groundstation.ui.main_window import MainWindow
 
     window.start_demo()

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtGui
 
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 from groundstation.estimation import ESTIMATORS, live_estimators
 from groundstation.estimation import colour_of as colour
 from groundstation.palette import ONBOARD_COLOUR, PALETTE

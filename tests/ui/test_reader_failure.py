@@ -6,7 +6,7 @@ from tests.waiting import LIMIT_MS
 
 
 def test_a_failure_in_the_reader_shows_in_the_banner(window, qtbot, monkeypatch):
-    monkeypatch.setattr("groundstation.session.pipeline.Pipeline", FailingPipeline)  # open_session imports it when it runs
+    monkeypatch.setattr("groundstation.session_makers.pipeline.Pipeline", FailingPipeline)  # open_session imports it when it runs
     window.connect_serial("sim:")
     session = window.session
     assert session is not None

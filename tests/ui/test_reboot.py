@@ -53,7 +53,7 @@ def test_a_device_reboot_breaks_every_curve_and_the_link_panel_shows_no_restart_
 
 def test_after_a_device_reboot_the_attitude_panel_warns_while_the_estimates_re_converge(window, qtbot):
     """Issue 21: the horizon and 3D view showed ahf2 upside down after a reboot, with no warning."""
-    from groundstation.session.estimators import RECONVERGE_S
+    from groundstation.session_parts.estimators import RECONVERGE_S
 
     window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     warning = window.attitude_panel.reconverging

@@ -2,7 +2,7 @@
 cannot be re-recorded."""
 
 from groundstation.recording import open_recording
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.pipeline import Pipeline
 
 from tests.ui.helpers import open_file
 from tests.waiting import LIMIT_MS

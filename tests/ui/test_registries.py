@@ -13,7 +13,7 @@ from groundstation import estimation, formats
 from groundstation.cli import main
 from groundstation.datasets import trial_from_columns
 from groundstation.estimation.ahf import Hf
-from groundstation.loaders import dataset_csv
+from groundstation.session_makers.loaders import dataset_csv
 
 from tests.ui.helpers import open_file
 from tests.waiting import LIMIT_MS

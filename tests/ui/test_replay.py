@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from groundstation import quaternion
-from groundstation.session import load as opening
-from groundstation.session.load import load_session
+from groundstation.session_makers import load as opening
+from groundstation.session_makers.load import load_session
 from groundstation.estimation import AIDING_ESTIMATOR, live_estimators, runnable
 from groundstation.formats import FILE_AIDING
 from groundstation.ui.sample_streams import headline

@@ -4,7 +4,7 @@ import threading
 
 import numpy as np
 
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 from groundstation.ui.series import BIN_ROWS, HISTORY_BINS, RECENT_S, Series
 
 

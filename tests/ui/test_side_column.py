@@ -122,7 +122,7 @@ def test_after_a_restart_the_source_box_shows_what_streams(qtbot, tmp_path):
     simulated curves passed for the aircraft."""
     from PySide6 import QtCore
 
-    from groundstation.session.factory import Sessions
+    from groundstation.session_makers.factory import Sessions
     from groundstation.ui.main_window import MainWindow
 
     settings = QtCore.QSettings(str(tmp_path / "settings.ini"), QtCore.QSettings.Format.IniFormat)

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.session.load import load_session
+from groundstation.session_makers.load import load_session
 from groundstation.sim.stream import Scenario, SimStream
 from groundstation.ui.export_dialog import ExportDialog
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 
 from tests.ui.helpers import open_file, play_to_the_end

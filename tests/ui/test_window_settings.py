@@ -3,7 +3,7 @@ neither overwrites the other's when it closes; a second window starts from the f
 
 from PySide6 import QtCore
 
-from groundstation.session.factory import Sessions
+from groundstation.session_makers.factory import Sessions
 from groundstation.ui.main_window import MainWindow
 from groundstation.ui.window_settings import window_settings
 

@@ -4,7 +4,7 @@ the rows they arrived at, so export and evaluate treat it like any session.
 
 - ``dt`` comes from the autopilot's timestamps (never a log's receive time).
 - Magnetometer, barometer and GPS readings go through the live session's aiding stage
-  (``session/aiding.py``), merged with the IMU samples by the autopilot's time: each reaches the
+  (``session_parts/aiding.py``), merged with the IMU samples by the autopilot's time: each reaches the
   estimators with the first IMU sample at or after it, GPS velocity when it has all three NED
   components (single-antenna GPS gives no heading); then the compass heading (``mag_raw``) and the
   fused position (``position``) on the aiding estimator's attitude, as live.
@@ -35,9 +35,9 @@ from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.evaluation import sample_periods_s
-from groundstation.session import aiding
-from groundstation.session.catalogue import POSITION, TRUTH, Catalogue, message_table, session_catalogue
-from groundstation.session.pipeline import DEFAULT_FILTERS
+from groundstation.session_parts import aiding
+from groundstation.session_parts.catalogue import POSITION, TRUTH, Catalogue, message_table, session_catalogue
+from groundstation.session_makers.pipeline import DEFAULT_FILTERS
 from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns
 from groundstation.formats import IMU_STREAMS
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -86,7 +86,7 @@ def read_log(path, progress=None) -> FlightLog:
 
 def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IMU_STREAMS[0]) -> SessionData:
     """``share(fraction)``: told after each estimator's run, from ``READ_SHARE`` to 1. The magnetometer,
-    barometer and GPS go through the live session's aiding stage (``session.aiding``) in time order with
+    barometer and GPS go through the live session's aiding stage (``session_parts.aiding``) in time order with
     the IMU samples: the readings handed to the estimators, then the compass heading and the position on
     the aiding estimator's attitude."""
     notes = []

@@ -6,9 +6,9 @@ from pathlib import Path
 
 from groundstation.datasets import DatasetError, Trial, read_csv
 from groundstation.errors import UserError
-from groundstation.session.load import SessionData, from_trial
-from groundstation.session.pipeline import DEFAULT_FILTERS
-from groundstation.session.replay import check_forced
+from groundstation.session_makers.load import SessionData, from_trial
+from groundstation.session_makers.pipeline import DEFAULT_FILTERS
+from groundstation.session_makers.replay import check_forced
 
 
 def load(path, filters=None, forced=None, progress=None) -> SessionData:

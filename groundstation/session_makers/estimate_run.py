@@ -1,5 +1,5 @@
 """The host estimators over a session's samples, run forward a stretch at a time (the batch path's
-estimator stage, ``session.batch``).
+estimator stage, ``session_makers.batch``).
 
 ``EstimateRun`` holds what the estimators are fed (each sample's gyro, accelerometer, interval and aiding,
 in body axes and physical units) and where their run breaks (a recorded settings change, a device restart),
@@ -17,7 +17,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from groundstation.session.estimators import EstimatorBank
+from groundstation.session_parts.estimators import EstimatorBank
 from groundstation.session.product import estimate_columns
 
 STRETCH_SAMPLES = 65_536  # what one stretch holds: 10 estimators' columns over it are ~37 MB

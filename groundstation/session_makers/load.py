@@ -15,19 +15,19 @@ import numpy as np
 
 from groundstation import formats, mounting, quaternion
 from groundstation.autopilot.sections import attach_sections
-from groundstation.autopilot.session import FAST_IMU_FORMATS, attach_simstate_truth
+from groundstation.session_makers.flight_log_session import FAST_IMU_FORMATS, attach_simstate_truth
 from groundstation.formats import IMU_STREAMS
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
 from groundstation.estimation import create, live_estimators, runnable
 from groundstation.estimation.evaluation import run_on_trial
 from groundstation.recording import Recording
-from groundstation.session.batch import BatchSession, batch_replay
-from groundstation.session.catalogue import Catalogue, session_catalogue
-from groundstation.session.clock import DISCONTINUITIES
-from groundstation.session.pipeline import Pipeline
+from groundstation.session_makers.batch import BatchSession, batch_replay
+from groundstation.session_parts.catalogue import Catalogue, session_catalogue
+from groundstation.session_parts.clock import DISCONTINUITIES
+from groundstation.session_makers.pipeline import Pipeline
 from groundstation.session.product import ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns
-from groundstation.session.replay import replay
+from groundstation.session_makers.replay import replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 

@@ -50,7 +50,7 @@ from groundstation.autopilot.messages import StatusTexts, message_event, paramet
 from groundstation.autopilot.modes import status_event
 from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.autopilot.vehicle import Vehicle
-from groundstation.session.catalogue import Catalogue, message_table
+from groundstation.session_parts.catalogue import Catalogue, message_table
 
 SLOW_WARNING_S = 5.0  # the requester's retry interval: one retry's chance before the warning
 OTHER_TABLES_MAX = 256  # tables of senders other than the vehicle

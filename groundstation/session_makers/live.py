@@ -15,8 +15,8 @@ from pathlib import Path
 
 from firmware_protocol import SPEC, encode, make_frame
 from groundstation.recording import Recorder, default_recordings_dir
-from groundstation.session.pipeline import Pipeline
-from groundstation.session.replay import SettingsSchedule
+from groundstation.session_makers.pipeline import Pipeline
+from groundstation.session_makers.replay import SettingsSchedule
 from groundstation.sources.base import Source, SourceClosed, SourceError
 from groundstation.sources.sniff import ForeignBytes
 
@@ -63,7 +63,7 @@ class PipelineView:
 
 
 class LiveSession:
-    """``source`` through ``pipeline`` (``session.factory.open_session`` makes both from a spec); the
+    """``source`` through ``pipeline`` (``session_makers.factory.open_session`` makes both from a spec); the
     window reads ``view`` (``view.Session``).
 
     ``record``: write a recording into ``recordings_dir`` (default: ``default_recordings_dir()``)

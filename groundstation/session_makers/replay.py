@@ -9,7 +9,7 @@ from groundstation.autopilot.vehicle import MAX_SYSTEM, MIN_SYSTEM
 from groundstation.errors import UserError
 from groundstation.estimation import ESTIMATORS, settings_from_json
 from groundstation.recording import Recording
-from groundstation.session.pipeline import DEFAULT_FILTERS, PROTOCOLS, Pipeline
+from groundstation.session_makers.pipeline import DEFAULT_FILTERS, PROTOCOLS, Pipeline
 
 
 def _header_settings(recording: Recording) -> dict:

@@ -35,20 +35,20 @@ from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_batch
 from firmware_protocol.decoder import DecoderStats
 from groundstation.estimation import settings_as_json
 from groundstation.recording import Recording
-from groundstation.session import aiding
-from groundstation.session.catalogue import IMU, estimator_columns, session_catalogue
-from groundstation.session.clock import SessionClock
-from groundstation.session.estimate_run import Break, EstimateRun, SampleColumns, Streamed
-from groundstation.session.estimators import EstimatorBank
-from groundstation.session.link import LinkStats
-from groundstation.session.pipeline import (
+from groundstation.session_parts import aiding
+from groundstation.session_parts.catalogue import IMU, estimator_columns, session_catalogue
+from groundstation.session_parts.clock import SessionClock
+from groundstation.session_makers.estimate_run import Break, EstimateRun, SampleColumns, Streamed
+from groundstation.session_parts.estimators import EstimatorBank
+from groundstation.session_parts.link import LinkStats
+from groundstation.session_makers.pipeline import (
     ACC_FIELDS, DISCONTINUITY, GYR_FIELDS, HANDLER, LAMBDA_SCALE, MAG_FIELDS, Q_FIELDS, Q_SCALES, SETTINGS,
     TEMPERATURE_SCALE, ConfigGuard, ConfigWait, SensorConfig, conversions, gap_row, impossible_config_message, in_body_axes,
     period_s, sample_dt_s, sensor_of, stage_key, unexpected_frame_event,
 )
-from groundstation.session.replay import CONFIG_ANSWERS, RecordedSetup, SettingsSchedule, apply_event, recorded_setup
+from groundstation.session_makers.replay import CONFIG_ANSWERS, RecordedSetup, SettingsSchedule, apply_event, recorded_setup
 from groundstation.session.product import estimate_columns
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 
 # Shares of the whole job reported through ``progress``: reading and decoding, then the estimators.
 _DECODE_SHARE = 0.4
@@ -466,7 +466,7 @@ def _as_slice(rows: np.ndarray) -> np.ndarray | slice:
 
 
 class _Readings:
-    """The aiding stage of the pipeline (``session.aiding.Aiding``, the same object and methods) driven
+    """The aiding stage of the pipeline (``session_parts.aiding.Aiding``, the same object and methods) driven
     over the session's columns in the pipeline's order: magnetometer, barometer and GPS readings, IMU
     samples and device restarts merged by their ``stage_key`` (``aiding.merged``).
 

@@ -26,7 +26,7 @@ The rules here are the session's only copy: the batch path (``batch.py``) calls 
 ``Aiding``) on its columns and orders what it computed by ``stage_key``.
 
 Two protocol front-ends turn bytes into the stages' input: the project's own frames (``GsFrontEnd``,
-the dispatcher above) and an autopilot's MAVLink (``autopilot/mavlink_front.py``: records already in
+the dispatcher above) and an autopilot's MAVLink (``session_makers/mavlink_front.py``: records already in
 body axes and physical units, placed on the same ``SessionClock``). ``protocol`` picks one; the
 stages, the tables and the catalogue are the same.
 """
@@ -42,13 +42,13 @@ from firmware_protocol import SPEC, Frame, StreamDecoder
 from firmware_protocol.spec import Spec
 from groundstation import mounting
 from groundstation.estimation import settings_as_json
-from groundstation.session.aiding import Aiding
-from groundstation.session.catalogue import session_catalogue
-from groundstation.session.clock import SessionClock
-from groundstation.session.estimators import EstimatorBank
-from groundstation.session.link import LinkStats
-from groundstation.autopilot.mavlink_front import MavlinkFrontEnd
-from groundstation.session.table import LIVE_CHUNK_ROWS, Table
+from groundstation.session_parts.aiding import Aiding
+from groundstation.session_parts.catalogue import session_catalogue
+from groundstation.session_parts.clock import SessionClock
+from groundstation.session_parts.estimators import EstimatorBank
+from groundstation.session_parts.link import LinkStats
+from groundstation.session_makers.mavlink_front import MavlinkFrontEnd
+from groundstation.session_parts.table import LIVE_CHUNK_ROWS, Table
 from groundstation.units import ACCEL_LSB_PER_G, GYRO_LSB_PER_DPS
 
 DEFAULT_FILTERS = ("ahf",)

@@ -14,7 +14,7 @@ import numpy as np
 
 from firmware_protocol import DecoderStats
 from firmware_protocol.batch import CHUNK_COUNTERS
-from groundstation.session.table import Table
+from groundstation.session_parts.table import Table
 
 PER_SECOND_COLUMNS = ("t_s", "frames", "bytes", "crc_errors", "frames_lost", "bytes_skipped")
 _COUNTERS = CHUNK_COUNTERS  # the decoder's counters read per second (the batch decode reports them per chunk)

@@ -33,7 +33,7 @@ _UNIT_SHOWN = {"1": "", "enum": "enum", "bits": "bits", "index": "index", "uT": 
 # Tables whose export columns carry another prefix than the table's name (kept from earlier exports).
 EXPORT_PREFIX = {"mag_raw": "mag", "position": "fused"}
 # Frames whose tables belong to the link's health rather than to the sensors (the workbook's Link sheet).
-LINK_TABLES = ("status", "radio_status", "sys_status")  # the last two: a MAVLink session's (autopilot/mavlink_front.py)
+LINK_TABLES = ("status", "radio_status", "sys_status")  # the last two: a MAVLink session's (session_makers/mavlink_front.py)
 # Frames decoded into a computed table instead of a table of their own.
 COMPUTED_FROM = {"IMU_RAW": "imu", "ATTITUDE": "onboard"}
 

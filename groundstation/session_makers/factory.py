@@ -18,8 +18,8 @@ from groundstation import formats
 from groundstation.formats import IMU_STREAMS
 
 if TYPE_CHECKING:
-    from groundstation.session.live import LiveSession
-    from groundstation.session.load import Loading
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.load import Loading
     from groundstation.sources import ReplaySource
 
 # The makers are imported when a session is opened, not with this module: the window takes ``Sessions``
@@ -37,9 +37,9 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
     override (``baud=``, ``speed=``).
     """
     from groundstation.estimation import live_estimators
-    from groundstation.session.live import LiveSession
-    from groundstation.session.pipeline import Pipeline
-    from groundstation.session.table import LIVE_KEEP_ROWS
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.pipeline import Pipeline
+    from groundstation.session_parts.table import LIVE_KEEP_ROWS
     from groundstation.sources import ReplaySource, SourceError, open_source
 
     source = open_source(spec, **defaults)
@@ -61,8 +61,8 @@ def open_session(spec: str, *, filters=None, settings: dict | None = None, recor
 def replay_session(source: ReplaySource) -> LiveSession:
     """A recording through the live path with its recorded estimators and settings (every one of
     live estimator for the app's recordings), as the live session computed it."""
-    from groundstation.session.live import LiveSession
-    from groundstation.session.replay import pipeline_for
+    from groundstation.session_makers.live import LiveSession
+    from groundstation.session_makers.replay import pipeline_for
 
     return LiveSession(source, pipeline_for(source.recording), record=False)
 
@@ -79,15 +79,15 @@ class Sessions:
 
     def load(self, path, filters=None, forced=None) -> Loading:
         """``path`` computed in a worker; a flight log that can hold a full-rate IMU on the stream ``imu`` names."""
-        from groundstation.autopilot.session import FAST_IMU_FORMATS
-        from groundstation.session.load import Loading
+        from groundstation.session_makers.flight_log_session import FAST_IMU_FORMATS
+        from groundstation.session_makers.load import Loading
 
         fast_possible = getattr(formats.sniff(path), "name", None) in FAST_IMU_FORMATS
         return Loading(path, filters, forced, self.imu if fast_possible else IMU_STREAMS[0])
 
     @staticmethod
     def load_session(*args, **kwargs):
-        """``session.load.load_session``: what an export or a report loads its file with."""
-        from groundstation.session.load import load_session
+        """``session_makers.load.load_session``: what an export or a report loads its file with."""
+        from groundstation.session_makers.load import load_session
 
         return load_session(*args, **kwargs)

@@ -7,8 +7,8 @@ import math
 
 from groundstation.errors import UserError
 from groundstation.recording import open_recording
-from groundstation.session.load import SessionData, computed, from_pipeline, from_trial, trial_from_samples
-from groundstation.session.replay import check_forced, recorded_filters, recorded_settings
+from groundstation.session_makers.load import SessionData, computed, from_pipeline, from_trial, trial_from_samples
+from groundstation.session_makers.replay import check_forced, recorded_filters, recorded_settings
 
 
 def load(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False,

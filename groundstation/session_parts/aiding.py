@@ -7,7 +7,7 @@ the aiding estimator's attitude (``EstimatorBank.aiding``): NED metres from the 
 from the first barometer reading (docs/conventions.md).
 
 The pipeline calls it per frame; the batch path (``batch._Readings``) and a flight log
-(``autopilot/session.py``) run its rules on whole columns merged in the pipeline's order (``merged``,
+(``session_makers/flight_log_session.py``) run its rules on whole columns merged in the pipeline's order (``merged``,
 ``handed_to_samples``, ``heading_and_position``), with no Python call per sample: the same heading
 (``reading_heading_rad``'s rotation compiled), barometer altitude, GPS fix and position filter
 (``DualChannel.run``: ``step``'s ``advance`` compiled), the same numbers bit for bit

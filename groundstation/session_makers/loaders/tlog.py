@@ -11,9 +11,9 @@ from groundstation import formats
 from groundstation.autopilot.flightlog import utc_text
 from groundstation.autopilot.tlog import session_packets
 from groundstation.errors import UserError
-from groundstation.session.load import SessionData, pipeline_product
-from groundstation.session.pipeline import DEFAULT_FILTERS, Pipeline
-from groundstation.session.replay import check_forced
+from groundstation.session_makers.load import SessionData, pipeline_product
+from groundstation.session_makers.pipeline import DEFAULT_FILTERS, Pipeline
+from groundstation.session_makers.replay import check_forced
 
 PROGRESS_EVERY = 4096  # packets
 

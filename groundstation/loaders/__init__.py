@@ -1,2 +1,0 @@
-"""The loaders of the file formats that fill the session product themselves (``formats`` registers
-them by name): a recording and a dataset CSV. A flight log's is ``autopilot.session.load_log``."""
