@@ -1,210 +1,66 @@
-"""The import structure docs/session.md draws, checked on the package's source (as napari's
-import-linter contracts are): no import circles, no import from a lower layer into a higher one, and
-nothing under ``groundstation/ui/`` or ``groundstation/export/`` that reaches the session's makers
-(the pipeline, the batch path, the live runner, the loaders), directly or through other modules.
+"""The import contract docs/session.md draws, declared in ``pyproject.toml`` (``[tool.importlinter]``) and
+checked by import-linter, as napari checks its own: every folder and top-level module of ``groundstation/``
+in one layer, importing its own layer and those below, never one above; the window and the exports reaching
+no maker of the session, not even through another module; the wire protocol importing nothing of the
+ground station; and no import circles, between folders or between the modules of one.
 
-Every ``import`` counts, also one inside a function (it runs as surely, only later). ``from a import b``
-points at ``a.b`` when that is a module, else at ``a``; a package's ``__init__`` is not imported
-along with its submodules (as import-linter counts it).
-
-``python tests/test_import_layers.py`` prints the circles, upward imports and forbidden paths it finds.
+``lint-imports`` at the repository's root prints the same report.
 """
 
 from __future__ import annotations
 
-import ast
-import sys
+import copy
 from pathlib import Path
 
+import grimp
+import pytest
+from importlinter.adapters.user_options import TomlFileUserOptionReader
+from importlinter.cli import lint_imports
+from importlinter.contracts.acyclic_siblings import AcyclicSiblingsContract
+from importlinter.contracts.forbidden import ForbiddenContract
+from importlinter.contracts.layers import LayersContract
+
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("groundstation", "firmware_protocol")
-
-# Top first: a module may import its own layer and the layers below it, never one above.
-LAYERS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    ("entry points", ("groundstation.cli", "groundstation.__main__", "groundstation.commands")),
-    ("window", ("groundstation.ui",)),
-    ("makers and exports", (
-        "groundstation.export", "groundstation.session_makers.loaders", "groundstation.session_makers.factory", "groundstation.session_makers.load",
-        "groundstation.session_makers.live", "groundstation.session_makers.batch", "groundstation.session_makers.estimate_run",
-        "groundstation.session_makers.replay",
-        "groundstation.session_makers.pipeline", "groundstation.session_makers.mavlink_front", "groundstation.session_makers.flight_log_session",
-        "groundstation.logbook",
-    )),
-    ("playback and the product", (
-        "groundstation.session.playback", "groundstation.session.product", "groundstation.session.view",
-    )),
-    ("the session's parts", ("groundstation.session_parts", "groundstation.autopilot", "groundstation.formats", "groundstation.sources",
-                             "groundstation.recording", "groundstation.experiments", "groundstation.sim")),
-    ("computation", ("groundstation.estimation", "groundstation.position", "groundstation.analysis",
-                     "groundstation.datasets", "firmware_protocol")),
-    ("foundations", ("groundstation",)),  # units, quaternion, errors, mounting, geodesy, readings, names, text
-)
-# What the window and the exports read is the product (``session.product``, ``session.view``); these
-# make it, and neither may reach them, not even through another module.
-MAKERS = ("groundstation.session_makers.pipeline", "groundstation.session_makers.batch", "groundstation.session_makers.estimate_run",
-          "groundstation.session_makers.live", "groundstation.session_makers.factory", "groundstation.session_makers.load", "groundstation.session_makers.replay",
-          "groundstation.session_makers.mavlink_front", "groundstation.session_makers.flight_log_session", "groundstation.session_makers.loaders")
-READERS = ("groundstation.ui", "groundstation.export")
+PYPROJECT = ROOT / "pyproject.toml"
+OPTIONS = TomlFileUserOptionReader().read_options(str(PYPROJECT))  # as lint-imports reads them
+TYPES = {kind.type_name: kind for kind in (LayersContract, ForbiddenContract, AcyclicSiblingsContract)}
 
 
-def modules() -> dict[str, Path]:
-    out = {}
-    for package in PACKAGES:
-        for path in (ROOT / package).rglob("*.py"):
-            parts = path.relative_to(ROOT).with_suffix("").parts
-            out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+def test_the_import_contracts_are_kept():
+    """On failure, the captured output names each broken contract and the imports that break it."""
+    assert lint_imports(config_filename=str(PYPROJECT), no_cache=True, no_logo=True) == 0
+
+
+@pytest.fixture(scope="module")
+def graph():
+    session = OPTIONS.session_options  # its booleans as text, as the reader hands them to the contracts
+    return grimp.build_graph(*session["root_packages"], cache_dir=None,
+                             exclude_type_checking_imports=str(session["exclude_type_checking_imports"]).lower() == "true")
+
+
+def broken(graph, *imports: tuple[str, str]) -> set[str]:
+    """The ids of the declared contracts that the package breaks with ``imports`` (importer, imported) added."""
+    graph = copy.deepcopy(graph)
+    for importer, imported in imports:
+        graph.add_import(importer=importer, imported=imported)
+    out = set()
+    for declared in OPTIONS.contracts_options:
+        contract = TYPES[declared["type"]](name=declared["name"], session_options=OPTIONS.session_options, contract_options=declared)
+        if not contract.check(graph, verbose=False).kept:
+            out.add(declared["id"])
     return out
 
 
-def _type_checking(node: ast.If) -> bool:
-    return isinstance(node.test, (ast.Name, ast.Attribute)) and "TYPE_CHECKING" in ast.unparse(node.test)
-
-
-def imports(name: str, path: Path, known: dict[str, Path]) -> set[str]:
-    """The package modules ``name`` imports (anywhere in it but under ``if TYPE_CHECKING``)."""
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    found: set[str] = set()
-
-    def resolve(target: str) -> str | None:
-        while target and target not in known:
-            target = target.rpartition(".")[0]
-        return target or None
-
-    def visit(node: ast.AST) -> None:
-        if isinstance(node, ast.If) and _type_checking(node):
-            return
-        if isinstance(node, ast.Import):
-            found.update(filter(None, (resolve(alias.name) for alias in node.names)))
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
-                base = ".".join([*anchor, *([base] if base else [])])
-            for alias in node.names:
-                target = f"{base}.{alias.name}"
-                found.add(target if target in known else resolve(base))
-        for child in ast.iter_child_nodes(node):
-            visit(child)
-
-    visit(ast.parse(path.read_text(encoding="utf-8")))
-    found.discard(None)
-    found.discard(name)
-    return found
-
-
-def graph() -> dict[str, set[str]]:
-    known = modules()
-    return {name: imports(name, path, known) for name, path in known.items()}
-
-
-def layer_of(module: str) -> int:
-    """The index in LAYERS of the most specific prefix naming ``module``."""
-    best, best_length = len(LAYERS), -1
-    for index, (_, prefixes) in enumerate(LAYERS):
-        for prefix in prefixes:
-            if (module == prefix or module.startswith(prefix + ".")) and len(prefix) > best_length:
-                best, best_length = index, len(prefix)
-    return best
-
-
-def circles(edges: dict[str, set[str]]) -> list[list[str]]:
-    """Strongly connected components of more than one module (Tarjan), each sorted."""
-    index, low, stack, on_stack, out, counter = {}, {}, [], set(), [], [0]
-
-    def connect(v: str) -> None:
-        index[v] = low[v] = counter[0]
-        counter[0] += 1
-        stack.append(v)
-        on_stack.add(v)
-        for w in sorted(edges.get(v, ())):
-            if w not in index:
-                connect(w)
-                low[v] = min(low[v], low[w])
-            elif w in on_stack:
-                low[v] = min(low[v], index[w])
-        if low[v] == index[v]:
-            component = []
-            while True:
-                w = stack.pop()
-                on_stack.discard(w)
-                component.append(w)
-                if w == v:
-                    break
-            if len(component) > 1:
-                out.append(sorted(component))
-
-    sys.setrecursionlimit(max(sys.getrecursionlimit(), 10_000))
-    for v in sorted(edges):
-        if v not in index:
-            connect(v)
-    return sorted(out)
-
-
-def upward(edges: dict[str, set[str]]) -> list[tuple[str, str]]:
-    return sorted((a, b) for a, targets in edges.items() for b in targets if layer_of(b) < layer_of(a))
-
-
-def _within(module: str, prefixes) -> bool:
-    return any(module == p or module.startswith(p + ".") for p in prefixes)
-
-
-def forbidden_paths(edges: dict[str, set[str]]) -> list[list[str]]:
-    """For each reader module that reaches a maker: the shortest chain of imports that does."""
-    out = []
-    for start in sorted(m for m in edges if _within(m, READERS)):
-        previous, frontier = {start: None}, [start]
-        while frontier:
-            reached = next((m for m in frontier if _within(m, MAKERS)), None)
-            if reached is not None:
-                chain = [reached]
-                while previous[chain[-1]] is not None:
-                    chain.append(previous[chain[-1]])
-                out.append(chain[::-1])
-                break
-            following = []
-            for m in frontier:
-                for n in sorted(edges.get(m, ())):
-                    if n not in previous:
-                        previous[n] = m
-                        following.append(n)
-            frontier = following
-    return out
-
-
-def test_no_import_circles():
-    assert circles(graph()) == []
-
-
-def test_no_import_from_a_lower_layer_into_a_higher_one():
-    assert upward(graph()) == []
-
-
-def test_the_window_and_the_exports_reach_no_maker_of_the_session():
-    assert forbidden_paths(graph()) == []
-
-
-def test_the_checker_sees_an_indirect_import_a_circle_and_an_upward_import():
-    """The checks can fail: a made-up window module importing a helper that imports the pipeline."""
-    edges = {"groundstation.ui.fake": {"groundstation.ui.helper"}, "groundstation.ui.helper": {"groundstation.session_makers.pipeline"},
-             "groundstation.session_makers.pipeline": {"groundstation.ui.fake"}}
-    assert forbidden_paths(edges) == [["groundstation.ui.fake", "groundstation.ui.helper", "groundstation.session_makers.pipeline"],
-                                      ["groundstation.ui.helper", "groundstation.session_makers.pipeline"]]
-    assert circles(edges) == [sorted(edges)]
-    assert upward(edges) == [("groundstation.session_makers.pipeline", "groundstation.ui.fake")]
-
-
-if __name__ == "__main__":
-    edges = graph()
-    print(f"{len(edges)} modules, {sum(map(len, edges.values()))} imports")
-    found = circles(edges)
-    print(f"\ncircles: {len(found)}")
-    for circle in found:
-        print("  " + " <-> ".join(circle))
-    found = upward(edges)
-    print(f"\nupward imports: {len(found)}")
-    for a, b in found:
-        print(f"  {a} ({LAYERS[layer_of(a)][0]}) -> {b} ({LAYERS[layer_of(b)][0]})")
-    found = forbidden_paths(edges)
-    print(f"\nwindow or export modules reaching a maker: {len(found)}")
-    for chain in found:
-        print("  " + " -> ".join(chain))
+@pytest.mark.parametrize(("imports", "contracts"), [
+    pytest.param([("groundstation.ui.fake", "groundstation.ui.helper"), ("groundstation.ui.helper", "groundstation.session_makers.pipeline")],
+                 {"readers"}, id="the window reaching the pipeline through a helper"),
+    pytest.param([("groundstation.session_parts.table", "groundstation.session.view")], {"layers", "acyclic"},
+                 id="a part importing the product above it (which imports the parts: a circle of folders)"),
+    pytest.param([("groundstation.autopilot.records", "groundstation.autopilot.vehicle")], {"acyclic"},
+                 id="two modules of one folder importing each other"),
+    pytest.param([("groundstation.sensors", "groundstation.units")], {"layers"}, id="a new top-level module in no layer"),
+    pytest.param([("firmware_protocol.decoder", "groundstation.units")], {"protocol"}, id="the wire protocol importing the ground station"),
+])
+def test_each_contract_breaks_on_what_it_forbids(graph, imports, contracts):
+    assert broken(graph) == set()
+    assert broken(graph, *imports) == contracts
