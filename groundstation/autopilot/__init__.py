@@ -9,12 +9,13 @@ this project's units and frames, with no Qt and no session machinery.
 - ``tlog``: the standard ``.tlog`` file (8-byte big-endian µs timestamp + raw message).
 - ``flightlog``: what a flight log is read into (``FlightLog``: arrays on the autopilot's clock); the
   readers ``tlog``, ``dataflash`` and ``ulog`` fill it.
-- ``session``: ``read_log`` (a log by its format's reader, ``formats``) and ``load_log``: a flight log
-  as a ``SessionData`` with the host estimators run on it.
-- ``mavlink_front``: the live pipeline's MAVLink front-end (records into the session's stages and tables).
 - ``agreement``: host estimators' pitch/roll difference from the autopilot's own estimate.
 - ``messages``: what the autopilot says (texts as ``message`` events, STATUSTEXT chunks joined) and its
   parameters; ``modes``: flight modes by name and ``mode_spans`` (the plots' bands, a report's phases).
+
+What makes a session of them is above, in ``session_makers/``: ``flight_log_session`` (a flight log as a
+``SessionData`` with the host estimators run on it) and ``mavlink_front`` (the live pipeline's MAVLink
+front-end).
 
 Frames: ArduPilot and PX4 report IMU and attitude on the body axes x forward, y right, z down (FRD)
 and attitude body -> NED, which are this project's conventions (docs/conventions.md), so no axis
