@@ -2,7 +2,6 @@
 against scipy.signal.welch on the CSV's own columns read here with numpy."""
 
 import gzip
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -11,16 +10,16 @@ from scipy.signal import welch
 from groundstation.analysis.vibration import MIN_ROTOR_HZ, vibration_summary
 from groundstation.session_makers.load import load_session
 
-TRIAL = Path("/work/shared/datasets/broad/27_disturbed_phone_vibration_B.csv.gz")
-pytestmark = pytest.mark.skipif(not TRIAL.exists(), reason="the BROAD datasets are not here")
+from tests.shared_datasets import shared_dataset
 
 
 def test_the_phone_motor_is_found_where_scipy_puts_it():
-    with gzip.open(TRIAL, "rt") as f:
+    trial = shared_dataset("broad/27_disturbed_phone_vibration_B.csv.gz")
+    with gzip.open(trial, "rt") as f:
         header = f.readline().strip().split(",")
         table = np.loadtxt(f, delimiter=",", usecols=range(7))
     t, acc = table[:, 0], table[:, header.index("acc_x_m_s2") : header.index("acc_x_m_s2") + 3]
-    summary = vibration_summary(load_session(TRIAL))
+    summary = vibration_summary(load_session(trial))
     sp = summary.spectra["accel"]
     assert sp.table == "imu" and sp.rate_hz == pytest.approx(1.0 / np.median(np.diff(t)), rel=1e-6)
     f_ref, p_ref = welch(acc[:, 0], sp.rate_hz, window="hann", nperseg=sp.nperseg)  # the trial has no gaps

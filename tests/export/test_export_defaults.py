@@ -15,9 +15,8 @@ from groundstation.recording import RecordingWriter
 from groundstation.sim.firmware import FirmwareSettings
 from groundstation.sim.stream import Scenario, SimStream
 
-from tests.export.conftest import simulated_recording
+from tests.shared_datasets import shared_dataset
 
-FLIGHT_LOGS = simulated_recording.__globals__["DATASETS"] / "flightlogs"
 CHART = "{http://schemas.openxmlformats.org/drawingml/2006/chart}"
 
 
@@ -46,7 +45,7 @@ def test_an_export_without_magnetometer_or_gps_leaves_out_the_estimators_that_ne
 
 
 def test_the_cli_exports_a_flight_log_with_the_estimators_the_app_opens_it_with(tmp_path):
-    log = FLIGHT_LOGS / "px4_sitl_quad_groundtruth.ulg"
+    log = shared_dataset("flightlogs/px4_sitl_quad_groundtruth.ulg")
     assert main(["export", str(log), "--out", str(tmp_path / "log.csv"), "--rate", "5"]) == 0
     exported = estimators_in(pd.read_csv(tmp_path / "log.csv", nrows=1).columns)
     assert {"ahf2", "vqf", "ahf"} <= exported  # not AHF alone: the app shows AHF2 and VQF first
@@ -90,7 +89,8 @@ def test_the_session_sheet_says_its_facts_in_words(sim_recording, tmp_path):
 
 def test_a_mavlink_session_sheet_does_not_wait_for_a_config_frame(tmp_path):
     book = tmp_path / "tlog.xlsx"
-    assert main(["export", str(FLIGHT_LOGS / "arduplane_quadplane_sitl.tlog"), "--out", str(book), "--rate", "2"]) == 0
+    log = shared_dataset("flightlogs/arduplane_quadplane_sitl.tlog")
+    assert main(["export", str(log), "--out", str(book), "--rate", "2"]) == 0
     sheet = load_workbook(book, read_only=True)["Session"]
     text = [str(v) for row in sheet.iter_rows(values_only=True) for v in row if v is not None]
     assert not any("no CONFIG frame" in t for t in text)
