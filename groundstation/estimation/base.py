@@ -553,18 +553,22 @@ def _loaded(dispatcher, signature) -> bool:
     before, or loaded now from numba's cache (some milliseconds). Never compiles (seconds, holding the GIL):
     a live session runs the kernel's source interpreted meanwhile (``CompiledEstimator.ready_or_interpreted``).
     The cache is read as ``Dispatcher.compile`` reads it first (numba 0.68's private ``_cache``, there is no
-    public "load only"); a signature the cache lacks (or one made on another CPU) is False."""
+    public "load only"); a signature the cache lacks (or one made on another CPU) is False. Under ``_compiled``'s
+    lock: disabling compilation while another thread's ``_compiled`` is about to compile would fail it."""
     if dispatcher in _READY:
         return True
-    drop_stale_cache(dispatcher)
-    cres = dispatcher._cache.load_overload(signature, dispatcher.targetctx)
-    if cres is None:
-        return False
-    dispatcher.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
-    dispatcher.add_overload(cres)
-    dispatcher.disable_compile()  # as ``_compiled``
-    _READY.add(dispatcher)
-    return True
+    with _COMPILING:
+        if dispatcher in _READY:
+            return True
+        drop_stale_cache(dispatcher)
+        cres = dispatcher._cache.load_overload(signature, dispatcher.targetctx)
+        if cres is None:
+            return False
+        dispatcher.targetctx.insert_user_function(cres.entry_point, cres.fndesc, [cres.library])
+        dispatcher.add_overload(cres)
+        dispatcher.disable_compile()  # as ``_compiled``
+        _READY.add(dispatcher)
+        return True
 
 
 _new_tuple = tuple.__new__
