@@ -1,9 +1,15 @@
 """Expressions of channels, as PlotJuggler's custom series: ``ahf2_roll_deg - onboard_roll_deg``.
 
 The text is parsed with Python's ``ast`` and only a whitelist is evaluated, on numpy arrays: numbers,
-the names the caller allows (a bare name, or ``table.column``), ``+ - * / ** %``, unary minus, and the
-functions of ``FUNCTIONS`` (numpy's, each with its number of values); never ``eval`` of the text.
-Anything else is an ``ExpressionError`` whose message says what, for the dialog that asked.
+the names the caller allows (a bare name, or ``table.column``, each also of another session of the window
+as its Channels tab lists them: ``S2:imu.gyr_x_dps``, ``S2:ahf2_roll_deg``), ``+ - * / ** %``, unary
+minus, and the functions of ``FUNCTIONS`` (numpy's, each with its number of values); never ``eval`` of
+the text. Anything else is an ``ExpressionError`` whose message says what, for the dialog that asked.
+
+Python reads ``S2:imu`` as no expression, and no allowed expression has a colon of its own (no slices,
+dictionaries or lambdas), so a colon between two names (``SESSION_COLON``, nothing around it) is read as a
+dot by the parser, and every name is taken from the text as written (``written_name``): ``S2:imu.x`` and a
+table ``S2``'s ``imu.x``, were there one, stay two names.
 
 Whatever is typed, evaluating is bounded: every number becomes a float64 when parsed, so no Python
 integer arithmetic ever runs (``10**10**10`` would hold the interpreter, and every other thread, for
@@ -19,6 +25,7 @@ from __future__ import annotations
 
 import ast
 import operator
+import re
 import time
 
 import numpy as np
@@ -35,19 +42,22 @@ OPERATORS = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mu
 UNARY = {ast.USub: operator.neg, ast.UAdd: operator.pos}
 MAX_CHARACTERS = 1000  # longer than any formula one types; bounds the parser's work
 MAX_PARTS = 200  # numbers, names and operations: bounds the work per row, and the nesting within Python's recursion limit
+SESSION_COLON = re.compile(r"(?<=\w):(?=[A-Za-z_])")  # "S2:imu": another session's name, then its channel's
 
 
 class ExpressionError(UserError):
     """An expression that cannot be evaluated: the message says why, for the user."""
 
 
-def dotted(node: ast.AST) -> str | None:
-    """``a`` or ``a.b`` as written; None for anything else."""
-    if isinstance(node, ast.Name):
-        return node.id
-    if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
-        return f"{node.value.id}.{node.attr}"
-    return None
+def written_name(node: ast.AST, text: str) -> str | None:
+    """A name as ``text`` writes it (``a``, ``a.b``, ``S2:a.b``; spaces left out), when ``node`` is one
+    parsed from ``text`` with its session colons read as dots; None for anything else."""
+    base = node
+    while isinstance(base, ast.Attribute):
+        base = base.value
+    if not isinstance(base, ast.Name):
+        return None
+    return "".join(ast.get_source_segment(text, node).split())
 
 
 def as_float64(value: int | float) -> np.float64:
@@ -69,7 +79,7 @@ class Expression:
         if len(self.text) > MAX_CHARACTERS:
             raise ExpressionError(f"the expression is {len(self.text)} characters long: {MAX_CHARACTERS} at most")
         try:
-            tree = ast.parse(self.text, mode="eval").body
+            tree = ast.parse(SESSION_COLON.sub(".", self.text), mode="eval").body  # as long as the text: its places hold
         except SyntaxError as error:
             raise ExpressionError(f"not an expression: {error.msg} at column {error.offset}") from None
         except (ValueError, RecursionError, MemoryError):  # a NUL character; nesting the parser will not take
@@ -84,7 +94,7 @@ class Expression:
     def _compile(self, node: ast.AST, known):
         """The checked tree: ("name", name), ("value", float64), or (function, operand nodes ...); the
         parts of numbers only computed now."""
-        name = dotted(node)
+        name = written_name(node, self.text)
         if name is not None:
             if name in CONSTANTS:
                 return ("value", CONSTANTS[name])
@@ -92,6 +102,9 @@ class Expression:
                 if name not in self.names:
                     self.names.append(name)
                 return ("name", name)
+            session = name.split(":")[0] if ":" in name else None
+            if session is not None and not any(k.startswith(f"{session}:") for k in known):
+                raise ExpressionError(f"unknown channel {name!r}: there is no session {session} in this window")
             raise ExpressionError(f"unknown channel {name!r}" + (f" (functions are called: {name}(x))" if name in FUNCTIONS else ""))
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)) and not isinstance(node.value, bool):
             return self._number(node, as_float64(node.value))

@@ -153,3 +153,20 @@ def test_no_typed_expression_stops_another_thread():
         time.sleep(0.01)
     stop.set()
     assert counted[0] > at_the_end
+
+
+def test_another_sessions_channel_is_named_as_the_channels_tab_lists_it():
+    known = KNOWN | {"S2:imu.gyr_x_rad_s", "S2:ahf2_roll_deg"}
+    a, b, c = np.array([1.0, 2.0]), np.array([3.0, 5.0]), np.array([7.0, 11.0])
+    e = Expression("S2:imu.gyr_x_rad_s - imu.gyr_x_rad_s + S2:ahf2_roll_deg*2", known)
+    assert e.names == ["S2:imu.gyr_x_rad_s", "imu.gyr_x_rad_s", "S2:ahf2_roll_deg"]
+    got = e.evaluate({"S2:imu.gyr_x_rad_s": a, "imu.gyr_x_rad_s": b, "S2:ahf2_roll_deg": c})
+    assert np.array_equal(got, a - b + c * 2)
+    with pytest.raises(ExpressionError, match="unknown channel 'S2.imu.gyr_x_rad_s'"):  # the colon is the session's mark
+        Expression("S2.imu.gyr_x_rad_s", known)
+    with pytest.raises(ExpressionError, match="unknown channel 'S3:imu.gyr_x_rad_s': there is no session S3 in this window"):
+        Expression("S3:imu.gyr_x_rad_s + 1", known)
+    with pytest.raises(ExpressionError, match="unknown channel 'S2:imu.nosuch'$"):  # S2 is there, not its channel
+        Expression("S2:imu.nosuch", known)
+    with pytest.raises(ExpressionError, match="not an expression"):  # a colon with space around is no session's
+        Expression("S2 : imu.gyr_x_rad_s", known)
