@@ -25,7 +25,8 @@ from PySide6 import QtCore, QtWidgets
 
 from groundstation.analysis.expression import Expression, ExpressionError, at_or_before
 from groundstation.session.view import ProductView, Session
-from groundstation.ui.custom_series import BUDGET_S, CUSTOM, ExpressionDerive, expression_sources, try_on_latest_rows
+from groundstation.ui.custom_series import (BUDGET_S, CUSTOM, ExpressionDerive, expression_sources, expression_tables,
+                                            try_on_latest_rows)
 from groundstation.palette import PALETTE
 from groundstation.ui.plots import LEFT_AXIS_PX, Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
@@ -180,8 +181,8 @@ class CustomSeriesDialog(QtWidgets.QDialog):
         form.addRow("name", self.name)
         form.addRow("expression", self.expression)
         form.addRow(QtWidgets.QLabel("channels as table.column or a column's own name, the Attitude tab's "
-                                     "angles (ahf2_roll_deg); + - * / **; abs, sqrt, sin, cos, arctan2, degrees …",
-                                     wordWrap=True))
+                                     "angles (ahf2_roll_deg), another session's as listed (S2:imu.gyr_x_dps); "
+                                     "+ - * / **; abs, sqrt, sin, cos, arctan2, degrees …", wordWrap=True))
         form.addRow(self.message)
         form.addRow(buttons)
 
@@ -309,8 +310,10 @@ class ChannelsView(QtWidgets.QWidget):
         self._make_series()
 
     def set_others(self, others: list[Other]) -> None:
-        """The sessions beside the window's: their channels listed and plotted under their name."""
+        """The sessions beside the window's: their channels listed and plotted under their name, and named
+        in custom series (judged again: a session's channels may have come, or gone with it)."""
         self.others = list(others)
+        self.disabled = {}
         self._fill_tree()
         self.stacked.clear_data()
         self._make_series()
@@ -418,9 +421,9 @@ class ChannelsView(QtWidgets.QWidget):
         self._make_series()
 
     def check_expression(self, text: str) -> None:
-        """``text`` as an expression of the session's channels, tried once on its latest rows (ExpressionError: why not)."""
-        sources = expression_sources(self.session.view)
-        try_on_latest_rows(Expression(text, sources), sources, self.session.view, self.session.lock)
+        """``text`` as an expression of the sessions' channels, tried once on its latest rows (ExpressionError: why not)."""
+        sources = expression_sources(self.session.view, self.others)
+        try_on_latest_rows(Expression(text, sources), sources, expression_tables(self.session.view, self.session.lock, self.others))
 
     def new_custom(self) -> CustomSeriesDialog:
         """The dialog asking a custom series' name and expression (checked against the session's channels)."""
@@ -500,14 +503,13 @@ class ChannelsView(QtWidgets.QWidget):
             return
         view = self.session.view
         known = channel_names(view).union(*(channel_names(o.session.view, o.label) for o in self.others))
-        others = {o.label: o for o in self.others}
-        sources = expression_sources(view)
+        sources = expression_sources(view, self.others)
+        tables = expression_tables(view, self.session.lock, self.others)
         derives: dict[str, ExpressionDerive] = {}
         for name, text in self.custom.items():
             if name not in self.disabled:
                 try:
-                    derives[name] = ExpressionDerive(name, Expression(text, sources), sources, view.tables,
-                                                     self.session.lock, self.budget_s)
+                    derives[name] = ExpressionDerive(name, Expression(text, sources), sources, tables, self.budget_s)
                 except ExpressionError as error:
                     self.disabled[name] = str(error)
         wanted: dict[str, list[str]] = {}
@@ -517,16 +519,12 @@ class ChannelsView(QtWidgets.QWidget):
             if channel in known:
                 wanted.setdefault(table, []).append(column)
             elif table == CUSTOM and column in derives:
-                self.series[series_key(channel)] = Series(view.tables[derives[column].table], derives[column])
-        for table, columns in wanted.items():
+                rows, lock = tables[derives[column].table]
+                self.series[series_key(channel)] = SessionSeries(rows, derives[column], lock)
+        for table, columns in wanted.items():  # "S2:imu": session S2's table imu, on the window's axis
             derive = lambda rows, names, columns=tuple(columns): {c: rows[:, names.index(c)] for c in columns}  # noqa: E731
-            label, _, own = table.rpartition(":")  # "S2:imu": session S2's table imu
-            if label:
-                other = others[label]
-                self.series[PREFIX + table] = SessionSeries(other.session.view.tables[own], derive, other.session.lock,
-                                                            other.offset_s)
-            else:
-                self.series[PREFIX + table] = Series(view.tables[table], derive)
+            rows, lock = tables[table]
+            self.series[PREFIX + table] = SessionSeries(rows, derive, lock)
         self._show_disabled()
 
     def _disable(self, name: str, reason: str) -> None:

@@ -3,9 +3,11 @@ they come, so it is plotted and binned like any channel (a ``Series`` whose ``de
 
 Its names are the session's channels (``table.column``, or the bare column name where only one table
 has it) and the quantities the live view derives (``ahf2_roll_deg``, ``onboard_roll_deg``, ``gyr_x_dps``
-...: the names its Attitude and Sensors curves carry). The rows are those of the first name's table; a
-name of another table takes that table's newest row at or before each row's time
-(``expression.at_or_before``). Each computation has a time budget (``BUDGET_S``); the dialog tries an
+...: the names its Attitude and Sensors curves carry), and the same of each session beside the window's
+after its name and a colon, as the Channels tab lists them (``S2:imu.gyr_x_dps``, ``S2:ahf2_roll_deg``;
+``expression.SESSION_COLON``), their times on the window's axis (``session.timeline``). The rows are
+those of the first name's table; a name of another table takes that table's newest row at or before
+each row's time (``expression.at_or_before``). Each computation has a time budget (``BUDGET_S``); the dialog tries an
 expression once on the session's latest rows (``try_on_latest_rows``) before taking it. No Qt here.
 """
 
@@ -18,14 +20,35 @@ import numpy as np
 from groundstation.analysis.expression import Expression, ExpressionError, at_or_before
 from groundstation.session.view import ProductView
 from groundstation.ui.series import Derive, imu_quantities, onboard_quantities
+from groundstation.ui.session_series import Other, ShiftedTable
 
 CUSTOM = "custom"  # the channels' "table" of custom series: "custom.NAME"
 BUDGET_S = 0.5  # per computation (a redraw's new rows, or all rows at the first): past it the series is disabled
 SAMPLE_ROWS = 500  # the dialog's trial: the latest rows of the expression's table
 
 
-def expression_sources(view: ProductView) -> dict[str, tuple[str, str, Derive | None]]:
-    """Every name an expression may use: (its table, its column or derived quantity, the derive or None)."""
+def expression_sources(view: ProductView, others: list[Other] = ()) -> dict[str, tuple[str, str, Derive | None]]:
+    """Every name an expression may use: (its table, its column or derived quantity, the derive or None);
+    those of ``others`` (the sessions beside the window's) after their name ("S2:imu.gyr_x_dps", of table "S2:imu")."""
+    sources = own_sources(view)
+    for other in others:
+        sources.update({f"{other.label}:{name}": (other.name(table), key, derive)
+                        for name, (table, key, derive) in own_sources(other.session.view).items()})
+    return sources
+
+
+def expression_tables(view: ProductView, lock, others: list[Other] = ()) -> dict[str, tuple]:
+    """Each table of ``expression_sources``: (the table, the lock its session's reader writes it under);
+    another session's with its times on the window's axis."""
+    tables = {name: (table, lock) for name, table in view.tables.items() if table is not None}
+    for other in others:
+        tables.update({other.name(name): (ShiftedTable(table, other.offset_s), other.session.lock)
+                       for name, table in other.session.view.tables.items() if table is not None})
+    return tables
+
+
+def own_sources(view: ProductView) -> dict[str, tuple[str, str, Derive | None]]:
+    """``expression_sources`` of one session."""
     sources: dict[str, tuple[str, str, Derive | None]] = {}
     bare: dict[str, list[tuple[str, str, None]]] = {}
     for table, column in view.catalogue.channels():
@@ -86,9 +109,9 @@ class Sampler(_Rows):
 
 class ExpressionDerive(_Rows):
     """``Series``' derive of a custom series ``name``: ``expression`` on the rows of its first name's
-    table (``table``), the other tables' names sampled (``Sampler``; ``lock``: the session's)."""
+    table (``table``), the other tables' names sampled (``Sampler``); ``tables``: ``expression_tables``."""
 
-    def __init__(self, name: str, expression: Expression, sources, tables: dict, lock, budget_s: float = BUDGET_S):
+    def __init__(self, name: str, expression: Expression, sources, tables: dict, budget_s: float = BUDGET_S):
         self.name, self.budget_s = name, budget_s
         self.expression = expression
         by_table: dict[str, dict[str, tuple[str, Derive | None]]] = {}
@@ -97,7 +120,7 @@ class ExpressionDerive(_Rows):
             by_table.setdefault(table, {})[used] = (key, derive)
         self.table = sources[expression.names[0]][0] if expression.names else "imu"
         super().__init__(by_table.pop(self.table, {}))
-        self.samplers = [Sampler(tables[table], lock, wanted) for table, wanted in by_table.items()]
+        self.samplers = [Sampler(*tables[table], wanted) for table, wanted in by_table.items()]
 
     def inputs(self, rows: np.ndarray, columns: tuple[str, ...]) -> dict[str, np.ndarray]:
         """The value of each name of the expression at these rows."""
@@ -115,11 +138,11 @@ class ExpressionDerive(_Rows):
         return {self.name: self.result(self.inputs(rows, columns), len(rows))}
 
 
-def try_on_latest_rows(expression: Expression, sources, view: ProductView, lock, rows: int = SAMPLE_ROWS) -> None:
+def try_on_latest_rows(expression: Expression, sources, tables: dict, rows: int = SAMPLE_ROWS) -> None:
     """The expression computed once on its table's latest ``rows``, as a plot would: an ExpressionError
     if it cannot be, or if every row where its channels all have values gives it none (inf or NaN)."""
-    derive = ExpressionDerive("trial", expression, sources, view.tables, lock)
-    table = view.tables[derive.table]
+    derive = ExpressionDerive("trial", expression, sources, tables)
+    table, lock = tables[derive.table]
     with lock:
         sample = table.tail(min(len(table), rows))
     if not len(sample):

@@ -2,6 +2,11 @@
 (``Estimator.tunable``: AHF's λ bounds, HF's and HF+mag's β, ECF's and ECF+mag's Kp/Ki) live, back to
 the defaults, or send AHF's λ bounds to the aircraft.
 
+It acts on one session, named in its first row: the window's own ("main") or one added beside it ("S2"),
+the one selected in the Sessions tab (its box selects there too). An added session's estimators shown
+are plotted in its pen style ("S2 HF"); AHF's λ goes to the aircraft through the Uplink tab, which is
+the window's own session's.
+
 Live, a change goes through ``Session.change_settings``: it applies from the next sample, keeps
 the attitude, and is written to the recording, so a replay changes it at the same point. In a replay
 every estimator can be shown, those the file lacks too, and a change is a what-if (the CLI's
@@ -44,12 +49,15 @@ class SettingBox(QtWidgets.QDoubleSpinBox):
 
 class EstimatorPanel(QtWidgets.QGroupBox):
     visibilityChanged = QtCore.Signal(str, bool)  # legend label, shown
+    otherShown = QtCore.Signal(str, bool)  # an added session's estimator, shown: plotted beside its others
+    sessionChosen = QtCore.Signal(int)  # a row of the Sessions tab, chosen in the panel's box
     sendToAircraft = QtCore.Signal(dict)  # AHF setting -> value, for set_filter_param
     replayAsked = QtCore.Signal(tuple, dict)  # a replay's estimators, {estimator: {setting: value}} forced
 
     def __init__(self, parent=None):
         super().__init__(parent)  # titled by its tab
         self.session: Session | None = None
+        self.label = ""  # the session's name: "" for the window's own, "S2" for one added beside it
         self.shown: dict[str, QtWidgets.QCheckBox] = {}
         self.boxes: dict[tuple[str, str], QtWidgets.QDoubleSpinBox] = {}
         self.message = QtWidgets.QLabel()
@@ -58,7 +66,16 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         # click would land on another one).
         self.message.setFixedHeight(MESSAGE_LINES * self.message.fontMetrics().lineSpacing())
         self.message.setAlignment(QtCore.Qt.AlignTop | QtCore.Qt.AlignLeft)
-        self._layout = QtWidgets.QFormLayout(self)
+        self.session_box = QtWidgets.QComboBox()  # which session it tunes, said first and chosen here
+        self.session_box.setSizeAdjustPolicy(QtWidgets.QComboBox.AdjustToMinimumContentsLengthWithIcon)
+        self.session_box.setMinimumContentsLength(12)  # a long source's name must not widen the side column
+        self.session_box.activated.connect(self.sessionChosen)
+        self.fields = QtWidgets.QWidget()  # all but the box: disabled with no session to tune
+        outer = QtWidgets.QFormLayout(self)
+        outer.addRow("session", self.session_box)
+        outer.addRow(self.fields)
+        self._layout = QtWidgets.QFormLayout(self.fields)
+        self._layout.setContentsMargins(0, 0, 0, 0)
         self._buttons = QtWidgets.QHBoxLayout()
         # The buttons first: in sight as soon as the tab is (at 1280x800, below the fields they were under the fold).
         self._layout.addRow(self._buttons)
@@ -80,13 +97,24 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.send_button.clicked.connect(lambda: self.sendToAircraft.emit(self.values("ahf")))
         for button in (apply_button, defaults_button, self.send_button):
             self._buttons.addWidget(button)
-        self.setEnabled(False)
+        self.fields.setEnabled(False)
 
-    def set_session(self, session: Session | None, visible_labels: set[str]) -> None:
-        """Fill the fields from the settings in effect; one "show" box per comparison estimator."""
-        self.session = session
-        self.setEnabled(session is not None)
-        self.message.clear()
+    def set_choices(self, names: list[str], current: int) -> None:
+        """The sessions its box offers (the Sessions tab's rows) and the one it tunes."""
+        self.session_box.blockSignals(True)
+        if [self.session_box.itemText(i) for i in range(self.session_box.count())] != names:
+            self.session_box.clear()
+            self.session_box.addItems(names)
+        self.session_box.setCurrentIndex(current)
+        self.session_box.setToolTip(names[current] if 0 <= current < len(names) else "")
+        self.session_box.blockSignals(False)
+
+    def set_session(self, session: Session | None, visible_labels: set[str], session_name: str = "") -> None:
+        """Fill the fields from the settings in effect; one "show" box per comparison estimator.
+        ``session_name``: "" for the window's own, "S2" for one added beside it (``label``)."""
+        self.session, self.label = session, session_name
+        self.fields.setEnabled(session is not None)  # the box stays: another session can be chosen
+        self.message.setText(f"{session_name} is being computed" if session is None and session_name else "")
         while self._shown_row.count():
             box = self._shown_row.takeAt(0).widget()
             box.hide()  # off the panel now: deleteLater waits for the outermost event loop, and a box
@@ -95,12 +123,15 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         self.shown = {}
         if session is None:
             return
-        self.send_button.setEnabled(session.source.can_send and session.view.protocol == "gs")  # an autopilot has no AHF
+        # An autopilot has no AHF; the Uplink tab sends to the window's own session.
+        self.send_button.setEnabled(not session_name and session.source.can_send and session.view.protocol == "gs")
+        self.send_button.setToolTip(f"the Uplink tab sends to the window's own session, not {session_name}"
+                                    if session_name else "")
         filters = session.view.filters
         offered = [*filters[1:], *(n for n in ESTIMATORS if n not in filters)] if self.replay else filters[1:]
         for index, name in enumerate(offered):
             box = QtWidgets.QCheckBox(label(name))
-            box.setChecked(label(name) in visible_labels and name in filters)
+            box.setChecked(self.legend_label(name) in visible_labels and name in filters)
             box.toggled.connect(lambda on, name=name: self._shown_changed(name, on))
             self.shown[name] = box
             self._shown_row.addWidget(box, *divmod(index, SHOWN_COLUMNS))
@@ -115,12 +146,18 @@ class EstimatorPanel(QtWidgets.QGroupBox):
                 else:
                     box.clear()  # no number for an estimator the session does not run
 
+    def legend_label(self, name: str) -> str:
+        """Estimator ``name``'s curves' label for this session: "HF" for the window's own, "S2 HF"."""
+        return f"{self.label} {label(name)}" if self.label else label(name)
+
     @property
     def replay(self) -> bool:
         return self.session is not None and self.session.source.is_replay
 
     def _shown_changed(self, name: str, on: bool) -> None:
-        self.visibilityChanged.emit(label(name), on)
+        if self.label:  # an added session plots only the estimators asked for
+            self.otherShown.emit(name, on)
+        self.visibilityChanged.emit(self.legend_label(name), on)
         if on and (why := unmet_needs(name, self._aiding())):  # shown, and said to be little use so far
             self.message.setText(f"{why}; this session has none so far")
         filters = self.session.view.filters
@@ -140,7 +177,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         """Follow the legend, where curves can be switched too."""
         for name, box in self.shown.items():
             box.blockSignals(True)  # reflecting the legend, not a new request
-            box.setChecked(label(name) in visible_labels)
+            box.setChecked(self.legend_label(name) in visible_labels)
             box.blockSignals(False)
 
     def values(self, name: str) -> dict[str, float]:
@@ -151,7 +188,7 @@ class EstimatorPanel(QtWidgets.QGroupBox):
         current = self.session.view.settings()
         if self.replay:
             if any(v != current[name][k] for name, values in self._forced().items() for k, v in values.items()):
-                self.message.setText("recomputing the session with these settings…")
+                self.message.setText(f"recomputing {self.label or 'the session'} with these settings…")
                 self.replayAsked.emit(self.session.view.filters, self._forced())
             else:
                 self.message.setText("nothing changed")
@@ -170,7 +207,8 @@ class EstimatorPanel(QtWidgets.QGroupBox):
                 return
             symbols = {setting: text for setting, text, _ in self.tunable[name]}  # as the fields are labelled
             changed.append(f"{label(name)} " + ", ".join(f"{symbols[k]} = {v:g}" for k, v in overrides.items()))
-        self.message.setText(("applied: " + "; ".join(changed)) if changed else "nothing changed")
+        to = f" to {self.label}" if self.label else ""
+        self.message.setText((f"applied{to}: " + "; ".join(changed)) if changed else "nothing changed")
 
     def restore_defaults(self) -> None:
         for (name, setting), box in self.boxes.items():

@@ -56,27 +56,29 @@ def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | Non
 
 
 def attitude_plots(filters: tuple[str, ...], truth: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
-    """``others``: (label, filters, style) of each session beside the window's, whose curves are added."""
+    """``others``: (label, estimators shown, style) of each session beside the window's, whose curves are added."""
     return tuple(Plot(angle, "°", estimator_curves(filters, angle, truth=truth) + other_curves(others, angle))
                  for angle in ("pitch", "roll"))
 
 
-def other_curves(others: tuple, angle: str) -> tuple[Curve, ...]:
-    """Each other session's first host estimator and onboard estimate, in its own pen style and named by it
-    ("S2 AHF2"): the estimator's colour says which estimator, the style which session."""
+def other_curves(others: tuple, angle: str, wraps_at: float | None = None) -> tuple[Curve, ...]:
+    """Each other session's estimators shown (at first its first host estimator; the Estimators panel
+    adds others) and onboard estimate, in its own pen style and named by it ("S2 AHF2"): the estimator's
+    colour says which estimator, the style which session."""
     curves = []
-    for label, filters, style in others:
-        curves += [Curve(f"{label}:imu", f"{name}_{angle}_deg", f"{label} {estimation.label(name)}", colour(name), style=style)
-                   for name in filters[:1]]
-        curves.append(Curve(f"{label}:onboard", f"onboard_{angle}_deg", f"{label} onboard", ONBOARD_COLOUR, style=style))
+    for label, shown, style in others:
+        curves += [Curve(f"{label}:imu", f"{name}_{angle}_deg", f"{label} {estimation.label(name)}", colour(name),
+                         wraps_at, style=style) for name in shown]
+        curves.append(Curve(f"{label}:onboard", f"onboard_{angle}_deg", f"{label} onboard", ONBOARD_COLOUR, wraps_at, style=style))
     return tuple(curves)
 
 
-def heading_plots(filters: tuple[str, ...], truth: bool = False) -> tuple[Plot, ...]:
-    """Compass and GPS heading against the estimators' yaw, all 0..360°."""
+def heading_plots(filters: tuple[str, ...], truth: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
+    """Compass and GPS heading against the estimators' yaw, all 0..360°; ``others`` as ``attitude_plots``."""
     sensors = (Curve("mag", "compass_heading_deg", "compass", HEADING_COLORS["compass"], 360.0),
                Curve("gps", "gps_heading_deg", "GPS", HEADING_COLORS["GPS"], 360.0))
-    return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0, truth)),)
+    return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0, truth)
+                 + other_curves(others, "heading", 360.0)),)
 
 
 def sensor_plots(aiding: frozenset[str] = frozenset()) -> tuple[Plot, ...]:
@@ -134,7 +136,7 @@ class LiveView(QtWidgets.QWidget):
         live = estimation.live_estimators()
         self.attitude = self._add_tab(StackedPlots(attitude_plots(live), hidden), "Attitude")
         self._curves_of = (live, False)  # the estimators, and whether a truth is plotted
-        self._others_of: tuple = ()  # the other sessions' curves: (label, filters, style) each
+        self._others_of: tuple = ()  # the other sessions' curves: (label, estimators shown, style) each
         self._sensor_aiding: frozenset[str] = frozenset()
         self._later: dict[str, QtWidgets.QWidget] = {}  # a tab not built yet -> the blank page under its title
         for name, title in LATER_TABS.items():
@@ -163,7 +165,7 @@ class LiveView(QtWidgets.QWidget):
         later, self._later = self._later, {}
         built = {"sensors": lambda: StackedPlots(sensor_plots(self._sensor_aiding)),
                  "diagnostics": lambda: StackedPlots(diagnostic_plots()),
-                 "heading": lambda: StackedPlots(heading_plots(*self._curves_of), self.hidden_labels()),
+                 "heading": lambda: StackedPlots(heading_plots(*self._curves_of, self._others_of), self.hidden_labels()),
                  "position": PositionView, "vibration": VibrationView, "flight": FlightSectionsView}
         current = self.tabs.currentIndex()
         self.tabs.blockSignals(True)  # the current tab stays what it was; no half-built view is asked for
@@ -227,7 +229,7 @@ class LiveView(QtWidgets.QWidget):
             self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
             self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*shown, self._others_of), self._hidden))
-            self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*shown), self._hidden))
+            self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*shown, self._others_of), self._hidden))
             self.tabs.setCurrentIndex(current)
             self._curves_of = shown
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position, self.flight):
@@ -239,17 +241,19 @@ class LiveView(QtWidgets.QWidget):
         self._show_aiding_tabs()
 
     def set_others(self, others: list[Other]) -> None:
-        """The sessions beside the window's: their attitude curves on the Attitude tab, their channels in
-        the Channels tab, from their oldest rows kept."""
+        """The sessions beside the window's: their attitude and heading curves on the Attitude and Heading
+        tabs, their channels in the Channels tab, from their oldest rows kept."""
         self.others = list(others)
         if self.series:  # else made with the window's own at the next refresh
             self.series = {**{k: s for k, s in self.series.items() if ":" not in k}, **other_series(self.others)}
-        curves = tuple((o.label, o.session.view.filters, o.style) for o in self.others)
+        curves = tuple((o.label, o.shown, o.style) for o in self.others)
         if curves != self._others_of:
             self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
             self._others_of = curves
             self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*self._curves_of, curves), self._hidden))
+            if "heading" not in self._later:  # built: else built with these curves when first shown
+                self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*self._curves_of, curves), self._hidden))
             self.tabs.setCurrentIndex(current)
         self.channels.set_others(self.others)
 

@@ -176,6 +176,13 @@ class MainWindow(QtWidgets.QMainWindow):
         self.foxglove = FoxgloveSwitch(settings, self.foxglove_label.setText, self.show_error, self)
         self.session_list = SessionList(self)  # sessions beside this one (``ui.session_list``): in the side tabs
         self.controls.addTab(self.session_list, "Sessions")
+        # The Estimators panel tunes the session selected there (``_tune_selected``), its box selecting there too.
+        self.session_list.selectionChanged.connect(self._tune_selected)
+        self.session_list.changed.connect(self._tune_selected)
+        self.estimator_panel.sessionChosen.connect(self.session_list.select_row)
+        self.estimator_panel.otherShown.connect(
+            lambda name, on: self.session_list.show_estimator(self.session_list.selected(), name, on))
+        self._tune_selected()
         self._build_menus()
         self._sync_record_action()
         self.resize(1280, 800)
@@ -301,7 +308,12 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def rerun_replay(self, filters: tuple[str, ...], forced: dict) -> None:
         """The what-if: the file computed again with ``filters`` and ``forced`` settings, in a worker;
-        the replay goes on meanwhile and continues from where it is."""
+        the replay goes on meanwhile and continues from where it is. An added file (the Estimators panel
+        tuning it): that file only (``SessionList.recompute``)."""
+        added = self.session_list.selected()
+        if added is not None:
+            self.session_list.recompute(added, filters, forced)
+            return
         session = self.session
         if session is not None and session.seekable:
             self._load(session.source.path, tuple(filters), forced, f"recomputing {session.source.path.name} with "
@@ -376,7 +388,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.attitude_panel.clear()  # nothing of the previous session's attitude
         self.live_view.set_session(session)
         self.replay_bar.set_session(session)
-        self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels())
+        self._tune_selected()
         self.uplink_panel.set_session(session)
         self.event_console.set_session(session)
         self.parameters_view.set_session(session)
@@ -397,7 +409,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.source_label.setText(f"stopped: {description}")
             self.recording_label.setText("not recording")
         self.replay_bar.set_session(None)
-        self.estimator_panel.set_session(None, set())
+        self._tune_selected()
         self.uplink_panel.set_session(None)
         self.bar.set_connected(False)
         self._sync_record_action()
@@ -413,6 +425,14 @@ class MainWindow(QtWidgets.QMainWindow):
             self.settings.setValue("estimator_settings", json.dumps(
                 {name: {k: tuned[name][k] for k, _, _ in fields} for name, fields in self.estimator_panel.tunable.items()
                  if name in tuned}))
+
+    def _tune_selected(self) -> None:
+        """The Estimators panel on the session selected in the Sessions tab (the window's own at first),
+        filled anew only when that session is another: fields being typed into stay as they are."""
+        label, session = self.session_list.tuned()
+        self.estimator_panel.set_choices(self.session_list.names(), self.session_list.selected_row())
+        if session is not self.estimator_panel.session or label != self.estimator_panel.label:
+            self.estimator_panel.set_session(session, self.live_view.attitude.visible_labels(), label)
 
     def show_error(self, message: str | None) -> None:
         self.banner.setText(message or "")

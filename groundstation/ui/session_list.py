@@ -9,6 +9,8 @@ Attitude tab in a pen style of its own ("S2 AHF2", dotted). All are drawn on the
 (``session.timeline``: live sessions on wall time; a file from its start, played along with the window's
 session). Each can be served to Foxglove on a port of its own (a taken one: the next free), exported, and
 removed (stopped: its recording closed). The panel says each one's source, place on the axis and state.
+The session selected here is the one the Estimators panel tunes (``tuned``; the panel's own box selects
+here too): a live one's settings changed as the window's are, a file's computed again (``recompute``).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from PySide6 import QtCore, QtWidgets
 from groundstation.errors import UserError
 from groundstation.session.playback import RevealSession
 from groundstation.session.timeline import offset_s, reveal_along
+from groundstation.session.view import Session
 from groundstation.sources import whole_file
 from groundstation.ui.foxglove_switch import FoxgloveSwitch
 from groundstation.ui.session_series import SESSION_STYLES, Other
@@ -39,16 +42,23 @@ class Entry:
         self.loading = None
         self.offset_s: float | None = None  # None until placed on the window's axis
         self.foxglove_text = ""  # its bridge's address and clients, in its row
+        self.shown: tuple[str, ...] | None = None  # its estimators plotted (``shown_now``); None: its first
         # From the window's port on: one taken by the window or another session gives the next free one.
         self.foxglove = FoxgloveSwitch(window.settings, lambda text: setattr(self, "foxglove_text", text), window.show_error,
                                        parent, remember=False, port=window.foxglove.port, text=f"Serve {label} to Foxglove")
+
+    def shown_now(self) -> tuple[str, ...]:
+        """The estimators of its session plotted: its first at the start, as the window's own."""
+        filters = self.session.view.filters
+        return filters[:1] if self.shown is None else tuple(name for name in self.shown if name in filters)
 
 
 class SessionList(QtWidgets.QWidget):
     """The panel, and the sessions it holds; ``window``: the main window, whose session is the first and
     whose redraw timer calls ``tick``."""
 
-    changed = QtCore.Signal()  # a session was added, placed on the axis or removed
+    changed = QtCore.Signal()  # a session was added, placed on the axis, computed again or removed
+    selectionChanged = QtCore.Signal()  # another row selected: another session to tune
 
     def __init__(self, window):
         super().__init__()
@@ -62,7 +72,7 @@ class SessionList(QtWidgets.QWidget):
         self.tree.setUniformRowHeights(True)
         for column in (0, 2):  # short: the name and the place on the axis; the source and state take the rest
             self.tree.header().setSectionResizeMode(column, QtWidgets.QHeaderView.ResizeToContents)
-        self.tree.currentItemChanged.connect(lambda *_: self._sync_buttons())
+        self.tree.currentItemChanged.connect(lambda *_: (self._sync_buttons(), self.selectionChanged.emit()))
         self.buttons = {}
         grid = QtWidgets.QGridLayout()
         for index, (text, slot) in enumerate({
@@ -135,14 +145,14 @@ class SessionList(QtWidgets.QWidget):
     # -- the window's timer ---------------------------------------------------------------------
 
     def tick(self) -> None:
-        """Files computed become sessions; each session placed on the window's axis once it can be; files
-        revealed up to the window's present."""
+        """Files computed become sessions (or take the place of their earlier computation); each session
+        placed on the window's axis once it can be; files revealed up to the window's present."""
         first = self.window.session
         moved = False
         for entry in list(self.entries):
-            if entry.loading is not None:
-                if entry.loading.done:
-                    moved |= self._loaded(entry)
+            if entry.loading is not None and entry.loading.done:
+                moved |= self._loaded(entry)
+            if entry.session is None:
                 continue
             if entry.session.seekable:
                 moved |= reveal_along(first, entry.session)  # back in time: its series start over
@@ -159,12 +169,29 @@ class SessionList(QtWidgets.QWidget):
         loading, entry.loading = entry.loading, None
         if loading.error is not None:
             self.window.show_error(f"{entry.label}: {loading.error}")
-            self.entries.remove(entry)
+            if entry.session is None:  # a file being added: nothing of it to keep (a what-if's file plays on)
+                self.entries.remove(entry)
             self.refresh_rows()
             return False
+        if entry.session is not None:  # computed again (``recompute``): the earlier computation gives way
+            entry.session.stop()
         entry.session = RevealSession(loading.data, loading.path, loading.setup, paused=True)  # moved by ``reveal_along``
         entry.foxglove.follow(entry.session)
         return True
+
+    def recompute(self, entry: Entry, filters: tuple[str, ...], forced: dict) -> None:
+        """The what-if on an added file (the window's ``rerun_replay`` for its own): computed again with
+        ``filters`` and ``forced`` settings in a worker, played along as it was meanwhile."""
+        if entry.loading is not None:
+            entry.loading.cancel()
+        entry.loading = self.window.sessions.load(entry.session.source.path, tuple(filters), forced)
+        self.refresh_rows()
+
+    def show_estimator(self, entry: Entry, name: str, shown: bool) -> None:
+        """Plot (or not) estimator ``name`` of an added session, beside its others shown."""
+        now = entry.shown if entry.shown is not None else entry.session.view.filters[:1]
+        entry.shown = (*now, name) if shown and name not in now else tuple(n for n in now if shown or n != name)
+        self.publish()
 
     def primary_changed(self) -> None:
         """The window's own session changed (or stopped): every other is placed on its axis anew."""
@@ -176,7 +203,7 @@ class SessionList(QtWidgets.QWidget):
         """The sessions placed on the window's axis (none without a window's session)."""
         if self.window.session is None:
             return []
-        return [Other(e.label, e.session, e.offset_s, e.style) for e in self.entries
+        return [Other(e.label, e.session, e.offset_s, e.style, e.shown_now()) for e in self.entries
                 if e.session is not None and e.offset_s is not None]
 
     def publish(self) -> None:
@@ -200,11 +227,16 @@ class SessionList(QtWidgets.QWidget):
             state = f"computing {entry.loading.fraction:.0%}" if entry.loading is not None else self._state(session)
             rows.append((entry.label, session.source.description if session is not None else entry.what, where, state,
                          entry.foxglove_text if entry.foxglove.action.isChecked() else ""))
-        selected = self.tree.indexOfTopLevelItem(self.tree.currentItem()) if self.tree.currentItem() else 0
-        if self.tree.topLevelItemCount() != len(rows):
+        labels = [row[0] for row in rows]
+        if [self.tree.topLevelItem(i).text(0) for i in range(self.tree.topLevelItemCount())] != labels:
+            selected = self.selected_label()  # kept by its name: rows come and go around it
+            self.tree.blockSignals(True)  # no passing selection of the first row while the rows are made
             self.tree.clear()
             self.tree.addTopLevelItems([QtWidgets.QTreeWidgetItem(list(row)) for row in rows])
-            self.tree.setCurrentItem(self.tree.topLevelItem(min(selected, len(rows) - 1)))
+            self.tree.setCurrentItem(self.tree.topLevelItem(labels.index(selected) if selected in labels else 0))
+            self.tree.blockSignals(False)
+            if self.selected_label() != selected:  # the session selected was removed: the window's own now
+                self.selectionChanged.emit()
         else:
             for index, row in enumerate(rows):
                 item = self.tree.topLevelItem(index)
@@ -231,8 +263,30 @@ class SessionList(QtWidgets.QWidget):
 
     def selected(self) -> Entry | None:
         """The added session selected; None for the window's own (the first row)."""
-        index = self.tree.indexOfTopLevelItem(self.tree.currentItem()) if self.tree.currentItem() else 0
+        index = self.selected_row()
         return self.entries[index - 1] if index > 0 else None
+
+    def selected_label(self) -> str:
+        """"main" or the added session's name ("S2")."""
+        return self.tree.currentItem().text(0) if self.tree.currentItem() else "main"
+
+    def selected_row(self) -> int:
+        return self.tree.indexOfTopLevelItem(self.tree.currentItem()) if self.tree.currentItem() else 0
+
+    def select_row(self, row: int) -> None:
+        """Select row ``row`` (0: the window's own session), as a click on it."""
+        self.tree.setCurrentItem(self.tree.topLevelItem(row))
+
+    def tuned(self) -> tuple[str, Session | None]:
+        """The session selected, to tune: its name ("" for the window's own) and the session (None: none
+        yet, or a file still being computed)."""
+        entry = self.selected()
+        return ("", self.window.session) if entry is None else (entry.label, entry.session)
+
+    def names(self) -> list[str]:
+        """Each row's session as the Estimators panel's box offers it: "main: sim:", "S2: sim:?seed=7"."""
+        return [f"{item.text(0)}: {item.text(1)}" for item in
+                (self.tree.topLevelItem(i) for i in range(self.tree.topLevelItemCount()))]
 
     def _sync_buttons(self) -> None:
         entry = self.selected()

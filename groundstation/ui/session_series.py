@@ -19,12 +19,14 @@ SESSION_STYLES = ("dot", "dashdot", "dashdotdot")
 @dataclass(frozen=True)
 class Other:
     """A session beside the window's: ``label`` names its channels ("S2" -> "S2:imu.acc_x_g"), ``offset_s``
-    places its time 0 on the window's axis, ``style`` is its curves' pen (``plots.PEN_STYLES``)."""
+    places its time 0 on the window's axis, ``style`` is its curves' pen (``plots.PEN_STYLES``), ``shown``
+    the estimators whose attitude and heading are plotted (with its onboard estimate)."""
 
     label: str
     session: Session
     offset_s: float
     style: str
+    shown: tuple[str, ...]
 
     def name(self, table: str) -> str:
         return f"{self.label}:{table}"
@@ -49,10 +51,11 @@ class ShiftedTable:
 
 
 class SessionSeries(Series):
-    """A ``Series`` of another session's table: taken under that session's lock, whichever the caller holds."""
+    """A ``Series`` of a session's table (another's: a ``ShiftedTable``), taken under that session's lock,
+    whichever the caller holds."""
 
-    def __init__(self, table, derive: Derive, lock, offset_s: float):
-        super().__init__(ShiftedTable(table, offset_s), derive)
+    def __init__(self, table, derive: Derive, lock):
+        super().__init__(table, derive)
         self._lock = lock
 
     def take(self, lock=None) -> int:
@@ -64,7 +67,7 @@ def other_series(others: list[Other]) -> dict[str, Series]:
     series = {}
     for other in others:
         view, lock = other.session.view, other.session.lock
-        series[other.name("imu")] = SessionSeries(view.imu, imu_quantities(view.filters), lock, other.offset_s)
-        series[other.name("onboard")] = SessionSeries(view.onboard, onboard_quantities, lock, other.offset_s)
+        series[other.name("imu")] = SessionSeries(ShiftedTable(view.imu, other.offset_s), imu_quantities(view.filters), lock)
+        series[other.name("onboard")] = SessionSeries(ShiftedTable(view.onboard, other.offset_s), onboard_quantities, lock)
     return series
 

@@ -49,7 +49,7 @@ def test_apply_moves_no_field_and_names_the_setting_as_its_field_does(window, qt
     window.start_demo()
     window.controls.setCurrentWidget(window.estimator_panel)
     panel = window.estimator_panel
-    qtbot.waitUntil(lambda: panel.isEnabled() and len(window.session.view.imu) > 20, timeout=LIMIT_MS)
+    qtbot.waitUntil(lambda: panel.fields.isEnabled() and len(window.session.view.imu) > 20, timeout=LIMIT_MS)
     before = settled(panel, qtbot)  # the banners of a starting session come and go above the panels
     name, setting = next((n, s) for (n, s) in panel.boxes if n == "ahf" and s != "lam_min")  # AHF λ max
     box = panel.boxes[name, setting]
