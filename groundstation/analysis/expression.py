@@ -2,7 +2,7 @@
 
 The text is parsed with Python's ``ast`` and only a whitelist is evaluated, on numpy arrays: numbers,
 the names the caller allows (a bare name, or ``table.column``, each also of another session of the window
-as its Channels tab lists them: ``S2:imu.gyr_x_dps``, ``S2:ahf2_roll_deg``), ``+ - * / ** %``, unary
+as its Channels tab lists them: ``S2:imu.gyr_x_rad_s``, ``S2:ahf2_roll_deg``), ``+ - * / ** %``, unary
 minus, and the functions of ``FUNCTIONS`` (numpy's, each with its number of values); never ``eval`` of
 the text. Anything else is an ``ExpressionError`` whose message says what, for the dialog that asked.
 

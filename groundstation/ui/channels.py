@@ -181,7 +181,7 @@ class CustomSeriesDialog(QtWidgets.QDialog):
         form.addRow("name", self.name)
         form.addRow("expression", self.expression)
         form.addRow(QtWidgets.QLabel("channels as table.column or a column's own name, the Attitude tab's "
-                                     "angles (ahf2_roll_deg), another session's as listed (S2:imu.gyr_x_dps); "
+                                     "angles (ahf2_roll_deg), another session's after its name (S2:imu.acc_z_g, S2:ahf2_roll_deg); "
                                      "+ - * / **; abs, sqrt, sin, cos, arctan2, degrees …", wordWrap=True))
         form.addRow(self.message)
         form.addRow(buttons)

@@ -4,7 +4,7 @@ they come, so it is plotted and binned like any channel (a ``Series`` whose ``de
 Its names are the session's channels (``table.column``, or the bare column name where only one table
 has it) and the quantities the live view derives (``ahf2_roll_deg``, ``onboard_roll_deg``, ``gyr_x_dps``
 ...: the names its Attitude and Sensors curves carry), and the same of each session beside the window's
-after its name and a colon, as the Channels tab lists them (``S2:imu.gyr_x_dps``, ``S2:ahf2_roll_deg``;
+after its name and a colon, as the Channels tab lists them (``S2:imu.gyr_x_rad_s``, ``S2:ahf2_roll_deg``;
 ``expression.SESSION_COLON``), their times on the window's axis (``session.timeline``). The rows are
 those of the first name's table; a name of another table takes that table's newest row at or before
 each row's time (``expression.at_or_before``). Each computation has a time budget (``BUDGET_S``); the dialog tries an
@@ -29,7 +29,7 @@ SAMPLE_ROWS = 500  # the dialog's trial: the latest rows of the expression's tab
 
 def expression_sources(view: ProductView, others: list[Other] = ()) -> dict[str, tuple[str, str, Derive | None]]:
     """Every name an expression may use: (its table, its column or derived quantity, the derive or None);
-    those of ``others`` (the sessions beside the window's) after their name ("S2:imu.gyr_x_dps", of table "S2:imu")."""
+    those of ``others`` (the sessions beside the window's) after their name ("S2:imu.gyr_x_rad_s", of table "S2:imu")."""
     sources = own_sources(view)
     for other in others:
         sources.update({f"{other.label}:{name}": (other.name(table), key, derive)

@@ -4,8 +4,9 @@ The window's own session (the one its connection bar, tabs and panels show) is l
 each session added here (File > Add source beside…, Add file beside…, or this panel's buttons) is
 "S2", "S3", … and has its own tables, estimators and, when live, its own recording (as any live session
 of the window). Its channels are listed under its name in the Channels tab ("S2:imu.acc_x_g") and can be
-plotted in the panes with the window's; its first estimator's and its onboard pitch and roll join the
-Attitude tab in a pen style of its own ("S2 AHF2", dotted). All are drawn on the window's time axis
+plotted in the panes with the window's, and named in custom series ("S2:imu.acc_x_g - imu.acc_x_g"); its
+first estimator's (and any other shown in the Estimators panel) and its onboard pitch, roll and heading
+join the Attitude and Heading tabs in a pen style of its own ("S2 AHF2", dotted). All are drawn on the window's time axis
 (``session.timeline``: live sessions on wall time; a file from its start, played along with the window's
 session). Each can be served to Foxglove on a port of its own (a taken one: the next free), exported, and
 removed (stopped: its recording closed). The panel says each one's source, place on the axis and state.
