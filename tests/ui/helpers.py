@@ -1,5 +1,7 @@
 """Shared steps of the window tests."""
 
+import pandas as pd
+
 from tests.waiting import LIMIT_MS
 
 
@@ -15,3 +17,17 @@ def play_to_the_end(window, qtbot, timeout_ms: int = LIMIT_MS) -> None:
     if window.session.source.paused:
         window.replay_bar.play_button.click()
     qtbot.waitUntil(lambda: not window.session.running, timeout=timeout_ms)
+
+
+def export_csv(window, qtbot, panel, row, out):
+    """The panel's Export… on the session of ``row``, to ``out`` (CSV)."""
+    panel.tree.setCurrentItem(panel.tree.topLevelItem(row))
+    dialog = panel.export_selected()
+    assert dialog is not None, (row, window.banner.text(), [e.label for e in panel.entries])
+    qtbot.addWidget(dialog)
+    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
+    dialog.path_edit.setText(str(out))
+    dialog.export_button.click()
+    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=LIMIT_MS)
+    assert dialog.status.text().startswith(f"wrote {out}"), dialog.status.text()
+    return pd.read_csv(out)

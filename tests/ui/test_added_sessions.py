@@ -20,6 +20,7 @@ from groundstation.ui.channels import PREFIX
 from groundstation.ui.custom_series import CUSTOM
 from groundstation.ui.main_window import MainWindow
 
+from tests.ui.helpers import export_csv
 from tests.waiting import LIMIT_MS, LIMIT_S
 
 
@@ -80,7 +81,7 @@ def test_each_session_has_its_heading_in_its_pen_style(boards, qtbot):
     assert error.max() < 1e-3  # float32 in the plots
 
 
-def test_the_estimators_panel_tunes_the_session_selected_and_that_one_only(boards, qtbot):
+def test_the_estimators_panel_tunes_the_session_selected_and_that_one_only(boards, qtbot, tmp_path):
     window, board = boards
     panel, sessions = window.estimator_panel, window.session_list
     main = window.session
@@ -100,6 +101,19 @@ def test_the_estimators_panel_tunes_the_session_selected_and_that_one_only(board
                                if e.get("kind") == "settings"]
     qtbot.waitUntil(lambda: bool(changes(board.session)), timeout=LIMIT_MS)  # written as the recording goes on
     assert changes(board.session) == [("hf", {"beta": before["S2"] * 2})] and changes(main) == []
+    # Its export (the Sessions tab's Export...) computes HF as the board did: β doubled from the change on.
+    with board.session.lock:
+        changed_s = board.session.view.imu.tail(1)[0, board.session.view.imu.columns.index("time_s")]
+    qtbot.waitUntil(lambda: len(board.session.view.imu) and board.session.file()[1] > changed_s + 1.0, timeout=LIMIT_MS)
+    exported = export_csv(window, qtbot, sessions, 1, tmp_path / "s2.csv")
+    with board.session.lock:
+        live = board.session.view.imu.to_dict()
+    rows = np.searchsorted(live["time_s"], exported["time_s"].to_numpy() - 1e-9)
+    kept = rows < len(live["time_s"])
+    np.testing.assert_allclose(live["time_s"][rows[kept]], exported["time_s"][kept], atol=1e-9)
+    assert (exported["time_s"][kept] > changed_s + 0.5).sum() > 50
+    for c in "wxyz":
+        np.testing.assert_allclose(exported[f"hf_q{c}"][kept], live[f"hf_q{c}"][rows[kept]], rtol=0, atol=1e-9)
     # Its comparison estimators shown in its own pen style ("S2 HF"), the window's own HF not.
     panel.shown["hf"].setChecked(True)
     attitude = window.live_view.attitude

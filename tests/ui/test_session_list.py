@@ -3,12 +3,12 @@ listed in the Sessions panel, their channels named by session and plotted on one
 recorded completely and each recording and file exportable; the window's own session as before."""
 
 import numpy as np
-import pandas as pd
 
 from firmware_protocol import StreamDecoder
 from groundstation.recording import open_recording
 from groundstation.ui.channels import PREFIX
 
+from tests.ui.helpers import export_csv
 from tests.waiting import LIMIT_MS
 
 
@@ -28,20 +28,6 @@ def arrivals(session):
         imu = session.view.imu
         rows = imu.tail(len(imu))
     return rows[:, imu.columns.index("time_s")], session.view.t0_host_ns + rows[:, imu.columns.index("host_time_s")] * 1e9
-
-
-def export_csv(window, qtbot, panel, row, out):
-    """The panel's Export… on the session of ``row``, to ``out`` (CSV)."""
-    panel.tree.setCurrentItem(panel.tree.topLevelItem(row))
-    dialog = panel.export_selected()
-    assert dialog is not None, (row, window.banner.text(), [e.label for e in panel.entries])
-    qtbot.addWidget(dialog)
-    dialog.format_box.setCurrentIndex(dialog.format_box.findData(".csv"))
-    dialog.path_edit.setText(str(out))
-    dialog.export_button.click()
-    qtbot.waitUntil(lambda: dialog.job.done and not dialog.timer.isActive(), timeout=LIMIT_MS)
-    assert dialog.status.text().startswith(f"wrote {out}"), dialog.status.text()
-    return pd.read_csv(out)
 
 
 def test_two_boards_and_a_recording_on_one_time_axis(window, qtbot, recording, tmp_path):
