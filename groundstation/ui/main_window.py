@@ -154,7 +154,12 @@ class MainWindow(QtWidgets.QMainWindow):
         layout = QtWidgets.QVBoxLayout(central)
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
-        layout.addWidget(ReservedStrip(self.replay_bar, self.loading_row))  # the plots never move (ui/steady_layout.py)
+        # One row always in use: the time window and the pause, then the replay bar or the progress of a file in a
+        # strip that keeps its height whether or not they show; the plots never move (ui/steady_layout.py).
+        view_row = QtWidgets.QHBoxLayout()
+        view_row.addWidget(self.live_view.view_controls)
+        view_row.addWidget(ReservedStrip(self.replay_bar, self.loading_row), 1)
+        layout.addLayout(view_row)
         layout.addWidget(self.splitter, 1)
         BannerOverlay(self.splitter, (self.banner, self.recording_banner, self.config_banner))
         self.setCentralWidget(central)
