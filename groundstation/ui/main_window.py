@@ -378,6 +378,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _adopt(self, session: Session) -> None:
         self.session = session
+        self.statusBar().clearMessage()  # a message about the last session (a report written) hid this one's name
         self.attitude_panel.clear()  # nothing of the previous session's attitude
         self.live_view.set_session(session)
         self.replay_bar.set_session(session)
