@@ -303,6 +303,9 @@ class MainWindow(QtWidgets.QMainWindow):
         if session is not None and session.seek(t_s):
             self.live_view.set_session(session)
             self.event_console.set_session(session)
+            # and the clock counts from now: the views' restart (a second for a whole flight on a busy machine) is
+            # no playback time ("Replay" at 8x began 8 s in)
+            session.seek(t_s)
 
     def rerun_replay(self, filters: tuple[str, ...], forced: dict) -> None:
         """The what-if: the file computed again with ``filters`` and ``forced`` settings, in a worker;
