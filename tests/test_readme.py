@@ -1,6 +1,7 @@
 """The README's plan is on its first screen, and its tables of export formats and source forms are the
 registries' (``export.request.FORMATS``, ``sources.spec.SCHEMES``): a format or a scheme added to its
-registry and not to the README fails here, and so does a row the registry does not have."""
+registry and not to the README fails here, and so does a row the registry does not have. Every screenshot it
+shows is one the screenshot driver writes (four were taken by hand once and never again)."""
 
 import re
 from pathlib import Path
@@ -8,7 +9,9 @@ from pathlib import Path
 from groundstation.export.request import FORMATS
 from groundstation.sources.spec import SCHEMES
 
-README = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8").splitlines()
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
+SCREENSHOT_DRIVER = ROOT / "docs" / "screenshots" / "take.py"
 FIRST_SCREEN_LINES = 25  # what a terminal or a repository page shows before one scrolls
 
 
@@ -46,3 +49,9 @@ def test_the_export_formats_table_is_the_registrys():
 def test_the_sources_table_is_the_registrys():
     rows = table_after("| source string | what |")
     assert [ticked(row[0]) for row in rows] == [list(scheme.forms) for scheme in SCHEMES.values()]
+
+
+def test_every_screenshot_of_the_readme_is_retaken_by_the_driver():
+    shown = set(re.findall(r"\(docs/screenshots/([^)]+\.png)\)", "\n".join(README)))
+    written = set(re.findall(r'"([\w-]+\.png)"', SCREENSHOT_DRIVER.read_text(encoding="utf-8")))
+    assert len(shown) >= 12 and shown <= written, f"taken by no script: {sorted(shown - written)}"

@@ -166,7 +166,7 @@ class VibrationSummary:
 
     def lines(self) -> list[str]:
         """The summary as text lines: what ``groundstation vibration`` prints and the window's Vibration tab shows."""
-        out = [f"vibration from {self.start_s:.2f} s to {self.end_s:.2f} s"]
+        out = [f"vibration from {_hundredths(self.start_s)} s to {_hundredths(self.end_s)} s"]
         for sp in self.spectra.values():
             out.append(f"{sp.sensor}: '{sp.table}' at {sp.rate_hz:.1f} Hz, {sp.segments} segments of {sp.nperseg} samples "
                        f"({sp.frequency_hz[1]:.2f} Hz bins)")
@@ -195,6 +195,11 @@ class VibrationSummary:
             out.append(f"motors: throttle {self.motor['throttle']:.3f} above idle ({self.motor['throttle_source']})")
         out.append(self.notch["text"] if self.notch else f"notch: no peak above {MIN_ROTOR_HZ:g} Hz to suggest one for")
         return out + [f"warning: {w}" for w in self.warnings]
+
+
+def _hundredths(seconds: float) -> str:
+    """``seconds`` to 0.01, a time a hair before zero (a full-rate IMU's first sample) as 0.00, not -0.00."""
+    return f"{round(seconds, 2) + 0.0:.2f}"  # + 0.0: -0.0 becomes 0.0
 
 
 class VibrationError(ValueError):

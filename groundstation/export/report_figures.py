@@ -133,10 +133,16 @@ def line_plot(series: list[tuple], title: str, x_label: str, y_label: str,
         text = f"{10 ** tick:.3g}" if log_y else f"{tick:g}"
         out.append(f'<line x1="{left}" x2="{left + plot_w}" y1="{py(tick):.1f}" y2="{py(tick):.1f}" stroke="#eee"/>'
                    f'<text x="{left - 4}" y="{py(tick) + 4:.1f}" text-anchor="end">{text}</text>')
-    for x, label in marks:
+    row_ends: list[float] = []  # the right end of the last mark label on each row of labels, top down
+    for x, label in sorted(marks):
         if x_lo <= x <= x_hi:
+            # the first row where the label clears the one before it (a reboot and a clock jump 0.4 s apart
+            # were written over each other)
+            start = float(px(x)) + 3
+            row = next((r for r, end in enumerate(row_ends) if start >= end + CHAR_PX), len(row_ends))
+            row_ends[row:row + 1] = [start + CHAR_PX * len(label)]
             out.append(f'<line x1="{px(x):.1f}" x2="{px(x):.1f}" y1="{top}" y2="{bottom}" stroke="#000" stroke-dasharray="4 3"/>'
-                       f'<text x="{px(x) + 3:.1f}" y="{top + 11}">{escaped(label)}</text>')
+                       f'<text x="{start:.1f}" y="{top + 11 + row * LEGEND_ROW_PX}">{escaped(label)}</text>')
     for label, x, y, colour, dashed in sorted(drawn, key=lambda d: not d[4]):  # the dashed references beneath
         points = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(px(x), py(y)))
         dash = ' stroke-dasharray="5 3"' if dashed else ""

@@ -94,7 +94,7 @@ class AttitudePanel(QtWidgets.QGroupBox):
     """The horizon, the 3D view of the body beside it, and the readouts of one estimate."""
 
     def __init__(self, parent=None):
-        super().__init__("Attitude (AHF)", parent)
+        super().__init__("Attitude", parent)  # the estimate shown named once there is one (``show_session``)
         self.indicator = AttitudeIndicator()
         self.body_view = AttitudeView3D()
         views = QtWidgets.QHBoxLayout()
@@ -153,6 +153,7 @@ class AttitudePanel(QtWidgets.QGroupBox):
 
     def clear(self) -> None:
         """No attitude (a new session, before its first estimate)."""
+        self.setTitle("Attitude")
         self.show_reconverging(None)
         self.show_attitude(math.nan, math.nan, math.nan)
         self.body_view.set_attitude(None)

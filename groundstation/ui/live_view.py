@@ -123,11 +123,13 @@ class LiveView(QtWidgets.QWidget):
         self.pause_button.setCheckable(True)
         self.pause_button.setToolTip("Freeze the plots to zoom and pan; acquisition and recording go on")
         self.pause_button.toggled.connect(self._paused_changed)
-        controls = QtWidgets.QHBoxLayout()
+        # The time window and the pause, placed by the host (the window: in the row the replay bar shares).
+        self.view_controls = QtWidgets.QWidget()
+        controls = QtWidgets.QHBoxLayout(self.view_controls)
+        controls.setContentsMargins(0, 0, 0, 0)
         controls.addWidget(QtWidgets.QLabel("Time window"))
         controls.addWidget(self.window_box)
         controls.addWidget(self.pause_button)
-        controls.addStretch(1)
         self.tabs = QtWidgets.QTabWidget()
         self._hidden = hidden  # remembered also for labels the current session lacks
         # Drawn at first for the estimators a live session runs (the registry names them without loading
@@ -150,7 +152,6 @@ class LiveView(QtWidgets.QWidget):
         self.tabs.currentChanged.connect(self._tab_changed)  # once every tab is there
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
-        layout.addLayout(controls)
         layout.addWidget(self.tabs, 1)
 
     def __getattr__(self, name: str):

@@ -154,7 +154,12 @@ class MainWindow(QtWidgets.QMainWindow):
         layout = QtWidgets.QVBoxLayout(central)
         layout.setContentsMargins(4, 0, 4, 0)
         layout.addWidget(self.bar)
-        layout.addWidget(ReservedStrip(self.replay_bar, self.loading_row))  # the plots never move (ui/steady_layout.py)
+        # One row always in use: the time window and the pause, then the replay bar or the progress of a file in a
+        # strip that keeps its height whether or not they show; the plots never move (ui/steady_layout.py).
+        view_row = QtWidgets.QHBoxLayout()
+        view_row.addWidget(self.live_view.view_controls)
+        view_row.addWidget(ReservedStrip(self.replay_bar, self.loading_row), 1)
+        layout.addLayout(view_row)
         layout.addWidget(self.splitter, 1)
         BannerOverlay(self.splitter, (self.banner, self.recording_banner, self.config_banner))
         self.setCentralWidget(central)
@@ -305,6 +310,9 @@ class MainWindow(QtWidgets.QMainWindow):
         if session is not None and session.seek(t_s):
             self.live_view.set_session(session)
             self.event_console.set_session(session)
+            # and the clock counts from now: the views' restart (a second for a whole flight on a busy machine) is
+            # no playback time ("Replay" at 8x began 8 s in)
+            session.seek(t_s)
 
     def rerun_replay(self, filters: tuple[str, ...], forced: dict) -> None:
         """The what-if: the file computed again with ``filters`` and ``forced`` settings, in a worker;
@@ -385,6 +393,7 @@ class MainWindow(QtWidgets.QMainWindow):
 
     def _adopt(self, session: Session) -> None:
         self.session = session
+        self.statusBar().clearMessage()  # a message about the last session (a report written) hid this one's name
         self.attitude_panel.clear()  # nothing of the previous session's attitude
         self.live_view.set_session(session)
         self.replay_bar.set_session(session)

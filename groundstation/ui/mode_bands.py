@@ -6,7 +6,8 @@ report uses); a session that never reports a mode (the project's own aircraft, a
 
 A label is laid out again whenever the time axis moves (``_fit_labels``): it shows whole where its span has room
 for it on screen, else the mode's name alone, else nothing (the band's tooltip names it), so short modes' labels
-never run into each other (issue 34); zoomed in, they come back.
+never run into each other (issue 34); zoomed in, they come back. It hangs on a line of its own, at its span's
+start or the view's left edge, whichever is later (a span begun before the view was labelled off its left edge).
 """
 
 from __future__ import annotations
@@ -91,6 +92,7 @@ class ModeBands:
         px_per_s = width_px / (high - low)
         metrics = pg.QtGui.QFontMetricsF(labels[0].textItem.font())
         for span, text in zip(spans, labels):
+            text.line.setValue(max(span.start_s, low))
             room = (min(span.end_s, high) - max(span.start_s, low)) * px_per_s - LABEL_PAD_PX
             fits = [t for t in (label(span), span.mode) if metrics.horizontalAdvance(t) + 2 * LABEL_PAD_PX <= room]
             text.setFormat(fits[0] if fits else "")  # its format: what the label says again when its line moves
@@ -103,8 +105,10 @@ class ModeBands:
             region = pg.LinearRegionItem((span.start_s, span.end_s), movable=False, brush=fill(span), pen=pg.mkPen(None))
             region.setZValue(-20)  # beneath the curves and the gaps' shading
             region.setToolTip(label(span))
-            if row == 0:
-                text = pg.InfLineLabel(region.lines[0], text=label(span), position=0.98, anchors=[(0, 0), (0, 0)], color="#333")
+            if row == 0:  # on an unseen line of the band's (gone with it, as its edges) that ``_fit_labels`` keeps in view
+                anchor = pg.InfiniteLine(span.start_s, angle=90, movable=False, pen=pg.mkPen(None))
+                anchor.setParentItem(region)
+                text = pg.InfLineLabel(anchor, text=label(span), position=0.98, anchors=[(0, 0), (0, 0)], color="#333")
             item.addItem(region, ignoreBounds=True)
             out.append(region)
         return out, text

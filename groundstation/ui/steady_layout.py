@@ -2,7 +2,8 @@
 pushed the plots down and up, and a click aimed at a curve landed elsewhere).
 
 - ``ReservedStrip``: the rows of one place (the replay bar, and over it while a file is computed the progress
-  bar) in a strip of a fixed height, reserved whether or not one shows.
+  bar) in a strip of a fixed height, reserved whether or not one shows. The window puts it beside the time window
+  and the pause, in a row every session uses: no band of nothing over the live plots.
 - ``BannerOverlay``: the banners (an error, a stopped recording, a changed configuration) over the top of the
   plots, as wide as they are and as tall as the banners shown; hidden, and so not in the mouse's way, when none is.
 """

@@ -164,6 +164,8 @@ class VibrationView(QtWidgets.QWidget):
         self.session = session
         self.summary = None
         self.change = None
+        for box in (self.filter_hz, self.filter_bw):  # the last file's notch is not this one's (``compute`` suggests)
+            box.setValue(0.0)
         self._due = session is not None
         self._clear()
 

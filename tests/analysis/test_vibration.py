@@ -95,3 +95,12 @@ def test_jittered_sample_times_are_one_stretch_but_a_real_gap_cuts():
     assert vib.stretches(t) == [slice(0, 1000)]
     t[500:] += 0.02  # four periods missing
     assert vib.stretches(t) == [slice(0, 500), slice(500, 1000)]
+
+
+def test_a_range_that_starts_a_hair_before_zero_reads_from_0_00_s():
+    """A full-rate IMU's first sample 0.4 ms before the session's zero: the text said "from -0.00 s"."""
+    t = np.arange(800) / RATE_HZ - 0.0004
+    rng = np.random.default_rng(11)
+    summary = vib.vibration_summary(_session(t, rng.normal(0, 0.1, (800, 3)), 1 + rng.normal(0, 0.01, (800, 3))))
+    assert summary.start_s < 0
+    assert summary.lines()[0] == f"vibration from 0.00 s to {t[-1]:.2f} s"

@@ -96,8 +96,11 @@ def test_the_report_renders_in_a_real_browser(vibrating_flight, tmp_path):
         target = np.array([(colour >> 16) & 255, (colour >> 8) & 255, colour & 255])
         return bool((np.abs(rgb - target).max(axis=-1) < 24).sum() > 50)
 
-    # drawn on the first screen: the high finding's red bar (#c00) and the plots' first line (#1f77b4)
-    assert near(0xCC0000) and near(0x1F77B4)
+    # drawn on the first screen: the high finding's red bar (#c00) and the pitch plot's estimator in its app colour
+    # (the simulated board records AHF)
+    from groundstation.estimation import colour_of
+
+    assert near(0xCC0000) and near(int(colour_of("ahf").lstrip("#"), 16))
 
 
 @pytest.mark.parametrize("name", SHARED_LOGS)

@@ -103,3 +103,19 @@ def test_a_flight_logs_report_shows_its_controller_battery_gps_and_outputs(tmp_p
     svg = next(s for s in re.findall(r"<svg.*?</svg>", page, flags=re.S) if 'aria-label="Attitude: roll"' in s)
     desired = next(line for line in ET.fromstring(svg).iter(f"{SVG}polyline") if line.get("data-series") == "desired")
     assert len(desired.get("points").split()) > 100  # every row, reduced to two a pixel column
+
+
+def test_the_labels_of_close_marks_do_not_overlap(metrics):
+    """A reboot at 3.6 s and a clock jump at 4.0 s of a 209 s log: their labels were drawn over each other."""
+    t = np.linspace(0.0, 209.0, 500)
+    marks = [(3.6, "reboot"), (4.0, "clock jump"), (4.2, "reboot"), (120.0, "reboot")]
+    svg = line_plot([("AHF2", t, np.sin(t))], "pitch", "session time (s)", "pitch (°)", marks=marks)
+    plot, _ = boxes(svg, metrics)
+    texts = [e for e in ET.fromstring(svg).iter(f"{SVG}text") if e.text in {"reboot", "clock jump"}]
+    assert len(texts) == len(marks)
+    placed = [(float(e.get("x")), float(e.get("y")) - metrics.ascent(),
+               float(e.get("x")) + metrics.horizontalAdvance(e.text), float(e.get("y")) + metrics.descent()) for e in texts]
+    for i, a in enumerate(placed):
+        assert plot[1] <= a[1] and a[3] <= plot[3]  # inside the plot area
+        for b in placed[i + 1:]:
+            assert not overlap(a, b), (a, b)

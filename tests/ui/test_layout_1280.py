@@ -1,7 +1,8 @@
 """The window at 1280x800 (issue 34): nothing in the right column is wider than its room (it was clipped on
 flight logs), the Estimators panel's Apply is in sight without scrolling, the status bar cuts a long recording
 path in the middle (its whole text in the tooltip), and the plots stay where they are while the progress bar, the
-replay bar and the banners come and go (the layout jumped)."""
+replay bar and the banners come and go (the layout jumped), with no empty band kept for them on a live session
+(a strip reserved for the bars showed as 30 px of nothing above every live plot)."""
 
 from PySide6 import QtCore, QtWidgets
 
@@ -18,7 +19,27 @@ def settle(qtbot, window):
 
 
 def plots_top(window) -> int:
-    return window.splitter.mapTo(window, QtCore.QPoint(0, 0)).y()
+    return window.live_view.tabs.mapTo(window, QtCore.QPoint(0, 0)).y()
+
+
+# What shows something: an empty container (a strip kept for a bar that is hidden) does not count.
+DRAWN = (QtWidgets.QLabel, QtWidgets.QAbstractButton, QtWidgets.QComboBox, QtWidgets.QProgressBar, QtWidgets.QSlider)
+
+
+def longest_empty_band(window) -> int:
+    """The most pixel rows in a row between the connection bar and the plots' tabs that no visible widget draws on."""
+    top = window.bar.mapTo(window, QtCore.QPoint(0, window.bar.height())).y()
+    covered = [False] * (plots_top(window) - top)
+    for widget in window.centralWidget().findChildren(QtWidgets.QWidget):
+        if isinstance(widget, DRAWN) and widget.isVisible():
+            y = widget.mapTo(window, QtCore.QPoint(0, 0)).y() - top
+            for row in range(max(y, 0), min(y + widget.height(), len(covered))):
+                covered[row] = True
+    longest = run = 0
+    for row in covered:
+        run = 0 if row else run + 1
+        longest = max(longest, run)
+    return longest
 
 
 def test_a_flight_log_fits_the_right_column_and_apply_is_in_sight(window, qtbot):
@@ -49,8 +70,17 @@ def test_the_status_bar_cuts_a_long_text_in_the_middle_and_keeps_it_whole_in_the
     assert label.mapTo(window, QtCore.QPoint(label.width(), 0)).x() <= bar.width()
 
 
+def test_a_live_session_has_no_empty_band_over_its_plots(window, qtbot):
+    window.resize(1280, 800)
+    window.start_demo()
+    settle(qtbot, window)
+    qtbot.waitUntil(lambda: window.live_view.frames_drawn > 0, timeout=LIMIT_MS)
+    assert longest_empty_band(window) <= 8  # a layout's spacing, not a row
+
+
 def test_the_plots_stay_put_while_bars_and_banners_come_and_go(window, qtbot):
     window.resize(1280, 800)
+    window.start_demo()  # from a live session, as a user opens a file
     settle(qtbot, window)
     top = plots_top(window)
     window.open_recording(flightlog(HOP))

@@ -55,3 +55,11 @@ def test_labels_never_overlap_and_fit_their_spans(shown, qtbot):
     plots.items[0].setXRange(0.0, 1.3, padding=0)  # zoomed in on the short ones: room for them
     zoomed = {t.split(" ")[0] for t, _ in visible_labels(plots, qtbot)}
     assert {"STABILIZE", "ALT_HOLD", "LOITER"} <= zoomed
+
+
+def test_a_span_begun_left_of_the_view_is_labelled_inside_it(shown, qtbot):
+    """A PX4 log's one mode began before the whole-flight view's left edge: its label read "ABILIZED (armed)"."""
+    plots, _ = shown
+    plots.items[0].setXRange(10.0, 60.0, padding=0)  # AUTO began at 1.2 s
+    labels = dict(visible_labels(plots, qtbot))
+    assert labels["AUTO (armed)"].left() >= start_px(plots, 10.0) - 1

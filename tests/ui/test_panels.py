@@ -80,3 +80,16 @@ def test_the_mouse_wheel_passing_over_a_setting_leaves_it(window, qtbot):
     qtbot.waitUntil(box.hasFocus, timeout=5000)
     wheel(box, -1)  # clicked into, the wheel tunes it as a spin box does
     assert box.value() == before - box.singleStep()
+
+
+def test_the_attitude_panel_names_no_estimator_when_it_shows_none(window, qtbot, recording):
+    """It said "Attitude (AHF)" before any session, while the app's first estimator is AHF2, and kept the last
+    session's name once it stopped."""
+    from tests.ui.helpers import open_file
+
+    panel = window.attitude_panel
+    assert panel.title() == "Attitude"
+    open_file(window, qtbot, recording)
+    qtbot.waitUntil(lambda: panel.title() != "Attitude", timeout=LIMIT_MS)
+    window.disconnect()
+    assert panel.title() == "Attitude"

@@ -49,7 +49,8 @@ def test_modes_are_bands_on_the_plots_and_the_mode_is_in_the_status_bar(copter):
         bands = [i for i in item.items if isinstance(i, pg.LinearRegionItem) and i.zValue() == -20]
         assert [b.getRegion() for b in bands] == [pytest.approx((s.start_s, s.end_s)) for s in spans]
     top = [i for i in copter.live_view.attitude.items[0].items if isinstance(i, pg.LinearRegionItem) and i.zValue() == -20]
-    labels = [c.toPlainText() for b in top for c in b.lines[0].childItems() if isinstance(c, pg.InfLineLabel)]
+    labels = [c.toPlainText() for b in top for line in b.childItems() if isinstance(line, pg.InfiniteLine)
+              for c in line.childItems() if isinstance(c, pg.InfLineLabel)]  # each on a line of its band's
     # each whole, or its mode alone where its span has no room on screen for more (issue 34: labels ran together)
     assert labels[:2] == ["LOITER (armed)", "RTL (armed)"] and labels[2] in ("RTL (disarmed)", "RTL")
     assert copter.vehicle_badge.text() == "disarmed · RTL" and copter.vehicle_badge.isVisible()

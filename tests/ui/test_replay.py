@@ -165,6 +165,26 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     np.testing.assert_array_equal(session.data.quaternion("cf1"), alone.quaternion("cf1"))
 
 
+def test_replay_from_the_end_starts_at_the_start_however_long_the_views_take_to_restart(window, qtbot, recording, monkeypatch):
+    """The views start over when the clock goes back (a second for a whole flight on a busy machine): that time was
+    counted as playback, so "Replay" at 8x began 8 s in (a 9 s log: at its end again before "Pause" could be clicked)."""
+    open_file(window, qtbot, recording)
+    session = window.session
+    window.seek(session.source.duration_s)
+    wall = [1000.0]
+    session.source._clock = lambda: wall[0]  # the clock the playback is given (``Playback(clock=...)``)
+    restart = window.live_view.set_session
+
+    def slow_restart(s):
+        restart(s)
+        wall[0] += 5.0  # the views' restart, seen by the playback's clock
+
+    monkeypatch.setattr(window.live_view, "set_session", slow_restart)
+    qtbot.waitUntil(lambda: window.replay_bar.play_button.text() == "Replay", timeout=LIMIT_MS)
+    window.replay_bar.play_button.click()
+    assert session.source.advance() == 0.0 and not session.source.paused
+
+
 def test_a_log_without_imu_plays_its_onboard_estimate(window, qtbot):
     path = flightlog("arduplane_omnibusf4_ground_pilot_0004.bin")
     open_file(window, qtbot, path)

@@ -1,5 +1,6 @@
 """File > Flight report… in the real window: the open file's report written in the background, the
-status bar saying where; with nothing open, the banner says why not."""
+status bar saying where (until the next file: it stayed over that file's name); with nothing open, the banner
+says why not."""
 
 from PySide6 import QtWidgets
 
@@ -18,6 +19,8 @@ def test_the_file_menu_writes_the_flight_report_and_says_where(window, qtbot, re
     assert job.error is None and not window.banner.isVisible()
     text = out.read_text(encoding="utf-8")
     assert "<h2>Findings</h2>" in text and recording.name in text
+    open_file(window, qtbot, recording)  # the next session: its own name in the status bar, not the last report
+    assert window.statusBar().currentMessage() == "" and window.source_label.isVisible()
 
 
 def test_with_nothing_open_the_banner_says_why(window, tmp_path):

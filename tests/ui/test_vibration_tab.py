@@ -107,6 +107,17 @@ def test_the_tab_says_what_the_suggested_notch_would_do_and_refuses_one_above_ny
     assert tab.change is None and not tab.what_if_plots.isVisible()
 
 
+def test_the_what_if_row_starts_empty_on_a_file_with_no_notch_to_suggest(window, qtbot, shaken, tmp_path):
+    """The next file's tab showed the last file's notch (54.2 Hz of an ArduCopter log over a PX4 log that has none)."""
+    tab = shown_tab(window, qtbot, shaken, "gyro")
+    assert tab.filter_hz.value() == pytest.approx(tab.summary.notch["frequency_hz"])
+    still = tmp_path / "still.gsrec"
+    assert main(["simulate", "--scenario", "static", "--duration", "15", "--out", str(still)]) == 0
+    tab = shown_tab(window, qtbot, still, "gyro")
+    assert tab.summary.notch == {}
+    assert tab.filter_hz.value() == 0.0 and tab.filter_bw.value() == 0.0
+
+
 def shown_tab(window, qtbot, path, sensor):
     """The Vibration tab of ``path`` played to its end, computed and showing ``sensor``."""
     open_file(window, qtbot, path)
