@@ -1,45 +1,63 @@
 """The Parameters tab: an autopilot's parameters (``view.parameters``: MAVLink PARAM_VALUE, DataFlash PARM,
-ULog parameters) in a table, filtered as the user types (a part of the name, any case). Their changes
+ULog parameters) in a table with what each means, as Mission Planner and Flight Review show them
+(``autopilot.parameter_docs``: description, units, range, the meaning of the value, the default), the
+non-default ones in bold and, at a click, alone; filtered as the user types (a part of the name or of the
+description, any case). A label says where the descriptions come from, or how to get them. Their changes
 during the session are in the Events tab."""
 
 from __future__ import annotations
 
+import html
+
 from PySide6 import QtWidgets
 
+from groundstation.autopilot.parameter_docs import ParameterDoc, ParameterDocs, docs_for, non_default, shown_value
+from groundstation.errors import UserError
 from groundstation.session.view import Session
 
-
-def shown_value(value: float) -> str:
-    """Integers as integers (most parameters are), others to float32's precision, which they are sent in."""
-    return f"{value:.0f}" if float(value).is_integer() else f"{value:.7g}"
+COLUMNS = ("parameter", "value", "default", "units", "range", "meaning", "description")
+DESCRIPTION = COLUMNS.index("description")
 
 
 class ParametersView(QtWidgets.QWidget):
     def __init__(self, parent=None):
         super().__init__(parent)
         self.session: Session | None = None
-        self._shown: dict[str, float] = {}
+        self._shown: tuple[dict[str, float], dict[str, float]] = ({}, {})
+        self._docs = ParameterDocs({}, "")
+        self._non_default: set[str] = set()
         self.filter_box = QtWidgets.QLineEdit()
-        self.filter_box.setPlaceholderText("Filter parameters (part of a name)")
+        self.filter_box.setPlaceholderText("Filter parameters (part of a name or of a description)")
         self.filter_box.setClearButtonEnabled(True)
         self.filter_box.textChanged.connect(self._filter)
+        self.non_default_box = QtWidgets.QCheckBox("Non-default only")
+        self.non_default_box.setToolTip("Only the parameters whose value is not their default (where the default is known)")
+        self.non_default_box.toggled.connect(lambda _: self._filter(self.filter_box.text()))
         self.count_label = QtWidgets.QLabel("no parameters")
-        self.table = QtWidgets.QTableWidget(0, 2)
-        self.table.setHorizontalHeaderLabels(["parameter", "value"])
+        self.source_label = QtWidgets.QLabel()
+        self.source_label.setWordWrap(True)
+        self.table = QtWidgets.QTableWidget(0, len(COLUMNS))
+        self.table.setHorizontalHeaderLabels(COLUMNS)
         self.table.horizontalHeader().setStretchLastSection(True)
         self.table.verticalHeader().hide()
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.NoEditTriggers)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectRows)
+        self.table.setWordWrap(False)
+        bar = QtWidgets.QHBoxLayout()
+        bar.addWidget(self.filter_box, 1)
+        bar.addWidget(self.non_default_box)
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
-        layout.addWidget(self.filter_box)
+        layout.addLayout(bar)
         layout.addWidget(self.count_label)
+        layout.addWidget(self.source_label)
         layout.addWidget(self.table, 1)
 
     def set_session(self, session: Session | None) -> None:
         self.session = session
-        self._shown = {}
+        self._shown = ({}, {})
         self.table.setRowCount(0)
+        self.source_label.clear()
         self.refresh()
 
     def refresh(self) -> None:
@@ -47,24 +65,68 @@ class ParametersView(QtWidgets.QWidget):
         if self.session is None:
             return
         with self.session.lock:
-            parameters = dict(self.session.view.parameters)
-        if parameters == self._shown:
+            shown = (dict(self.session.view.parameters), dict(self.session.view.parameter_defaults))
+        if shown == self._shown:
             return
-        self._shown = parameters
+        parameters, defaults = shown
+        if (set(parameters), defaults) != (set(self._shown[0]), self._shown[1]):  # a new name or default: the docs again
+            self._docs = self._docs_of(parameters, defaults)
+            self.source_label.setText(f"Descriptions: {self._docs.source}" if self._docs.docs else self._docs.source)
+        self._shown = shown
         self.table.setRowCount(len(parameters))
+        self._non_default = set()
         for row, name in enumerate(sorted(parameters)):
-            self.table.setItem(row, 0, QtWidgets.QTableWidgetItem(name))
-            self.table.setItem(row, 1, QtWidgets.QTableWidgetItem(shown_value(parameters[name])))
-        self.table.resizeColumnToContents(0)
+            value, doc = parameters[name], self._docs.get(name)
+            cells = (name, shown_value(value), shown_value(doc.default) if doc.default is not None else "", doc.units,
+                     doc.range_text(), doc.meaning(value), doc.description)
+            changed = non_default(value, doc)
+            tip = _tooltip(doc)
+            for column, text in enumerate(cells):
+                item = QtWidgets.QTableWidgetItem(text)
+                item.setToolTip(tip)
+                if changed and column == 1:
+                    font = item.font()
+                    font.setBold(True)
+                    item.setFont(font)
+                self.table.setItem(row, column, item)
+            if changed:
+                self._non_default.add(name)
+        for column in range(DESCRIPTION):
+            self.table.resizeColumnToContents(column)
         self._filter(self.filter_box.text())
+
+    def _docs_of(self, parameters: dict[str, float], defaults: dict[str, float]) -> ParameterDocs:
+        played = self.session.file() if self.session is not None else None
+        try:
+            return docs_for(parameters, played[0].parent if played else None, defaults)
+        except UserError as error:
+            return ParameterDocs({}, str(error))
 
     def visible_names(self) -> list[str]:
         return [self.table.item(row, 0).text() for row in range(self.table.rowCount()) if not self.table.isRowHidden(row)]
 
     def _filter(self, text: str) -> None:
         needle = text.strip().casefold()
+        only_changed = self.non_default_box.isChecked()
         for row in range(self.table.rowCount()):
-            self.table.setRowHidden(row, needle not in self.table.item(row, 0).text().casefold())
+            name = self.table.item(row, 0).text()
+            found = needle in name.casefold() or needle in self.table.item(row, DESCRIPTION).text().casefold()
+            self.table.setRowHidden(row, not found or (only_changed and name not in self._non_default))
         total = self.table.rowCount()
         shown = len(self.visible_names())
         self.count_label.setText("no parameters" if not total else f"{shown} of {total} parameters")
+
+
+def _tooltip(doc: ParameterDoc) -> str:
+    """The whole of what is known of it, for a description the column cuts short and an enum's every value."""
+    lines = [f"<b>{html.escape(doc.name)}</b>" + (f": {html.escape(doc.title)}" if doc.title else "")]
+    if doc.description:
+        lines.append(html.escape(doc.description))
+    facts = [f"units {doc.units}" if doc.units else "", f"range {doc.range_text()}" if doc.range_text() else "",
+             f"default {shown_value(doc.default)}" if doc.default is not None else ""]
+    if any(facts):
+        lines.append(html.escape(", ".join(f for f in facts if f)))
+    labels = [f"{shown_value(v)}: {label}" for v, label in sorted(doc.values.items())] or [f"bit {b}: {label}" for b, label in sorted(doc.bits.items())]
+    if labels:
+        lines.append(html.escape("; ".join(labels)))
+    return "<p style='white-space:normal'>" + "<br>".join(lines) + "</p>" if doc.description or doc.title else ""

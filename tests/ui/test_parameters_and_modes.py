@@ -4,8 +4,11 @@ mode and arming; the autopilot's texts are in Events."""
 
 from pathlib import Path
 
+import math
+
 import pyqtgraph as pg
 import pytest
+from mavio_params import definitions
 from pymavlink import DFReader
 from PySide6 import QtCore
 
@@ -32,14 +35,51 @@ def test_the_parameters_tab_filters_as_text_is_typed(copter, qtbot):
         pass
     view = copter.parameters_view
     assert sorted(view.visible_names()) == sorted(reader.params)  # DFReader's own table of PARM
+    documented = definitions("ardupilot.copter")  # the filter finds a part of a name or of a description
+
+    def found(part: str) -> list[str]:
+        return sorted(n for n in reader.params if part in n or part.lower() in documented.get(n, {}).get("description", "").lower())
+
     view.filter_box.setFocus()
     qtbot.keyClicks(view.filter_box, "ins_gyr")
-    expected = sorted(name for name in reader.params if "INS_GYR" in name)
+    expected = found("INS_GYR")
     assert expected and view.visible_names() == expected
     assert view.count_label.text() == f"{len(expected)} of {len(reader.params)} parameters"
     for _ in range(4):
         qtbot.keyClick(view.filter_box, QtCore.Qt.Key_Backspace)
-    assert view.visible_names() == sorted(name for name in reader.params if "INS" in name)
+    assert view.visible_names() == found("INS")
+
+
+def test_the_parameters_tab_says_what_each_parameter_means_and_marks_the_non_default_ones(copter, qtbot):
+    """Issue 34: description, units, range, the value's meaning and the default, as Mission Planner shows them; the
+    non-default ones alone at a click (Flight Review's list); the filter finds words of the descriptions too."""
+    reader, defaults = DFReader.DFReader_binary(str(COPTER), zero_time_base=False), {}
+    while (msg := reader.recv_match(type="PARM")) is not None:
+        if not math.isnan(msg.Default):
+            defaults[msg.Name] = msg.Default
+    documented = definitions("ardupilot.copter")
+    view = copter.parameters_view
+    table = view.table
+    headers = [table.horizontalHeaderItem(c).text() for c in range(table.columnCount())]
+    assert headers == ["parameter", "value", "default", "units", "range", "meaning", "description"]
+    rows = {table.item(r, 0).text(): [table.item(r, c).text() for c in range(table.columnCount())] for r in range(table.rowCount())}
+    gyro = rows["INS_GYRO_FILTER"]
+    assert gyro[3:5] == ["Hz", "0 .. 256"] and gyro[6] == documented["INS_GYRO_FILTER"]["description"]
+    assert gyro[2] == f"{defaults['INS_GYRO_FILTER']:.0f}"
+    assert rows["FRAME_CLASS"][5] == documented["FRAME_CLASS"]["values"][int(reader.params["FRAME_CLASS"])] == "Quad"
+    name_row = next(r for r in range(table.rowCount()) if table.item(r, 0).text() == "INS_GYRO_FILTER")
+    assert documented["INS_GYRO_FILTER"]["display_name"] in table.item(name_row, 0).toolTip()
+    assert "Copter" in view.source_label.text()
+    view.filter_box.setFocus()
+    qtbot.keyClicks(view.filter_box, "cutoff frequency for gyro")
+    expected = sorted(n for n in reader.params if "cutoff frequency for gyro" in documented.get(n, {}).get("description", "").lower())
+    assert expected and view.visible_names() == expected
+    view.filter_box.clear()
+    view.non_default_box.click()  # (the tab is not on screen: a click's own signal)
+    changed = sorted(n for n, value in reader.params.items() if n in defaults and value != defaults[n])
+    assert len(changed) > 100 and view.visible_names() == changed
+    assert view.count_label.text() == f"{len(changed)} of {len(reader.params)} parameters"
+    assert table.item(name_row, 1).font().bold() == ("INS_GYRO_FILTER" in changed)
 
 
 def test_modes_are_bands_on_the_plots_and_the_mode_is_in_the_status_bar(copter):
