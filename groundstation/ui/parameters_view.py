@@ -2,14 +2,16 @@
 ULog parameters) in a table with what each means, as Mission Planner and Flight Review show them
 (``autopilot.parameter_docs``: description, units, range, the meaning of the value, the default), the
 non-default ones in bold and, at a click, alone; filtered as the user types (a part of the name or of the
-description, any case). A label says where the descriptions come from, or how to get them. Their changes
-during the session are in the Events tab."""
+description, any case). A label says where the descriptions come from, or how to get them. The side panel is
+narrow for seven columns: "Open in a window" shows the same table in a window of its own, as wide as the
+flyer makes it (Mission Planner's full parameter list), kept on the same session. Their changes during the
+session are in the Events tab."""
 
 from __future__ import annotations
 
 import html
 
-from PySide6 import QtWidgets
+from PySide6 import QtCore, QtWidgets
 
 from groundstation.autopilot.parameter_docs import ParameterDoc, ParameterDocs, docs_for, non_default, shown_value
 from groundstation.errors import UserError
@@ -17,12 +19,14 @@ from groundstation.session.view import Session
 
 COLUMNS = ("parameter", "value", "default", "units", "range", "meaning", "description")
 DESCRIPTION = COLUMNS.index("description")
+COLUMN_MAX_PX = 220  # the description gets the rest of the width
 
 
 class ParametersView(QtWidgets.QWidget):
-    def __init__(self, parent=None):
+    def __init__(self, parent=None, detachable: bool = True):
         super().__init__(parent)
         self.session: Session | None = None
+        self.detached: ParametersView | None = None  # the window "Open in a window" opened, once opened
         self._shown: tuple[dict[str, float], dict[str, float]] = ({}, {})
         self._docs = ParameterDocs({}, "")
         self._non_default: set[str] = set()
@@ -43,9 +47,14 @@ class ParametersView(QtWidgets.QWidget):
         self.table.setEditTriggers(QtWidgets.QAbstractItemView.NoEditTriggers)
         self.table.setSelectionBehavior(QtWidgets.QAbstractItemView.SelectRows)
         self.table.setWordWrap(False)
+        self.table.verticalHeader().setDefaultSectionSize(self.fontMetrics().height() + 6)  # a list, not a form
         bar = QtWidgets.QHBoxLayout()
         bar.addWidget(self.filter_box, 1)
         bar.addWidget(self.non_default_box)
+        if detachable:
+            self.window_button = QtWidgets.QPushButton("Open in a window")
+            self.window_button.clicked.connect(self.open_window)
+            bar.addWidget(self.window_button)
         layout = QtWidgets.QVBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addLayout(bar)
@@ -59,9 +68,24 @@ class ParametersView(QtWidgets.QWidget):
         self.table.setRowCount(0)
         self.source_label.clear()
         self.refresh()
+        if self.detached is not None:
+            self.detached.set_session(session)
+
+    def open_window(self) -> None:
+        if self.detached is None:
+            self.detached = ParametersView(detachable=False)
+            self.detached.setParent(self, QtCore.Qt.Window)  # a window of its own, closed with the main one
+            self.detached.setWindowTitle("Parameters")
+            self.detached.resize(1100, 700)
+            self.detached.set_session(self.session)
+        self.detached.show()
+        self.detached.raise_()
+        self.detached.activateWindow()
 
     def refresh(self) -> None:
         """The table again when the parameters changed (a live link's download, a change)."""
+        if self.detached is not None and self.detached.isVisible():
+            self.detached.refresh()
         if self.session is None:
             return
         with self.session.lock:
@@ -91,8 +115,9 @@ class ParametersView(QtWidgets.QWidget):
                 self.table.setItem(row, column, item)
             if changed:
                 self._non_default.add(name)
-        for column in range(DESCRIPTION):
+        for column in range(DESCRIPTION):  # each as wide as its text, a long meaning (a bitmask's bits) cut: its tooltip has it
             self.table.resizeColumnToContents(column)
+            self.table.setColumnWidth(column, min(self.table.columnWidth(column), COLUMN_MAX_PX))
         self._filter(self.filter_box.text())
 
     def _docs_of(self, parameters: dict[str, float], defaults: dict[str, float]) -> ParameterDocs:

@@ -80,6 +80,11 @@ def test_the_parameters_tab_says_what_each_parameter_means_and_marks_the_non_def
     assert len(changed) > 100 and view.visible_names() == changed
     assert view.count_label.text() == f"{len(changed)} of {len(reader.params)} parameters"
     assert table.item(name_row, 1).font().bold() == ("INS_GYRO_FILTER" in changed)
+    view.window_button.click()  # the same table, in a window as wide as the flyer makes it
+    detached = view.detached
+    qtbot.waitUntil(detached.isVisible, timeout=10000)
+    assert detached.isWindow() and detached.width() > view.width()
+    assert sorted(detached.visible_names()) == sorted(reader.params) and detached.source_label.text() == view.source_label.text()
 
 
 def test_modes_are_bands_on_the_plots_and_the_mode_is_in_the_status_bar(copter):
