@@ -32,8 +32,8 @@ from groundstation.errors import UserError
 PX4_FILE = "parameters.json"
 ARDUPILOT_VEHICLES = ("copter", "plane", "rover", "sub", "tracker", "blimp")
 NAMED_AT_LEAST = 0.5  # of the log's parameters a vehicle's set names, to be taken as that vehicle's
-PX4_DOCS_HINT = (f"No parameter descriptions: for a PX4 log, put PX4's {PX4_FILE} of its firmware (the build's "
-                 f"parameters.json, or the one QGroundControl downloads from the vehicle) beside the log")
+PX4_DOCS_HINT = (f"No parameter descriptions: for a PX4 log, put the {PX4_FILE} of its firmware version (PX4's build "
+                 f"makes it; QGroundControl reads the same) beside the log")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,6 +66,7 @@ class ParameterDoc:
 class ParameterDocs:
     docs: dict[str, ParameterDoc]
     source: str  # where they come from, in words; or why there are none
+    described: bool = False  # a source of descriptions was found (else ``docs`` holds the log's defaults alone)
 
     def get(self, name: str) -> ParameterDoc:
         return self.docs.get(name) or ParameterDoc(name)
@@ -81,7 +82,7 @@ def docs_for(parameters, beside: Path | None = None, defaults: dict[str, float] 
     docs, source = found or ({}, PX4_DOCS_HINT if names else "")
     for name, default in (defaults or {}).items():
         docs[name] = dataclasses.replace(docs.get(name) or ParameterDoc(name), default=default)
-    return ParameterDocs(docs, source)
+    return ParameterDocs(docs, source, found is not None)
 
 
 def non_default(value: float, doc: ParameterDoc) -> bool:

@@ -9,6 +9,7 @@ session are in the Events tab."""
 
 from __future__ import annotations
 
+import dataclasses
 import html
 
 from PySide6 import QtCore, QtWidgets
@@ -20,6 +21,9 @@ from groundstation.session.view import Session
 COLUMNS = ("parameter", "value", "default", "units", "range", "meaning", "description")
 DESCRIPTION = COLUMNS.index("description")
 COLUMN_MAX_PX = 220  # the description gets the rest of the width
+NON_DEFAULT_TIP = "Only the parameters whose value is not their default (where the default is known)"
+NO_DEFAULTS_TIP = ("No defaults known: a MAVLink link or .tlog does not carry them (a DataFlash log of ArduPilot 4.3 on "
+                   "and a ULog of PX4 1.12 on do)")
 
 
 class ParametersView(QtWidgets.QWidget):
@@ -35,7 +39,6 @@ class ParametersView(QtWidgets.QWidget):
         self.filter_box.setClearButtonEnabled(True)
         self.filter_box.textChanged.connect(self._filter)
         self.non_default_box = QtWidgets.QCheckBox("Non-default only")
-        self.non_default_box.setToolTip("Only the parameters whose value is not their default (where the default is known)")
         self.non_default_box.toggled.connect(lambda _: self._filter(self.filter_box.text()))
         self.count_label = QtWidgets.QLabel("no parameters")
         self.source_label = QtWidgets.QLabel()
@@ -95,7 +98,10 @@ class ParametersView(QtWidgets.QWidget):
         parameters, defaults = shown
         if (set(parameters), defaults) != (set(self._shown[0]), self._shown[1]):  # a new name or default: the docs again
             self._docs = self._docs_of(parameters, defaults)
-            self.source_label.setText(f"Descriptions: {self._docs.source}" if self._docs.docs else self._docs.source)
+            self.source_label.setText(f"Descriptions: {self._docs.source}" if self._docs.described else self._docs.source)
+            known = any(doc.default is not None for doc in self._docs.docs.values())
+            self.non_default_box.setEnabled(known)
+            self.non_default_box.setToolTip(NON_DEFAULT_TIP if known else NO_DEFAULTS_TIP)
         self._shown = shown
         self.table.setRowCount(len(parameters))
         self._non_default = set()
@@ -124,15 +130,16 @@ class ParametersView(QtWidgets.QWidget):
         played = self.session.file() if self.session is not None else None
         try:
             return docs_for(parameters, played[0].parent if played else None, defaults)
-        except UserError as error:
-            return ParameterDocs({}, str(error))
+        except UserError as error:  # a parameters.json beside the log that is not one: said, and the rest still shown
+            fallback = docs_for(parameters, None, defaults)
+            return dataclasses.replace(fallback, source=f"{error}. {fallback.source}")
 
     def visible_names(self) -> list[str]:
         return [self.table.item(row, 0).text() for row in range(self.table.rowCount()) if not self.table.isRowHidden(row)]
 
     def _filter(self, text: str) -> None:
         needle = text.strip().casefold()
-        only_changed = self.non_default_box.isChecked()
+        only_changed = self.non_default_box.isChecked() and self.non_default_box.isEnabled()
         for row in range(self.table.rowCount()):
             name = self.table.item(row, 0).text()
             found = needle in name.casefold() or needle in self.table.item(row, DESCRIPTION).text().casefold()

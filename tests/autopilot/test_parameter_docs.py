@@ -39,7 +39,7 @@ def parm_records(name: str) -> tuple[dict, dict]:
 
 def test_a_copter_logs_parameters_read_as_ardupilots_copter_documentation_says(copter):
     docs = docs_for(copter.parameters, flightlog(COPTER).parent, copter.parameter_defaults)
-    assert "for Copter" in docs.source
+    assert "for Copter" in docs.source and docs.described
     documented = definitions("ardupilot.copter")
     described = [name for name in copter.parameters if name in documented]
     # 86 %: the rest are 4.3's names that ArduPilot has since renamed or dropped (SYSID_THISMAV is MAV_SYSID now)
@@ -91,7 +91,7 @@ def test_a_px4_log_without_its_metadata_says_where_to_put_it_and_has_its_logged_
     assert len(logged) == 80
     assert log.parameter_defaults == {name: float(logged.get(name, value)) for name, value in ulog.initial_parameters.items()}
     docs = docs_for(log.parameters, flightlog(HOP).parent, log.parameter_defaults)
-    assert docs.source == PX4_DOCS_HINT and PX4_FILE in docs.source
+    assert docs.source == PX4_DOCS_HINT and PX4_FILE in docs.source and not docs.described
     assert {name for name, value in log.parameters.items() if non_default(value, docs.get(name))} == set(logged)
     assert read_ulog(flightlog("px4_sitl_quad_groundtruth.ulg")).parameter_defaults == {}  # PX4 1.7 logged none
 
@@ -108,7 +108,7 @@ def test_px4s_parameters_json_beside_the_log_describes_it(tmp_path):
          "bitmask": [{"index": 0, "description": "Default set"}, {"index": 1, "description": "Estimator replay"}]}]}
     (tmp_path / PX4_FILE).write_text(json.dumps(metadata))
     docs = docs_for(log.parameters, tmp_path, log.parameter_defaults)
-    assert str(tmp_path / PX4_FILE) in docs.source
+    assert str(tmp_path / PX4_FILE) in docs.source and docs.described
     rate = docs.get("MC_ROLLRATE_P")
     assert (rate.title, rate.description, rate.range_text()) == ("Roll rate P gain", "Roll rate P gain. Roll rate proportional gain.", "0.01 .. 0.5")
     assert rate.default == log.parameter_defaults["MC_ROLLRATE_P"]  # the log's own default wins over the file's

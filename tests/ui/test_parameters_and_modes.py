@@ -4,6 +4,7 @@ mode and arming; the autopilot's texts are in Events."""
 
 from pathlib import Path
 
+import json
 import math
 
 import pyqtgraph as pg
@@ -75,6 +76,7 @@ def test_the_parameters_tab_says_what_each_parameter_means_and_marks_the_non_def
     expected = sorted(n for n in reader.params if "cutoff frequency for gyro" in documented.get(n, {}).get("description", "").lower())
     assert expected and view.visible_names() == expected
     view.filter_box.clear()
+    assert view.non_default_box.isEnabled()
     view.non_default_box.click()  # (the tab is not on screen: a click's own signal)
     changed = sorted(n for n, value in reader.params.items() if n in defaults and value != defaults[n])
     assert len(changed) > 100 and view.visible_names() == changed
@@ -105,3 +107,33 @@ def test_the_autopilots_texts_are_in_events(copter):
     details = [console.item(row, 2).text() for row in range(console.rowCount())]
     assert any("message ArduCopter V4.3.6 (0c5e999c)" in d for d in details)
     assert any("mode RTL" in d for d in details)
+
+
+def test_a_px4_logs_parameters_tab_says_where_descriptions_come_from_and_reads_parameters_json_beside_it(qtbot, tmp_path):
+    """PX4 publishes no package of its parameter metadata: the tab says where to put its parameters.json, reads
+    it from beside the log when there, says so when it is not one; the log's own defaults mark the non-default
+    ones in any case (pyulog's: PX4 logs the default of each parameter not at it)."""
+    from pyulog import ULog
+
+    from groundstation.autopilot.parameter_docs import PX4_DOCS_HINT, PX4_FILE
+    from groundstation.session.playback import RevealSession
+    from groundstation.session_makers.load import load_session
+    from groundstation.ui.parameters_view import ParametersView
+
+    hop = COPTER.parent / "px4_fmuv5_quad_hop.ulg"
+    if not hop.is_file():
+        pytest.skip(f"{hop} is absent (the shared flight logs)")
+    (tmp_path / hop.name).symlink_to(hop)
+    session = RevealSession(load_session(tmp_path / hop.name, filters=("ahf2",)), tmp_path / hop.name, paused=True)
+    view = ParametersView()
+    qtbot.addWidget(view)
+    view.set_session(session)
+    assert view.source_label.text() == PX4_DOCS_HINT and view.non_default_box.isEnabled()
+    view.non_default_box.click()
+    assert view.visible_names() == sorted(ULog(str(hop)).get_default_parameters(0))
+    (tmp_path / PX4_FILE).write_text(json.dumps({"parameters": [{"name": "MC_ROLLRATE_P", "shortDesc": "Roll rate P gain"}]}))
+    view.set_session(session)
+    assert str(tmp_path / PX4_FILE) in view.source_label.text()
+    (tmp_path / PX4_FILE).write_text("[")
+    view.set_session(session)
+    assert view.source_label.text().startswith(f"{tmp_path / PX4_FILE}: not PX4's parameter metadata") and PX4_DOCS_HINT in view.source_label.text()
