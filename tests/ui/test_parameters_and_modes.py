@@ -30,30 +30,10 @@ def copter(window, qtbot):
     return window
 
 
-def test_the_parameters_tab_filters_as_text_is_typed(copter, qtbot):
-    reader = DFReader.DFReader_binary(str(COPTER), zero_time_base=False)
-    while reader.recv_match(type="PARM") is not None:
-        pass
-    view = copter.parameters_view
-    assert sorted(view.visible_names()) == sorted(reader.params)  # DFReader's own table of PARM
-    documented = definitions("ardupilot.copter")  # the filter finds a part of a name or of a description
-
-    def found(part: str) -> list[str]:
-        return sorted(n for n in reader.params if part in n or part.lower() in documented.get(n, {}).get("description", "").lower())
-
-    view.filter_box.setFocus()
-    qtbot.keyClicks(view.filter_box, "ins_gyr")
-    expected = found("INS_GYR")
-    assert expected and view.visible_names() == expected
-    assert view.count_label.text() == f"{len(expected)} of {len(reader.params)} parameters"
-    for _ in range(4):
-        qtbot.keyClick(view.filter_box, QtCore.Qt.Key_Backspace)
-    assert view.visible_names() == found("INS")
-
-
-def test_the_parameters_tab_says_what_each_parameter_means_and_marks_the_non_default_ones(copter, qtbot):
+def test_the_parameters_tab_says_what_each_parameter_means_filters_and_marks_the_non_default_ones(copter, qtbot):
     """Issue 34: description, units, range, the value's meaning and the default, as Mission Planner shows them; the
-    non-default ones alone at a click (Flight Review's list); the filter finds words of the descriptions too."""
+    non-default ones alone at a click (Flight Review's list); the filter (issue 23) finds words of the descriptions
+    too."""
     reader, defaults = DFReader.DFReader_binary(str(COPTER), zero_time_base=False), {}
     while (msg := reader.recv_match(type="PARM")) is not None:
         if not math.isnan(msg.Default):
@@ -71,10 +51,23 @@ def test_the_parameters_tab_says_what_each_parameter_means_and_marks_the_non_def
     name_row = next(r for r in range(table.rowCount()) if table.item(r, 0).text() == "INS_GYRO_FILTER")
     assert documented["INS_GYRO_FILTER"]["display_name"] in table.item(name_row, 0).toolTip()
     assert "Copter" in view.source_label.text()
+    assert sorted(view.visible_names()) == sorted(reader.params)  # DFReader's own table of PARM
+
+    def found(part: str) -> list[str]:  # the filter finds a part of a name or of a description, any case
+        return sorted(n for n in reader.params if part.upper() in n or part.lower() in documented.get(n, {}).get("description", "").lower())
+
     view.filter_box.setFocus()
-    qtbot.keyClicks(view.filter_box, "cutoff frequency for gyro")
-    expected = sorted(n for n in reader.params if "cutoff frequency for gyro" in documented.get(n, {}).get("description", "").lower())
+    qtbot.keyClicks(view.filter_box, "ins_gyr")
+    expected = found("ins_gyr")
     assert expected and view.visible_names() == expected
+    assert view.count_label.text() == f"{len(expected)} of {len(reader.params)} parameters"
+    for _ in range(4):
+        qtbot.keyClick(view.filter_box, QtCore.Qt.Key_Backspace)
+    assert view.visible_names() == found("ins")
+    view.filter_box.clear()
+    qtbot.keyClicks(view.filter_box, "cutoff frequency for gyro")
+    expected = found("cutoff frequency for gyro")
+    assert expected and not any("CUTOFF" in n for n in expected) and view.visible_names() == expected
     view.filter_box.clear()
     assert view.non_default_box.isEnabled()
     view.non_default_box.click()  # (the tab is not on screen: a click's own signal)
