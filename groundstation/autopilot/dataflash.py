@@ -17,6 +17,7 @@ that has one, as DFReader times them.
 from __future__ import annotations
 
 import itertools
+import math
 from collections import defaultdict
 
 import numpy as np
@@ -86,6 +87,8 @@ def read_dataflash(path, progress=None) -> FlightLog:
     log = FlightLog(path, "dataflash", "ArduPilot")
     first_us = next((t_us for t_us, _ in said if t_us is not None), 0)  # what came before any stamp: the log's start
     log.events, log.parameters = dataflash_said([(first_us if t_us is None else int(t_us), r) for t_us, r in said], reader.mav_type)
+    log.parameter_defaults = {r.Name: float(r.Default) for _, r in said  # ArduPilot 4.3's PARM on: NaN when not known
+                              if r.get_type() == "PARM" and not math.isnan(getattr(r, "Default", math.nan))}
     log.tables, log.units, log.warnings = every.tables()
     if gps_times:
         week, ms, boot_us = np.array(gps_times, dtype=np.int64).T

@@ -130,6 +130,7 @@ class FlightLog:
     warnings: list[str] = dataclasses.field(default_factory=list)  # what a flyer must hear of the reading (names kept apart)
     events: list[tuple[int, dict]] = dataclasses.field(default_factory=list)  # (time µs, event without times)
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)
+    parameter_defaults: dict[str, float] = dataclasses.field(default_factory=dict)  # name -> default, where the log says it
     utc_offset_us: int | None = None  # UTC (µs since 1970) minus the boot clock, from the log's GPS or UTC time
     utc_source: str = ""  # where utc_offset_us comes from, in words
     imu_choice: str = ""  # which IMU stream is ``imu`` and why (``imu_choice``)

@@ -205,7 +205,8 @@ class MessageMapper:
         speed = msg.vel / 100.0 if msg.vel != UINT16_UNKNOWN else math.nan
         course = math.radians(msg.cog / 100.0) if msg.cog != UINT16_UNKNOWN else math.nan
         satellites = msg.satellites_visible if msg.satellites_visible != 255 else -1
-        return [GpsReading(*sender, t_host_ns, msg.time_usec, msg.lat * 1e-7, msg.lon * 1e-7, msg.alt / 1000.0,
+        return [generic(msg, sender, t_host_ns),  # its fix's quality (eph: HDOP) as a row of ``gps_raw_int``
+                GpsReading(*sender, t_host_ns, msg.time_usec, msg.lat * 1e-7, msg.lon * 1e-7, msg.alt / 1000.0,
                            speed * math.cos(course), speed * math.sin(course), math.nan, msg.fix_type, satellites)]  # fmt: skip
 
 

@@ -14,7 +14,7 @@ Where each comes from, first found wins (``Source``):
 | ``rates_setpoint`` | ``RATE`` RDes, PDes, YDes | ``vehicle_rates_setpoint`` roll, pitch, yaw (rad/s) | ``ATTITUDE_TARGET`` body rates |
 | ``rates`` | ``RATE`` R, P, Y | ``vehicle_angular_velocity`` xyz (rad/s), else ``vehicle_attitude`` roll/pitch/yawspeed | the IMU's gyro |
 | ``battery`` | ``BAT`` Volt, Curr, RemPct, CurrTot | ``battery_status`` voltage_v, current_a, remaining (0..1), discharged_mah | ``SYS_STATUS``; ``BATTERY_STATUS`` current_consumed |
-| ``gps_quality`` | ``GPS`` Status, NSats, HDop | ``vehicle_gps_position`` fix_type, satellites_used, hdop | the GPS table's fix_type, satellites (a tlog keeps no HDOP) |
+| ``gps_quality`` | ``GPS`` Status, NSats, HDop | ``vehicle_gps_position`` fix_type, satellites_used, hdop | ``GPS_RAW_INT`` fix_type, satellites_visible, eph (HDOP × 100) |
 | ``outputs`` | ``RCOU`` C1..C14 (µs) | ``actuator_outputs`` output_0.. (its values: PWM µs on PX4 1.12) | ``SERVO_OUTPUT_RAW`` servo1..16_raw (µs) |
 
 A source column's unit is the catalogue's (DataFlash's FMTU, pymavlink's units), else the one ``Source``
@@ -39,7 +39,7 @@ AXES = ("roll", "pitch", "yaw")
 FACTORS = {("deg", "deg"): 1.0, ("degheading", "deg"): 1.0, ("cdeg", "deg"): 0.01, ("rad", "deg"): 180.0 / math.pi,
            ("deg/s", "deg/s"): 1.0, ("rad/s", "deg/s"): 180.0 / math.pi, ("V", "V"): 1.0, ("mV", "V"): 1e-3,
            ("A", "A"): 1.0, ("cA", "A"): 0.01, ("%", "%"): 1.0, ("fraction", "%"): 100.0, ("mAh", "mAh"): 1.0,
-           ("Ah", "mAh"): 1000.0, ("1", "1"): 1.0, ("us", "us"): 1.0, ("enum", "enum"): 1.0}
+           ("Ah", "mAh"): 1000.0, ("1", "1"): 1.0, ("centi", "1"): 0.01, ("us", "us"): 1.0, ("enum", "enum"): 1.0}
 MAX_OUTPUTS = 16  # output channels a section shows (SERVO_OUTPUT_RAW's 16, RCOU's 14, actuator_outputs' 16)
 
 
@@ -143,7 +143,9 @@ SECTIONS = (
         for name in ("gps_0", "gps_log")) + (
         Source("vehicle_gps_position", {"fix_type": "fix_type", "satellites": "satellites_used", "hdop": "hdop"},
                {"fix_type": "enum", "satellites_used": "1", "hdop": "1"}),
-        Source("gps", {"fix_type": "fix_type", "satellites": "satellites"}),
+        Source("gps_raw_int", {"fix_type": "fix_type", "satellites": "satellites_visible", "hdop": "eph"},
+               {"fix_type": "enum", "satellites_visible": "1", "eph": "centi"},  # eph: HDOP in hundredths
+               unknown={"satellites_visible": 255.0, "eph": 65535.0}),  # MAVLink's "unknown": UINT8_MAX, UINT16_MAX
     )),
     Section(OUTPUTS, (
         Source("rcou", {f"out_{i}_us": f"C{i}_us" for i in range(1, 15)}),

@@ -38,6 +38,7 @@ from groundstation.units import STANDARD_GRAVITY_M_S2
 
 MAGIC = FORMATS["ulog"].magic
 GAUSS_TO_UT = 100.0
+SYSTEM_DEFAULTS = 0  # pyulog's default_type: the firmware's defaults (1: the airframe's)
 
 
 def read_ulog(path, progress=None) -> FlightLog:
@@ -92,6 +93,9 @@ def read_ulog(path, progress=None) -> FlightLog:
         log.utc_offset_us = utc_offset_us(gps["time_utc_usec"][fixed], gps["timestamp"][fixed])
         log.utc_source = "vehicle_gps_position.time_utc_usec"
     log.events, log.parameters = ulog_said(ulog, topics.get("vehicle_status"))
+    if ulog.has_default_parameters:  # PX4 1.12 on: the system default of each parameter not at it (Flight Review's)
+        logged = ulog.get_default_parameters(SYSTEM_DEFAULTS)
+        log.parameter_defaults = {name: float(logged.get(name, value)) for name, value in ulog.initial_parameters.items()}
     return log
 
 

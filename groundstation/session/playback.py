@@ -141,6 +141,7 @@ class Revealed:
         self.catalogue = data.catalogue
         self.config = data.config
         self.parameters = data.parameters  # as last set: each change is also an event, revealed with the clock
+        self.parameter_defaults = data.parameter_defaults
         self.t0_host_ns = None  # every event carries its session time
         self.protocol = data.protocol
         self._settings = data.settings_at_end

@@ -4,7 +4,8 @@ or the dataset reader. One shape, filled by one builder (``build_product``):
 - ``tables``: every table as columns, exactly as ``catalogue`` describes them (``imu`` with every
   estimator's quaternion and diagnostics, ``onboard``, one per frame or message type, ``position``);
 - ``events``, ``link`` (the decoder's counters), ``config``, the estimators' settings at start and end;
-- ``parameters``: an autopilot's parameters, name -> value as last set (their changes are events);
+- ``parameters``: an autopilot's parameters, name -> value as last set (their changes are events), and
+  ``parameter_defaults`` where the log says them (a MAVLink link does not);
 - ``protocol``: what the link spoke ("gs", "mavlink"; None for a dataset), ``metadata``, ``damage``;
 - the truth an evaluation scores against, on the sample rows, where the session has one.
 
@@ -54,6 +55,7 @@ class SessionData:
     true_frame: str = "ENU"
     moving: np.ndarray | None = None  # (N,) bool on the sample rows: the samples an evaluation scores
     parameters: dict[str, float] = dataclasses.field(default_factory=dict)  # an autopilot's: name -> last value
+    parameter_defaults: dict[str, float] = dataclasses.field(default_factory=dict)  # name -> default, where the log says it
     # Host estimators whose ``imu`` columns are not in ``tables`` but made a stretch of rows at a time, forward
     # only (an export's: ``session_makers.estimate_run.Streamed``); read through ``attitudes(rows)``
     estimates: object | None = None

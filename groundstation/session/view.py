@@ -36,6 +36,7 @@ class ProductView(Protocol):
     onboard: object
     events: list[dict]
     parameters: dict[str, float]  # an autopilot's, name -> value (``SessionData.parameters``)
+    parameter_defaults: dict[str, float]  # name -> default where the log says it (``SessionData.parameter_defaults``)
     config: dict | None
     protocol: str | None
     t0_host_ns: int | None  # None: every event carries its ``session_time_s``

@@ -104,7 +104,7 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
         return build_product(describe(log, t_us[0]), log_catalogue(log, {}, messages), tables, (), protocol=AUTOPILOT_PROTOCOL,
                              true_q=interpolated(t_us, log.truth), true_frame="NED", damage=list(log.damage),
                              magnetometer=log.mag is not None, events=log_events(log, t_us[0]),
-                             parameters=dict(log.parameters))
+                             parameters=dict(log.parameters), parameter_defaults=dict(log.parameter_defaults))
     t_us = log.imu.time_us
     gyr, acc = log.imu.stack(IMU_COLUMNS[:3]), log.imu.stack(IMU_COLUMNS[3:])
     readings = _Readings(log, t_us)
@@ -138,7 +138,7 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     return build_product(describe(log, t_us[0]), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
                          true_q=interpolated(t_us, log.truth), true_frame="NED", magnetometer=mag is not None,
                          settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
-                         events=log_events(log, t_us[0]), parameters=dict(log.parameters))
+                         events=log_events(log, t_us[0]), parameters=dict(log.parameters), parameter_defaults=dict(log.parameter_defaults))
 
 
 def log_events(log: FlightLog, t0_us: int) -> list[dict]:

@@ -46,6 +46,7 @@ class PipelineView:
     onboard = property(lambda self: self._pipeline.onboard)
     events = property(lambda self: self._pipeline.events)
     parameters = property(lambda self: self._pipeline.parameters)
+    parameter_defaults = property(lambda self: {})  # MAVLink's PARAM_VALUE carries none
     config = property(lambda self: self._pipeline.config)
     protocol = property(lambda self: self._pipeline.protocol)
     t0_host_ns = property(lambda self: self._pipeline.t0_host_ns)

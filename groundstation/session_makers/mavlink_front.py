@@ -14,7 +14,8 @@ axes (FRD). They go where the project's own frames go:
   (the mode and arming are a ``vehicle_status`` event when they change, ``modes``);
 - ``StatusText`` -> a ``message`` event per whole text (chunks joined), ``ParamValue`` -> the pipeline's
   ``parameters`` and a ``parameter`` event when a known one changes (``messages``); their numbers also
-  reach the ``statustext`` and ``param_value`` tables as generic rows;
+  reach the ``statustext`` and ``param_value`` tables as generic rows, as ``GPS_RAW_INT``'s reach ``gps_raw_int``
+  (its HDOP, which ``gps`` does not keep);
 - ``GenericMessage`` -> one table per message type, added to the catalogue when the first one
   arrives (a message from another sender than the vehicle: ``<type>_<system>_<component>``).
 

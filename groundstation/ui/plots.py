@@ -37,6 +37,7 @@ FOLLOW_STEPS = 10  # the time axis advances by about a tenth of the window at a 
 HEAD_S = 1.0  # a curve takes its head's samples when these span this: one whole repaint a second
 Y_HEADROOM = 0.15  # of the data's span, above and below, when the value axis is re-fitted
 Y_SHRINK = 3.0  # re-fit when the axis spans more than this many times the data
+FLAT, FLAT_SHOWN = 1e-6, 0.1  # data flatter than this (of its size) is shown on an axis spanning this of its size, or 1
 READOUT_GAP_PX = 16  # between the cursor and the readout beside it
 LEGEND_COLUMNS = 6  # more entries (the live estimators, onboard, compass and GPS) wrap onto further legend rows
 
@@ -46,7 +47,9 @@ def refit(low: float, high: float, shown: tuple[float, float], span: float | Non
     when the data leaves the ``shown`` range or shrinks well inside it; else None: keep it."""
     if not (math.isfinite(low) and math.isfinite(high)):
         return None
-    span = max(high - low, span or 0.0, 1e-6)
+    span = max(high - low, span or 0.0)
+    if span <= FLAT * max(abs(low), abs(high), 1.0):  # a flat line (a SITL's HDOP, a current of 0 A): ticks need room
+        span = max(FLAT_SHOWN * max(abs(low), abs(high)), 1.0)
     if low < shown[0] or high > shown[1] or shown[1] - shown[0] > Y_SHRINK * span:
         return low - Y_HEADROOM * span, high + Y_HEADROOM * span
     return None

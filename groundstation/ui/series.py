@@ -24,6 +24,9 @@ from groundstation.session_parts.table import Table
 
 INITIAL_ROWS = 8192
 GAP_S = 0.25  # samples further apart than this mark a gap (port gone, radio lost): 25 at 100 Hz
+GAP_INTERVALS = 4  # ... or than this many of the series' own intervals, if more: a 2 Hz GPS_RAW_INT is a line
+PACE_ROWS = 20  # the newest intervals a series' own interval is the median of (all of a larger take's)
+MIN_PACE_ROWS = 3  # fewer intervals known: no gap yet (the first of a 2 Hz series' is not one)
 RECENT_S = 660.0  # kept at full resolution: the 10-minute window and a margin
 BIN_ROWS = 10  # older samples: min and max of each 10 (0.1 s at 100 Hz)
 HISTORY_BINS = 4096  # more, and the history's bins are merged in pairs
@@ -96,6 +99,7 @@ class Series:
         self.bin_rows = BIN_ROWS  # samples per bin of the history: doubles as its bins are merged
         self.history = Columns()  # two rows per bin of older samples: (first time, min), (last time, max)
         self.gaps: list[tuple[float, float]] = []  # (last sample before, first sample after), seconds
+        self._intervals = np.empty(0)  # the newest intervals between samples (s): the series' own pace
 
     def take(self, lock) -> int:
         """Append the rows added since the last call; returns how many. ``lock`` keeps the
@@ -107,7 +111,10 @@ class Series:
             return 0
         time_s = rows[:, self.table.columns.index("time_s")]
         edges = time_s if self.end_s is None else np.concatenate(([self.end_s], time_s))
-        before = np.flatnonzero(np.diff(edges) > GAP_S)  # the gaps: between edges[i] and edges[i + 1]
+        steps = np.diff(edges)
+        self._intervals = np.concatenate([self._intervals, steps[np.isfinite(steps)]])[-max(PACE_ROWS, len(steps)):]
+        gap_s = max(GAP_S, GAP_INTERVALS * float(np.median(self._intervals))) if len(self._intervals) >= MIN_PACE_ROWS else np.inf
+        before = np.flatnonzero(steps > gap_s)  # the gaps: between edges[i] and edges[i + 1]
         self.gaps += [(float(edges[i]), float(edges[i + 1])) for i in before]
         values = self._derive(rows, self.table.columns)
         if len(before):  # a NaN row in the middle of each gap: no curve draws a line across it

@@ -127,3 +127,26 @@ def test_a_ulogs_unknown_battery_current_is_no_number():
     assert unknown.any()
     assert np.isnan(data.tables["battery"]["current_A"][unknown]).all()
     np.testing.assert_allclose(data.tables["battery"]["current_A"][~unknown], battery["current_a"][~unknown], rtol=1e-6)
+
+
+def test_a_tlogs_gps_quality_has_hdop_and_its_unknowns_as_gaps_as_mavutil_reads_them():
+    """GPS_RAW_INT.eph is HDOP × 100, UINT16_MAX when unknown (the boat's 132 fixes before its GPS had one, with
+    satellites_visible 0 and fix 0); satellites_visible 255 is unknown too. Neither is a number on the plot."""
+    name = "ardurover_boat_sitl_autotest.tlog"
+    data = load_session(flightlog(name), filters=("ahf2",))
+    log = mavutil.mavlink_connection(str(flightlog(name)))
+    gps = []
+    while (msg := log.recv_match(type="GPS_RAW_INT")) is not None:
+        if (msg.get_srcSystem(), msg.get_srcComponent()) == (1, 1):
+            gps.append(msg)
+    eph = np.array([m.eph for m in gps], dtype=float)
+    assert (eph == 65535).sum() > 100 and (eph < 65535).sum() > 1000
+    quality = data.tables["gps_quality"]
+    gap = np.isnan(quality["fix_type"])  # the gap row the boat's clock jump puts in every table (pipeline.gap_row)
+    assert gap.sum() == len(gap) - len(gps)
+    quality = {name: values[~gap] for name, values in quality.items()}
+    np.testing.assert_allclose(quality["hdop"], np.where(eph == 65535, np.nan, eph / 100.0), equal_nan=True)
+    satellites = np.array([m.satellites_visible for m in gps], dtype=float)
+    np.testing.assert_allclose(quality["satellites"], np.where(satellites == 255, np.nan, satellites), equal_nan=True)
+    np.testing.assert_allclose(quality["fix_type"], [m.fix_type for m in gps])
+    assert np.nanmax(quality["hdop"]) < 100  # never 655.35

@@ -4,8 +4,12 @@ mode and arming; the autopilot's texts are in Events."""
 
 from pathlib import Path
 
+import json
+import math
+
 import pyqtgraph as pg
 import pytest
+from mavio_params import definitions
 from pymavlink import DFReader
 from PySide6 import QtCore
 
@@ -26,20 +30,56 @@ def copter(window, qtbot):
     return window
 
 
-def test_the_parameters_tab_filters_as_text_is_typed(copter, qtbot):
-    reader = DFReader.DFReader_binary(str(COPTER), zero_time_base=False)
-    while reader.recv_match(type="PARM") is not None:
-        pass
+def test_the_parameters_tab_says_what_each_parameter_means_filters_and_marks_the_non_default_ones(copter, qtbot):
+    """Issue 34: description, units, range, the value's meaning and the default, as Mission Planner shows them; the
+    non-default ones alone at a click (Flight Review's list); the filter (issue 23) finds words of the descriptions
+    too."""
+    reader, defaults = DFReader.DFReader_binary(str(COPTER), zero_time_base=False), {}
+    while (msg := reader.recv_match(type="PARM")) is not None:
+        if not math.isnan(msg.Default):
+            defaults[msg.Name] = msg.Default
+    documented = definitions("ardupilot.copter")
     view = copter.parameters_view
+    table = view.table
+    headers = [table.horizontalHeaderItem(c).text() for c in range(table.columnCount())]
+    assert headers == ["parameter", "value", "default", "units", "range", "meaning", "description"]
+    rows = {table.item(r, 0).text(): [table.item(r, c).text() for c in range(table.columnCount())] for r in range(table.rowCount())}
+    gyro = rows["INS_GYRO_FILTER"]
+    assert gyro[3:5] == ["Hz", "0 .. 256"] and gyro[6] == documented["INS_GYRO_FILTER"]["description"]
+    assert gyro[2] == f"{defaults['INS_GYRO_FILTER']:.0f}"
+    assert rows["FRAME_CLASS"][5] == documented["FRAME_CLASS"]["values"][int(reader.params["FRAME_CLASS"])] == "Quad"
+    name_row = next(r for r in range(table.rowCount()) if table.item(r, 0).text() == "INS_GYRO_FILTER")
+    assert documented["INS_GYRO_FILTER"]["display_name"] in table.item(name_row, 0).toolTip()
+    assert "Copter" in view.source_label.text()
     assert sorted(view.visible_names()) == sorted(reader.params)  # DFReader's own table of PARM
+
+    def found(part: str) -> list[str]:  # the filter finds a part of a name or of a description, any case
+        return sorted(n for n in reader.params if part.upper() in n or part.lower() in documented.get(n, {}).get("description", "").lower())
+
     view.filter_box.setFocus()
     qtbot.keyClicks(view.filter_box, "ins_gyr")
-    expected = sorted(name for name in reader.params if "INS_GYR" in name)
+    expected = found("ins_gyr")
     assert expected and view.visible_names() == expected
     assert view.count_label.text() == f"{len(expected)} of {len(reader.params)} parameters"
     for _ in range(4):
         qtbot.keyClick(view.filter_box, QtCore.Qt.Key_Backspace)
-    assert view.visible_names() == sorted(name for name in reader.params if "INS" in name)
+    assert view.visible_names() == found("ins")
+    view.filter_box.clear()
+    qtbot.keyClicks(view.filter_box, "cutoff frequency for gyro")
+    expected = found("cutoff frequency for gyro")
+    assert expected and not any("CUTOFF" in n for n in expected) and view.visible_names() == expected
+    view.filter_box.clear()
+    assert view.non_default_box.isEnabled()
+    view.non_default_box.click()  # (the tab is not on screen: a click's own signal)
+    changed = sorted(n for n, value in reader.params.items() if n in defaults and value != defaults[n])
+    assert len(changed) > 100 and view.visible_names() == changed
+    assert view.count_label.text() == f"{len(changed)} of {len(reader.params)} parameters"
+    assert table.item(name_row, 1).font().bold() == ("INS_GYRO_FILTER" in changed)
+    view.window_button.click()  # the same table, in a window as wide as the flyer makes it
+    detached = view.detached
+    qtbot.waitUntil(detached.isVisible, timeout=10000)
+    assert detached.isWindow() and detached.width() > view.width()
+    assert sorted(detached.visible_names()) == sorted(reader.params) and detached.source_label.text() == view.source_label.text()
 
 
 def test_modes_are_bands_on_the_plots_and_the_mode_is_in_the_status_bar(copter):
@@ -61,3 +101,33 @@ def test_the_autopilots_texts_are_in_events(copter):
     details = [console.item(row, 2).text() for row in range(console.rowCount())]
     assert any("message ArduCopter V4.3.6 (0c5e999c)" in d for d in details)
     assert any("mode RTL" in d for d in details)
+
+
+def test_a_px4_logs_parameters_tab_says_where_descriptions_come_from_and_reads_parameters_json_beside_it(qtbot, tmp_path):
+    """PX4 publishes no package of its parameter metadata: the tab says where to put its parameters.json, reads
+    it from beside the log when there, says so when it is not one; the log's own defaults mark the non-default
+    ones in any case (pyulog's: PX4 logs the default of each parameter not at it)."""
+    from pyulog import ULog
+
+    from groundstation.autopilot.parameter_docs import PX4_DOCS_HINT, PX4_FILE
+    from groundstation.session.playback import RevealSession
+    from groundstation.session_makers.load import load_session
+    from groundstation.ui.parameters_view import ParametersView
+
+    hop = COPTER.parent / "px4_fmuv5_quad_hop.ulg"
+    if not hop.is_file():
+        pytest.skip(f"{hop} is absent (the shared flight logs)")
+    (tmp_path / hop.name).symlink_to(hop)
+    session = RevealSession(load_session(tmp_path / hop.name, filters=("ahf2",)), tmp_path / hop.name, paused=True)
+    view = ParametersView()
+    qtbot.addWidget(view)
+    view.set_session(session)
+    assert view.source_label.text() == PX4_DOCS_HINT and view.non_default_box.isEnabled()
+    view.non_default_box.click()
+    assert view.visible_names() == sorted(ULog(str(hop)).get_default_parameters(0))
+    (tmp_path / PX4_FILE).write_text(json.dumps({"parameters": [{"name": "MC_ROLLRATE_P", "shortDesc": "Roll rate P gain"}]}))
+    view.set_session(session)
+    assert str(tmp_path / PX4_FILE) in view.source_label.text()
+    (tmp_path / PX4_FILE).write_text("[")
+    view.set_session(session)
+    assert view.source_label.text().startswith(f"{tmp_path / PX4_FILE}: not PX4's parameter metadata") and PX4_DOCS_HINT in view.source_label.text()

@@ -13,7 +13,7 @@ from groundstation.estimation import ESTIMATORS, live_estimators
 from groundstation.estimation import colour_of as colour
 from groundstation.palette import ONBOARD_COLOUR, PALETTE
 from groundstation.ui.live_view import attitude_plots, diagnostic_plots
-from groundstation.ui.plots import StackedPlots
+from groundstation.ui.plots import Curve, Plot, StackedPlots
 from groundstation.ui.series import Series
 from tests.waiting import LIMIT_MS
 
@@ -225,3 +225,23 @@ def test_a_click_on_a_legend_name_toggles_its_curves(plots, qtbot):
     centre = plots.mapFromScene(text.mapToScene(text.boundingRect().center()))
     QtTest.QTest.mouseClick(plots.viewport(), QtCore.Qt.LeftButton, QtCore.Qt.NoModifier, centre)
     qtbot.waitUntil(lambda: curve.isVisible() != shown, timeout=5000)
+
+
+def test_a_flat_lines_axis_has_a_readable_range_around_it(qtbot):
+    """A SITL log's HDOP is 1.21 throughout (issue 34, the Flight tab's GPS page) and its current 0 A: an axis of
+    ±1.5e-7 around the line had no tick label. It gets a tenth of the value each side, at least ±0.15."""
+    table = Table(("time_s", "hdop", "current_A"))
+    t = np.arange(0.0, 20.0, 0.2)
+    table.append(np.column_stack([t, np.full(len(t), 1.21), np.zeros(len(t))]).ravel().tolist())
+    series = {"imu": Series(table, lambda rows, names: {n: rows[:, i] for i, n in enumerate(names) if n != "time_s"})}
+    series["imu"].take(threading.Lock())
+    plots = StackedPlots((Plot("HDOP", "", (Curve("imu", "hdop", "HDOP", "#000000"),)),
+                          Plot("current", "A", (Curve("imu", "current_A", "current", "#000000"),))))
+    qtbot.addWidget(plots)
+    plots.resize(600, 400)
+    plots.show()
+    qtbot.waitExposed(plots)
+    plots.draw(series, None, None)
+    (low, high), (zero_low, zero_high) = (item.getViewBox().viewRange()[1] for item in plots.items)
+    assert low < 1.21 < high and high - low >= 0.2
+    assert zero_low <= 0 <= zero_high and zero_high - zero_low >= 0.3

@@ -105,3 +105,20 @@ def test_a_restart_gap_row_still_breaks_the_line_once_binned():
     assert len(broken) == 2  # that bin's two points only
     _, older_w = series.older("w", None)
     assert np.isnan(older_w).sum() == 2  # a quantity missing in some rows keeps its bins, except the restart's
+
+
+def test_a_slow_series_is_a_line_and_its_own_long_pauses_are_its_gaps():
+    """A tlog's GPS_RAW_INT and SYS_STATUS come at 2 Hz (the shared ArduSub tlog): each 0.5 s interval was taken
+    for a gap (GAP_S), a NaN row put in each, and the Flight tab's GPS and Battery pages drew no line at all
+    (issue 34). A gap is a pause long for the series' own rate; a pause of 5 s still is one, fed whole or a row
+    at a time as a live link feeds it."""
+    t = np.arange(0.0, 60.0, 0.5) + np.random.default_rng(2).uniform(-0.1, 0.1, 120)  # 2 Hz, arrival jitter
+    t[t > 30.0] += 5.0  # the link was away for 5 s
+    rows = np.column_stack([t, np.sin(t)])
+    for parts in (1, len(t)):
+        table = Table(("time_s", "v"))
+        series = Series(table, lambda rows, columns: {"v": rows[:, 1]})
+        feed(series, table, rows, parts)
+        drawn_t, drawn_v = series.data("v", None)
+        assert series.gaps == [(t[t <= 35.0][-1], t[t > 35.0][0])]
+        assert np.isnan(drawn_v).sum() == 1 and len(drawn_t) == len(t) + 1
