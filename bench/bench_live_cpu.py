@@ -3,12 +3,13 @@ of its own) against ``groundstation record --port sim:`` headless, the same simu
 100 Hz, magnetometer, barometer and GPS) and the same estimators (the app's ten live ones, ``record``'s
 default), for ``--minutes`` each, one after the other, interleaved, ``--repeats`` times.
 
-    python bench/bench_live_cpu.py [--minutes 2] [--repeats 2] [--tree PATH ...]   # from the worktree root
+    python bench/bench_live_cpu.py [--minutes 2] [--repeats 2] [--tree PATH ...] [--commands app,record]   # from the worktree root
 
 Figures of the whole process (every thread) from ``/proc/PID``: CPU seconds (user + system, its waited
 children too) and RSS, at the first minute and at the end; "steady" is the CPU from the first minute to
 the end as a share of one core (the start, imports and the estimators' kernels loaded, left out), "whole"
-since the process started. The app runs with fresh settings (the window's defaults: the Attitude tab,
+since the process started; the RSS at 10 minutes too when the runs are longer (the live tables hold 10
+minutes of rows: ``session_parts.table.LIVE_KEEP_ROWS``). The app runs with fresh settings (the window's defaults: the Attitude tab,
 the 30 s window), Qt on the X server (``QT_QPA_PLATFORM=xcb``, software rendering as on a machine
 without a GPU); recordings go to a temporary folder. ``--tree`` runs each command from another
 checkout as well (the code before a change, say), interleaved with this one's. Prints Markdown: the
@@ -18,6 +19,7 @@ medians, and the app's over ``record``'s.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import statistics
 import subprocess
@@ -76,7 +78,7 @@ def run(tree: Path, kind: str, seconds: float, display: str) -> dict[str, float]
         started = time.monotonic()
         figures = {}
         try:
-            for name, at_s in (("first", FIRST_S), ("end", seconds)):
+            for name, at_s in (("first", FIRST_S), *((("ten", 600.0),) if seconds > 600.0 else ()), ("end", seconds)):
                 while time.monotonic() - started < at_s:
                     if process.poll() is not None:
                         raise RuntimeError(f"{kind} ended early ({process.returncode}): {process.stderr.read()[-2000:]}")
@@ -96,10 +98,12 @@ def main() -> None:
     parser.add_argument("--minutes", type=float, default=2.0, help="each run's length (default 2; at least 1.5)")
     parser.add_argument("--repeats", type=int, default=2, help="interleaved runs of each (default 2)")
     parser.add_argument("--tree", type=Path, action="append", default=[], help="another checkout to run as well")
+    parser.add_argument("--commands", default=",".join(COMMANDS), help="which of them (default: app,record)")
     args = parser.parse_args()
+    kinds = args.commands.split(",")
     seconds = max(args.minutes, 1.5) * 60
     trees = [ROOT, *(t.resolve() for t in args.tree)]
-    results: dict[tuple[Path, str], list[dict]] = {(t, k): [] for t in trees for k in COMMANDS}
+    results: dict[tuple[Path, str], list[dict]] = {(t, k): [] for t in trees for k in kinds}
     print(f"{args.repeats} interleaved runs of {seconds / 60:g} min each; load average at the start "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}", flush=True)
     for tree in trees:  # numba's cache (per source path) filled and the byte code written, unmeasured
@@ -109,20 +113,20 @@ def main() -> None:
     with Xvfb() as display:
         for repeat in range(args.repeats):
             for tree in trees:
-                for kind in COMMANDS:
+                for kind in kinds:
                     figures = run(tree, kind, seconds, display)
                     results[tree, kind].append(figures)
                     print(f"  run {repeat + 1} {tree.name} {kind}: steady {figures['steady_pct']:.1f} %, whole {figures['whole_pct']:.1f} %, "
-                          f"RSS {figures['rss_first_mb']:.0f} -> {figures['rss_end_mb']:.0f} MB", flush=True)
+                          f"RSS {figures['rss_first_mb']:.0f} -> {figures.get('rss_ten_mb', math.nan):.0f} (10 min) -> {figures['rss_end_mb']:.0f} MB", flush=True)
     print(f"\nload average at the end {' '.join(f'{x:.1f}' for x in os.getloadavg())}\n")
-    print("| tree | command | CPU from 1 min to the end, % of a core | CPU since the start | RSS at 1 min | RSS at the end |")
-    print("|---|---|---|---|---|---|")
+    print("| tree | command | CPU from 1 min to the end, % of a core | CPU since the start | RSS at 1 min | at 10 min | at the end |")
+    print("|---|---|---|---|---|---|---|")
     median = {key: {f: statistics.median(r[f] for r in runs) for f in runs[0]} for key, runs in results.items()}
     for (tree, kind), m in median.items():
         print(f"| {tree.name} | `{' '.join(COMMANDS[kind])}` | {m['steady_pct']:.1f} % | {m['whole_pct']:.1f} % "
-              f"| {m['rss_first_mb']:.0f} MB | {m['rss_end_mb']:.0f} MB |")
+              f"| {m['rss_first_mb']:.0f} MB | {m.get('rss_ten_mb', math.nan):.0f} MB | {m['rss_end_mb']:.0f} MB |")
     print()
-    for tree in trees:
+    for tree in trees if set(kinds) == set(COMMANDS) else ():
         app, record = median[tree, "app"], median[tree, "record"]
         print(f"{tree.name}: the app over record, CPU from 1 min: {app['steady_pct'] / record['steady_pct']:.2f}x; "
               f"since the start {app['whole_pct'] / record['whole_pct']:.2f}x; RSS at the end {app['rss_end_mb'] / record['rss_end_mb']:.2f}x, "
