@@ -1,8 +1,9 @@
 """The live view: attitude, raw sensors, AHF diagnostics, heading, position and any channel over a
 chosen time window.
 
-``refresh`` is called by the window's redraw timer: it pulls the rows the session added since the
-last call into the ``Series`` buffers and redraws the visible tab. The heading and position tabs
+``refresh`` is called by the window's redraw timer: once the newest sample reaches a pixel column the
+plots have not drawn, it pulls the rows the session added since the last draw into the ``Series``
+buffers and redraws the visible tab (the others draw nothing until they are shown). The heading and position tabs
 appear, and the Sensors tab gains the magnetometer and barometer, once the session has delivered
 their frames. "Pause view" freezes the plots (acquisition and recording go on) and frees zoom and
 pan; panning or zooming pauses it too. ``show_time`` and ``pan`` pause it and move it (the event

@@ -1,7 +1,9 @@
 """Stacked time plots on one shared time axis, fed from ``Series`` buffers.
 
 Each curve is created once and updated with ``setData`` only when its series grew (or the window
-changed); peak downsampling and clipping to the view keep long windows cheap. A frame does not set
+changed); a view that follows the newest data hands a curve only the samples that draw each pixel column
+(``series.per_pixel``: at most four a column), a paused one every sample, which pyqtgraph's peak
+downsampling and clipping to the view keep cheap to zoom into. A frame does not set
 the curves: the newest samples of every curve of a plot are drawn by one item (``Heads``), each
 joined to its curve at the curve's last sample, so Qt repaints only the strip they cover, from the
 curves' cached pixmaps (setting whole curves would repaint every plot, and each pyqtgraph
