@@ -87,7 +87,11 @@ def run(tree: Path, kind: str, seconds: float, display: str) -> dict[str, float]
                 figures[f"wall_{name}_s"] = time.monotonic() - started
         finally:
             process.terminate()
-            process.wait(timeout=60)
+            try:
+                process.wait(timeout=120)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                raise RuntimeError(f"{kind} did not end within 120 s of SIGTERM (killed)") from None
     figures["steady_pct"] = 100 * (figures["cpu_end_s"] - figures["cpu_first_s"]) / (figures["wall_end_s"] - figures["wall_first_s"])
     figures["whole_pct"] = 100 * figures["cpu_end_s"] / figures["wall_end_s"]
     return figures
