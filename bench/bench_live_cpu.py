@@ -89,9 +89,9 @@ def run(tree: Path, kind: str, seconds: float, display: str) -> dict[str, float]
             process.terminate()
             try:
                 process.wait(timeout=120)
-            except subprocess.TimeoutExpired:
+            except subprocess.TimeoutExpired:  # its figures stand (read before); the hang is said
                 process.kill()
-                raise RuntimeError(f"{kind} did not end within 120 s of SIGTERM (killed)") from None
+                print(f"  {tree.name} {kind} did not end within 120 s of SIGTERM: killed", flush=True)
     figures["steady_pct"] = 100 * (figures["cpu_end_s"] - figures["cpu_first_s"]) / (figures["wall_end_s"] - figures["wall_first_s"])
     figures["whole_pct"] = 100 * figures["cpu_end_s"] / figures["wall_end_s"]
     return figures
