@@ -19,7 +19,6 @@ medians, and the app's over ``record``'s.
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import statistics
 import subprocess
@@ -97,6 +96,10 @@ def run(tree: Path, kind: str, seconds: float, display: str) -> dict[str, float]
     return figures
 
 
+def mb(value: float | None) -> str:
+    return "–" if value is None else f"{value:.0f} MB"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--minutes", type=float, default=2.0, help="each run's length (default 2; at least 1.5)")
@@ -121,14 +124,14 @@ def main() -> None:
                     figures = run(tree, kind, seconds, display)
                     results[tree, kind].append(figures)
                     print(f"  run {repeat + 1} {tree.name} {kind}: steady {figures['steady_pct']:.1f} %, whole {figures['whole_pct']:.1f} %, "
-                          f"RSS {figures['rss_first_mb']:.0f} -> {figures.get('rss_ten_mb', math.nan):.0f} (10 min) -> {figures['rss_end_mb']:.0f} MB", flush=True)
+                          f"RSS {figures['rss_first_mb']:.0f} -> {mb(figures.get('rss_ten_mb'))} (10 min) -> {figures['rss_end_mb']:.0f} MB", flush=True)
     print(f"\nload average at the end {' '.join(f'{x:.1f}' for x in os.getloadavg())}\n")
     print("| tree | command | CPU from 1 min to the end, % of a core | CPU since the start | RSS at 1 min | at 10 min | at the end |")
     print("|---|---|---|---|---|---|---|")
     median = {key: {f: statistics.median(r[f] for r in runs) for f in runs[0]} for key, runs in results.items()}
     for (tree, kind), m in median.items():
         print(f"| {tree.name} | `{' '.join(COMMANDS[kind])}` | {m['steady_pct']:.1f} % | {m['whole_pct']:.1f} % "
-              f"| {m['rss_first_mb']:.0f} MB | {m.get('rss_ten_mb', math.nan):.0f} MB | {m['rss_end_mb']:.0f} MB |")
+              f"| {m['rss_first_mb']:.0f} MB | {mb(m.get('rss_ten_mb'))} | {m['rss_end_mb']:.0f} MB |")
     print()
     for tree in trees if set(kinds) == set(COMMANDS) else ():
         app, record = median[tree, "app"], median[tree, "record"]
