@@ -80,6 +80,18 @@ def check_libraries(libraries: dict[str, tuple[str, str]]) -> None:
                         f"`sudo apt install {debian}` (Debian, Ubuntu) or `sudo dnf install {fedora}` (Fedora)")
 
 
+def close_on_signals(window) -> None:
+    """Ctrl-C or a kill closes the window as its close button does: the session stops, the recording is
+    closed and the settings saved. Python runs the handler between two bytecodes of whatever the main
+    thread runs then (the redraw timer's tick, say, holding the session's lock while it reads a table), so
+    the handler only asks the event loop to close once that code is done: closing there would wait for the
+    reader thread, which waits for the lock (a kill that never ended, seen with ``py-spy dump``)."""
+    from PySide6 import QtCore
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: QtCore.QTimer.singleShot(0, window.close))
+
+
 def run(port: str | None, baud: int | None, recording: str | None, sessions) -> int:
     """Open the window on ``recording``, else ``port``, else the simulated bridge; ``sessions`` opens
     them (``session_makers.factory.Sessions``)."""
@@ -100,10 +112,7 @@ def run(port: str | None, baud: int | None, recording: str | None, sessions) -> 
     window = MainWindow(settings, sessions)
     window.setWindowTitle(claim.title(window.windowTitle()))
     first_frame.watch(app, window)  # the benchmark's stopwatch, when asked for
-    # Ctrl-C or a kill closes the window as its close button does: the session stops, the recording
-    # is closed and the settings saved. (Python runs the handler at the redraw timer's next tick.)
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: window.close())
+    close_on_signals(window)
 
     def open_source() -> None:
         if recording:

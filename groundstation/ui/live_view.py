@@ -1,8 +1,9 @@
 """The live view: attitude, raw sensors, AHF diagnostics, heading, position and any channel over a
 chosen time window.
 
-``refresh`` is called by the window's redraw timer: it pulls the rows the session added since the
-last call into the ``Series`` buffers and redraws the visible tab. The heading and position tabs
+``refresh`` is called by the window's redraw timer: once the newest sample reaches a pixel column the
+plots have not drawn, it pulls the rows the session added since the last draw into the ``Series``
+buffers and redraws the visible tab (the others draw nothing until they are shown). The heading and position tabs
 appear, and the Sensors tab gains the magnetometer and barometer, once the session has delivered
 their frames. "Pause view" freezes the plots (acquisition and recording go on) and frees zoom and
 pan; panning or zooming pauses it too. ``show_time`` and ``pan`` pause it and move it (the event
@@ -113,6 +114,7 @@ class LiveView(QtWidgets.QWidget):
         self._view = None
         self.frames_drawn = 0  # for the tests and the benchmark
         self._browsing: StackedPlots | None = None  # paused, and drawn whole to look back in time
+        self._newest_s: float | None = None  # the newest sample's time at the last refresh (``_nothing_new``)
         self.mode_bands = ModeBands()  # an autopilot's flight modes under the curves
         self.window_box = QtWidgets.QComboBox()
         self.window_box.addItems(list(WINDOWS_S))
@@ -298,7 +300,7 @@ class LiveView(QtWidgets.QWidget):
         self.pause_button.setText("Resume view" if paused else "Pause view")
         if not paused:
             self._browsing = None
-            self.redraw()
+        self.redraw()
 
     def show_time(self, t_s: float | None) -> None:
         """Pause the view and centre it on ``t_s`` (None: the session's start), window wide."""
@@ -334,10 +336,12 @@ class LiveView(QtWidgets.QWidget):
                            **section_series(view.tables), **other_series(self.others)}
             if view.tables.get("truth") is not None:  # a simulator's log: its truth, dashed
                 self.series["truth"] = Series(view.tables["truth"], truth_quantities)
+        plots = self.current_plots()
+        if self._nothing_new(plots):
+            return False
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}
         if grew - {"imu", "onboard"}:
             self._show_aiding_tabs()
-        plots = self.current_plots()
         ends = [s.end_s for s in (self.series["imu"], self.series["onboard"]) if s.end_s is not None]
         self.mode_bands.update_spans(view.events, max(ends) if ends else None)
         if isinstance(plots, StackedPlots):
@@ -345,14 +349,34 @@ class LiveView(QtWidgets.QWidget):
         # A curve switched on after the data stopped (a replay at its end) is drawn all the same.
         if self.paused or not (grew or getattr(plots, "stale", False)):
             return False
-        plots.draw(self.series, self.window_s, grew)
+        plots.draw(self.series, self.window_s, grew, **self._following(plots))
         self.frames_drawn += 1
         return True
 
+    def _nothing_new(self, plots) -> bool:
+        """The rows wait in their tables while the samples still arriving stay in the pixel column of the
+        newest one drawn (``StackedPlots.shows_nothing_new``): a 30 s window gains a column about every
+        tick of the redraw timer, a 10-minute one every 25. Once they stop arriving they are drawn."""
+        if self.paused or not isinstance(plots, StackedPlots):
+            return False
+        newest_s = max((t for t in (self.series[name].newest_s(self.session.lock) for name in ("imu", "onboard"))
+                        if t is not None), default=None)
+        arriving, self._newest_s = newest_s != self._newest_s, newest_s
+        return arriving and newest_s is not None and plots.shows_nothing_new(newest_s)
+
     def redraw(self) -> None:
-        """Everything visible again (window, tab or visibility changed)."""
+        """Everything visible again (window, tab, visibility or pause changed); paused, every sample of
+        the curves in sight (to zoom in), the time range kept."""
+        plots = self.current_plots()
         if self.series and not self.paused:
-            self.current_plots().draw(self.series, self.window_s, None)
+            plots.draw(self.series, self.window_s, None, **self._following(plots))
+        elif self.series and isinstance(plots, StackedPlots):
+            plots.show_every_sample(self.series, self.window_s)
+
+    @staticmethod
+    def _following(plots) -> dict:
+        """``draw``'s arguments for a view that follows the newest data: the samples that draw each pixel column."""
+        return {"pixels": True} if isinstance(plots, StackedPlots) else {}
 
     def current_plots(self) -> StackedPlots | PositionView:
         return self.tabs.currentWidget()

@@ -1,7 +1,9 @@
 """Stacked time plots on one shared time axis, fed from ``Series`` buffers.
 
 Each curve is created once and updated with ``setData`` only when its series grew (or the window
-changed); peak downsampling and clipping to the view keep long windows cheap. A frame does not set
+changed); a view that follows the newest data hands a curve only the samples that draw each pixel column
+(``series.per_pixel``: at most four a column), a paused one every sample, which pyqtgraph's peak
+downsampling and clipping to the view keep cheap to zoom into. A frame does not set
 the curves: the newest samples of every curve of a plot are drawn by one item (``Heads``), each
 joined to its curve at the curve's last sample, so Qt repaints only the strip they cover, from the
 curves' cached pixmaps (setting whole curves would repaint every plot, and each pyqtgraph
@@ -27,7 +29,9 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtGui, QtWidgets
 
-from groundstation.ui.series import Series, clock_series, shared_gaps
+from groundstation.ui.series import Series, clock_series, per_pixel, shared_gaps
+
+PER_PIXEL = 4  # samples a pixel column beyond which a following view's curves keep only those that draw it
 
 PEN_STYLES = {"solid": QtCore.Qt.SolidLine, "dash": QtCore.Qt.DashLine, "dot": QtCore.Qt.DotLine,
               "dashdot": QtCore.Qt.DashDotLine, "dashdotdot": QtCore.Qt.DashDotDotLine}
@@ -167,6 +171,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self.setBackground("w")
         self.items: list[pg.PlotItem] = []
         self._stale = True  # a curve was switched on: it needs its data even if nothing grew
+        self._next_column_s = -math.inf  # where the pixel column after the newest sample drawn begins (``shows_nothing_new``)
         self._series: dict[str, Series] = {}  # as last drawn, for the crosshair
         self._specs = plots
         self._gaps_drawn: set[tuple[float, float]] = set()
@@ -177,6 +182,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self._heads_of: list[Heads] = []  # by curve index
         # Each curve's series and time of its last sample, where its head starts (another series: none).
         self._curve_end: list[tuple[Series, float] | None] = []
+        self._decimated: list[bool] = []  # each curve holds the samples that draw its pixel columns, not all
         # The legend sits above the plots, not over them: new data then never repaints it.
         labels = list(dict.fromkeys(c.label for spec in plots for c in spec.curves))
         self.legend = pg.LegendItem(colCount=max(1, min(len(labels), LEGEND_COLUMNS)), labelTextColor="#222")
@@ -209,6 +215,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 self._older_drawn.append(None)
                 self._heads_of.append(heads)
                 self._curve_end.append(None)
+                self._decimated.append(False)
                 if spec_curve.label not in in_legend:
                     in_legend[spec_curve.label] = curve
                     self.legend.addItem(curve, spec_curve.label)
@@ -260,6 +267,32 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         even if nothing grew (a stopped series' curve then takes its head's samples)."""
         return self._stale or any(heads.pending for heads in self.heads)
 
+    def shows_nothing_new(self, newest_s: float) -> bool:
+        """Whether samples up to ``newest_s`` stay in the pixel column of the newest sample drawn (and no
+        curve was switched on): drawing them now would change no column a person could tell apart from
+        the next frame's, which draws them anyway."""
+        return not self._stale and newest_s < self._next_column_s
+
+    def _columns(self) -> tuple[float, float]:
+        """The time axis' pixel columns: where the first begins, and their width (0 before it has a width)."""
+        box = self.items[0].getViewBox()
+        low, high = box.viewRange()[0]
+        return low, (high - low) / box.width() if box.width() > 0 else 0.0
+
+    def _note_column(self, end_s: float) -> None:
+        low, pixel_s = self._columns()
+        self._next_column_s = low + (math.floor((end_s - low) / pixel_s) + 1) * pixel_s if pixel_s > 0 else -math.inf
+
+    def show_every_sample(self, series: dict[str, Series], window_s: float | None) -> None:
+        """The curves that hold only the samples drawing their pixel columns set with every sample, the
+        time range kept: a paused view is zoomed into."""
+        for i, (spec, curve) in enumerate(self.curves):
+            s = series.get(spec.series)
+            if self._decimated[i] and s is not None and s.has(spec.quantity):
+                self._set_curve(i, s, *s.data(spec.quantity, window_s), 0.0, None)
+        for heads in self.heads:
+            heads.commit()
+
     def drawn(self, curve: pg.PlotDataItem) -> tuple[np.ndarray, np.ndarray]:
         """(time, values) of the samples drawn for ``curve`` (one of ``curves``): its own and its head's."""
         i = next(i for i, (_, c) in enumerate(self.curves) if c is curve)
@@ -282,6 +315,8 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             heads.commit()
         self._older_drawn = [None] * len(self.older)
         self._curve_end = [None] * len(self.curves)
+        self._decimated = [False] * len(self.curves)
+        self._next_column_s = -math.inf
         for item in self.items:
             for region in [i for i in item.items if isinstance(i, pg.LinearRegionItem)]:
                 item.removeItem(region)
@@ -296,14 +331,18 @@ class StackedPlots(pg.GraphicsLayoutWidget):
                 item.addItem(region, ignoreBounds=True)
         self._gaps_drawn.update(gaps)
 
-    def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None) -> None:
+    def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None, pixels: bool = False) -> None:
         """Update the visible curves whose series grew (all of them when ``grew`` is None) and
-        follow the newest ``window_s`` seconds (the whole session when None)."""
+        follow the newest ``window_s`` seconds (the whole session when None). ``pixels``: a curve with
+        more than ``PER_PIXEL`` samples a pixel column keeps those that draw each column (``series.per_pixel``:
+        a 10-minute window draws 2,000 samples a curve, not 60,000), as a view that follows the newest data
+        shows them; else every sample (a view paused to look back and zoom in)."""
         everything, self._stale = grew is None or self._stale, False
         clock = clock_series(series)
         if clock is not None:
             self._mark_gaps(shared_gaps(series))
             everything |= self._follow_time(clock, window_s)  # the time axis moved: every plot is repainted anyway
+        columns = self._columns() if pixels else None
         for i, (spec, curve) in enumerate(self.curves):
             grown = everything or spec.series in grew
             if not curve.isVisible() or not (grown or self._heads_of[i].has(i)):
@@ -312,7 +351,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
             if s is None or not s.has(spec.quantity):
                 continue
             t, values = s.data(spec.quantity, window_s)
-            self._set_curve(i, s, t, values, HEAD_S if grown and not everything else 0.0)
+            self._set_curve(i, s, t, values, HEAD_S if grown and not everything else 0.0, columns)
             if not grown:
                 continue
             t, older = s.older(spec.quantity, window_s)
@@ -324,19 +363,29 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         if clock is not None:
             for item, heads in zip(self.items, self.heads):
                 self._fit_values(item, heads)
+            self._note_column(clock.end_s)
         for heads in self.heads:
             heads.commit()
 
-    def _set_curve(self, i: int, series: Series, t: np.ndarray, values: np.ndarray, head_s: float) -> None:
+    def _set_curve(self, i: int, series: Series, t: np.ndarray, values: np.ndarray, head_s: float,
+                   columns: tuple[float, float] | None) -> None:
         """Curve ``i`` shows ``t``, ``values`` of ``series``: its head the samples since its last one while
-        they span at most ``head_s``, else the curve all of them (a copy: the series shifts its buffers in place)."""
+        they span at most ``head_s``, else the curve all of them (a copy: the series shifts its buffers in
+        place), or those that draw its pixel ``columns`` (their first's start and their width) when there are
+        more than ``PER_PIXEL`` a column."""
         spec, curve = self.curves[i]
         drawn, end_s = self._curve_end[i] or (None, None)
         if head_s > 0.0 and drawn is series and len(t) and end_s <= t[-1] <= end_s + head_s:
             joined = int(np.searchsorted(t, end_s))  # the curve's last sample: the head starts there
             self._heads_of[i].set(i, spec, curve.opts["pen"], t[joined:], values[joined:])
             return
-        curve.setData(t.copy(), values.copy(), **spec.connect(values))
+        self._decimated[i] = columns is not None and columns[1] > 0 and len(t) > PER_PIXEL * (t[-1] - t[0]) / columns[1]
+        if self._decimated[i]:
+            keep = per_pixel(t, values, *columns)
+            t, values = t[keep], values[keep]  # copies
+        else:
+            t, values = t.copy(), values.copy()
+        curve.setData(t, values, **spec.connect(values))
         self._curve_end[i] = (series, float(t[-1])) if len(t) else None
         self._heads_of[i].drop(i)
 

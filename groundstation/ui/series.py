@@ -88,6 +88,25 @@ def min_max_bins(first_s: np.ndarray, last_s: np.ndarray, lows: dict[str, np.nda
     return times.ravel(), binned
 
 
+def per_pixel(t: np.ndarray, values: np.ndarray, left_s: float, pixel_s: float) -> np.ndarray:
+    """Indices of the samples that draw what all of them draw on pixel columns ``pixel_s`` wide from
+    ``left_s``: in each column its first and last sample (the lines to the neighbouring columns), its
+    lowest and highest (its extent), in time order, and every NaN (a gap's break, which also splits its
+    column). At most four samples a column, whatever the window's length."""
+    if len(t) < 2 or not pixel_s > 0:
+        return np.arange(len(t))
+    column = np.floor((t - left_s) / pixel_s)
+    gap = np.isnan(values)
+    start = np.flatnonzero(np.concatenate(([True], (column[1:] != column[:-1]) | gap[1:] | gap[:-1])))
+    run = np.repeat(np.arange(len(start)), np.diff(np.append(start, len(t))))
+    chosen = [start, np.append(start[1:], len(t)) - 1]
+    for reduce, fill in ((np.minimum, np.inf), (np.maximum, -np.inf)):
+        filled = np.where(gap, fill, values)  # a NaN's run is itself: it is its own extreme
+        hits = np.flatnonzero(filled == reduce.reduceat(filled, start)[run])
+        chosen.append(hits[np.concatenate(([True], run[hits][1:] != run[hits][:-1]))])  # the first in each run
+    return np.unique(np.concatenate(chosen))
+
+
 class Series:
     """``derive(rows, columns)`` -> ``{name: 1-D array}``: the quantities of some new table rows."""
 
@@ -147,6 +166,12 @@ class Series:
             self.history.append(np.concatenate([times, h.time_s[whole : h.count]]),
                                 {n: np.concatenate([merged[n], c[whole : h.count]]) for n, c in h.values.items()})
             self.bin_rows = 2 * size
+
+    def newest_s(self, lock) -> float | None:
+        """Time of the table's newest row, taken or not (one row read): whether a redraw would show anything new."""
+        with lock:
+            last = self.table.tail(1)
+        return float(last[0, self.table.columns.index("time_s")]) if len(last) else None
 
     @property
     def end_s(self) -> float | None:

@@ -5,7 +5,7 @@ import threading
 import numpy as np
 
 from groundstation.session_parts.table import Table
-from groundstation.ui.series import BIN_ROWS, HISTORY_BINS, RECENT_S, Series
+from groundstation.ui.series import BIN_ROWS, HISTORY_BINS, RECENT_S, Series, per_pixel
 
 
 def assert_bins_hold_min_max(older_t, older_v, t, v):
@@ -122,3 +122,23 @@ def test_a_slow_series_is_a_line_and_its_own_long_pauses_are_its_gaps():
         drawn_t, drawn_v = series.data("v", None)
         assert series.gaps == [(t[t <= 35.0][-1], t[t > 35.0][0])]
         assert np.isnan(drawn_v).sum() == 1 and len(drawn_t) == len(t) + 1
+
+
+def test_per_pixel_keeps_what_every_sample_draws_in_each_pixel_column():
+    """Against the samples undecimated: in each pixel column the same lowest and highest value, the same
+    first and last sample (the lines to the neighbouring columns), every NaN (a gap's break), in time order;
+    at most four samples a column besides the NaN."""
+    rng = np.random.default_rng(35)
+    t = np.cumsum(rng.uniform(0.005, 0.015, 20_000))
+    values = np.cumsum(rng.normal(0.0, 1.0, len(t))).astype(np.float32)
+    values[rng.choice(len(t), 40, replace=False)] = np.nan
+    left_s, pixel_s = t[0] - 0.37, 0.8
+    keep = per_pixel(t, values, left_s, pixel_s)
+    assert np.all(np.diff(keep) > 0)
+    column, kept_column = np.floor((t - left_s) / pixel_s), np.floor((t[keep] - left_s) / pixel_s)
+    for c in np.unique(column):
+        every, kept = values[column == c], values[keep][kept_column == c]
+        assert np.nanmin(every) == np.nanmin(kept) and np.nanmax(every) == np.nanmax(kept)
+        assert t[column == c][0] == t[keep][kept_column == c][0] and t[column == c][-1] == t[keep][kept_column == c][-1]
+        assert np.count_nonzero(np.isnan(kept)) == np.count_nonzero(np.isnan(every))
+    assert len(keep) <= 4 * (len(np.unique(column)) + 2 * 40) and len(keep) < len(t) / 10
