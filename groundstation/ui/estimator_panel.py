@@ -143,6 +143,14 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             box.setChecked(label(name) in visible_labels)
             box.blockSignals(False)
 
+    def mark_uncompiled(self, names) -> None:
+        """The estimators whose kernels are compiling (a first start) say so; a file's cannot be asked for
+        meanwhile (computed without them, the window adds them when compiled)."""
+        for name, box in self.shown.items():
+            waiting = name in names
+            box.setText(f"{label(name)} (compiling…)" if waiting else label(name))
+            box.setEnabled(not (waiting and self.replay))
+
     def values(self, name: str) -> dict[str, float]:
         return {setting: self.boxes[name, setting].value() for setting, _, _ in self.tunable[name]}
 
