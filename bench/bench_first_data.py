@@ -26,6 +26,7 @@ and with the generic one named, what it then costs to have it ready, and its spe
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import resource
 import statistics
@@ -40,31 +41,39 @@ sys.path.insert(0, str(ROOT))
 
 from groundstation.stopwatch import UNCOMPILED  # noqa: E402
 
+LOG = Path("/work/shared/datasets/flightlogs/px4_fmuv5_quad_hop.ulg")  # a shared flight log: 8 estimators, 2 min
 COMMANDS = {
     "groundstation app --demo": ["-m", "groundstation", "app", "--demo"],
     "groundstation record --port sim: --duration 3": ["-m", "groundstation", "record", "--port", "sim:", "--duration", "3"],
+    f"groundstation app {LOG.name}": ["-m", "groundstation", "app", str(LOG)],
+    f"groundstation export {LOG.name}": ["-m", "groundstation", "export", str(LOG), "--out", "{home}/out.csv", "--overwrite"],
+    f"groundstation export {LOG.name} --filters ahf2": ["-m", "groundstation", "export", str(LOG), "--filters", "ahf2", "--out",
+                                                         "{home}/out.csv", "--overwrite"],
 }
-FILL = ["-c", "from groundstation.estimation import create, live_estimators; [create(n) for n in live_estimators()]"]
+FILL = ["-c", "import numpy as np; from groundstation.estimation import create, live_estimators; "
+              "[create(n).run(np.zeros((1, 3)), np.zeros((1, 3)), np.ones(1)) for n in live_estimators()]"]
 
 
-def run(argv: list[str], env: dict[str, str]) -> tuple[float, float, int]:
-    """(CPU s to the first data, CPU s in all, estimators not compiled at the first data)."""
+def run(argv: list[str], env: dict[str, str]) -> tuple[float, float, float, int]:
+    """(CPU s to the first data, CPU s to every estimator in the window, CPU s in all, estimators not compiled at
+    the first data); NaN for a moment the command does not have (an export has no first data)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run([sys.executable, *argv], env=env, capture_output=True, text=True, check=True, timeout=900).stdout
+    out = subprocess.run([sys.executable, *argv], env=env, capture_output=True, text=True, check=True, timeout=1800).stdout
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     lines = out.splitlines()
-    first = next(float(line.split()[-1]) for line in lines if line.startswith("first data "))
-    uncompiled = next(line.removeprefix(UNCOMPILED).strip() for line in lines if line.startswith(UNCOMPILED))
+    first, every = (next((float(line.split()[-1]) for line in lines if line.startswith(moment)), math.nan)
+                    for moment in ("first data ", "every estimator "))
+    uncompiled = next((line.removeprefix(UNCOMPILED).strip() for line in lines if line.startswith(UNCOMPILED)), "")
     total = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return first, total, len([name for name in uncompiled.split(",") if name])
+    return first, every, total, len([name for name in uncompiled.split(",") if name])
 
 
-def row(label: str, runs: list[tuple[float, float, int]]) -> str:
-    first, total, interpreted = (statistics.median(r[i] for r in runs) for i in range(3))
-    return f"| {label} | {first:.2f} | {total:.2f} | {interpreted:.0f} |"
+def row(label: str, runs: list[tuple[float, float, float, int]]) -> str:
+    first, every, total, uncompiled = (statistics.median(r[i] for r in runs) for i in range(4))
+    return f"| {label} | {first:.2f} | {every:.2f} | {total:.2f} | {uncompiled:.0f} |".replace("nan", "—")
 
 
-def first_data(repeats: int) -> None:
+def first_data(repeats: int, only: str | None) -> None:
     with tempfile.TemporaryDirectory() as home:
         home = Path(home)
         base = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(ROOT),
@@ -72,13 +81,17 @@ def first_data(repeats: int) -> None:
                 "GROUNDSTATION_RECORDINGS": str(home / "recordings")}
         warm = {**base, "NUMBA_CACHE_DIR": str(home / "warm")}
         subprocess.run([sys.executable, *FILL], env=warm, check=True)  # the warm start's cache
-        print(f"| command, numba cache | CPU s to first data | CPU s in all | estimators not compiled at first data (median of {repeats}) |")
-        print("|---|---|---|---|")
-        for label, argv in COMMANDS.items():
+        print(f"| command, numba cache | CPU s to first data | CPU s to every estimator | CPU s in all | "
+              f"estimators not compiled at first data (median of {repeats}) |")
+        print("|---|---|---|---|---|")
+        for n, (label, argv) in enumerate(COMMANDS.items()):
+            if only is not None and only not in label:
+                continue
+            argv = [arg.format(home=home) for arg in argv]
             run(argv, warm)  # byte code and page cache
             runs = {"empty": [], "warm": []}
             for k in range(repeats):  # interleaved: the machine's load weighs on both alike
-                runs["empty"].append(run(argv, {**base, "NUMBA_CACHE_DIR": str(home / f"cold{label[14:17]}{k}")}))
+                runs["empty"].append(run(argv, {**base, "NUMBA_CACHE_DIR": str(home / f"cold{n}-{k}")}))
                 runs["warm"].append(run(argv, warm))
             for cache, measured in runs.items():
                 print(row(f"{label}, {cache}", measured), flush=True)
@@ -164,9 +177,40 @@ def portable() -> None:
             print(f"| {made}, {run_as} | {out[0]} | {float(out[1]):.2f} | {float(out[2]):.0f} |", flush=True)
 
 
+INTERPRETED_SAMPLES = 2000
+
+
+def interpreted() -> None:
+    """Each live estimator's ``run``, its kernel's source interpreted (as a first start would have to run it over
+    a file while the kernel compiles) against compiled: ns a sample, and what an hour at 100 Hz would take."""
+    import numpy as np
+
+    from groundstation.estimation import ESTIMATORS, create, live_estimators
+    from groundstation.estimation.base import CompiledEstimator
+
+    rng = np.random.default_rng(1)
+    gyr, acc = rng.normal(0, 0.1, (INTERPRETED_SAMPLES, 3)), np.tile([0.0, 0.0, -1.0], (INTERPRETED_SAMPLES, 1))
+    print("| estimator | interpreted, µs a sample | compiled, µs a sample | an hour at 100 Hz interpreted, CPU s |")
+    print("|---|---|---|---|")
+    for name in live_estimators():
+        cls = ESTIMATORS[name]
+        if not issubclass(cls, CompiledEstimator):
+            continue
+        compiled = create(name)
+        compiled.run(gyr[:10], acc[:10], 0.01)
+        times = []
+        for estimator in (cls(dtype=np.float64), compiled):
+            t = time.process_time()
+            estimator.run(gyr, acc, 0.01)
+            times.append((time.process_time() - t) / INTERPRETED_SAMPLES)
+        print(f"| {name} | {times[0] * 1e6:.1f} | {times[1] * 1e6:.2f} | {times[0] * 360_000:.0f} |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--only", metavar="TEXT", help="only the commands whose label holds TEXT")
+    parser.add_argument("--interpreted", action="store_true", help="interpreted kernels over a file against compiled")
     parser.add_argument("--alternatives", action="store_true", help="a compiling thread against a compiling process")
     parser.add_argument("--portable", action="store_true", help="a cache made for a generic CPU (install time)")
     args = parser.parse_args()
@@ -174,8 +218,10 @@ def main() -> None:
         alternatives()
     elif args.portable:
         portable()
+    elif args.interpreted:
+        interpreted()
     else:
-        first_data(args.repeats)
+        first_data(args.repeats, args.only)
 
 
 if __name__ == "__main__":
