@@ -10,8 +10,6 @@ from groundstation.text import clean
 
 
 SHOW_AFTER_S = 1.0  # a job that ends sooner shows no bar
-# What compiling one estimator's kernel and batch loop costs on a first run (bench/bench_first_data.out.md)
-COMPILE_CPU_S_EACH = 4.0
 
 
 class ProgressBar:
@@ -79,5 +77,5 @@ def say_compiling(path, filters, stream=None) -> None:
     except (UserError, OSError, ValueError):
         return  # the load says what is wrong with the file
     if waiting:
-        print(f"compiling {len(waiting)} estimator{'s' if len(waiting) > 1 else ''} for this machine, once (about "
-              f"{COMPILE_CPU_S_EACH * len(waiting):.0f} CPU s; later runs start at once)…", file=stream or sys.stderr, flush=True)
+        print(f"compiling {len(waiting)} estimator{'s' if len(waiting) > 1 else ''} for this machine, once (2-10 CPU s "
+              "each; later runs start at once)…", file=stream or sys.stderr, flush=True)

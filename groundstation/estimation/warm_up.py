@@ -41,6 +41,7 @@ class WarmUp:
 
     def __init__(self, names, runs_first: bool = False):
         self.names = tuple(names)
+        self.runs_first = runs_first
         self.compiled: set[str] = set()
         self.runs: set[str] = set()
         self.finished = False
@@ -94,11 +95,23 @@ _warming: WarmUp | None = None  # the process's one compiler: two would compile 
 
 def warm_up(names, runs_first: bool = False) -> WarmUp:
     """The background compiler of ``names``' kernels (``WarmUp``): the one running already if it compiles them
-    all, else a new one."""
+    all in an order that suits (a file's ``runs_first``), else a new one, ``names`` first, then what the one
+    running had left (stopped: a file opened after a live start would wait for every per-sample kernel first)."""
     global _warming
-    if _warming is None or not _warming.running or not set(names) <= set(_warming.names):
-        _warming = WarmUp(names, runs_first)
+    running = _warming is not None and _warming.running
+    if running and set(names) <= set(_warming.names) and (_warming.runs_first or not runs_first):
+        return _warming
+    if running:
+        _warming.stop()
+        names = (*names, *(name for name in _warming.names if name not in names))
+    _warming = WarmUp(names, runs_first)
     return _warming
+
+
+def stop_warm_up() -> None:
+    """The process's background compiler ended, if one runs (the app closing: it would take CPU from the close)."""
+    if _warming is not None:
+        _warming.stop()
 
 
 def compile_kernels(names, send, runs_first: bool = False) -> None:

@@ -21,6 +21,7 @@ from groundstation.session.view import Session
 
 SHOWN_COLUMNS = 4  # "show" check boxes per row
 MESSAGE_LINES = 3  # "applied: ..." for a few estimators at once
+COMPILING_TIP = "compiling for this machine (once, in the background); shown when ready"
 
 
 def defaults(name: str) -> dict[str, float]:
@@ -144,11 +145,13 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             box.blockSignals(False)
 
     def mark_uncompiled(self, names) -> None:
-        """The estimators whose kernels are compiling (a first start) say so; a file's cannot be asked for
-        meanwhile (computed without them, the window adds them when compiled)."""
+        """The estimators whose kernels are compiling (a first start) say so: "…" after the name (short: four
+        boxes a row must fit the side column) and why in the tooltip; a file's cannot be asked for meanwhile
+        (computed without them, the window adds them when compiled)."""
         for name, box in self.shown.items():
             waiting = name in names
-            box.setText(f"{label(name)} (compiling…)" if waiting else label(name))
+            box.setText(f"{label(name)} …" if waiting else label(name))
+            box.setToolTip(COMPILING_TIP if waiting else "")
             box.setEnabled(not (waiting and self.replay))
 
     def values(self, name: str) -> dict[str, float]:

@@ -17,6 +17,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from groundstation.errors import UserError
 from groundstation import formats
 from groundstation.estimation import ESTIMATORS, label
+from groundstation.estimation.warm_up import stop_warm_up
 from groundstation.recording import default_recordings_dir
 from groundstation.session.playback import RevealSession
 from groundstation.session.view import Session
@@ -637,6 +638,7 @@ class MainWindow(QtWidgets.QMainWindow):
                 restore(value)
 
     def closeEvent(self, event) -> None:
+        stop_warm_up()  # at once: what it compiled stays in numba's cache, the rest compiles at the next start
         self.disconnect()
         self.session_list.stop_all()
         # "" for none: QSettings reads an empty list back as None, which means "the defaults"

@@ -87,7 +87,8 @@ def test_estimators_compiling_are_counted_in_the_status_bar_and_marked_in_the_pa
     qtbot.waitUntil(lambda: window.compiling_label.isVisible(), timeout=LIMIT_MS)
     assert window.compiling_label.text() == "compiling estimators: 2 left"
     panel = window.estimator_panel
-    assert panel.shown["ukf"].text() == "UKF (compiling…)" and not panel.shown["ukf"].isEnabled()
+    assert panel.shown["ukf"].text() == "UKF …" and "compiling" in panel.shown["ukf"].toolTip()
+    assert not panel.shown["ukf"].isEnabled()
     assert panel.shown["ecf"].text() == "ECF" and panel.shown["ecf"].isEnabled()
     window._adopt(RevealSession(data, SAMPLE))
     qtbot.waitUntil(lambda: not window.compiling_label.isVisible(), timeout=LIMIT_MS)
