@@ -1,15 +1,21 @@
-"""The first data of a first start (issue 34): ``groundstation app --demo`` and ``groundstation record
---port sim:`` with numba's cache EMPTY (``NUMBA_CACHE_DIR`` a fresh temporary folder for each run, as
-after an install) against the warm start (the cache filled), in the same run.
+"""The first data of a first start (issue 34): ``groundstation app --demo``, ``groundstation record
+--port sim:``, ``groundstation app FILE`` (a shared flight log opened before any live start) and
+``groundstation export FILE`` with numba's cache EMPTY (``NUMBA_CACHE_DIR`` a fresh temporary folder for
+each run, as after an install) against the warm start (the cache filled), in the same run.
 
-The moment: ``first data`` of the process's stopwatch (``groundstation/stopwatch.py``,
-``GROUNDSTATION_FIRST_FRAME=1``): the app's first paint with a curve of the simulated bridge on screen
-(it then closes itself), ``record``'s first IMU sample with every estimator's estimate in its tables.
-CPU seconds of the whole process (every thread) since it started. "CPU s in all" is the process and its
-children (the background compiler, stopped when the process ends) until it ended: the app at its first
-data, ``record`` after ``--duration``. Also said: how many estimators were not compiled at the first
-data (their kernels compiling in the other process). Qt renders offscreen; settings and recordings go
-to a temporary folder.
+The moments: ``first data`` of the process's stopwatch (``groundstation/stopwatch.py``,
+``GROUNDSTATION_FIRST_FRAME=1``): the app's first paint with a curve on screen (the simulated bridge's;
+then it closes itself), ``record``'s first IMU sample with every estimator's estimate in its tables; and
+for a file shown without estimators not compiled yet, ``every estimator``: once they all joined it (then
+the app closes itself). CPU seconds of the whole process (every thread) since it started. "CPU s in all"
+is the process and its children (the background compiler, stopped when the process ends) until it ended:
+the app at its first data (a file: every estimator), ``record`` after ``--duration``, ``export`` when
+written. Also said: how many estimators were not compiled at the first data (their kernels compiling in
+the other process). Qt renders offscreen; settings and recordings go to a temporary folder.
+``--only TEXT`` measures the commands whose label holds TEXT.
+
+Why a file's estimators are not run interpreted meanwhile (``--interpreted``): each live estimator's batch
+run with its kernel's source interpreted against compiled, a sample's cost and an hour's at 100 Hz.
 
 The alternative to a compiling process: a compiling thread. ``--alternatives`` measures what it costs
 the process's other threads: the longest pause of a 10 ms tick in the main thread (as the window's
@@ -20,7 +26,8 @@ Install time instead (``--portable``): numba's only portable cache is one compil
 (``NUMBA_CPU_NAME=generic``). Whether a process finds ahf2's kernel in such a cache, with the host's CPU
 and with the generic one named, what it then costs to have it ready, and its speed in ``run``.
 
-    python bench/bench_first_data.py [--repeats 3] [--alternatives] [--portable]   # from the worktree root; prints Markdown
+    python bench/bench_first_data.py [--repeats 3] [--only TEXT] [--alternatives] [--portable] [--interpreted]
+    # from the worktree root; prints Markdown
 """
 
 from __future__ import annotations

@@ -22,13 +22,14 @@ from groundstation.errors import UserError
 from groundstation.estimation import ESTIMATORS, aiding_estimator, create, live_estimators, runnable
 from groundstation.estimation.warm_up import WarmUp, warm_up
 from groundstation.estimation.evaluation import run_on_trial
-from groundstation.recording import Recording
+from groundstation.recording import Recording, open_recording
 from groundstation.session_makers.batch import BatchSession, batch_replay
 from groundstation.session_parts.catalogue import Catalogue, session_catalogue
 from groundstation.session_parts.clock import DISCONTINUITIES
+from groundstation.session_parts.estimators import slow_interpreted
 from groundstation.session_makers.pipeline import Pipeline
 from groundstation.session.product import ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns
-from groundstation.session_makers.replay import replay
+from groundstation.session_makers.replay import recorded_filters, replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 
@@ -179,17 +180,12 @@ def planned_estimators(path, filters=None) -> tuple[str, ...]:
     named = estimators_for(path)
     if named is not None:
         return named
-    from groundstation.recording import open_recording
-    from groundstation.session_makers.replay import recorded_filters
-
     return tuple(recorded_filters(open_recording(path))[0])
 
 
 def not_compiled(names) -> tuple[str, ...]:
     """Those of ``names`` whose batch run would compile first (``Estimator.runs_compiled``), the aiding
     estimator first (the compass heading and the position wait for it) and the slow ones last."""
-    from groundstation.session_parts.estimators import slow_interpreted
-
     aiding = aiding_estimator(tuple(names))
     waiting = [name for name in names if name in ESTIMATORS and not ESTIMATORS[name].runs_compiled()]
     return tuple(sorted(waiting, key=lambda name: (slow_interpreted(name), name != aiding)))
