@@ -522,6 +522,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.vehicle_badge.refresh(self.live_view.mode_bands.spans if session is not None else [])
             self.recording_banner.refresh(session)
             self.config_banner.refresh(session)
+            self._follow_compiling(session)
         if session is None:
             return
         self.live_view.refresh()
@@ -536,8 +537,6 @@ class MainWindow(QtWidgets.QMainWindow):
             self.recording_label.setText(self._recording_text(session))
             self._sync_record_action()
             self._follow_mavlink(session)
-        if figures:
-            self._follow_compiling(session)
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")
 
