@@ -14,6 +14,9 @@ written. Also said: how many estimators were not compiled at the first data (the
 the other process). Qt renders offscreen; settings and recordings go to a temporary folder.
 ``--only TEXT`` measures the commands whose label holds TEXT.
 
+Close during that compile (``--ctrl-c S``): ``app FILE`` Ctrl-C'd S seconds after its start, the wall and CPU
+seconds to its exit, with an empty cache and a warm one.
+
 Why a file's estimators are not run interpreted meanwhile (``--interpreted``): each live estimator's batch
 run with its kernel's source interpreted against compiled, a sample's cost and an hour's at 100 Hz.
 
@@ -26,7 +29,7 @@ Install time instead (``--portable``): numba's only portable cache is one compil
 (``NUMBA_CPU_NAME=generic``). Whether a process finds ahf2's kernel in such a cache, with the host's CPU
 and with the generic one named, what it then costs to have it ready, and its speed in ``run``.
 
-    python bench/bench_first_data.py [--repeats 3] [--only TEXT] [--alternatives] [--portable] [--interpreted]
+    python bench/bench_first_data.py [--repeats 3] [--only TEXT] [--alternatives] [--portable] [--interpreted] [--ctrl-c S]
     # from the worktree root; prints Markdown
 """
 
@@ -184,6 +187,34 @@ def portable() -> None:
             print(f"| {made}, {run_as} | {out[0]} | {float(out[1]):.2f} | {float(out[2]):.0f} |", flush=True)
 
 
+def ctrl_c(after_s: float) -> None:
+    """``app LOG`` with an empty cache, Ctrl-C ``after_s`` later (its kernels compiling in the other process), and
+    with a warm one: wall and CPU s from the signal to its exit (the app's and its compiler's)."""
+    import signal
+
+    def cpu_s(pid: int) -> float:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+    print("| numba cache | Ctrl-C to exit, wall s | Ctrl-C to exit, CPU s | load average |")
+    print("|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as home:
+        base = {**os.environ, "PYTHONPATH": str(ROOT), "QT_QPA_PLATFORM": "offscreen", "XDG_CONFIG_HOME": f"{home}/config",
+                "GROUNDSTATION_RECORDINGS": f"{home}/recordings"}
+        subprocess.run([sys.executable, *FILL], env={**base, "NUMBA_CACHE_DIR": f"{home}/warm"}, check=True)
+        for cache in ("empty", "warm"):
+            app = subprocess.Popen([sys.executable, "-m", "groundstation", "app", str(LOG)], env={**base, "NUMBA_CACHE_DIR": f"{home}/{cache}"},
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            time.sleep(after_s)
+            children = subprocess.run(["pgrep", "-P", str(app.pid)], capture_output=True, text=True).stdout.split()
+            before = cpu_s(app.pid) + sum(cpu_s(int(c)) for c in children if Path(f"/proc/{c}").exists())  # reaped at its exit
+            t = time.monotonic()
+            app.send_signal(signal.SIGINT)
+            _, _, usage = os.wait4(app.pid, 0)
+            print(f"| {cache} | {time.monotonic() - t:.2f} | {usage.ru_utime + usage.ru_stime - before:.2f} | {os.getloadavg()[0]:.1f} |",
+                  flush=True)
+
+
 INTERPRETED_SAMPLES = 2000
 
 
@@ -218,6 +249,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--only", metavar="TEXT", help="only the commands whose label holds TEXT")
     parser.add_argument("--interpreted", action="store_true", help="interpreted kernels over a file against compiled")
+    parser.add_argument("--ctrl-c", type=float, metavar="S", help="Ctrl-C the app on a file S seconds after its start")
     parser.add_argument("--alternatives", action="store_true", help="a compiling thread against a compiling process")
     parser.add_argument("--portable", action="store_true", help="a cache made for a generic CPU (install time)")
     args = parser.parse_args()
@@ -227,6 +259,8 @@ def main() -> None:
         portable()
     elif args.interpreted:
         interpreted()
+    elif args.ctrl_c is not None:
+        ctrl_c(args.ctrl_c)
     else:
         first_data(args.repeats, args.only)
 
