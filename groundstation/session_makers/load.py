@@ -201,7 +201,8 @@ class Loading:
     compiled by another process (``warm_up``, ``estimation.warm_up``), so the file's sensors, onboard
     estimate and compiled estimators show within seconds; the window loads the file again as the others
     are ready. Why not their source interpreted, as a live session runs it: over a whole file that takes
-    0.03-1 ms a sample and estimator, minutes for an hour's flight (bench/bench_first_data.out.md)."""
+    17-520 µs a sample and estimator, an hour's flight at 100 Hz about 60 CPU s for the seven fast ones (twice
+    what compiling every kernel costs) and minutes for ukf and sssrukf (bench/bench_first_data.out.md)."""
 
     def __init__(self, path, filters=None, forced=None, imu: str = IMU_STREAMS[0], compile_in_background: bool = False):
         self.path = Path(path)
