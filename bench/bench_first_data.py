@@ -1,15 +1,24 @@
-"""The first data of a first start (issue 34): ``groundstation app --demo`` and ``groundstation record
---port sim:`` with numba's cache EMPTY (``NUMBA_CACHE_DIR`` a fresh temporary folder for each run, as
-after an install) against the warm start (the cache filled), in the same run.
+"""The first data of a first start (issue 34): ``groundstation app --demo``, ``groundstation record
+--port sim:``, ``groundstation app FILE`` (a shared flight log opened before any live start) and
+``groundstation export FILE`` with numba's cache EMPTY (``NUMBA_CACHE_DIR`` a fresh temporary folder for
+each run, as after an install) against the warm start (the cache filled), in the same run.
 
-The moment: ``first data`` of the process's stopwatch (``groundstation/stopwatch.py``,
-``GROUNDSTATION_FIRST_FRAME=1``): the app's first paint with a curve of the simulated bridge on screen
-(it then closes itself), ``record``'s first IMU sample with every estimator's estimate in its tables.
-CPU seconds of the whole process (every thread) since it started. "CPU s in all" is the process and its
-children (the background compiler, stopped when the process ends) until it ended: the app at its first
-data, ``record`` after ``--duration``. Also said: how many estimators were not compiled at the first
-data (their kernels compiling in the other process). Qt renders offscreen; settings and recordings go
-to a temporary folder.
+The moments: ``first data`` of the process's stopwatch (``groundstation/stopwatch.py``,
+``GROUNDSTATION_FIRST_FRAME=1``): the app's first paint with a curve on screen (the simulated bridge's;
+then it closes itself), ``record``'s first IMU sample with every estimator's estimate in its tables; and
+for a file shown without estimators not compiled yet, ``every estimator``: once they all joined it (then
+the app closes itself). CPU seconds of the whole process (every thread) since it started. "CPU s in all"
+is the process and its children (the background compiler, stopped when the process ends) until it ended:
+the app at its first data (a file: every estimator), ``record`` after ``--duration``, ``export`` when
+written. Also said: how many estimators were not compiled at the first data (their kernels compiling in
+the other process). Qt renders offscreen; settings and recordings go to a temporary folder.
+``--only TEXT`` measures the commands whose label holds TEXT.
+
+Close during that compile (``--ctrl-c S``): ``app FILE`` Ctrl-C'd S seconds after its start, the wall and CPU
+seconds to its exit, with an empty cache and a warm one.
+
+Why a file's estimators are not run interpreted meanwhile (``--interpreted``): each live estimator's batch
+run with its kernel's source interpreted against compiled, a sample's cost and an hour's at 100 Hz.
 
 The alternative to a compiling process: a compiling thread. ``--alternatives`` measures what it costs
 the process's other threads: the longest pause of a 10 ms tick in the main thread (as the window's
@@ -20,12 +29,14 @@ Install time instead (``--portable``): numba's only portable cache is one compil
 (``NUMBA_CPU_NAME=generic``). Whether a process finds ahf2's kernel in such a cache, with the host's CPU
 and with the generic one named, what it then costs to have it ready, and its speed in ``run``.
 
-    python bench/bench_first_data.py [--repeats 3] [--alternatives] [--portable]   # from the worktree root; prints Markdown
+    python bench/bench_first_data.py [--repeats 3] [--only TEXT] [--alternatives] [--portable] [--interpreted] [--ctrl-c S]
+    # from the worktree root; prints Markdown
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import resource
 import statistics
@@ -40,31 +51,39 @@ sys.path.insert(0, str(ROOT))
 
 from groundstation.stopwatch import UNCOMPILED  # noqa: E402
 
+LOG = Path("/work/shared/datasets/flightlogs/px4_fmuv5_quad_hop.ulg")  # a shared flight log: 8 estimators, 2 min
 COMMANDS = {
     "groundstation app --demo": ["-m", "groundstation", "app", "--demo"],
     "groundstation record --port sim: --duration 3": ["-m", "groundstation", "record", "--port", "sim:", "--duration", "3"],
+    f"groundstation app {LOG.name}": ["-m", "groundstation", "app", str(LOG)],
+    f"groundstation export {LOG.name}": ["-m", "groundstation", "export", str(LOG), "--out", "{home}/out.csv", "--overwrite"],
+    f"groundstation export {LOG.name} --filters ahf2": ["-m", "groundstation", "export", str(LOG), "--filters", "ahf2", "--out",
+                                                         "{home}/out.csv", "--overwrite"],
 }
-FILL = ["-c", "from groundstation.estimation import create, live_estimators; [create(n) for n in live_estimators()]"]
+FILL = ["-c", "import numpy as np; from groundstation.estimation import create, live_estimators; "
+              "[create(n).run(np.zeros((1, 3)), np.zeros((1, 3)), np.ones(1)) for n in live_estimators()]"]
 
 
-def run(argv: list[str], env: dict[str, str]) -> tuple[float, float, int]:
-    """(CPU s to the first data, CPU s in all, estimators not compiled at the first data)."""
+def run(argv: list[str], env: dict[str, str]) -> tuple[float, float, float, int]:
+    """(CPU s to the first data, CPU s to every estimator in the window, CPU s in all, estimators not compiled at
+    the first data); NaN for a moment the command does not have (an export has no first data)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run([sys.executable, *argv], env=env, capture_output=True, text=True, check=True, timeout=900).stdout
+    out = subprocess.run([sys.executable, *argv], env=env, capture_output=True, text=True, check=True, timeout=1800).stdout
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     lines = out.splitlines()
-    first = next(float(line.split()[-1]) for line in lines if line.startswith("first data "))
-    uncompiled = next(line.removeprefix(UNCOMPILED).strip() for line in lines if line.startswith(UNCOMPILED))
+    first, every = (next((float(line.split()[-1]) for line in lines if line.startswith(moment)), math.nan)
+                    for moment in ("first data ", "every estimator "))
+    uncompiled = next((line.removeprefix(UNCOMPILED).strip() for line in lines if line.startswith(UNCOMPILED)), "")
     total = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    return first, total, len([name for name in uncompiled.split(",") if name])
+    return first, every, total, len([name for name in uncompiled.split(",") if name])
 
 
-def row(label: str, runs: list[tuple[float, float, int]]) -> str:
-    first, total, interpreted = (statistics.median(r[i] for r in runs) for i in range(3))
-    return f"| {label} | {first:.2f} | {total:.2f} | {interpreted:.0f} |"
+def row(label: str, runs: list[tuple[float, float, float, int]]) -> str:
+    first, every, total, uncompiled = (statistics.median(r[i] for r in runs) for i in range(4))
+    return f"| {label} | {first:.2f} | {every:.2f} | {total:.2f} | {uncompiled:.0f} |".replace("nan", "—")
 
 
-def first_data(repeats: int) -> None:
+def first_data(repeats: int, only: str | None) -> None:
     with tempfile.TemporaryDirectory() as home:
         home = Path(home)
         base = {**{k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}, "PYTHONPATH": str(ROOT),
@@ -72,13 +91,17 @@ def first_data(repeats: int) -> None:
                 "GROUNDSTATION_RECORDINGS": str(home / "recordings")}
         warm = {**base, "NUMBA_CACHE_DIR": str(home / "warm")}
         subprocess.run([sys.executable, *FILL], env=warm, check=True)  # the warm start's cache
-        print(f"| command, numba cache | CPU s to first data | CPU s in all | estimators not compiled at first data (median of {repeats}) |")
-        print("|---|---|---|---|")
-        for label, argv in COMMANDS.items():
+        print(f"| command, numba cache | CPU s to first data | CPU s to every estimator | CPU s in all | "
+              f"estimators not compiled at first data (median of {repeats}) |")
+        print("|---|---|---|---|---|")
+        for n, (label, argv) in enumerate(COMMANDS.items()):
+            if only is not None and only not in label:
+                continue
+            argv = [arg.format(home=home) for arg in argv]
             run(argv, warm)  # byte code and page cache
             runs = {"empty": [], "warm": []}
             for k in range(repeats):  # interleaved: the machine's load weighs on both alike
-                runs["empty"].append(run(argv, {**base, "NUMBA_CACHE_DIR": str(home / f"cold{label[14:17]}{k}")}))
+                runs["empty"].append(run(argv, {**base, "NUMBA_CACHE_DIR": str(home / f"cold{n}-{k}")}))
                 runs["warm"].append(run(argv, warm))
             for cache, measured in runs.items():
                 print(row(f"{label}, {cache}", measured), flush=True)
@@ -164,9 +187,69 @@ def portable() -> None:
             print(f"| {made}, {run_as} | {out[0]} | {float(out[1]):.2f} | {float(out[2]):.0f} |", flush=True)
 
 
+def ctrl_c(after_s: float) -> None:
+    """``app LOG`` with an empty cache, Ctrl-C ``after_s`` later (its kernels compiling in the other process), and
+    with a warm one: wall and CPU s from the signal to its exit (the app's and its compiler's)."""
+    import signal
+
+    def cpu_s(pid: int) -> float:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+    print("| numba cache | Ctrl-C to exit, wall s | Ctrl-C to exit, CPU s | load average |")
+    print("|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as home:
+        base = {**os.environ, "PYTHONPATH": str(ROOT), "QT_QPA_PLATFORM": "offscreen", "XDG_CONFIG_HOME": f"{home}/config",
+                "GROUNDSTATION_RECORDINGS": f"{home}/recordings"}
+        subprocess.run([sys.executable, *FILL], env={**base, "NUMBA_CACHE_DIR": f"{home}/warm"}, check=True)
+        for cache in ("empty", "warm"):
+            app = subprocess.Popen([sys.executable, "-m", "groundstation", "app", str(LOG)], env={**base, "NUMBA_CACHE_DIR": f"{home}/{cache}"},
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            time.sleep(after_s)
+            children = subprocess.run(["pgrep", "-P", str(app.pid)], capture_output=True, text=True).stdout.split()
+            before = cpu_s(app.pid) + sum(cpu_s(int(c)) for c in children if Path(f"/proc/{c}").exists())  # reaped at its exit
+            t = time.monotonic()
+            app.send_signal(signal.SIGINT)
+            _, _, usage = os.wait4(app.pid, 0)
+            print(f"| {cache} | {time.monotonic() - t:.2f} | {usage.ru_utime + usage.ru_stime - before:.2f} | {os.getloadavg()[0]:.1f} |",
+                  flush=True)
+
+
+INTERPRETED_SAMPLES = 2000
+
+
+def interpreted() -> None:
+    """Each live estimator's ``run``, its kernel's source interpreted (as a first start would have to run it over
+    a file while the kernel compiles) against compiled: ns a sample, and what an hour at 100 Hz would take."""
+    import numpy as np
+
+    from groundstation.estimation import ESTIMATORS, create, live_estimators
+    from groundstation.estimation.base import CompiledEstimator
+
+    rng = np.random.default_rng(1)
+    gyr, acc = rng.normal(0, 0.1, (INTERPRETED_SAMPLES, 3)), np.tile([0.0, 0.0, -1.0], (INTERPRETED_SAMPLES, 1))
+    print("| estimator | interpreted, µs a sample | compiled, µs a sample | an hour at 100 Hz interpreted, CPU s |")
+    print("|---|---|---|---|")
+    for name in live_estimators():
+        cls = ESTIMATORS[name]
+        if not issubclass(cls, CompiledEstimator):
+            continue
+        compiled = create(name)
+        compiled.run(gyr[:10], acc[:10], 0.01)
+        times = []
+        for estimator in (cls(dtype=np.float64), compiled):
+            t = time.process_time()
+            estimator.run(gyr, acc, 0.01)
+            times.append((time.process_time() - t) / INTERPRETED_SAMPLES)
+        print(f"| {name} | {times[0] * 1e6:.1f} | {times[1] * 1e6:.2f} | {times[0] * 360_000:.0f} |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--only", metavar="TEXT", help="only the commands whose label holds TEXT")
+    parser.add_argument("--interpreted", action="store_true", help="interpreted kernels over a file against compiled")
+    parser.add_argument("--ctrl-c", type=float, metavar="S", help="Ctrl-C the app on a file S seconds after its start")
     parser.add_argument("--alternatives", action="store_true", help="a compiling thread against a compiling process")
     parser.add_argument("--portable", action="store_true", help="a cache made for a generic CPU (install time)")
     args = parser.parse_args()
@@ -174,8 +257,12 @@ def main() -> None:
         alternatives()
     elif args.portable:
         portable()
+    elif args.interpreted:
+        interpreted()
+    elif args.ctrl_c is not None:
+        ctrl_c(args.ctrl_c)
     else:
-        first_data(args.repeats)
+        first_data(args.repeats, args.only)
 
 
 if __name__ == "__main__":

@@ -33,12 +33,17 @@ def collect_in_the_main_thread():
 
 @pytest.fixture(scope="session", autouse=True)
 def compiled_estimators():
-    """The live estimators' kernels compiled (or loaded from the cache: about a second) before any test. A
-    live session does not wait for them: until they are compiled it runs them interpreted (within 1e-12)
-    and leaves ukf and sssrukf out (``session_parts.estimators.EstimatorBank``); the tests that compare a live
-    session with a batch run bit for bit see what every start but a machine's first gives. The first
-    start itself is tested in processes with an empty cache of their own (tests/session/test_first_start.py)."""
+    """The live estimators' kernels and batch loops compiled (or loaded from the cache: about a second) before
+    any test. A live session does not wait for them: until they are compiled it runs them interpreted (within
+    1e-12) and leaves ukf and sssrukf out (``session_parts.estimators.EstimatorBank``), and a file opened in the
+    app is computed without them (``session_makers.load.Loading``); the tests that compare a live session with
+    a batch run bit for bit, or read a file's estimators in the window, see what every start but a machine's
+    first gives. The first start itself is tested in processes with an empty cache of their own
+    (tests/session/test_first_start.py, tests/ui/test_first_start.py)."""
+    import numpy as np
+
     from groundstation.estimation import create, live_estimators
 
+    one = np.zeros((1, 3))
     for name in live_estimators():
-        create(name)
+        create(name).run(one, one, np.ones(1))

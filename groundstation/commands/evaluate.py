@@ -53,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from groundstation.autopilot.agreement import onboard_agreement
-    from groundstation.commands.progress import ProgressBar
+    from groundstation.commands.progress import ProgressBar, say_compiling
     from groundstation.estimation import unmet_warnings
     from groundstation.session_makers.load import load_session
 
@@ -63,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out is not None or args.overwrite:
         raise UserError("--out and --overwrite are for a folder of logs; one file prints its figures")
     refuse_batch_options(args)
+    say_compiling(args.file, names)
     bar = ProgressBar("computing")  # shown after a second: a long recording or log
     try:
         data = load_session(args.file, names, overrides, bar, args.accept_config_changes, imu=args.imu)

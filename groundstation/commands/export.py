@@ -11,7 +11,7 @@ import functools
 from pathlib import Path
 
 from groundstation.commands.options import add_config_option, add_imu_option, add_estimator_options, estimator_options
-from groundstation.commands.progress import StagedProgress
+from groundstation.commands.progress import StagedProgress, say_compiling
 from groundstation.text import clean
 
 
@@ -41,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
     request = export_request(args.file, args.out, filters=filters, overrides=overrides, t_from=args.t_from,
                              t_to=args.t_to, rate_hz=args.rate, overwrite=args.overwrite,
                              accept_config_changes=args.accept_config_changes)
+    say_compiling(args.file, filters)
     progress = StagedProgress()
     try:
         result = run_export(request, functools.partial(load_session, imu=args.imu), progress)

@@ -1,4 +1,5 @@
-"""A one-line progress bar with ETA on stderr, for anything that takes more than a second."""
+"""A one-line progress bar with ETA on stderr, for anything that takes more than a second; the line said
+before a command's first compile of its estimators (``say_compiling``)."""
 
 from __future__ import annotations
 
@@ -61,3 +62,20 @@ class StagedProgress:
         if self.bar is not None:
             self.bar.done()
             self.bar = None
+
+
+def say_compiling(path, filters, stream=None) -> None:
+    """One line on stderr when the estimators a command runs on ``path`` compile first (numba's cache empty, as
+    after an install): once per machine, seconds each, so that nobody takes the wait for a hang. Compiling in
+    parallel processes would not save CPU, nor the wall time of a machine already busy
+    (bench/bench_first_data.out.md)."""
+    from groundstation.errors import UserError
+    from groundstation.session_makers.load import not_compiled, planned_estimators
+
+    try:
+        waiting = not_compiled(planned_estimators(path, filters))
+    except (UserError, OSError, ValueError):
+        return  # the load says what is wrong with the file
+    if waiting:
+        print(f"compiling {len(waiting)} estimator{'s' if len(waiting) > 1 else ''} for this machine, once (2-10 CPU s "
+              "each; later runs start at once)…", file=stream or sys.stderr, flush=True)

@@ -23,7 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from groundstation.commands.progress import ProgressBar
+    from groundstation.commands.progress import ProgressBar, say_compiling
     from groundstation.commands.summary import follow, totals_line
     from groundstation.errors import UserError
     from groundstation.session_makers.load import load_session
@@ -34,6 +34,7 @@ def run(args: argparse.Namespace) -> int:
         paced = None if args.speed is None else check_speed(args.speed)
     except ValueError as error:
         raise UserError(str(error)) from None
+    say_compiling(args.file, filters)
     progress = ProgressBar(f"computing {Path(args.file).name}")
     data = load_session(args.file, filters, overrides, progress, args.accept_config_changes, imu=args.imu)
     progress.done()

@@ -27,7 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from groundstation.commands.progress import ProgressBar
+    from groundstation.commands.progress import ProgressBar, say_compiling
     from groundstation.errors import UserError
     from groundstation.export.report import write_report
     from groundstation.export.request import check_destination
@@ -40,6 +40,7 @@ def run(args: argparse.Namespace) -> int:
     if args.out.suffix.lower() not in (".html", ".htm"):
         raise UserError(f"{args.out}: a report is an HTML page; name it .html")
     check_destination(args.out, args.overwrite)  # said before the long load: an existing OUT, a missing folder
+    say_compiling(args.file, filters)
     progress = ProgressBar(f"computing {Path(args.file).name}")
     try:
         data = load_session(args.file, filters, overrides, progress)

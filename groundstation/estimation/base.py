@@ -307,6 +307,13 @@ class Estimator:
 
     interpreted = False  # running an interpreted kernel until ``take_compiled``
 
+    @classmethod
+    def runs_compiled(cls) -> bool:
+        """Whether ``run`` over a file starts at once: what it compiles is compiled or in numba's cache (never
+        compiles here; ``_loaded``). A file opened in the app runs those that do and leaves the others to
+        another process (``session_makers.load.Loading``)."""
+        return True
+
     def take_compiled(self) -> bool:
         """Go on compiled once the kernel is (``CompiledEstimator``); whether it runs compiled now."""
         return True
@@ -611,6 +618,11 @@ class CompiledEstimator(Estimator):
         """Compiled if its kernel is compiled or in numba's cache, else its source interpreted on float64 (the
         same numbers within 1e-12, tests/estimation/test_kernels.py) until ``take_compiled``."""
         return cls(settings) if _loaded(cls.kernel, cls._signature()) else cls(settings, dtype=np.float64)
+
+    @classmethod
+    def runs_compiled(cls) -> bool:
+        run_signature = GPS_RUN_SIGNATURE if cls.gps_aided else RUN_SIGNATURE
+        return _loaded(cls.kernel, cls._signature()) and _loaded(cls.run_kernel, run_signature)
 
     @property
     def interpreted(self) -> bool:

@@ -41,7 +41,7 @@ import vqf as vqf_package
 
 from groundstation import quaternion
 from groundstation.estimation.base import (
-    ACC_SKIPPED, INITIALISED, NO_UPDATE, SCREEN_ROWS_SIGNATURE, CommonSettings, Estimator, _compiled, _rows, batch_inputs, screen_rows,
+    ACC_SKIPPED, INITIALISED, NO_UPDATE, SCREEN_ROWS_SIGNATURE, CommonSettings, Estimator, _compiled, _loaded, _rows, batch_inputs, screen_rows,
 )
 from groundstation.estimation.tilt import quaternion_product
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -129,6 +129,10 @@ class Vqf(Estimator):
         bias, bias_std = f.getBiasEstimate()
         self._diag = (float(f.getRestDetected()), *bias.tolist(), float(bias_std), float(f.getMagDistDetected()))
         return self._q, VqfDiagnostics(status, *self._diag)
+
+    @classmethod
+    def runs_compiled(cls) -> bool:
+        return _loaded(screen_rows, SCREEN_ROWS_SIGNATURE)
 
     def run(self, gyr_rad_s, acc_g, dt_s, mag=None, gps=None):
         """``updateBatch`` over each stretch of rows that ``step`` would give to VQF whole (module docstring),

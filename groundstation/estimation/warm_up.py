@@ -31,20 +31,25 @@ import threading
 
 
 class WarmUp:
-    """A process compiling estimators' kernels into numba's cache, in the order named: their per-sample
-    kernels first (what a live session waits for), then their batch loops (what a later export or
-    replay would compile). ``compiled`` holds the names whose per-sample kernel is in the cache, as the
-    process says so, ``finished`` once it ended; ``generation`` counts both (a cheap "anything new?" for the
-    reader thread)."""
+    """A process compiling estimators' kernels into numba's cache, in the order named. For a live session
+    (``runs_first`` False) their per-sample kernels first (what it waits for), then their batch loops
+    (what a later export or replay would compile); for a file opened whole (``runs_first``), each one's
+    kernel and batch loop in turn, so that each estimator can join as soon as its ``run`` is ready.
+    ``compiled`` holds the names whose per-sample kernel is in the cache, as the process says so, ``runs``
+    those whose batch loop is too (``Estimator.runs_compiled``), ``finished`` once it ended;
+    ``generation`` counts all three (a cheap "anything new?" for the reader thread and the window)."""
 
-    def __init__(self, names):
+    def __init__(self, names, runs_first: bool = False):
         self.names = tuple(names)
+        self.runs_first = runs_first
         self.compiled: set[str] = set()
+        self.runs: set[str] = set()
         self.finished = False
         self.generation = 0
         context = multiprocessing.get_context("spawn")  # not fork: numba and Qt are not fork-safe; the bundle supports spawn
         receive, send = context.Pipe(duplex=False)
-        self._process = context.Process(target=compile_kernels, args=(self.names, send), name="groundstation-compile", daemon=True)
+        self._process = context.Process(target=compile_kernels, args=(self.names, send, runs_first), name="groundstation-compile",
+                                        daemon=True)
         self._start_without_ctrl_c()
         send.close()  # the child holds the other end: its exit ends ``_listen``
         self._listener = threading.Thread(target=self._listen, args=(receive,), name="groundstation-compile-listener", daemon=True)
@@ -66,10 +71,10 @@ class WarmUp:
         with receive:
             while True:
                 try:
-                    name = receive.recv()
+                    name, batch_loop = receive.recv()
                 except (EOFError, OSError):
                     break
-                self.compiled.add(name)
+                (self.runs if batch_loop else self.compiled).add(name)
                 self.generation += 1
         self.finished = True  # done, or stopped: nothing more will come
         self.generation += 1
@@ -88,29 +93,50 @@ class WarmUp:
 _warming: WarmUp | None = None  # the process's one compiler: two would compile the same kernels twice
 
 
-def warm_up(names) -> WarmUp:
-    """The background compiler of ``names``' kernels: the one running already, else a new one."""
+def warm_up(names, runs_first: bool = False) -> WarmUp:
+    """The background compiler of ``names``' kernels (``WarmUp``): the one running already if it compiles them
+    all in an order that suits (a file's ``runs_first``), else a new one, ``names`` first, then what the one
+    running had left (stopped: a file opened after a live start would wait for every per-sample kernel first)."""
     global _warming
-    if _warming is None or not _warming.running:
-        _warming = WarmUp(names)
+    running = _warming is not None and _warming.running
+    if running and set(names) <= set(_warming.names) and (_warming.runs_first or not runs_first):
+        return _warming
+    if running:
+        _warming.stop()
+        names = (*names, *(name for name in _warming.names if name not in names))
+    _warming = WarmUp(names, runs_first)
     return _warming
 
 
-def compile_kernels(names, send) -> None:
-    """In the compiling process: each estimator's per-sample kernel into the cache, said through ``send``
-    as each is there; then each one's batch loop."""
+def stop_warm_up() -> None:
+    """The process's background compiler ended, if one runs (the app closing: it would take CPU from the close)."""
+    if _warming is not None:
+        _warming.stop()
+
+
+def compile_kernels(names, send, runs_first: bool = False) -> None:
+    """In the compiling process: each estimator's per-sample kernel, then each one's batch loop, into the
+    cache (``runs_first``: each one's both in turn), said through ``send`` as ``(name, batch loop)`` as each is there."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # in case it was started from a thread other than the main one
     threading.Thread(target=_exit_with_parent, name="groundstation-parent-watch", daemon=True).start()
     import numpy as np
 
     from groundstation.estimation import create
 
+    one = np.zeros((1, 3))
+
+    def batch_loop(name):
+        create(name).run(one, one, np.ones(1))  # compiles its batch loop (vqf: the guard's)
+        send.send((name, True))
+
     for name in names:
         create(name)
-        send.send(name)
-    one = np.zeros((1, 3))
-    for name in names:
-        create(name).run(one, one, np.ones(1))  # compiles its batch loop (vqf: the guard's)
+        send.send((name, False))
+        if runs_first:
+            batch_loop(name)
+    if not runs_first:
+        for name in names:
+            batch_loop(name)
     send.close()
 
 

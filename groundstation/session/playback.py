@@ -136,8 +136,9 @@ class Revealed:
     """What the window reads of a session (``view.ProductView``), from a computed session up to the
     clock. ``link`` is None for a file with no link in it (a flight log, a dataset)."""
 
-    def __init__(self, data: SessionData):
+    def __init__(self, data: SessionData, uncompiled: tuple[str, ...] = ()):
         self.filters = data.filters
+        self._uncompiled = uncompiled  # asked for, left out of ``data`` until compiled (``load.Loading``)
         self.catalogue = data.catalogue
         self.config = data.config
         self.parameters = data.parameters  # as last set: each change is also an event, revealed with the clock
@@ -175,6 +176,10 @@ class Revealed:
     def settings(self) -> dict[str, dict[str, float]]:
         """The estimators' settings as computed (after any recorded change)."""
         return {name: dict(values) for name, values in self._settings.items()}
+
+    def uncompiled(self) -> tuple[str, ...]:
+        """The estimators asked for that the file was computed without, their kernels compiling (a first start)."""
+        return self._uncompiled
 
 
 class Playback:
@@ -255,10 +260,10 @@ class RevealSession:
     heard_protocol = None  # a file is decoded as what it is
 
     def __init__(self, data: SessionData, path, setup: tuple = (None, None), *, speed: float = 1.0,
-                 paused: bool = False, position_s: float = 0.0):
+                 paused: bool = False, position_s: float = 0.0, uncompiled: tuple[str, ...] = ()):
         self.data = data
         self.setup = setup
-        self.view = Revealed(data)
+        self.view = Revealed(data, uncompiled)
         self.source = Playback(path, self.view.end_s, speed, paused, position_s)
         self.lock = threading.Lock()  # the window's readers take it, as they do a live session's
         self.connected = True

@@ -44,6 +44,7 @@ class ProductView(Protocol):
 
     def counters(self) -> dict[str, int]: ...  # the decoder's totals: frames, crc_errors, frames_lost, bytes_skipped
     def settings(self) -> dict[str, dict[str, float]]: ...
+    def uncompiled(self) -> tuple[str, ...]: ...  # estimators whose compiled kernels are not there yet (a first start)
 
 
 def event_session_time_s(view: ProductView, event: dict) -> float:

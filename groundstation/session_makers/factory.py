@@ -77,13 +77,15 @@ class Sessions:
     def __init__(self, imu: str = IMU_STREAMS[0]):
         self.imu = imu  # the IMU stream a flight log's estimators run on (File > "Full-rate IMU", ``--imu``)
 
-    def load(self, path, filters=None, forced=None) -> Loading:
-        """``path`` computed in a worker; a flight log that can hold a full-rate IMU on the stream ``imu`` names."""
+    def load(self, path, filters=None, forced=None, compile_in_background: bool = True) -> Loading:
+        """``path`` computed in a worker; a flight log that can hold a full-rate IMU on the stream ``imu`` names.
+        ``compile_in_background``: its estimators not compiled yet are left out and compiled in another
+        process (``Loading``; the window adds them when compiled)."""
         from groundstation.session_makers.flight_log_session import FAST_IMU_FORMATS
         from groundstation.session_makers.load import Loading
 
         fast_possible = getattr(formats.sniff(path), "name", None) in FAST_IMU_FORMATS
-        return Loading(path, filters, forced, self.imu if fast_possible else IMU_STREAMS[0])
+        return Loading(path, filters, forced, self.imu if fast_possible else IMU_STREAMS[0], compile_in_background)
 
     @staticmethod
     def load_session(*args, **kwargs):

@@ -66,7 +66,7 @@ def load_log(path, filters=None, forced=None, progress=None, imu: str = IMU_STRE
     after each estimator."""
     share = None if progress is None else lambda fraction: progress(round(PROGRESS_STEPS * fraction), PROGRESS_STEPS)
     reading = None if share is None else lambda done, total: share(READ_SHARE * min(done / max(total, 1), 1.0))
-    return log_session(read_log(path, reading), filters or DEFAULT_FILTERS, forced or {}, share, imu)
+    return log_session(read_log(path, reading), DEFAULT_FILTERS if filters is None else filters, forced or {}, share, imu)
 
 
 def read_log(path, progress=None) -> FlightLog:

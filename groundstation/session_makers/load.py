@@ -19,15 +19,17 @@ from groundstation.session_makers.flight_log_session import FAST_IMU_FORMATS, at
 from groundstation.formats import IMU_STREAMS
 from groundstation.datasets import TRUE_Q, DatasetError, Trial, trial_from_columns
 from groundstation.errors import UserError
-from groundstation.estimation import create, live_estimators, runnable
+from groundstation.estimation import ESTIMATORS, aiding_estimator, create, live_estimators, runnable
+from groundstation.estimation.warm_up import WarmUp, warm_up
 from groundstation.estimation.evaluation import run_on_trial
-from groundstation.recording import Recording
+from groundstation.recording import Recording, open_recording
 from groundstation.session_makers.batch import BatchSession, batch_replay
 from groundstation.session_parts.catalogue import Catalogue, session_catalogue
 from groundstation.session_parts.clock import DISCONTINUITIES
+from groundstation.session_parts.estimators import slow_interpreted
 from groundstation.session_makers.pipeline import Pipeline
 from groundstation.session.product import ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns
-from groundstation.session_makers.replay import replay
+from groundstation.session_makers.replay import recorded_filters, replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 
@@ -170,12 +172,39 @@ def estimators_for(path) -> tuple[str, ...] | None:
     return None
 
 
+def planned_estimators(path, filters=None) -> tuple[str, ...]:
+    """The estimators ``load_session(path, filters)`` runs: ``filters``, else those ``estimators_for`` the
+    file, else (a recording) those it recorded."""
+    if filters is not None:
+        return tuple(dict.fromkeys(filters))
+    named = estimators_for(path)
+    if named is not None:
+        return named
+    return tuple(recorded_filters(open_recording(path))[0])
+
+
+def not_compiled(names) -> tuple[str, ...]:
+    """Those of ``names`` whose batch run would compile first (``Estimator.runs_compiled``), the aiding
+    estimator first (the compass heading and the position wait for it) and the slow ones last."""
+    aiding = aiding_estimator(tuple(names))
+    waiting = [name for name in names if name in ESTIMATORS and not ESTIMATORS[name].runs_compiled()]
+    return tuple(sorted(waiting, key=lambda name: (slow_interpreted(name), name != aiding)))
+
+
 class Loading:
     """``load_session(path, filters, forced)`` in a worker thread. The window polls ``fraction`` and
     ``done``; then ``data`` is the computed session, or ``error`` says, for the user, why there is none.
-    ``cancel`` stops it at its next progress report (its result is dropped in any case)."""
+    ``cancel`` stops it at its next progress report (its result is dropped in any case).
 
-    def __init__(self, path, filters=None, forced=None, imu: str = IMU_STREAMS[0]):
+    ``compile_in_background`` (the app): never wait for numba to compile. The estimators whose batch run
+    is not compiled (a first start, numba's cache empty: 30 CPU s for all) are left out (``pending``) and
+    compiled by another process (``warm_up``, ``estimation.warm_up``), so the file's sensors, onboard
+    estimate and compiled estimators show within seconds; the window loads the file again as the others
+    are ready. Why not their source interpreted, as a live session runs it: over a whole file that takes
+    17-520 µs a sample and estimator, an hour's flight at 100 Hz about 60 CPU s for the seven fast ones (twice
+    what compiling every kernel costs) and minutes for ukf and sssrukf (bench/bench_first_data.out.md)."""
+
+    def __init__(self, path, filters=None, forced=None, imu: str = IMU_STREAMS[0], compile_in_background: bool = False):
         self.path = Path(path)
         self.setup = (filters, forced)
         self.imu = imu
@@ -183,6 +212,9 @@ class Loading:
         self.done = False
         self.data: SessionData | None = None
         self.error: str | None = None
+        self._background = compile_in_background
+        self.pending: tuple[str, ...] = ()  # left out of ``data``, compiling in ``warm_up``
+        self.warm_up: WarmUp | None = None
         self._cancel = threading.Event()
         self._thread = threading.Thread(target=self._run, name="groundstation-load", daemon=True)
         self._thread.start()
@@ -194,7 +226,8 @@ class Loading:
 
     def _run(self) -> None:
         try:
-            self.data = load_session(self.path, *self.setup, progress=self._progress, imu=self.imu)
+            filters, forced = self._compiled_only(*self.setup) if self._background else self.setup
+            self.data = load_session(self.path, filters, forced, progress=self._progress, imu=self.imu)
             self.fraction = 1.0
         except _Cancelled:
             self.error = "cancelled"
@@ -205,6 +238,17 @@ class Loading:
         except Exception as error:  # noqa: BLE001 — a reader's bug must reach the window as a message, not a traceback
             self.error = f"{self.path}: cannot be opened ({type(error).__name__}: {error})"
         self.done = True
+
+    def _compiled_only(self, filters, forced) -> tuple:
+        """``(filters, forced)`` without the estimators not compiled (``not_compiled``), which another
+        process compiles meanwhile."""
+        planned = planned_estimators(self.path, filters)
+        self.pending = not_compiled(planned)
+        if not self.pending:
+            return filters, forced
+        self.warm_up = warm_up(self.pending, runs_first=True)
+        return (tuple(name for name in planned if name not in self.pending),
+                {name: values for name, values in (forced or {}).items() if name not in self.pending})
 
     def cancel(self) -> None:
         self._cancel.set()

@@ -26,6 +26,7 @@ from groundstation.session.view import Session
 
 SHOWN_COLUMNS = 4  # "show" check boxes per row
 MESSAGE_LINES = 3  # "applied: ..." for a few estimators at once
+COMPILING_TIP = "compiling for this machine (once, in the background); shown when ready"
 
 
 def defaults(name: str) -> dict[str, float]:
@@ -179,6 +180,16 @@ class EstimatorPanel(QtWidgets.QGroupBox):
             box.blockSignals(True)  # reflecting the legend, not a new request
             box.setChecked(self.legend_label(name) in visible_labels)
             box.blockSignals(False)
+
+    def mark_uncompiled(self, names) -> None:
+        """The estimators whose kernels are compiling (a first start) say so: "…" after the name (short: four
+        boxes a row must fit the side column) and why in the tooltip; a file's cannot be asked for meanwhile
+        (computed without them, the window adds them when compiled)."""
+        for name, box in self.shown.items():
+            waiting = name in names
+            box.setText(f"{label(name)} …" if waiting else label(name))
+            box.setToolTip(COMPILING_TIP if waiting else "")
+            box.setEnabled(not (waiting and self.replay))
 
     def values(self, name: str) -> dict[str, float]:
         return {setting: self.boxes[name, setting].value() for setting, _, _ in self.tunable[name]}

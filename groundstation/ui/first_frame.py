@@ -8,6 +8,7 @@ thread's, since the process started; ``groundstation.stopwatch``) at
 - ``first data``: the first paint of any of its widgets after the live view drew with rows of the
   session taken (``LiveView.frames_drawn``, ``Series.taken``): a curve with data on screen; then the
   estimators not compiled then (a first start: their kernels compiling in the background);
+- ``every estimator``: a file shown without some estimators (a first start), once they joined it;
 
 then closes the window (the session stops, the recording closes, as at the close button) and so quits.
 """
@@ -63,10 +64,20 @@ class FirstFrame(QtCore.QObject):
         if event.type() == QtCore.QEvent.Paint and isinstance(watched, QtWidgets.QWidget) and watched.window() is self.window:
             self.app.removeEventFilter(self)
             self._note("first data")
-            view = self.window.session.view
-            stopwatch.note_uncompiled(getattr(view, "uncompiled", tuple)())  # a file's (computed whole) has none
-            QtCore.QTimer.singleShot(0, self.window.close)
+            session = self.window.session
+            stopwatch.note_uncompiled(session.view.uncompiled())
+            if session.seekable and session.view.uncompiled():  # a file: its other estimators join when compiled
+                self.window.timer.timeout.connect(self._every_estimator)
+            else:
+                QtCore.QTimer.singleShot(0, self.window.close)
         return False
+
+    def _every_estimator(self) -> None:
+        session = self.window.session
+        if session is not None and not session.view.uncompiled():
+            self.window.timer.timeout.disconnect(self._every_estimator)
+            self._note("every estimator")
+            QtCore.QTimer.singleShot(0, self.window.close)
 
     def _note(self, moment: str) -> None:
         self.moments[moment] = stopwatch.note(moment)

@@ -17,6 +17,7 @@ from PySide6 import QtCore, QtGui, QtWidgets
 from groundstation.errors import UserError
 from groundstation import formats
 from groundstation.estimation import ESTIMATORS, label
+from groundstation.estimation.warm_up import stop_warm_up
 from groundstation.recording import default_recordings_dir
 from groundstation.session.playback import RevealSession
 from groundstation.session.view import Session
@@ -81,6 +82,7 @@ class MainWindow(QtWidgets.QMainWindow):
         self.recordings_dir = recordings_dir
         self.session: Session | None = None
         self.loading = None  # a file being computed (``sessions.load``)
+        self.compiling = None  # the process compiling estimators the file shown was computed without (``Loading.warm_up``)
         self._recomputing = False  # the loading is a what-if of the session shown: it keeps the position
         self.last_file: tuple[Path, float] | None = None  # the last session's recording and its length (s)
         self.typed_source: str | None = None  # the source string of the live session shown (Connect)
@@ -168,6 +170,9 @@ class MainWindow(QtWidgets.QMainWindow):
         self.statusBar().addWidget(self.source_label, 1)
         self.vehicle_badge = VehicleBadge()  # an autopilot's mode and arming, always in sight
         self.statusBar().addPermanentWidget(self.vehicle_badge)
+        self.compiling_label = QtWidgets.QLabel()  # a first start: "compiling estimators: N left", then gone
+        self.compiling_label.hide()
+        self.statusBar().addPermanentWidget(self.compiling_label)
         self.statusBar().addPermanentWidget(self.recording_label)
         self.record_action = QtGui.QAction("Start recording", self, shortcut=QtGui.QKeySequence("Ctrl+R"))
         self.record_action.setShortcutContext(QtCore.Qt.ApplicationShortcut)
@@ -265,7 +270,9 @@ class MainWindow(QtWidgets.QMainWindow):
             self._stop_session()
         else:
             playback = opening_playback(loading.path)  # a flight log whole, at its end (``whole_flight``)
-        self._adopt(RevealSession(loading.data, loading.path, loading.setup, speed=self.replay_bar.speed, **playback))
+        self._adopt(RevealSession(loading.data, loading.path, loading.setup, speed=self.replay_bar.speed,
+                                  uncompiled=loading.pending, **playback))
+        self.compiling = loading.warm_up
         self.source_label.setText(self.session.source.description)
         if shown is None:
             self._remember_recent(loading.path.resolve())
@@ -544,6 +551,7 @@ class MainWindow(QtWidgets.QMainWindow):
             self.vehicle_badge.refresh(self.live_view.mode_bands.spans if session is not None else [])
             self.recording_banner.refresh(session)
             self.config_banner.refresh(session)
+            self._follow_compiling(session)
         if session is None:
             return
         self.live_view.refresh()
@@ -560,6 +568,24 @@ class MainWindow(QtWidgets.QMainWindow):
             self._follow_mavlink(session)
         if session.error and not self.banner.isVisible():
             self.show_error(f"The session stopped: {session.error}")
+
+    def _follow_compiling(self, session: Session | None) -> None:
+        """While estimators' kernels compile in the background (a first start), the status bar counts them and
+        the Estimators panel marks them; a file's join its plots as they are ready: the file computed
+        again (``rerun_replay``'s way), from where it is shown."""
+        left = session.view.uncompiled() if session is not None else ()
+        self.compiling_label.setText(f"compiling estimators: {len(left)} left" if left else "")
+        self.compiling_label.setVisible(bool(left))
+        self.estimator_panel.mark_uncompiled(left)
+        warm = self.compiling
+        if not left or warm is None or self.loading is not None or not session.seekable:
+            return
+        ready = [name for name in left if name in warm.runs]
+        if ready:
+            self._load(session.source.path, *session.setup, f"adding {', '.join(label(name) for name in ready)} to "
+                       f"{session.source.path.name}", recompute=True)
+        elif warm.finished:  # it stopped without them: the file stays without them
+            self.compiling = None
 
     def _follow_mavlink(self, session: Session) -> None:
         """An autopilot's MAVLink heard on a source opened for the project's bridge (QGroundControl's habit:
@@ -640,6 +666,7 @@ class MainWindow(QtWidgets.QMainWindow):
                 restore(value)
 
     def closeEvent(self, event) -> None:
+        stop_warm_up()  # at once: what it compiled stays in numba's cache, the rest compiles at the next start
         self.disconnect()
         self.session_list.stop_all()
         # "" for none: QSettings reads an empty list back as None, which means "the defaults"

@@ -124,7 +124,7 @@ class SessionList(QtWidgets.QWidget):
         """A file beside the window's session: computed in a worker, then played along (``tick``)."""
         path = Path(path)
         entry = self._new_entry(path.name)
-        entry.loading = self.window.sessions.load(path)
+        entry.loading = self.window.sessions.load(path, compile_in_background=False)  # a file beside is not computed again
         self.entries.append(entry)
         self.refresh_rows()
         return entry

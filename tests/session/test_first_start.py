@@ -115,3 +115,19 @@ def test_a_slow_estimator_waiting_for_its_kernel_catches_up_as_the_bank_would_ha
     assert not estimator.interpreted and estimator.settings.gyro_noise_rad_s == 0.02
     assert q_caught == q
     assert estimator.step([0.1, 0.0, 0.0], [0.0, 0.0, -1.0], 0.01) == reference.step([0.1, 0.0, 0.0], [0.0, 0.0, -1.0], 0.01)
+
+
+def test_export_on_a_first_start_says_it_compiles_before_it_does(tmp_path):
+    """``export`` after an install compiles its estimators in the process, seconds each: it says so in one line
+    first, so that nobody takes the wait for a hang (the process is stopped once it said it)."""
+    sample = ROOT / "recordings" / "samples" / "flight-both-lossy.gsrec"  # its live session ran AHF only
+    export = subprocess.Popen([sys.executable, "-m", "groundstation", "export", str(sample), "--out", str(tmp_path / "out.csv")],
+                              env=first_start_env(tmp_path), cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        out = Lines(export)
+        wait_for(lambda: out.starting("compiling") or export.poll() is not None, what="the line about compiling")
+        assert out.starting("compiling 1 estimator for this machine, once"), out.lines
+        assert not compiled_kernels(tmp_path / "numba", "ahf")  # said before it compiled
+    finally:
+        export.kill()
+        export.wait()

@@ -22,6 +22,6 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
 def session_of_trial(trial: Trial, filters, forced, metadata: dict) -> SessionData:
     """A trial's session with ``filters`` (default: the pipeline's) and the ``forced`` settings: what any
     format of sample columns (a dataset CSV, arrays) gives."""
-    filters = filters or DEFAULT_FILTERS
+    filters = DEFAULT_FILTERS if filters is None else filters
     check_forced(filters, forced)
     return from_trial(trial, filters, forced, metadata)

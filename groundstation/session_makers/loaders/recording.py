@@ -16,7 +16,7 @@ def load(path, filters=None, forced=None, progress=None, accept_config_changes: 
     recording = open_recording(path)
     if recording.chunk_count == 0 and recording.samples:  # an imported dataset; otherwise samples are truth
         trial = trial_from_samples(recording.samples, path)
-        filters = filters or recorded_filters(recording)[0]
+        filters = recorded_filters(recording)[0] if filters is None else filters
         check_forced(filters, forced)
         settings = {**recorded_settings(recording)}
         for name, values in (forced or {}).items():

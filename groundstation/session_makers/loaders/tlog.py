@@ -27,7 +27,7 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
     log = session_packets(data)
     if not log.packets:
         raise UserError(f"{path}: no MAVLink messages found; not a .tlog, or damaged from the start")
-    filters = tuple(filters or DEFAULT_FILTERS)
+    filters = tuple(DEFAULT_FILTERS if filters is None else filters)
     check_forced(filters, forced)
     pipeline = Pipeline(filters, None, forced, protocol="mavlink")
     total = len(log.packets)
