@@ -5,7 +5,7 @@ import threading
 import numpy as np
 
 from groundstation.session_parts.table import Table
-from groundstation.ui.series import BIN_ROWS, HISTORY_BINS, RECENT_S, Series, per_pixel
+from groundstation.ui.series import HISTORY_BINS, RECENT_S, Series, per_pixel
 
 
 def assert_bins_hold_min_max(older_t, older_v, t, v):
