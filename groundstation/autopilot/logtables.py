@@ -198,9 +198,10 @@ def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]
         if not len(data.data["timestamp"]) or not fields:
             continue
         flat, said = kept_apart([_flat(f) for f in fields], [f"{data.name}.{f}" for f in fields], "ULog field")
-        columns = {name: data.data[field] for name, field in zip(flat, fields)}
+        # copies, the time too: a view of a field holds on to pyulog's buffer of the topic's every record and field
+        columns = {name: np.array(data.data[field], dtype=float) for name, field in zip(flat, fields)}
         renamed += said
-        made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"], columns, data.name), {}))
+        made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"].copy(), columns, data.name), {}))
         if data.name in FIFO_TOPICS:
             kind = FIFO_TOPICS[data.name]
             fast.append((fast_name(kind, data.multi_id), fifo_series(data.data, kind),
