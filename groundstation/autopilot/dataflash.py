@@ -113,7 +113,11 @@ def read_dataflash(path, progress=None) -> FlightLog:
     reader.messages.clear()
     reader.metadata = None
     del reader
-    _streams(log, {kind: every.fields(data, taken_type[kind], starts, FIELDS[kind]) for kind, starts in taken.items()}, choice)
+    try:
+        rows = {kind: every.fields(data, taken_type[kind], starts, FIELDS[kind]) for kind, starts in taken.items()}
+    except ValueError as error:
+        raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
+    _streams(log, rows, choice)
     log.tables, log.units, log.warnings = every.tables(data)
     return log
 

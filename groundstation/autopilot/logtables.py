@@ -98,6 +98,8 @@ class DataflashTables:
         """(rows, 1 + len(names)): the time (µs) and the fields ``names`` of the records of ``msg_type`` at
         ``starts`` in the file's bytes ``data``, as DFReader gives them."""
         layout = self.layouts[msg_type]
+        if missing := [name for name in names if name not in layout.names]:
+            raise ValueError(f"its {msg_type} messages have no {', '.join(missing)}")
         time_us, values = layout.values(layout.records(data, np.frombuffer(starts, dtype=np.int64)), names)
         return np.column_stack([time_us, values])
 

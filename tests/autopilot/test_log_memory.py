@@ -10,8 +10,11 @@ import pytest
 from pymavlink import DFReader
 
 from groundstation import quaternion
+from groundstation.errors import UserError
 from groundstation.session_makers.load import load_session
 from tests.shared_datasets import shared_dataset
+
+from mavlink_helpers import write_dataflash
 
 PLANE_BIN = "flightlogs/arduplane_omnibusf4_ground_pilot_0004.bin"  # ATT, XKF*, GPS, MAG, PARM; no IMU: no estimators
 PEAK_PER_FILE_BYTE = 3.0  # the goal of issue 35: the open's peak at most three times the file
@@ -68,3 +71,11 @@ def test_the_onboard_attitude_is_att_as_pymavlink_reads_it(plane):
     q = quaternion.from_euler_zyx(*np.radians([[m.Yaw, m.Pitch, m.Roll] for m in att]).T)
     np.testing.assert_array_equal(plane.tables["onboard"]["device_time_us"], [m.TimeUS for m in att])
     np.testing.assert_array_equal(np.column_stack([plane.tables["onboard"][f"q{c}"] for c in "wxyz"]), q)
+
+
+def test_an_att_without_its_angles_is_a_clear_error(tmp_path):
+    """The streams are read from the records' bytes after the walk: a field the format lacks is still said, in a line."""
+    path = tmp_path / "no_yaw.bin"
+    write_dataflash(path, {"ATT": ("Qff", "TimeUS,Roll,Pitch", [(1000 * i, 1.0, 2.0) for i in range(1, 20)])})
+    with pytest.raises(UserError, match="cannot read this DataFlash log .*Yaw"):
+        load_session(path)
