@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from array import array
 from collections import defaultdict
 
 import numpy as np
@@ -54,20 +55,24 @@ def read_dataflash(path, progress=None) -> FlightLog:
     with open(path, "rb") as f:
         if f.read(2) != MAGIC:
             raise UserError(f"{path}: not an ArduPilot DataFlash log (it does not start with 0xA3 0x95)")
-    rows, said, gps_times = defaultdict(list), [], []
+    said, gps_times = [], []
+    taken, taken_type = defaultdict(lambda: array("q")), {}  # FIELDS kind -> its rows' file offsets; their type
     choice = ImuChoice()  # the IMU instance the estimators run on
     every = DataflashTables()  # every message type as a table (``logtables``)
     chatter = Chatter()  # DFReader prints a "bad header" line per damaged byte, some from C: counted, not shown
     try:
         with chatter.caught():
             reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
+        cut = unfinished_record_bytes(reader)  # from DFReader's index of every record, which then goes: it holds a
+        reader.offsets = None  # Python int per record (as much memory as the file), and reading on (recv_msg) needs none
         clocks = {name: boot_clock(reader, name) for name in reader.name_to_id}
         last_us = None  # the boot time of the latest stamped record: an unstamped one (a log before 2015's PARM, MSG) came then
         with chatter.caught(descriptors=False):  # reading prints from Python only
             for count in itertools.count():
                 if (msg := reader.recv_msg()) is None:
                     break
-                every.add(msg)
+                start = reader.offset - msg.fmt.len  # DFReader stands at the record's end
+                every.add(msg, start)
                 name = msg.get_type()
                 if name == "GPS" and getattr(msg, "GWk", 0) > 0 and getattr(msg, "TimeUS", None) is not None:
                     gps_times.append((msg.GWk, msg.GMS, msg.TimeUS))  # any instance: the GPS time is one
@@ -76,7 +81,8 @@ def read_dataflash(path, progress=None) -> FlightLog:
                 if name in DATAFLASH_SAID:
                     said.append((last_us, msg))
                 elif clock is not None and (kind := "IMU" if name in IMU_TYPES else name) in FIELDS and _taken(msg, name, choice):
-                    rows[kind].append([getattr(msg, clock[0]) * clock[1], *(getattr(msg, f) for f in FIELDS[kind])])
+                    taken[kind].append(start)
+                    taken_type[kind] = name  # one type a kind: the IMU's rows are its chosen stream's
                 if progress is not None and count % 4096 == 0:
                     progress(reader.percent, 100)
     except RecursionError:  # DFReader reads on by calling itself once per record that does not fit its FMT
@@ -89,7 +95,7 @@ def read_dataflash(path, progress=None) -> FlightLog:
     log.events, log.parameters = dataflash_said([(first_us if t_us is None else int(t_us), r) for t_us, r in said], reader.mav_type)
     log.parameter_defaults = {r.Name: float(r.Default) for _, r in said  # ArduPilot 4.3's PARM on: NaN when not known
                               if r.get_type() == "PARM" and not math.isnan(getattr(r, "Default", math.nan))}
-    log.tables, log.units, log.warnings = every.tables()
+    said.clear()  # DFReader's messages: a Python object per value
     if gps_times:
         week, ms, boot_us = np.array(gps_times, dtype=np.int64).T
         log.utc_offset_us, log.utc_source = utc_offset_us(gps_unix_us(week, ms), boot_us), "GPS week and ms (GWk, GMS)"
@@ -99,37 +105,49 @@ def read_dataflash(path, progress=None) -> FlightLog:
     damaged = max(chatter.count("bad header"), sum(int(n) for n in skipped if n.isdigit()))
     if damaged:
         log.damage.append(f"{damaged} damaged bytes skipped")
-    cut = unfinished_record_bytes(reader)
     if cut and reader.data_len % BLOCK_BYTES == 0 and cut < BLOCK_BYTES:
         log.notes.append(f"the log ends in its last block with {cut} bytes of a record the autopilot had not finished: "
                          "a log copied off the card in whole blocks ends so")
     elif cut:
         log.damage.append(cut_message(cut))
-    if rows["IMU"]:
-        imu = np.array(rows["IMU"], dtype=float)
+    data = np.frombuffer(reader.data_map, dtype=np.uint8)  # the file's bytes (mapped: not copied)
+    # DFReader is read: it goes before the tables are made (its latest message of each type and its metadata
+    # point back at it; without those cycles it goes now, not at the garbage collector's next pass)
+    reader.messages.clear()
+    reader.metadata = None
+    del reader
+    try:
+        rows = {kind: every.fields(data, taken_type[kind], starts, FIELDS[kind]) for kind, starts in taken.items()}
+    except ValueError as error:
+        raise UserError(f"{path}: cannot read this DataFlash log ({error})") from None
+    _streams(log, rows, choice)
+    log.tables, log.units, log.warnings = every.tables(data)
+    return log
+
+
+def _streams(log: FlightLog, rows: dict[str, np.ndarray], choice: ImuChoice) -> None:
+    """The log's ``imu``, ``onboard``, ``mag``, ``baro`` and ``gps`` from ``rows``: per ``FIELDS`` kind, the time
+    and the fields of the records taken."""
+    if (imu := rows.get("IMU")) is not None:
         values = np.column_stack([imu[:, 1:4], imu[:, 4:7] / STANDARD_GRAVITY_M_S2])
         log.imu = series(imu[:, 0], dict(zip(IMU_COLUMNS, values.T)), choice.chosen)
     else:
         log.notes.append(f"{choice.said()}: onboard attitude only" if choice.heard else
                          "no IMU messages logged (the logging bitmask left them out): onboard attitude only")
-    if rows["ATT"]:
-        att = np.array(rows["ATT"], dtype=float)
+    if (att := rows.get("ATT")) is not None:
         q = quaternion.from_euler_zyx(*np.radians(att[:, 1:4]).T)
         log.onboard = series(att[:, 0], dict(zip(Q_COLUMNS, q.T)), "ATT")
-    if rows["MAG"]:
-        mag = np.array(rows["MAG"], dtype=float)
+    if (mag := rows.get("MAG")) is not None:
         log.mag = series(mag[:, 0], dict(zip(MAG_COLUMNS, (mag[:, 1:4] * MGAUSS_TO_UT).T)), "MAG[0]")
-    if rows["BARO"]:
-        baro = np.array(rows["BARO"], dtype=float)
+    if (baro := rows.get("BARO")) is not None:
         log.baro = series(baro[:, 0], {"pressure_hpa": baro[:, 1] / 100.0, "temperature_c": baro[:, 2]}, "BARO[0]")
     said_choice(log, choice)
-    gps = np.array(rows["GPS"], dtype=float).reshape(-1, 1 + len(FIELDS["GPS"]))  # the time, then the fields
+    gps = rows.get("GPS", np.zeros((0, 1 + len(FIELDS["GPS"]))))  # the time, then the fields
     gps = gps[gps[:, 7] >= 2]  # a 2D fix or better
     if len(gps):
         course = np.radians(gps[:, 5])
         columns = [gps[:, 1], gps[:, 2], gps[:, 3], gps[:, 4] * np.cos(course), gps[:, 4] * np.sin(course), gps[:, 6], gps[:, 7], gps[:, 8]]
         log.gps = series(gps[:, 0], dict(zip(GPS_COLUMNS, columns)), "GPS[0]")
-    return log
 
 
 def _taken(msg, name: str, choice: ImuChoice) -> bool:

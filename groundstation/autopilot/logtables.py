@@ -29,8 +29,8 @@ a reader can tell a burst from a continuous stream):
 from __future__ import annotations
 
 import functools
-import operator
 import re
+from array import array
 from collections import defaultdict
 
 import numpy as np
@@ -63,15 +63,18 @@ def table_name(name: str, instance=None) -> str:
 
 
 class DataflashTables:
-    """Collects every message ``DFReader`` returns (``add``), then ``tables()``: the log's tables and units."""
+    """Collects where every message ``DFReader`` returns starts in the file (``add``), then ``tables(data)``: the
+    log's tables and units, each type's records decoded from the file's bytes into columns at once (a Python
+    object per value, kept to the end, took ten times the file)."""
 
     def __init__(self):
-        self.rows = defaultdict(list)  # (type, instance) -> [[TimeUS, values...]]
+        self.starts = defaultdict(lambda: array("q"))  # type -> the file offsets of its records, in file order
         self.layouts: dict[str, _Layout] = {}  # type -> which of its fields are kept, and how
         self.isbh: dict[int, tuple] = {}  # batch N -> (kind, instance, mul, count, first sample µs, rate Hz)
         self.isbd = defaultdict(list)  # (kind, instance) -> [((mul, count, first µs, rate), N, seqno, x, y, z)]
 
-    def add(self, msg) -> None:
+    def add(self, msg, start: int) -> None:
+        """``msg`` as DFReader read it from the record at file offset ``start`` (its header's)."""
         msg_type = msg.get_type()
         if msg_type in DATAFLASH_SKIPPED:
             return
@@ -83,27 +86,48 @@ class DataflashTables:
         if layout is None:
             layout = self.layouts[msg_type] = _Layout(msg.fmt)
         if layout.take is not None:
-            elements = msg._elements  # the raw values: read whole, scaled per column in ``tables`` (getattr per field is 10x slower)
-            self.rows[(msg_type, layout.instance(elements))].append(layout.take(elements))
+            self.starts[msg_type].append(start)
+
     def _burst(self, msg) -> None:
         header = self.isbh.get(msg.N)
         if header is None or header[0] is None or not header[2]:
             return  # its header was lost (damaged bytes, a cut log start): no scale, no time
         self.isbd[header[:2]].append((header[2:], msg.N, msg.seqno, *msg._elements[-3:]))  # x, y, z: the last three fields
 
-    def tables(self) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
-        """The tables, their units, and a warning per type renamed to keep it apart (``kept_apart``)."""
+    def fields(self, data: np.ndarray, msg_type: str, starts, names) -> np.ndarray:
+        """(rows, 1 + len(names)): the time (µs) and the fields ``names`` of the records of ``msg_type`` at
+        ``starts`` in the file's bytes ``data``, as DFReader gives them."""
+        layout = self.layouts[msg_type]
+        if missing := [name for name in names if name not in layout.names]:
+            raise ValueError(f"its {msg_type} messages have no {', '.join(missing)}")
+        time_us, values = layout.values(layout.records(data, np.frombuffer(starts, dtype=np.int64)), names)
+        return np.column_stack([time_us, values])
+
+    def tables(self, data: np.ndarray) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
+        """The tables, their units, and a warning per type renamed to keep it apart (``kept_apart``); ``data``:
+        the file's bytes. The tables in the order their first records come in the file, the full-rate ones first."""
         made = []  # (table name, series, units)
         for (kind, instance), records in self.isbd.items():
             times, values, batch = _isbd_samples(records)
             made.append((fast_name(kind, instance), in_order(times, {**dict(zip(FAST[kind][1], values.T)), BATCH: batch}, "ISBH/ISBD"),
                          dict.fromkeys(FAST[kind][1], FAST[kind][2])))
-        for (msg_type, instance), rows in self.rows.items():
+        parts = []  # (first record's offset, table name, series, units)
+        while self.starts:  # each type's offsets let go once its table is made
+            msg_type, starts = self.starts.popitem()
             layout = self.layouts[msg_type]
-            values = np.array(rows, dtype=float).reshape(len(rows), -1) * layout.scale / layout.divisor
-            source = msg_type if instance is None else f"{msg_type}[{instance}]"
-            made.append((table_name(msg_type, instance), in_order(values[:, 0], dict(zip(layout.names, values[:, 1:].T)), source),
-                         layout.units))
+            starts = np.frombuffer(starts, dtype=np.int64)
+            records = layout.records(data, starts)
+            if layout.instance is None:
+                groups = [(None, slice(None))]
+            else:
+                keys, inverse = np.unique(records[layout.instance], return_inverse=True)
+                groups = [(key.item(), inverse.reshape(-1) == k) for k, key in enumerate(keys)]
+            for instance, rows in groups:
+                time_us, values = layout.values(records[rows])
+                source = msg_type if instance is None else f"{msg_type}[{instance}]"
+                parts.append((starts[rows][0], table_name(msg_type, instance),
+                              in_order(time_us, dict(zip(layout.names, values.T)), source), layout.units))
+        made += [part[1:] for part in sorted(parts, key=lambda part: part[0])]
         return named_tables(made, "DataFlash message")
 
 
@@ -127,13 +151,44 @@ class _Layout:
         self.names = [fmt.columns[i] for i in kept]
         self.units = {c: fmt.get_unit(c) for c in self.names}
         has_time = clock is not None and bool(kept)
-        self.take = operator.itemgetter(fmt.colhash[clock], *kept) if has_time else None  # a type without time: no table
+        self.take = [f"f{i}" for i in (fmt.colhash[clock], *kept)] if has_time else None  # a type without time: no table
+        self.dtype, self.length = record_dtype(fmt.msg_struct), fmt.len
         mults = [None, *(fmt.msg_mults[i] for i in kept)]
         # DFReader divides by 1/m for m < 1 (more exact than multiplying by m) and multiplies otherwise: so do we
         self.scale = np.array([us_per_unit, *(m if m is not None and m >= 1.0 else 1.0 for m in mults[1:])])
         self.divisor = np.array([1.0 / m if m is not None and 0.0 < m < 1.0 else 1.0 for m in mults])
         at = fmt.colhash.get(fmt.instance_field) if fmt.instance_field is not None else None
-        self.instance = (lambda elements: None) if at is None else operator.itemgetter(at)
+        self.instance = None if at is None else f"f{at}"
+
+    def records(self, data: np.ndarray, starts: np.ndarray) -> np.ndarray:
+        """The records at file offsets ``starts`` of the file's bytes ``data``, as a structured array (field ``f<i>``:
+        element ``i`` of DFReader's unpacking)."""
+        bodies = np.lib.stride_tricks.sliding_window_view(data, self.length - 3)[starts + 3]  # one copy: the records' bytes
+        return bodies.view(self.dtype).reshape(len(starts))
+
+    def values(self, records: np.ndarray, fields=None) -> tuple[np.ndarray, np.ndarray]:
+        """The time in µs (rows,) and the kept fields (rows, kept) of ``records`` (or those ``fields`` of them),
+        scaled as DFReader scales them, the time apart (a table's columns hold on to what they are cut from)."""
+        at = [0, *(1 + self.names.index(name) for name in fields)] if fields is not None else range(len(self.take))
+        time_us = records[self.take[0]] * self.scale[0] / self.divisor[0]
+        values = np.empty((len(records), len(at) - 1))
+        for i, field in enumerate(at[1:]):
+            values[:, i] = records[self.take[field]]
+            values[:, i] *= self.scale[field]
+            values[:, i] /= self.divisor[field]
+        return time_us, values
+
+
+# DFReader's struct codes (``DFFormat.msg_struct``: little-endian, unpadded) as numpy's; ``<n>s`` a string of n bytes
+STRUCT_TO_NUMPY = {"b": "i1", "B": "u1", "e": "<f2", "h": "<i2", "H": "<u2", "i": "<i4", "I": "<u4", "f": "<f4", "d": "<f8",
+                   "q": "<i8", "Q": "<u8"}
+_STRUCT_CODE = re.compile(r"(\d*)([a-zA-Z])")
+
+
+def record_dtype(msg_struct: str) -> np.dtype:
+    """A DataFlash record's body as a numpy dtype: field ``f<i>`` is element ``i`` of ``struct.unpack(msg_struct)``."""
+    formats = [f"V{count or 1}" if code == "s" else STRUCT_TO_NUMPY[code] for count, code in _STRUCT_CODE.findall(msg_struct)]
+    return np.dtype({"names": [f"f{i}" for i in range(len(formats))], "formats": formats})
 
 
 def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
@@ -145,9 +200,10 @@ def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]]
         if not len(data.data["timestamp"]) or not fields:
             continue
         flat, said = kept_apart([_flat(f) for f in fields], [f"{data.name}.{f}" for f in fields], "ULog field")
-        columns = {name: data.data[field] for name, field in zip(flat, fields)}
+        # copies, the time too: a view of a field holds on to pyulog's buffer of the topic's every record and field
+        columns = {name: np.array(data.data[field], dtype=float) for name, field in zip(flat, fields)}
         renamed += said
-        made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"], columns, data.name), {}))
+        made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"].copy(), columns, data.name), {}))
         if data.name in FIFO_TOPICS:
             kind = FIFO_TOPICS[data.name]
             fast.append((fast_name(kind, data.multi_id), fifo_series(data.data, kind),

@@ -1,0 +1,81 @@
+"""What opening a flight log costs in memory (issue 35): the readers keep columns, not an object per message,
+so the open's tracemalloc peak stays within a few times the file; and the session is the one pymavlink's
+DFReader reads, message by message, from the same file."""
+
+import tracemalloc
+from collections import defaultdict
+
+import numpy as np
+import pytest
+from pymavlink import DFReader
+
+from groundstation import quaternion
+from groundstation.errors import UserError
+from groundstation.session_makers.load import load_session
+from tests.shared_datasets import shared_dataset
+
+from mavlink_helpers import write_dataflash
+
+PLANE_BIN = "flightlogs/arduplane_omnibusf4_ground_pilot_0004.bin"  # ATT, XKF*, GPS, MAG, PARM; no IMU: no estimators
+PEAK_PER_FILE_BYTE = 3.0  # the goal of issue 35: the open's peak at most three times the file
+
+
+@pytest.fixture(scope="module")
+def plane():
+    return load_session(shared_dataset(PLANE_BIN))
+
+
+def test_opening_a_dataflash_log_peaks_within_three_times_the_file(plane):
+    path = shared_dataset(PLANE_BIN)
+    tracemalloc.start()  # after the fixture's open: what is imported and compiled on first use is not the reading
+    try:
+        load_session(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= PEAK_PER_FILE_BYTE * path.stat().st_size, f"{peak / path.stat().st_size:.2f}x the file"
+
+
+def pymavlink_messages(path) -> dict[tuple[str, object], list]:
+    """(type, instance) -> the messages DFReader reads, in the file's order."""
+    reader = DFReader.DFReader_binary(str(path), zero_time_base=False)
+    out = defaultdict(list)
+    while (msg := reader.recv_msg()) is not None:
+        field = msg.fmt.instance_field
+        out[(msg.get_type(), getattr(msg, field) if field else None)].append(msg)
+    return out
+
+
+def test_every_table_of_the_log_is_every_field_as_pymavlink_reads_it(plane):
+    expected = pymavlink_messages(shared_dataset(PLANE_BIN))
+    t0_us = plane.tables["onboard"]["device_time_us"][0]
+    seen = set()
+    for (msg_type, instance), messages in expected.items():
+        name = msg_type.lower() if instance is None else f"{msg_type.lower()}_{instance}"
+        if name not in plane.tables:
+            continue  # FMT, PARM, MSG...: no time or no numbers, not a table
+        table, info = plane.tables[name], plane.catalogue[name]
+        times_us = np.array([m.TimeUS for m in messages], dtype=float)
+        order = np.argsort(times_us, kind="stable")
+        np.testing.assert_array_equal(table["time_s"], (times_us[order] - t0_us) / 1e6, err_msg=name)
+        for column in info.columns[1:]:
+            field = column.label
+            np.testing.assert_array_equal(table[column.name], np.array([getattr(m, field) for m in messages], dtype=float)[order],
+                                          err_msg=f"{name}.{field}")
+            seen.add(name)
+    assert len(seen) > 40  # every type and instance with a time and numbers: this log's 50-odd
+
+
+def test_the_onboard_attitude_is_att_as_pymavlink_reads_it(plane):
+    att = pymavlink_messages(shared_dataset(PLANE_BIN))[("ATT", None)]
+    q = quaternion.from_euler_zyx(*np.radians([[m.Yaw, m.Pitch, m.Roll] for m in att]).T)
+    np.testing.assert_array_equal(plane.tables["onboard"]["device_time_us"], [m.TimeUS for m in att])
+    np.testing.assert_array_equal(np.column_stack([plane.tables["onboard"][f"q{c}"] for c in "wxyz"]), q)
+
+
+def test_an_att_without_its_angles_is_a_clear_error(tmp_path):
+    """The streams are read from the records' bytes after the walk: a field the format lacks is still said, in a line."""
+    path = tmp_path / "no_yaw.bin"
+    write_dataflash(path, {"ATT": ("Qff", "TimeUS,Roll,Pitch", [(1000 * i, 1.0, 2.0) for i in range(1, 20)])})
+    with pytest.raises(UserError, match="cannot read this DataFlash log .*Yaw"):
+        load_session(path)
