@@ -2,18 +2,17 @@
 
 import gzip
 import json
-import subprocess
 
 import numpy as np
 import pytest
 from ahrs.filters import Madgwick
 
 from groundstation import quaternion as quat
-from groundstation.cli import main
 from groundstation.datasets import DatasetError, read_csv
 from groundstation.datasets import Trial
 from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score, scores
 from groundstation.sim.profiles import make_profile
+from tests.cli_in_process import run_in_process
 
 TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
 SLICE = 12_000  # about 42 s at 285.7 Hz: enough to include rest and motion, quick to run
@@ -175,12 +174,7 @@ def test_reader_plain_and_gz_agree_and_bad_files_are_refused(trial_slice, tmp_pa
 
 
 def run_cli(capsys, *args):
-    """``groundstation evaluate`` in this process (the console script's process is tested in tests/test_cli.py):
-    its exit status and what it printed."""
-    capsys.readouterr()
-    returncode = main(["evaluate", *args])
-    out, err = capsys.readouterr()
-    return subprocess.CompletedProcess(["evaluate", *args], returncode, out, err)
+    return run_in_process(capsys, "evaluate", *args)
 
 
 def test_evaluate_command_json(trial_slice, capsys):
