@@ -15,6 +15,7 @@ from groundstation.cli import main
 from groundstation.estimation import live_estimators, runnable
 from groundstation.formats import FILE_AIDING
 from groundstation.recording import RecordingWriter, open_recording
+from tests.cli_in_process import run_in_process
 from tests.session.full_disk import tiny_tmpfs
 
 GYR = ["gyr_x_rad_s", "gyr_y_rad_s", "gyr_z_rad_s"]
@@ -79,13 +80,13 @@ def test_set_on_an_estimator_the_recording_did_not_run(dataset, tmp_path, capsys
     message = f"--set cf1: not among the estimators of this session ({default}); add cf1 with --filters"
     fails_with(capsys, ["export", str(csv), "--out", str(tmp_path / "out.csv"), "--set", "cf1.time_constant_s=1"], message)
     # and with hf run, the setting takes effect: a different answer than the default beta
-    default = json.loads(run_json(["evaluate", str(csv), "--filters", "hf", "--json"]))["hf"]["incl_rmse_deg"]
-    changed = json.loads(run_json(["evaluate", str(csv), "--filters", "hf", "--set", "hf.beta=1", "--json"]))["hf"]["incl_rmse_deg"]
+    default = json.loads(run_json(capsys, ["evaluate", str(csv), "--filters", "hf", "--json"]))["hf"]["incl_rmse_deg"]
+    changed = json.loads(run_json(capsys, ["evaluate", str(csv), "--filters", "hf", "--set", "hf.beta=1", "--json"]))["hf"]["incl_rmse_deg"]
     assert changed != default
 
 
-def run_json(argv) -> str:
-    done = subprocess.run([sys.executable, "-m", "groundstation", *argv], capture_output=True, text=True, timeout=120)
+def run_json(capsys, argv) -> str:
+    done = run_in_process(capsys, *argv)
     assert done.returncode == 0, done.stderr
     return done.stdout
 

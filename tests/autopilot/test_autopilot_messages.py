@@ -6,8 +6,6 @@ encoder, and live from the simulated aircraft through a real pty, whose .tlog gi
 import dataclasses
 import os
 import struct
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -21,6 +19,7 @@ from groundstation.session_makers.load import load_session
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 from groundstation.sim.stream import Scenario
 from mavlink_helpers import Sender, flightlog, pty_session
+from tests.cli_in_process import run_in_process
 
 VEHICLE = (1, 1)
 SEVERITY = ("EMERGENCY", "ALERT", "CRITICAL", "ERROR", "WARNING", "NOTICE", "INFO", "DEBUG")  # MAVLink's MAV_SEVERITY
@@ -137,14 +136,13 @@ TEXTS = ((0.3, mavlink.MAV_SEVERITY_INFO, "ArduCopter V4.5.7 (simulated)"),
 
 
 @pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
-def test_a_live_session_says_the_aircrafts_texts_and_its_tlog_says_the_same(tmp_path):
+def test_a_live_session_says_the_aircrafts_texts_and_its_tlog_says_the_same(tmp_path, capsys):
     aircraft = MavlinkAircraft(dataclasses.replace(Scenario(), profile="static", duration_s=60.0, seed=2), texts=TEXTS)
     session = pty_session(aircraft, 2.5, filters=FILTERS, recordings_dir=tmp_path)
     live = [(e["severity"], e["message"]) for e in session.view.events if e["kind"] == "message"]
     assert live == [(SEVERITY[s], text) for _, s, text in TEXTS]
     tlog = tmp_path / "x.tlog"
-    done = subprocess.run([sys.executable, "-m", "groundstation", "import", str(session.recording_path), "--out", str(tlog)],
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    done = run_in_process(capsys, "import", session.recording_path, "--out", tlog)
     assert done.returncode == 0, done.stderr
     recorded, logged = load_session(session.recording_path, filters=FILTERS), load_session(tlog, filters=FILTERS)
     keys = ("kind", "message", "severity", "source", "mode", "armed")

@@ -8,8 +8,6 @@ column (``host_time_s``) may differ by up to 1 µs; every other value is equal b
 
 import dataclasses
 import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -19,6 +17,7 @@ from groundstation.session_makers.load import load_session
 from groundstation.sim.mavlink_aircraft import MavlinkAircraft
 from groundstation.sim.stream import Scenario
 from mavlink_helpers import pty_session
+from tests.cli_in_process import run_in_process
 
 SCENARIO = dataclasses.replace(Scenario(), profile="flight", duration_s=60.0, seed=5)
 FILTERS = ("ahf", "hf")
@@ -27,13 +26,12 @@ RECEIVE_TIME_TOLERANCE_S = 1e-6
 
 
 @pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals are POSIX only")
-def test_a_live_session_and_its_tlog_open_to_the_same_tables_and_rows(tmp_path):
+def test_a_live_session_and_its_tlog_open_to_the_same_tables_and_rows(tmp_path, capsys):
     session = pty_session(MavlinkAircraft(SCENARIO), 3.0, filters=FILTERS, recordings_dir=tmp_path)
     recording = session.recording_path
     assert open_recording(recording).metadata["protocol"] == "mavlink"
     tlog = tmp_path / "x.tlog"
-    done = subprocess.run([sys.executable, "-m", "groundstation", "import", str(recording), "--out", str(tlog)],
-                          capture_output=True, text=True, timeout=120)  # fmt: skip
+    done = run_in_process(capsys, "import", recording, "--out", tlog)
     assert done.returncode == 0, done.stderr
 
     live, logged = load_session(recording, filters=FILTERS), load_session(tlog, filters=FILTERS)

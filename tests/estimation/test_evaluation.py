@@ -2,8 +2,6 @@
 
 import gzip
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -14,6 +12,7 @@ from groundstation.datasets import DatasetError, read_csv
 from groundstation.datasets import Trial
 from groundstation.estimation.evaluation import evaluate_trial, heading_error_rad, inclination_error_rad, resampled, sample_periods_s, score, scores
 from groundstation.sim.profiles import make_profile
+from tests.cli_in_process import run_in_process
 
 TRIAL = "02_undisturbed_slow_rotation_B.csv.gz"
 SLICE = 12_000  # about 42 s at 285.7 Hz: enough to include rest and motion, quick to run
@@ -174,12 +173,12 @@ def test_reader_plain_and_gz_agree_and_bad_files_are_refused(trial_slice, tmp_pa
         read_csv(tmp_path / "absent.csv")
 
 
-def run_cli(*args):
-    return subprocess.run([sys.executable, "-m", "groundstation", "evaluate", *args], capture_output=True, text=True, timeout=300)
+def run_cli(capsys, *args):
+    return run_in_process(capsys, "evaluate", *args)
 
 
-def test_evaluate_command_json(trial_slice):
-    result = run_cli(str(trial_slice), "--filters", "hf,ecf,hfm", "--set", "hf.beta=0.033", "--json")
+def test_evaluate_command_json(trial_slice, capsys):
+    result = run_cli(capsys, str(trial_slice), "--filters", "hf,ecf,hfm", "--set", "hf.beta=0.033", "--json")
     assert result.returncode == 0, result.stderr
     figures = json.loads(result.stdout)
     assert list(figures) == ["hf", "ecf", "hfm"]
@@ -188,14 +187,14 @@ def test_evaluate_command_json(trial_slice):
     assert figures["hfm"] == pytest.approx(expected["hfm"]) and "heading_rmse_deg" in figures["hfm"]  # the CLI scores heading too
 
 
-def test_a_gps_aided_filter_asked_for_without_gps_is_said_to_need_it(trial_slice):
+def test_a_gps_aided_filter_asked_for_without_gps_is_said_to_need_it(trial_slice, capsys):
     """Issue 33: ukf and sssrukf without GPS flipped to about 178° with no warning. They are not run by
     default on a file without GPS; asked for by name, they are scored and one line says why to doubt it."""
-    default = run_cli(str(trial_slice), "--json")
+    default = run_cli(capsys, str(trial_slice), "--json")
     assert default.returncode == 0, default.stderr
     figures = json.loads(default.stdout)
     assert "ukf" not in figures and "sssrukf" not in figures and "warnings" not in figures
-    asked = run_cli(str(trial_slice), "--filters", "ecf,ukf", "--json")
+    asked = run_cli(capsys, str(trial_slice), "--filters", "ecf,ukf", "--json")
     assert asked.returncode == 0, asked.stderr
     figures = json.loads(asked.stdout)
     assert list(figures) == ["ecf", "ukf", "warnings"]
@@ -213,10 +212,10 @@ def test_a_gps_aided_filter_asked_for_without_gps_is_said_to_need_it(trial_slice
         (["{slice}", "--set", "hf.gain=1"], "no setting 'gain'"),
     ],
 )
-def test_evaluate_command_errors_are_messages_not_tracebacks(trial_slice, tmp_path, args, message):
+def test_evaluate_command_errors_are_messages_not_tracebacks(trial_slice, tmp_path, capsys, args, message):
     garbage = tmp_path / "garbage.csv.gz"
     garbage.write_bytes(bytes(range(256)) * 10)
     args = [a.format(garbage=garbage, slice=trial_slice) for a in args]
-    result = run_cli(*args)
+    result = run_cli(capsys, *args)
     assert result.returncode == 2
     assert message in result.stderr and "Traceback" not in result.stderr

@@ -17,6 +17,7 @@ from openpyxl import load_workbook
 from groundstation.errors import UserError
 from groundstation.export import files
 from groundstation.export.excel import ExportCancelled, write_workbook
+from tests.cli_in_process import run_in_process
 
 posix_only = pytest.mark.skipif(os.name != "posix", reason="POSIX permissions and resource limits")
 
@@ -172,11 +173,12 @@ def test_progress_counts_every_row_up_to_the_total(sim_session, tmp_path):
     assert reports[-1][1] == len(sim_session) * 3 + link  # Attitude, Sensors, chart points, Link
 
 
-def gs(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "groundstation", *map(str, args)], capture_output=True, text=True, timeout=120)
+@pytest.fixture
+def gs(capsys):
+    return lambda *args: run_in_process(capsys, *args)
 
 
-def test_the_export_command_writes_a_workbook(sim_recording, tmp_path):
+def test_the_export_command_writes_a_workbook(sim_recording, tmp_path, gs):
     out = tmp_path / "flight.xlsx"
     result = gs("export", sim_recording, "--out", out, "--from", "2", "--to", "12")
     assert result.returncode == 0, result.stderr

@@ -3,8 +3,6 @@ time stamp of every table equal to the session's, every attitude on /tf, every e
 
 import json
 import math
-import subprocess
-import sys
 from collections import defaultdict
 
 import numpy as np
@@ -18,6 +16,7 @@ from groundstation.export.protobuf_rows import field_names
 from groundstation.export.request import export_request, run_export
 from groundstation.session_makers.load import load_session
 from groundstation.session.product import event_time_s
+from tests.cli_in_process import run_in_process
 from tests.export.conftest import START_UTC
 
 
@@ -118,14 +117,13 @@ def test_time_range_and_rate(sim_recording, tmp_path):
         export_request(sim_recording, tmp_path / "x.mcap", rate_hz=10)
 
 
-def test_cli_exports_a_flight_log_and_refuses_cleanly(tmp_path):
+def test_cli_exports_a_flight_log_and_refuses_cleanly(tmp_path, capsys):
     from tests.export.conftest import DATASETS
     log = DATASETS / "flightlogs" / "px4_fmuv5_quad_hop.ulg"
     if not log.exists():
         pytest.skip("flight logs not found")
     out = tmp_path / "hop.mcap"
-    done = subprocess.run([sys.executable, "-m", "groundstation", "export", str(log), "--out", str(out)],
-                          capture_output=True, text=True, timeout=300)
+    done = run_in_process(capsys, "export", log, "--out", out)
     assert done.returncode == 0, done.stderr
     topics = read_mcap(out)
     session = load_session(log)
@@ -134,8 +132,7 @@ def test_cli_exports_a_flight_log_and_refuses_cleanly(tmp_path):
     times = np.array([t for t, _ in topics["/onboard"]])
     assert times.min() >= origin_ns(session.metadata) > 1.6e18  # the log's GPS time (2023), not 1970
     np.testing.assert_allclose(np.diff(times) / 1e9, np.diff(onboard), atol=1e-9)
-    again = subprocess.run([sys.executable, "-m", "groundstation", "export", str(log), "--out", str(out)],
-                           capture_output=True, text=True, timeout=300)
+    again = run_in_process(capsys, "export", log, "--out", out)
     assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
     assert len(again.stderr.strip().splitlines()) == 1
 

@@ -5,7 +5,6 @@ on its own (no script, no address, figures inline) and renders in a real browser
 import html
 import shutil
 import subprocess
-import sys
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -13,6 +12,7 @@ import numpy as np
 import pytest
 
 from groundstation.cli import main
+from tests.cli_in_process import run_in_process
 
 FLIGHTLOGS = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs"  # as tests/autopilot finds them
 SHARED_LOGS = sorted(p.name for pattern in ("*.bin", "*.ulg", "*.tlog") for p in FLIGHTLOGS.glob(pattern))
@@ -104,10 +104,9 @@ def test_the_report_renders_in_a_real_browser(vibrating_flight, tmp_path):
 
 
 @pytest.mark.parametrize("name", SHARED_LOGS)
-def test_every_shared_log_gets_a_report(name, tmp_path):
+def test_every_shared_log_gets_a_report(name, tmp_path, capsys):
     out = tmp_path / "report.html"
-    result = subprocess.run([sys.executable, "-m", "groundstation", "report", str(FLIGHTLOGS / name), "--out", str(out),
-                             "--filters", "ahf"], capture_output=True, text=True, timeout=600)
+    result = run_in_process(capsys, "report", FLIGHTLOGS / name, "--out", out, "--filters", "ahf")
     assert result.returncode == 0 and "Traceback" not in result.stderr, result.stderr[-2000:]
     assert f"wrote {out}" in result.stdout
     assert "<h2>Findings</h2>" in out.read_text(encoding="utf-8")

@@ -1,4 +1,6 @@
-"""The session commands as a user runs them: real processes, real files."""
+"""The session commands as a user runs them: real files; each command in the test's process (``gs``), and
+where a result must not depend on the process (exact figures, byte-identical files) once in a process of its
+own (``gs_process``: another interpreter, another hash seed)."""
 
 import filecmp
 import json
@@ -12,14 +14,20 @@ import pytest
 
 from groundstation.datasets import read_csv
 from groundstation.estimation.evaluation import evaluate_trial
+from tests.cli_in_process import run_in_process
 
 SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "datasets" / "broad"
 TRIAL = SHARED / "02_undisturbed_slow_rotation_B.csv.gz"
 needs_dataset = pytest.mark.skipif(not TRIAL.exists(), reason=f"dataset not found at {TRIAL}")
 
 
-def gs(*args, cwd=None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "groundstation", *map(str, args)], capture_output=True, text=True, timeout=300, cwd=cwd)
+def gs_process(*args) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "groundstation", *map(str, args)], capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture
+def gs(capsys):
+    return lambda *args: run_in_process(capsys, *args)
 
 
 @pytest.fixture(scope="module")
@@ -33,23 +41,23 @@ def short_trial(tmp_path_factory) -> Path:
 
 
 @needs_dataset
-def test_imported_trial_evaluates_exactly_as_its_csv(short_trial, tmp_path):
+def test_imported_trial_evaluates_exactly_as_its_csv(short_trial, tmp_path, gs):
     recording = tmp_path / "trial.gsrec"
     assert gs("import", short_trial, "--out", recording).returncode == 0
     from_recording = json.loads(gs("evaluate", recording, "--filters", "ahf,hf,ecf", "--json").stdout)
-    from_csv = json.loads(gs("evaluate", short_trial, "--filters", "ahf,hf,ecf", "--json").stdout)
+    from_csv = json.loads(gs_process("evaluate", short_trial, "--filters", "ahf,hf,ecf", "--json").stdout)
     assert from_recording == from_csv  # exactly, not approximately
     # and both are what the estimators' own evaluation gives on the CSV
     assert from_csv == evaluate_trial(read_csv(short_trial), ["ahf", "hf", "ecf"])
 
 
 @needs_dataset
-def test_export_csv_columns_values_and_byte_identical_reruns(short_trial, tmp_path):
+def test_export_csv_columns_values_and_byte_identical_reruns(short_trial, tmp_path, gs):
     recording = tmp_path / "trial.gsrec"
     gs("import", short_trial, "--out", recording)
     first, second = tmp_path / "a.csv", tmp_path / "b.csv"
     assert gs("export", recording, "--out", first, "--filters", "ahf,hf").returncode == 0
-    assert gs("export", recording, "--out", second, "--filters", "ahf,hf").returncode == 0
+    assert gs_process("export", recording, "--out", second, "--filters", "ahf,hf").returncode == 0
     assert filecmp.cmp(first, second, shallow=False)
     table = pd.read_csv(first)
     for name in ("ahf", "hf"):
@@ -65,7 +73,7 @@ def test_export_csv_columns_values_and_byte_identical_reruns(short_trial, tmp_pa
 
 
 @needs_dataset
-def test_export_time_range_and_rate(short_trial, tmp_path):
+def test_export_time_range_and_rate(short_trial, tmp_path, gs):
     out = tmp_path / "part.csv"
     assert gs("export", short_trial, "--out", out, "--filters", "ahf", "--from", "5", "--to", "10", "--rate", "50").returncode == 0
     table = pd.read_csv(out)
@@ -74,7 +82,7 @@ def test_export_time_range_and_rate(short_trial, tmp_path):
     assert 200 <= len(table) <= 260
 
 
-def test_bad_inputs_get_a_message_and_exit_2(tmp_path):
+def test_bad_inputs_get_a_message_and_exit_2(tmp_path, gs):
     garbage = tmp_path / "garbage.gsrec"
     garbage.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(200))
     cases = [
@@ -94,7 +102,7 @@ def test_bad_inputs_get_a_message_and_exit_2(tmp_path):
 
 
 @needs_dataset
-def test_export_to_an_unwritable_place_leaves_nothing(short_trial, tmp_path):
+def test_export_to_an_unwritable_place_leaves_nothing(short_trial, tmp_path, gs):
     result = gs("export", short_trial, "--out", tmp_path / "no" / "such" / "dir" / "x.csv", "--filters", "ahf")
     assert result.returncode == 2 and "does not exist" in result.stderr
     existing = tmp_path / "exists.csv"

@@ -1,9 +1,6 @@
 """A lost CONFIG is said (issue 22): a recording whose only CONFIG frames are in damaged records is
 converted at an accelerometer full scale inferred from 1 g at rest, and every command says so."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
 
@@ -12,13 +9,15 @@ from groundstation.session_makers.load import load_session
 from groundstation.session_makers.pipeline import SensorConfig, without_config
 from groundstation.session_makers.replay import replay
 
+from tests.cli_in_process import run_in_process
 from tests.recording.helpers import recording_without_config
 
 INFERRED = "accelerometer full scale ±4 g inferred"  # the simulated board's (at the assumed ±2 g: 0.5 g at rest)
 
 
-def gs(*args):
-    return subprocess.run([sys.executable, "-m", "groundstation", *map(str, args)], capture_output=True, text=True, timeout=300)
+@pytest.fixture
+def gs(capsys):
+    return lambda *args: run_in_process(capsys, *args)
 
 
 @pytest.fixture(scope="module")
@@ -39,7 +38,7 @@ def test_both_paths_warn_and_convert_at_the_inferred_scale(damaged):
 
 
 @pytest.mark.parametrize("command", [["export", "--out", "{out}"], ["evaluate"], ["replay"]])
-def test_every_command_prints_the_warning(damaged, tmp_path, command):
+def test_every_command_prints_the_warning(damaged, tmp_path, gs, command):
     args = [a.format(out=tmp_path / "out.csv") for a in command]
     run = gs(args[0], damaged, *args[1:])
     assert run.returncode == 0, run.stderr

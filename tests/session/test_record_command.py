@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from groundstation.recording import open_recording
+from tests.cli_in_process import run_in_process
 from tests.waiting import LIMIT_S, wait_for
 
 posix_only = pytest.mark.skipif(os.name != "posix", reason="pseudo-terminals and signals are POSIX")
@@ -64,7 +65,7 @@ def test_ctrl_c_stops_cleanly_and_says_where_the_recording_is(tmp_path):
     assert recording.closed_cleanly and recording.chunk_count > 50
 
 
-def test_wrong_inputs_get_a_message_exit_2_and_leave_no_file(tmp_path):
+def test_wrong_inputs_get_a_message_exit_2_and_leave_no_file(tmp_path, capsys):
     not_a_folder = tmp_path / "file"
     not_a_folder.write_text("x")
     sample = Path(__file__).resolve().parents[2] / "recordings" / "samples" / "hover-raw.gsrec"
@@ -81,7 +82,9 @@ def test_wrong_inputs_get_a_message_exit_2_and_leave_no_file(tmp_path):
     for args, message in cases:
         if "--recordings" not in args:
             args = [*args, "--recordings", folder]
-        done = gs("record", *args)
+        if "--duration" not in args:  # in this process: one let through would stop after a second, not at Ctrl-C
+            args = [*args, "--duration", "1"]
+        done = run_in_process(capsys, "record", *args)
         assert done.returncode == 2 and message in done.stderr and "Traceback" not in done.stderr, (args, done.stderr)
         assert not folder.exists() or list(folder.iterdir()) == []
 

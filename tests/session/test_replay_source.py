@@ -1,7 +1,5 @@
 """Replay pacing, and replaying damaged recordings."""
 
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -11,6 +9,7 @@ import pytest
 from groundstation.recording import open_recording
 from groundstation.session_makers.replay import replay
 from groundstation.sources import ReplaySource, SourceClosed
+from tests.cli_in_process import run_in_process
 
 SAMPLE = Path(__file__).resolve().parents[2] / "recordings" / "samples" / "hover-raw.gsrec"
 
@@ -46,7 +45,7 @@ def test_speed_outside_the_range_is_refused():
         ReplaySource(open_recording(SAMPLE), speed=100.0)
 
 
-def test_a_recording_cut_off_mid_record_replays_what_it_holds(tmp_path):
+def test_a_recording_cut_off_mid_record_replays_what_it_holds(tmp_path, capsys):
     cut = tmp_path / "cut.gsrec"
     data = SAMPLE.read_bytes()
     cut.write_bytes(data[: len(data) // 6 + 7])  # mid-record, inside the link bytes (the truth block comes last)
@@ -57,6 +56,5 @@ def test_a_recording_cut_off_mid_record_replays_what_it_holds(tmp_path):
     assert 0.1 * len(whole) < len(part) < len(whole)
     np.testing.assert_array_equal(part, whole[: len(part)])  # what survives is exactly the flight's start
 
-    result = subprocess.run([sys.executable, "-m", "groundstation", "export", cut, "--out", tmp_path / "cut.csv"],
-                            capture_output=True, text=True, timeout=120)
+    result = run_in_process(capsys, "export", cut, "--out", tmp_path / "cut.csv")
     assert result.returncode == 0 and "warning: truncated" in result.stdout

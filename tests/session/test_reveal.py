@@ -2,8 +2,6 @@
 and on pause; the tables show exactly the computed rows up to the clock, read as a ``Table`` is;
 the link figures at the end are the decoder's totals; ``groundstation replay`` computes any file."""
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +12,7 @@ from groundstation.session_makers.load import load_session
 from groundstation.session_makers.replay import replay
 from groundstation.session.playback import Playback, RevealedTable, RevealSession, check_speed
 from groundstation.session_parts.table import Table
+from tests.cli_in_process import run_in_process
 
 SAMPLES = Path(__file__).resolve().parents[2] / "recordings" / "samples"
 LOSSY = SAMPLES / "flight-both-lossy.gsrec"  # losses, CRC failures, both raw and estimated frames
@@ -94,11 +93,12 @@ def test_a_recording_played_to_the_end_shows_every_row_and_the_decoders_totals()
     assert session.source.position_s == data.time_s[int((data.time_s <= 1.0).sum())]
 
 
-def gs(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "groundstation", *map(str, args)], capture_output=True, text=True, timeout=120)
+@pytest.fixture
+def gs(capsys):
+    return lambda *args: run_in_process(capsys, *args)
 
 
-def test_replay_command_computes_a_recording_and_plays_it_at_a_pace():
+def test_replay_command_computes_a_recording_and_plays_it_at_a_pace(gs):
     data = load_session(LOSSY)
     c = data.link.counters
     totals = (f"{len(data)} IMU samples at {data.imu_rate_hz():.1f} Hz over {data.duration_s():.1f} s, {c['frames']} frames, "
@@ -113,7 +113,7 @@ def test_replay_command_computes_a_recording_and_plays_it_at_a_pace():
 
 
 @pytest.mark.parametrize("name", ["px4_fmuv5_quad_hop.ulg", "arduplane_omnibusf4_ground_pilot_0004.bin"])
-def test_replay_command_reads_flight_logs(name):
+def test_replay_command_reads_flight_logs(name, gs):
     path = FLIGHTLOGS / name
     if not path.exists():
         pytest.skip(f"{path} is absent (the shared flight logs)")

@@ -1,7 +1,5 @@
 """Simulated recordings: the truth travels with them, and the samples in recordings/ stay usable."""
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -9,15 +7,17 @@ import pytest
 
 from groundstation.recording import open_recording
 from groundstation.session_makers.load import load_session
+from tests.cli_in_process import run_in_process
 
 SAMPLES = Path(__file__).resolve().parents[2] / "recordings" / "samples"
 
 
-def gs(*args):
-    return subprocess.run([sys.executable, "-m", "groundstation", *map(str, args)], capture_output=True, text=True, timeout=300)
+@pytest.fixture
+def gs(capsys):
+    return lambda *args: run_in_process(capsys, *args)
 
 
-def test_a_simulated_recording_scores_like_its_truth_csv(tmp_path):
+def test_a_simulated_recording_scores_like_its_truth_csv(tmp_path, gs):
     """Two roads to the same figures: the recording decoded through the pipeline (body axes, the
     mounting applied) and the truth CSV through the dataset path (sensor axes). They differ only
     by the CSV's 10-digit rounding and the first sample's dt."""

@@ -2,8 +2,6 @@
 radio echoing, another sender) is counted and said, live, in replay and on the batch path; and a
 failure in the live reader is an error the window and ``record`` show, never a dead thread."""
 
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -16,6 +14,7 @@ from groundstation.session_makers.live import LiveSession
 from groundstation.session_makers.pipeline import Pipeline
 from groundstation.session_makers.replay import replay
 from groundstation.sources import open_source
+from tests.cli_in_process import run_in_process
 from tests.session.test_batch import assert_same_session
 from tests.simulated import simulated_chunks, write_recording
 
@@ -64,11 +63,10 @@ def test_the_batch_path_counts_and_says_them_as_the_pipeline_does(tmp_path):
     assert batch.unexpected_frames == incremental.unexpected_frames == {"COMMAND": len(with_commands(chunks)) - len(chunks)}
 
 
-def test_record_on_a_loopback_port_records_without_a_traceback(tmp_path):
+def test_record_on_a_loopback_port_records_without_a_traceback(tmp_path, capsys):
     """loop:// echoes the request for CONFIG that the session sends at its start: the reader used to die
     on ``KeyError: 16`` while ``record`` said nothing and exited 0."""
-    done = subprocess.run([sys.executable, "-m", "groundstation", "record", "--port", "loop://", "--duration", "2",
-                           "--recordings", str(tmp_path)], capture_output=True, text=True, timeout=120)
+    done = run_in_process(capsys, "record", "--port", "loop://", "--duration", "2", "--recordings", tmp_path)  # a reader's traceback in its stderr
     assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
     path = next(tmp_path.glob("*.gsrec"))
     replayed = replay(open_recording(path))

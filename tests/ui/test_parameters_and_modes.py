@@ -19,10 +19,13 @@ from tests.ui.helpers import open_file, play_to_the_end
 COPTER = Path(__file__).resolve().parents[2] / ".." / "shared" / "datasets" / "flightlogs" / "arducopter_cubeorange_2023-07-06_10-12-18.bin"
 
 
-@pytest.fixture
-def copter(window, qtbot):
+@pytest.fixture(scope="module")
+def copter(module_window, module_qtbot):
+    """The log opened and played to the end once for the module: each test reads another part of the window
+    (the Parameters tab's filter, typed in by one test, is read by no other)."""
     if not COPTER.is_file():
         pytest.skip(f"{COPTER} is absent (the shared flight logs)")
+    window, qtbot = module_window, module_qtbot
     open_file(window, qtbot, COPTER, timeout_ms=120000)
     assert window.loading is None and not window.banner.isVisible(), window.banner.text()
     play_to_the_end(window, qtbot)
