@@ -225,3 +225,21 @@ def test_a_click_on_a_legend_name_toggles_its_curves(plots, qtbot):
     centre = plots.mapFromScene(text.mapToScene(text.boundingRect().center()))
     QtTest.QTest.mouseClick(plots.viewport(), QtCore.Qt.LeftButton, QtCore.Qt.NoModifier, centre)
     qtbot.waitUntil(lambda: curve.isVisible() != shown, timeout=5000)
+
+
+def test_the_readout_follows_a_pan_under_a_still_cursor(plots, qtbot):
+    """Issue 34, the tour's defect 6: the arrow keys pan a paused view under a cursor that does not move; the
+    crosshair and its numbers are then those of the time now under the cursor, not the time before the pan."""
+    series = series_until(60.0, FILTERS[:2])
+    plots.draw(series, 30.0, None)
+    qtbot.wait(50)
+    view = plots.items[0].getViewBox()
+    scene = view.mapViewToScene(QtCore.QPointF(45.0, 0.0))
+    plots.scene().sigMouseMoved.emit(scene)
+    before = plots.readout.text()
+    low, high = view.viewRange()[0]
+    plots.items[0].setXRange(low - 10.0, high - 10.0, padding=0)  # what ``LiveView.pan`` does
+    t_s = view.mapSceneToView(scene).x()
+    assert t_s == pytest.approx(35.0, abs=0.5)
+    assert plots.crosshair[0].value() == pytest.approx(t_s)
+    assert plots.readout.isVisible() and plots.readout.text() == plots.read_at(t_s) != before
