@@ -243,3 +243,16 @@ def test_the_readout_follows_a_pan_under_a_still_cursor(plots, qtbot):
     assert t_s == pytest.approx(35.0, abs=0.5)
     assert plots.crosshair[0].value() == pytest.approx(t_s)
     assert plots.readout.isVisible() and plots.readout.text() == plots.read_at(t_s) != before
+
+
+def test_the_heading_tab_plots_only_the_estimators_whose_yaw_is_a_heading():
+    """Issue 34, the tour's defect 4: AHF2's yaw, gyro-only, ran 360° -> 325° against the onboard heading's
+    235° on a PX4 hop. Only estimators that take the magnetometer (``uses_magnetometer``) have a heading."""
+    from groundstation import estimation
+    from groundstation.estimation.evaluation import uses_magnetometer
+    from groundstation.ui.live_view import heading_plots
+
+    (plot,) = heading_plots(FILTERS)
+    estimators = [c.label for c in plot.curves if c.series == "imu"]
+    assert estimators == [estimation.label(n) for n in FILTERS if uses_magnetometer(n)] and "AHF2" not in estimators
+    assert {c.label for c in plot.curves if c.series != "imu"} == {"compass", "GPS", "onboard"}
