@@ -174,3 +174,6 @@ def test_a_session_that_sped_up_names_one_imu_rate_in_its_warnings_and_its_figur
     assert data.imu_rate_hz() == pytest.approx(1.0 / median_interval_s)
     slow = [w for w in data.warnings if "too slow" in w]
     assert slow == [slow_imu_note(data.imu_rate_hz())]
+    from groundstation.export.report import events_section
+
+    assert "IMU at 2.0 Hz" not in events_section(data)  # the report's events table does not say it again
