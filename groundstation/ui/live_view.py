@@ -20,7 +20,7 @@ from groundstation.ui.channels import ChannelsView
 from groundstation.ui.flight_sections_view import SERIES as SECTION_SERIES, FlightSectionsView, section_series
 from groundstation.ui.mode_bands import ModeBands
 from groundstation.estimation import colour_of as colour
-from groundstation.estimation.evaluation import uses_magnetometer
+from groundstation.estimation.evaluation import gives_heading
 from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR
 from groundstation.ui.plots import Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
@@ -77,12 +77,12 @@ def other_curves(others: tuple, angle: str) -> tuple[Curve, ...]:
 
 
 def heading_plots(filters: tuple[str, ...], truth: bool = False, onboard_main: bool = False) -> tuple[Plot, ...]:
-    """Compass and GPS heading against the onboard one and the yaw of the estimators that take the
-    magnetometer, all 0..360°: the others' yaw is the gyro's integral from an arbitrary start, no heading
-    (AHF2's ran 360° -> 325° against the onboard 235° on a PX4 hop), and is not drawn as one."""
+    """Compass and GPS heading against the onboard one and the yaw of the estimators that have a heading
+    (``gives_heading``), all 0..360°: the others' yaw is the gyro's integral from an arbitrary start (AHF2's
+    ran 360° -> 325° against the onboard 235° on a PX4 hop), and is not drawn as one."""
     sensors = (Curve("mag", "compass_heading_deg", "compass", HEADING_COLORS["compass"], 360.0),
                Curve("gps", "gps_heading_deg", "GPS", HEADING_COLORS["GPS"], 360.0))
-    headed = tuple(name for name in filters if uses_magnetometer(name))
+    headed = tuple(name for name in filters if gives_heading(name))
     return (Plot("heading", "°", sensors + estimator_curves(headed, "heading", 360.0, truth, onboard_main)),)
 
 

@@ -247,12 +247,13 @@ def test_the_readout_follows_a_pan_under_a_still_cursor(plots, qtbot):
 
 def test_the_heading_tab_plots_only_the_estimators_whose_yaw_is_a_heading():
     """Issue 34, the tour's defect 4: AHF2's yaw, gyro-only, ran 360° -> 325° against the onboard heading's
-    235° on a PX4 hop. Only estimators that take the magnetometer (``uses_magnetometer``) have a heading."""
+    235° on a PX4 hop. Only estimators that take the magnetometer or the GPS velocity have a heading."""
     from groundstation import estimation
     from groundstation.estimation.evaluation import uses_magnetometer
     from groundstation.ui.live_view import heading_plots
 
     (plot,) = heading_plots(FILTERS)
     estimators = [c.label for c in plot.curves if c.series == "imu"]
-    assert estimators == [estimation.label(n) for n in FILTERS if uses_magnetometer(n)] and "AHF2" not in estimators
+    expected = [n for n in FILTERS if uses_magnetometer(n) or "gps" in estimation.ESTIMATORS.about(n).needs]
+    assert estimators == [estimation.label(n) for n in expected] and "AHF2" not in estimators and "HF" not in estimators
     assert {c.label for c in plot.curves if c.series != "imu"} == {"compass", "GPS", "onboard"}
