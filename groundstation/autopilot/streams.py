@@ -24,6 +24,7 @@ from groundstation.session_parts.figures import rate_hz
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
 MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
 REQUESTED_RATE_HZ = 50.0  # what a session asks an autopilot for unless the user asks otherwise
+IMU_RATE = "imu_rate"  # the ``about`` of a live slow-IMU warning event: a product names the whole session's rate instead
 MAX_REQUEST_RATE_HZ = 400.0  # the fastest IMU loop ArduPilot and PX4 stream; REQUEST_DATA_STREAM takes whole Hz
 STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
                      mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
@@ -122,12 +123,18 @@ class ImuRateMonitor:
 
     @property
     def too_slow(self) -> bool:
-        return self.rate_hz < MIN_FILTER_RATE_HZ  # NaN (no rate yet) compares False
+        return too_slow(self.rate_hz)
+
+
+def too_slow(rate_hz: float) -> bool:
+    """Whether an IMU at ``rate_hz`` is too slow for host filtering: the one rule the requester, the warnings
+    and the window (the onboard estimate as the attitude, no fused position) follow; NaN (no rate yet): not."""
+    return rate_hz < MIN_FILTER_RATE_HZ
 
 
 def slow_imu_note(rate_hz: float) -> str | None:
     """The message the window, the importer and evaluate show; None when the rate is fine."""
-    if not rate_hz < MIN_FILTER_RATE_HZ:
+    if not too_slow(rate_hz):
         return None
     return (f"IMU at {rate_hz:.1f} Hz: too slow for host filtering (needs >= {MIN_FILTER_RATE_HZ:.0f} Hz); "
             "the host estimates are shown but mean little; compare with the onboard attitude instead")

@@ -80,6 +80,12 @@ def uses_magnetometer(name: str) -> bool:
     return bool(cls and cls.uses_magnetometer)
 
 
+def gives_heading(name: str) -> bool:
+    """True for an estimator whose yaw has a reference (the magnetometer, or the GPS velocity it needs); the
+    others' yaw is the gyro's integral from an arbitrary start, no heading."""
+    return uses_magnetometer(name) or (name in ESTIMATORS and "gps" in ESTIMATORS.about(name).needs)
+
+
 def scores(q_est, q_true, mask, truth_frame: str = "ENU", heading: bool = False) -> dict[str, float]:
     """Inclination figures (``score``), and the heading's too when ``heading``."""
     figures = score(inclination_error_rad(q_est, q_true, truth_frame), mask)

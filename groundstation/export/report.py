@@ -28,6 +28,7 @@ from groundstation.analysis.vibration import UNITS, VibrationError, VibrationSum
 from groundstation.analysis.whatif import LAG_AT_HZ, what_if
 from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.messages import ALARM_SEVERITIES, MESSAGE_KIND, PARAMETER_KIND
+from groundstation.autopilot.streams import IMU_RATE
 from groundstation.autopilot.modes import STATUS_KIND, event_time_s, mode_spans
 from groundstation.autopilot.sections import pages_of
 from groundstation.errors import UserError
@@ -305,9 +306,10 @@ def link_section(data: SessionData) -> str:
 
 
 def events_section(data: SessionData) -> str:
-    """Every event in time order but the parameter changes (counted): modes, the autopilot's messages,
-    resets, warnings; alarms in red."""
-    shown = sorted((e for e in data.events if e.get("kind") != PARAMETER_KIND), key=event_time_s)
+    """Every event in time order but the parameter changes (counted) and the live slow-IMU warning (the
+    report's warnings give the whole session's IMU rate, ``SessionData.warnings``): modes, the autopilot's
+    messages, resets, warnings; alarms in red."""
+    shown = sorted((e for e in data.events if e.get("kind") != PARAMETER_KIND and e.get("about") != IMU_RATE), key=event_time_s)
     changes = sum(e.get("kind") == PARAMETER_KIND for e in data.events)
     out = ["<h2>Events and messages</h2>"]
     if not shown:

@@ -20,6 +20,7 @@ import dataclasses
 
 import numpy as np
 
+from groundstation.autopilot.streams import IMU_RATE, slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation.evaluation import scores, uses_magnetometer
 from groundstation.session_parts.catalogue import Catalogue
@@ -90,10 +91,12 @@ class SessionData:
 
     @property
     def warnings(self) -> list[str]:
-        """What every command says besides its result: what the recording lost, a flight log's IMU too slow
-        to filter, then the session's warnings."""
-        slow = [self.metadata["imu_warning"]] if self.metadata.get("imu_warning") else []
-        return [*self.damage, *slow, *(str(e["message"]) for e in self.events if e.get("kind") in ("warning", "config_conflict"))]
+        """What every command says besides its result: what the recording lost, an IMU too slow to filter (at
+        the rate the figures give, ``imu_rate_hz``: not the live warning's, measured on the samples come by
+        then), then the session's warnings."""
+        slow = [note] if (note := slow_imu_note(self.imu_rate_hz())) else []
+        return [*self.damage, *slow, *(str(e["message"]) for e in self.events
+                                       if e.get("kind") in ("warning", "config_conflict") and e.get("about") != IMU_RATE)]
 
     def quaternion(self, name: str, rows: np.ndarray | None = None) -> np.ndarray:
         """(N, 4) w-first, body -> NED, on the sample rows (those of ``rows``): a host estimator's, or

@@ -36,7 +36,8 @@ often GPS or UNIX time, not time since boot.
 
 Uplink: ``StreamRequester``'s stream-rate requests only (``take_uplink``); when the IMU is still
 slower than host filtering needs ``SLOW_WARNING_S`` after the first request, a warning event
-(``slow_imu_note``) — in the pipeline's events, so a replay shows it at the same point.
+(``slow_imu_note``) — in the pipeline's events, so a replay shows it at the same point. A session's
+product names its whole IMU table's rate instead (``SessionData.warnings``): one rate, as its figures give it.
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.imu_choice import ImuChoice
 from groundstation.autopilot.messages import StatusTexts, message_event, parameter_change
 from groundstation.autopilot.modes import status_event
-from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
+from groundstation.autopilot.streams import IMU_RATE, REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session_parts.catalogue import Catalogue, message_table
 
@@ -138,7 +139,7 @@ class MavlinkFrontEnd:
             self._slow_warned = False
         elif not self._slow_warned and t_host_ns - self._first_request_ns >= SLOW_WARNING_S * 1e9:
             self._slow_warned = True
-            self.pipeline._warn(t_host_ns, note)
+            self.pipeline._warn(t_host_ns, note, about=IMU_RATE)
 
     # -- records ----------------------------------------------------------------------------------
 

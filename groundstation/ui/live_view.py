@@ -21,9 +21,11 @@ from groundstation.ui.channels import ChannelsView
 from groundstation.ui.flight_sections_view import SERIES as SECTION_SERIES, FlightSectionsView, section_series
 from groundstation.ui.mode_bands import ModeBands
 from groundstation.estimation import colour_of as colour
+from groundstation.estimation.evaluation import gives_heading
 from groundstation.palette import ONBOARD_COLOUR, TRUTH_COLOUR
 from groundstation.ui.plots import Curve, Plot, StackedPlots
 from groundstation.ui.position_view import PositionView
+from groundstation.ui.sample_streams import newest_time_s, slow_imu_hz
 from groundstation.ui.series import Series, clock_series, imu_quantities, onboard_quantities, truth_quantities
 from groundstation.ui.session_series import Other, other_series
 from groundstation.ui.vibration_view import VibrationView
@@ -47,18 +49,20 @@ LATER_TABS = {"sensors": "Sensors", "diagnostics": "AHF diagnostics", "heading":
               "flight": "Flight", "channels": "Channels", "vibration": "Vibration"}
 
 
-def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None, truth: bool = False) -> tuple[Curve, ...]:
-    """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one, the others, then
-    the truth when the session has one (a SITL log's)."""
+def estimator_curves(filters: tuple[str, ...], angle: str, wraps_at: float | None = None, truth: bool = False,
+                     onboard_main: bool = False) -> tuple[Curve, ...]:
+    """``angle`` (pitch, roll, heading) of the first host estimator, the onboard one (dashed, beneath), the
+    others, then the truth when the session has one (a SITL log's); ``onboard_main`` (the IMU too slow for
+    the host estimators: ``sample_streams.slow_imu_hz``): the onboard one first and solid."""
     host = tuple(Curve("imu", f"{n}_{angle}_deg", estimation.label(n), colour(n), wraps_at) for n in filters)
-    onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", ONBOARD_COLOUR, wraps_at, reference=True)
+    onboard = Curve("onboard", f"onboard_{angle}_deg", "onboard", ONBOARD_COLOUR, wraps_at, reference=not onboard_main)
     true = (Curve("truth", f"truth_{angle}_deg", "truth", TRUTH_COLOUR, wraps_at, reference=True),) if truth else ()
-    return host[:1] + (onboard,) + host[1:] + true
+    return ((onboard,) + host if onboard_main else host[:1] + (onboard,) + host[1:]) + true
 
 
-def attitude_plots(filters: tuple[str, ...], truth: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
+def attitude_plots(filters: tuple[str, ...], truth: bool = False, onboard_main: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
     """``others``: (label, estimators shown, style) of each session beside the window's, whose curves are added."""
-    return tuple(Plot(angle, "°", estimator_curves(filters, angle, truth=truth) + other_curves(others, angle))
+    return tuple(Plot(angle, "°", estimator_curves(filters, angle, truth=truth, onboard_main=onboard_main) + other_curves(others, angle))
                  for angle in ("pitch", "roll"))
 
 
@@ -74,12 +78,17 @@ def other_curves(others: tuple, angle: str, wraps_at: float | None = None) -> tu
     return tuple(curves)
 
 
-def heading_plots(filters: tuple[str, ...], truth: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
-    """Compass and GPS heading against the estimators' yaw, all 0..360°; ``others`` as ``attitude_plots``."""
+def heading_plots(filters: tuple[str, ...], truth: bool = False, onboard_main: bool = False, others: tuple = ()) -> tuple[Plot, ...]:
+    """Compass and GPS heading against the onboard one and the yaw of the estimators that have a heading
+    (``gives_heading``), all 0..360°: the others' yaw is the gyro's integral from an arbitrary start (AHF2's
+    ran 360° -> 325° against the onboard 235° on a PX4 hop), and is not drawn as one; ``others`` as
+    ``attitude_plots``, their estimators chosen by the same rule."""
     sensors = (Curve("mag", "compass_heading_deg", "compass", HEADING_COLORS["compass"], 360.0),
                Curve("gps", "gps_heading_deg", "GPS", HEADING_COLORS["GPS"], 360.0))
-    return (Plot("heading", "°", sensors + estimator_curves(filters, "heading", 360.0, truth)
-                 + other_curves(others, "heading", 360.0)),)
+    headed = tuple(name for name in filters if gives_heading(name))
+    others_headed = tuple((label, tuple(name for name in shown if gives_heading(name)), style) for label, shown, style in others)
+    return (Plot("heading", "°", sensors + estimator_curves(headed, "heading", 360.0, truth, onboard_main)
+                 + other_curves(others_headed, "heading", 360.0)),)
 
 
 def sensor_plots(aiding: frozenset[str] = frozenset()) -> tuple[Plot, ...]:
@@ -134,12 +143,14 @@ class LiveView(QtWidgets.QWidget):
         controls.addWidget(self.pause_button)
         self.tabs = QtWidgets.QTabWidget()
         self._hidden = hidden  # remembered also for labels the current session lacks
+        self._slow_hidden: frozenset[str] = frozenset()  # host estimators switched off for an IMU too slow for them
+        self._slow_hz: float | None = None  # the IMU's rate when too slow for them (``sample_streams.slow_imu_hz``)
         # Drawn at first for the estimators a live session runs (the registry names them without loading
         # them): the app's usual first session then finds its curves there, not rebuilt (a third of a
         # second before its first data; bench/bench_first_frame.py).
         live = estimation.live_estimators()
         self.attitude = self._add_tab(StackedPlots(attitude_plots(live), hidden), "Attitude")
-        self._curves_of = (live, False)  # the estimators, and whether a truth is plotted
+        self._curves_of = (live, False, False)  # the estimators, whether a truth is plotted, whether onboard is the main curve
         self._others_of: tuple = ()  # the other sessions' curves: (label, estimators shown, style) each
         self._sensor_aiding: frozenset[str] = frozenset()
         self._later: dict[str, QtWidgets.QWidget] = {}  # a tab not built yet -> the blank page under its title
@@ -168,8 +179,8 @@ class LiveView(QtWidgets.QWidget):
         later, self._later = self._later, {}
         built = {"sensors": lambda: StackedPlots(sensor_plots(self._sensor_aiding)),
                  "diagnostics": lambda: StackedPlots(diagnostic_plots()),
-                 "heading": lambda: StackedPlots(heading_plots(*self._curves_of, self._others_of), self.hidden_labels()),
-                 "position": PositionView, "vibration": VibrationView, "flight": FlightSectionsView}
+                 "heading": lambda: StackedPlots(heading_plots(*self._curves_of, self._others_of), self._switched_off()),
+                 "position": lambda: PositionView(fused_absent_hz=self._slow_hz), "vibration": VibrationView, "flight": FlightSectionsView}
         current = self.tabs.currentIndex()
         self.tabs.blockSignals(True)  # the current tab stays what it was; no half-built view is asked for
         for name, blank in later.items():
@@ -227,14 +238,8 @@ class LiveView(QtWidgets.QWidget):
         self._browsing = None
         self.series = {}
         filters = session.view.filters if session is not None else self._curves_of[0]
-        shown = (filters, session is not None and "truth" in session.view.catalogue)  # the curves the plots need
-        if shown != self._curves_of:
-            self._hidden = self.hidden_labels()
-            current = self.tabs.currentIndex()
-            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*shown, self._others_of), self._hidden))
-            self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*shown, self._others_of), self._hidden))
-            self.tabs.setCurrentIndex(current)
-            self._curves_of = shown
+        self._hidden, self._slow_hidden = self.hidden_labels(), frozenset()
+        self._show_estimators((filters, session is not None and "truth" in session.view.catalogue, False))
         for plots in (self.attitude, self.sensors, self.diagnostics, self.heading, self.position, self.flight):
             plots.clear_data()
         self.flight.set_session(session)
@@ -242,6 +247,34 @@ class LiveView(QtWidgets.QWidget):
         self.channels.set_session(session)
         self.vibration.set_session(session)
         self._show_aiding_tabs()
+
+    def _show_estimators(self, shown: tuple) -> None:
+        """The attitude and heading tabs rebuilt for ``shown`` (as ``_curves_of``) when it changed."""
+        if shown == self._curves_of:
+            return
+        current = self.tabs.currentIndex()
+        self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*shown, self._others_of), self._switched_off()))
+        self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*shown, self._others_of), self._switched_off()))
+        self.tabs.setCurrentIndex(current)
+        self._curves_of = shown
+
+    def _follow_imu_rate(self, view) -> None:
+        """An IMU too slow for the host estimators (``sample_streams.slow_imu_hz``): the onboard estimate the main
+        curve, the host estimators switched off (the user may switch them on), no fused position; back when it
+        is fast enough again."""
+        self._slow_hz = slow_hz = slow_imu_hz(view)
+        if "position" not in self._later:  # else told when built
+            self.position.set_fused_absent(slow_hz)
+        onboard_main = slow_hz is not None and newest_time_s(view.onboard) is not None
+        if onboard_main == self._curves_of[2]:
+            return
+        self._hidden = self.hidden_labels()
+        host = frozenset(estimation.label(name) for name in self._curves_of[0])
+        self._slow_hidden = host - self._hidden if onboard_main else frozenset()
+        self._show_estimators((*self._curves_of[:2], onboard_main))
+
+    def _switched_off(self) -> frozenset[str]:
+        return self._hidden | self._slow_hidden
 
     def set_others(self, others: list[Other]) -> None:
         """The sessions beside the window's: their attitude and heading curves on the Attitude and Heading
@@ -254,21 +287,23 @@ class LiveView(QtWidgets.QWidget):
             self._hidden = self.hidden_labels()
             current = self.tabs.currentIndex()
             self._others_of = curves
-            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*self._curves_of, curves), self._hidden))
+            self.attitude = self._replace_tab(self.attitude, StackedPlots(attitude_plots(*self._curves_of, curves), self._switched_off()))
             if "heading" not in self._later:  # built: else built with these curves when first shown
-                self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*self._curves_of, curves), self._hidden))
+                self.heading = self._replace_tab(self.heading, StackedPlots(heading_plots(*self._curves_of, curves), self._switched_off()))
             self.tabs.setCurrentIndex(current)
         self.channels.set_others(self.others)
 
     def hidden_labels(self) -> frozenset[str]:
-        """The attitude legend entries switched off, with those remembered from earlier sessions."""
+        """The attitude legend entries the user switched off, with those remembered from earlier sessions (not
+        those switched off for an IMU too slow for them)."""
         present = {spec.label for spec, _ in self.attitude.curves}
-        return frozenset((self._hidden - present) | (present - self.attitude.visible_labels()))
+        return frozenset((self._hidden - present) | (present - self.attitude.visible_labels() - self._slow_hidden))
 
     def set_visible(self, label: str, visible: bool) -> None:
         """Show or hide an estimator's curves on the attitude and heading tabs (remembered for a
         session to come when this one lacks the estimator)."""
         self._hidden = self._hidden | {label} if not visible else self._hidden - {label}
+        self._slow_hidden -= {label}  # the user's choice now
         for plots in (self.attitude, self.heading):
             plots.set_visible(label, visible)
 
@@ -340,6 +375,8 @@ class LiveView(QtWidgets.QWidget):
         if self._nothing_new(plots):
             return False
         grew = {name for name, s in self.series.items() if s.take(self.session.lock)}
+        if grew & {"imu", "onboard"}:
+            self._follow_imu_rate(view)
         if grew - {"imu", "onboard"}:
             self._show_aiding_tabs()
         ends = [s.end_s for s in (self.series["imu"], self.series["onboard"]) if s.end_s is not None]

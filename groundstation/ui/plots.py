@@ -242,7 +242,10 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self.readout.setAttribute(QtCore.Qt.WA_TransparentForMouseEvents)
         self.readout.setTextFormat(QtCore.Qt.RichText)
         self.readout.hide()
+        self._cursor = None  # the scene position the readout was read at
         self.scene().sigMouseMoved.connect(self._mouse_moved)
+        # a pan under a still cursor (the arrow keys, a live view's scroll): read the time now under it
+        self.items[0].getViewBox().sigXRangeChanged.connect(self._read_again)
         for label, curve in in_legend.items():  # the legend drives the others
             curve.visibleChanged.connect(lambda c=curve, label=label: self._mirror(label, c.isVisible()))
 
@@ -425,6 +428,7 @@ class StackedPlots(pg.GraphicsLayoutWidget):
 
     def _mouse_moved(self, position) -> None:
         item = next((i for i in self.items if i.sceneBoundingRect().contains(position)), None)
+        self._cursor = QtCore.QPointF(position)
         if item is None:
             self.readout.hide()
             return
@@ -436,6 +440,10 @@ class StackedPlots(pg.GraphicsLayoutWidget):
         self.readout.adjustSize()
         self.readout.move(*self._readout_place(self.mapFromScene(position)))
         self.readout.show()
+
+    def _read_again(self) -> None:
+        if self.readout.isVisible() and self._cursor is not None:
+            self._mouse_moved(self._cursor)
 
     def _readout_place(self, cursor: QtCore.QPoint) -> tuple[int, int]:
         """Beside the cursor, on the side with room (right, else left), never over the point read; a

@@ -9,6 +9,9 @@ GPS row, float64, not the plotted float32) are set after every ``TRACK_EVERY_S``
 track leaves them or shrinks well inside them (``plots.refit``): re-ranging on every update would
 repaint the whole plot. Height (GPS, barometer, fused) is a ``StackedPlots`` plot on the live
 view's time window.
+
+A fused position integrated from an IMU too slow for the host estimators (an autopilot's RAW_IMU at 4 Hz
+in a tlog drifts kilometres) is not shown, and a line says why (``set_fused_absent``).
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
+from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ
 from groundstation.ui.navigation import fix_name, newest_row
 from groundstation.ui.plots import Curve, Plot, StackedPlots, refit
 from groundstation.ui.series import Series
@@ -30,6 +34,11 @@ COLORS = {"gps": "#1f5fbf", "baro": "#e07000", "position": "#2a9d3a"}
 LABELS = {"gps": "GPS", "baro": "barometer", "position": "fused"}
 FIELDS = ("latitude", "longitude", "altitude (MSL)", "height (barometer)", "ground speed", "satellites", "fix")
 NO_GPS = "No GPS solution in this session (yet): the height is the barometer's."
+
+
+def no_fused_text(imu_hz: float) -> str:
+    return (f"No fused position: the IMU arrives at {imu_hz:.1f} Hz, too slowly for the host estimators (needs "
+            f">= {MIN_FILTER_RATE_HZ:.0f} Hz); the track is the GPS's.")
 
 
 def height_plot() -> Plot:
@@ -55,7 +64,7 @@ def number(value: float | None, fmt: str, unit: str = "") -> str:
 class PositionView(QtWidgets.QWidget):
     userInteracted = QtCore.Signal()  # the user panned or zoomed a plot
 
-    def __init__(self, parent=None):
+    def __init__(self, parent=None, fused_absent_hz: float | None = None):
         super().__init__(parent)
         self.track_widget = pg.PlotWidget(background="w")
         track = self.track_widget.getPlotItem()
@@ -77,9 +86,15 @@ class PositionView(QtWidgets.QWidget):
         self._list_fused(False)
         self.note = QtWidgets.QLabel(NO_GPS)
         self.note.setWordWrap(True)
+        self.fused_note = QtWidgets.QLabel()
+        self.fused_note.setWordWrap(True)
+        self.fused_note.hide()
+        self._fused_absent_hz: float | None = None
+        self.set_fused_absent(fused_absent_hz)
         self.readouts = {name: QtWidgets.QLabel("—") for name in FIELDS}
         numbers = QtWidgets.QFormLayout()
         numbers.addRow(self.note)
+        numbers.addRow(self.fused_note)
         for name, label in self.readouts.items():
             label.setStyleSheet("font-family: monospace")
             numbers.addRow(name, label)
@@ -100,13 +115,27 @@ class PositionView(QtWidgets.QWidget):
             label.setText("—")
         self.note.show()
 
+    def set_fused_absent(self, imu_hz: float | None) -> None:
+        """No fused position drawn while the IMU is too slow for it (``imu_hz``: its rate; None: fast enough)."""
+        if (imu_hz is None) == (self._fused_absent_hz is None) and (imu_hz is None or f"{imu_hz:.1f}" == f"{self._fused_absent_hz:.1f}"):
+            return
+        self._fused_absent_hz = imu_hz
+        self.fused_note.setVisible(imu_hz is not None)
+        if imu_hz is not None:
+            self.fused_note.setText(no_fused_text(imu_hz))
+            self.tracks["position"].setData([], [])
+            next(curve for spec, curve in self.height.curves if spec.series == "position").setData([], [])
+        self._drawn_s = -math.inf  # drawn again whole
+
     @property
     def stale(self) -> bool:
         return self.height.stale  # as ``StackedPlots.stale``
 
     def draw(self, series: dict[str, Series], window_s: float | None, grew: set[str] | None) -> None:
         """As ``StackedPlots.draw`` (everything when ``grew`` is None); the track and the numbers
-        after ``TRACK_EVERY_S`` more of position samples."""
+        after ``TRACK_EVERY_S`` more of position samples; no fused position while ``set_fused_absent``."""
+        if self._fused_absent_hz is not None:
+            series = {name: s for name, s in series.items() if name != "position"}
         self._list_fused("position" in series)
         self.height.draw(series, window_s, grew)
         ends = [s.end_s for name in ("gps", "baro", "position") if (s := series.get(name)) and s.end_s is not None]

@@ -2,16 +2,16 @@
 
 A session's samples come as raw IMU (``imu``: the host estimators) and as the aircraft's own estimate
 (``onboard``). The firmware's "estimated" mode sends only the latter, and an autopilot on a slow link
-(RAW_IMU at 2-4 Hz) sends the IMU too slowly for host filtering (``autopilot.streams.MIN_FILTER_RATE_HZ``):
-then the onboard estimate is the one to show as the attitude (issue 24, defects 3 and 5), and the plots
-follow its time. The link's lateness is measured against the same streams' own rate (defect 6).
+(RAW_IMU at 2-4 Hz) sends the IMU too slowly for host filtering (``autopilot.streams.too_slow``):
+then the onboard estimate is the one to show as the attitude (issue 24, defects 3 and 5), the main curve of
+the plots (issue 34), whose time they follow, and no fused position is shown. The link's lateness is measured against the same streams' own rate (defect 6).
 """
 
 from __future__ import annotations
 
 import math
 
-from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ
+from groundstation.autopilot.streams import too_slow
 from groundstation.session_parts.figures import rate_hz
 from groundstation.session.view import ProductView
 from groundstation.ui.series import GAP_S
@@ -43,6 +43,13 @@ def stream_interval_s(view: ProductView) -> float:
     return interval_s(view.onboard if headline(view)[0] == "onboard" else view.imu)
 
 
+def slow_imu_hz(view: ProductView) -> float | None:
+    """The IMU's rate (of its newest samples) when it is too slow for host filtering; None when it is not, or
+    is not known yet."""
+    imu_hz = newest_rate_hz(view.imu)
+    return imu_hz if too_slow(imu_hz) else None
+
+
 def headline(view: ProductView) -> tuple[str, str]:
     """(estimate, why): the estimate to show as the attitude: the first host estimator (AHF2 in the app),
     or "onboard" with the reason, when the session has no host estimator, when the raw IMU stopped while
@@ -58,6 +65,6 @@ def headline(view: ProductView) -> tuple[str, str]:
     stopped_after_s = STOPPED_INTERVALS / imu_hz if STOPPED_INTERVALS / imu_hz > GAP_S else GAP_S  # NaN: GAP_S
     if imu_s is None or onboard_s - imu_s > stopped_after_s:
         return "onboard", "no raw IMU"
-    if imu_hz < MIN_FILTER_RATE_HZ:  # NaN (too few samples yet) compares False
-        return "onboard", f"IMU at {imu_hz:.1f} Hz"
+    if (slow_hz := slow_imu_hz(view)) is not None:
+        return "onboard", f"IMU at {slow_hz:.1f} Hz"
     return filters[0], ""

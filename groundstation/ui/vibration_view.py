@@ -44,6 +44,8 @@ FREQUENCY_TICKS_HZ = [m * 10.0**k for k in range(-1, 5) for m in (1, 2, 5)]
 DECADES_HZ = [f for f in FREQUENCY_TICKS_HZ if f == 10.0 ** round(np.log10(f))]  # the spectrogram's short axis: 1, 2, 5 crowd it
 LOG_ROWS = 256  # the spectrogram's rows on its log-frequency axis
 MOST_PEAK_LABELS = 5  # more labels than this crowd the plot; the text below lists every peak
+FILTER_TIP = "What this filter would do: the spectrum before and after, its gain and phase, the attitude difference where the IMU carries it"
+NO_FREQUENCY = "set a frequency"  # the what-if's frequency box at 0 (no notch suggested): Filter waits for one
 LABEL_GAP_PX = 4.0  # the least room between two labels' boxes on screen
 
 
@@ -104,11 +106,12 @@ class VibrationView(QtWidgets.QWidget):
         self.filter_box.addItems(list(KINDS))
         self.filter_hz, self.filter_bw = (QtWidgets.QDoubleSpinBox(decimals=1, maximum=1e5, suffix=" Hz") for _ in range(2))
         self.filter_bw.setToolTip("the notch's bandwidth between its -3 dB points (0: half its centre)")
+        self.filter_hz.setSpecialValueText(NO_FREQUENCY)  # shown at 0, the minimum: no "0.0 Hz" to filter at
         self.filter_box.currentTextChanged.connect(lambda kind: self.filter_bw.setEnabled(kind == "notch"))
         self.filter_button = QtWidgets.QPushButton("Filter")
-        self.filter_button.setToolTip("What this filter would do: the spectrum before and after, its gain and phase, "
-                                      "the attitude difference where the IMU carries it")
         self.filter_button.clicked.connect(self.run_what_if)
+        self.filter_hz.valueChanged.connect(self._offer_filter)
+        self._offer_filter(self.filter_hz.value())
         what_if_row = QtWidgets.QHBoxLayout()
         for widget in (QtWidgets.QLabel("what-if"), self.filter_box, QtWidgets.QLabel("at"), self.filter_hz,
                        QtWidgets.QLabel("bandwidth"), self.filter_bw, self.filter_button):
@@ -227,6 +230,11 @@ class VibrationView(QtWidgets.QWidget):
         else:
             self.banner.hide()
         self._show()
+
+    def _offer_filter(self, frequency_hz: float) -> None:
+        """Filter only at a frequency: none is set before a notch is suggested or the user types one."""
+        self.filter_button.setEnabled(frequency_hz > 0.0)
+        self.filter_button.setToolTip(FILTER_TIP if frequency_hz > 0.0 else "Set a frequency to filter at (no notch is suggested)")
 
     def _clear(self) -> None:
         self.spectrum_plot.clear()

@@ -153,3 +153,27 @@ def test_slow_imu_is_asked_again_and_warned_and_a_reboot_restarts_like_the_proje
     assert np.all(np.diff(imu["time_s"]) > 0)  # one monotonic axis across the reboot
     assert math.isnan(imu["acc_x_g"][30])  # the gap row every table gets at a restart
     assert imu["acc_z_g"][0] == pytest.approx(-1.0) and imu["gyr_y_rad_s"][0] == 0.0
+
+
+def test_a_session_that_sped_up_names_one_imu_rate_in_its_warnings_and_its_figures():
+    """Issue 34, the tour's defect 3: RAW_IMU at 2 Hz for 10 s, then (the request answered) at 4 Hz for 20 s.
+    The live warning said 2.0 Hz when it was made; the session's product says the one rate its figures give
+    (the median interval of the whole IMU table: 0.25 s, 4 Hz), once."""
+    from groundstation.session_makers.load import pipeline_product
+
+    autopilot = Sender()
+    pipeline = Pipeline(("ahf",), protocol="mavlink")
+    times_us = [1_000_000 + i * 500_000 for i in range(20)] + [11_000_000 + i * 250_000 for i in range(80)]
+    for i, time_us in enumerate(times_us):
+        data = ardupilot_heartbeat(autopilot) if i % 4 == 0 else b""
+        pipeline.feed(time_us * 1000, data + autopilot.raw_imu(time_us, 0, 0, -1000, 0, 0, 0, 200, 0, 400, 0, 2500))
+    live = [e["message"] for e in pipeline.events if e["kind"] == "warning"]
+    assert live == [slow_imu_note(2.0)]  # what the window said at the time
+    data = pipeline_product({"protocol": "mavlink"}, pipeline, [])
+    median_interval_s = float(np.median(np.diff(times_us))) / 1e6
+    assert data.imu_rate_hz() == pytest.approx(1.0 / median_interval_s)
+    slow = [w for w in data.warnings if "too slow" in w]
+    assert slow == [slow_imu_note(data.imu_rate_hz())]
+    from groundstation.export.report import events_section
+
+    assert "IMU at 2.0 Hz" not in events_section(data)  # the report's events table does not say it again

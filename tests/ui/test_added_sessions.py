@@ -53,10 +53,11 @@ def curve(plots, label):
     return next(c for spec, c in plots.curves if spec.label == label)
 
 
-def heading_deg(table, name: str) -> tuple[np.ndarray, np.ndarray]:
-    """Time and heading (0..360°) of estimator ``name`` in an IMU table, by scipy from its quaternions (w first)."""
+def heading_deg(table, prefix: str = "") -> tuple[np.ndarray, np.ndarray]:
+    """Time and heading (0..360°) of a table's quaternion (columns ``{prefix}qw`` ...: ``ahf2_`` in an IMU
+    table, none in the onboard one), by scipy from its quaternions (w first)."""
     rows = table.to_dict()
-    q_xyzw = np.column_stack([rows[f"{name}_q{c}"] for c in "xyzw"])
+    q_xyzw = np.column_stack([rows[f"{prefix}q{c}"] for c in "xyzw"])
     return rows["time_s"], Rotation.from_quat(q_xyzw).as_euler("ZYX", degrees=True)[:, 0] % 360.0
 
 
@@ -65,15 +66,16 @@ def test_each_session_has_its_heading_in_its_pen_style(boards, qtbot):
     view = window.live_view
     view.tabs.setCurrentWidget(view.heading)
     labels = {spec.label for spec, _ in view.heading.curves}
-    assert {"AHF2", "onboard", "S2 AHF2", "S2 onboard"} <= labels
+    # AHF2's yaw is the gyro's alone, no heading (``gives_heading``): the onboard heading is S2's shown one
+    assert {"onboard", "S2 onboard"} <= labels and not {"AHF2", "S2 AHF2"} & labels
     pen = lambda plots, label: curve(plots, label).opts["pen"].style()  # noqa: E731
-    for label in ("S2 AHF2", "S2 onboard"):  # as on the Attitude tab, and not the window's own
-        assert pen(view.heading, label) == pen(view.attitude, label) != pen(view.heading, "AHF2")
-    s2 = curve(view.heading, "S2 AHF2")
+    # as on the Attitude tab, and not the window's own
+    assert pen(view.heading, "S2 onboard") == pen(view.attitude, "S2 onboard") != pen(view.heading, "onboard")
+    s2 = curve(view.heading, "S2 onboard")
     qtbot.waitUntil(lambda: len(view.heading.drawn(s2)[0]) > 50, timeout=LIMIT_MS)
     t, drawn = view.heading.drawn(s2)
     with board.session.lock:
-        own_t, own_deg = heading_deg(board.session.view.imu, "ahf2")
+        own_t, own_deg = heading_deg(board.session.view.onboard)
     rows = np.searchsorted(own_t, t - board.offset_s - 1e-6)  # each drawn sample's row (its time, less rounding)
     kept = (rows < len(own_t)) & np.isfinite(drawn)  # a gap is a NaN between rows
     np.testing.assert_allclose(own_t[rows[kept]] + board.offset_s, t[kept], atol=1e-6)  # its rows, on the window's axis

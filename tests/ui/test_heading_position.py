@@ -118,9 +118,9 @@ def test_the_demo_shows_heading_and_position(window, qtbot):
     assert len(tables["mag_raw"]) and len(tables["baro"]) and len(tables["gps"])
     view.tabs.setCurrentWidget(view.position)
     qtbot.waitUntil(lambda: view.position.readouts["fix"].text() == "3D", timeout=LIMIT_MS)
-    hf_heading = next(c for s, c in view.heading.curves if s.label == "HF")
+    hf_heading = next(c for s, c in view.heading.curves if s.label == "HF+mag")  # a heading estimator (it takes the magnetometer)
     assert not hf_heading.isVisible()  # the comparison estimators start switched off, here too
-    window.estimator_panel.shown["hf"].setChecked(True)
+    window.estimator_panel.shown["hfm"].setChecked(True)
     assert hf_heading.isVisible()
 
 

@@ -245,3 +245,35 @@ def test_a_flat_lines_axis_has_a_readable_range_around_it(qtbot):
     (low, high), (zero_low, zero_high) = (item.getViewBox().viewRange()[1] for item in plots.items)
     assert low < 1.21 < high and high - low >= 0.2
     assert zero_low <= 0 <= zero_high and zero_high - zero_low >= 0.3
+
+
+def test_the_readout_follows_a_pan_under_a_still_cursor(plots, qtbot):
+    """Issue 34, the tour's defect 6: the arrow keys pan a paused view under a cursor that does not move; the
+    crosshair and its numbers are then those of the time now under the cursor, not the time before the pan."""
+    series = series_until(60.0, FILTERS[:2])
+    plots.draw(series, 30.0, None)
+    qtbot.wait(50)
+    view = plots.items[0].getViewBox()
+    scene = view.mapViewToScene(QtCore.QPointF(45.0, 0.0))
+    plots.scene().sigMouseMoved.emit(scene)
+    before = plots.readout.text()
+    low, high = view.viewRange()[0]
+    plots.items[0].setXRange(low - 10.0, high - 10.0, padding=0)  # what ``LiveView.pan`` does
+    t_s = view.mapSceneToView(scene).x()
+    assert t_s == pytest.approx(35.0, abs=0.5)
+    assert plots.crosshair[0].value() == pytest.approx(t_s)
+    assert plots.readout.isVisible() and plots.readout.text() == plots.read_at(t_s) != before
+
+
+def test_the_heading_tab_plots_only_the_estimators_whose_yaw_is_a_heading():
+    """Issue 34, the tour's defect 4: AHF2's yaw, gyro-only, ran 360° -> 325° against the onboard heading's
+    235° on a PX4 hop. Only estimators that take the magnetometer or the GPS velocity have a heading."""
+    from groundstation import estimation
+    from groundstation.estimation.evaluation import uses_magnetometer
+    from groundstation.ui.live_view import heading_plots
+
+    (plot,) = heading_plots(FILTERS)
+    estimators = [c.label for c in plot.curves if c.series == "imu"]
+    expected = [n for n in FILTERS if uses_magnetometer(n) or "gps" in estimation.ESTIMATORS.about(n).needs]
+    assert estimators == [estimation.label(n) for n in expected] and "AHF2" not in estimators and "HF" not in estimators
+    assert {c.label for c in plot.curves if c.series != "imu"} == {"compass", "GPS", "onboard"}

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from groundstation.cli import main
+from groundstation.ui.vibration_view import NO_FREQUENCY
 
 from tests.ui.helpers import open_file, play_to_the_end
 from tests.waiting import LIMIT_MS
@@ -116,6 +117,28 @@ def test_the_what_if_row_starts_empty_on_a_file_with_no_notch_to_suggest(window,
     tab = shown_tab(window, qtbot, still, "gyro")
     assert tab.summary.notch == {}
     assert tab.filter_hz.value() == 0.0 and tab.filter_bw.value() == 0.0
+    check_no_filter_yet(tab)
+
+
+def check_no_filter_yet(tab):
+    """No "0.0 Hz" to filter at: the box says a frequency is to be set, and Filter waits for one."""
+    assert tab.filter_hz.text() == NO_FREQUENCY and "Hz" not in tab.filter_hz.text()
+    assert not tab.filter_button.isEnabled() and "frequency" in tab.filter_button.toolTip()
+    tab.filter_hz.setValue(30.0)
+    assert tab.filter_button.isEnabled()
+    tab.filter_hz.setValue(0.0)
+    assert not tab.filter_button.isEnabled()
+
+
+def test_the_what_if_row_of_a_live_session_with_no_notch_to_suggest_waits_for_a_frequency(window, qtbot):
+    """Issue 34, the tour's defect 5: live, with no notch suggested, the row read "0.0 Hz" and Filter only said an error."""
+    window.connect_serial("sim:?seed=8")
+    qtbot.waitUntil(lambda: window.session is not None and len(window.session.view.imu) > 600, timeout=LIMIT_MS)
+    tab = window.live_view.vibration
+    window.live_view.tabs.setCurrentWidget(tab)
+    qtbot.waitUntil(lambda: tab.summary is not None, timeout=LIMIT_MS)
+    assert tab.summary.notch == {}
+    check_no_filter_yet(tab)
 
 
 def shown_tab(window, qtbot, path, sensor):
