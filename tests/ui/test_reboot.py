@@ -10,9 +10,8 @@ from groundstation.ui.main_window import FIGURES_EVERY, HORIZON_EVERY
 from tests.waiting import LIMIT_MS
 
 # The uptime must exceed the reboot's outage, else the restart cannot be told (clock.py); a counted
-# restart would add all of it to the latency. Seconds of real time in which the window must first look
-# at the data before the restart, on a loaded machine too.
-REBOOT_AFTER_S = 5.0
+# restart would add all of it to the latency.
+REBOOT_AFTER_S = 3.0
 
 
 def drawn_segments(curve):
@@ -62,24 +61,18 @@ def test_after_a_device_reboot_the_attitude_panel_warns_while_the_estimates_re_c
     """Issue 21: the horizon and 3D view showed ahf2 upside down after a reboot, with no warning."""
     from groundstation.session_parts.estimators import RECONVERGE_S
 
-    window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     warning = window.attitude_panel.reconverging
+    # Nothing restarted: no warning. On the same board without the reboot, since a loaded machine may
+    # take the first seconds' bytes, reboot included, in one go before the window first looks.
+    window.connect_serial("sim:?seed=2", 115200)
+    qtbot.waitUntil(lambda: window.session.view.imu.tail(1).size and window.session.view.imu.tail(1)[0][0] > 1.0, timeout=LIMIT_MS)
+    for _ in range(HORIZON_EVERY):  # one of them shows the newest row in the attitude panel
+        window.tick()
+    assert not warning.isVisible()
+    window.disconnect()
+
+    window.connect_serial(f"sim:?reboot_after={REBOOT_AFTER_S}&seed=2", 115200)
     events = window.session.view.events
-
-    seen = []  # (warning visible, restarted by then) once the panel has shown a second of data
-
-    def looked() -> bool:
-        if not (rows := window.session.view.imu.tail(1)).size or rows[0][0] <= 1.0:
-            return False
-        for _ in range(HORIZON_EVERY):  # one of them shows the newest row in the attitude panel
-            window.tick()
-        seen.append((warning.isVisible(), any(e["kind"] == "device_reset" for e in list(events))))  # events after it
-        return True
-
-    qtbot.waitUntil(looked, timeout=LIMIT_MS)
-    (visible, restarted), = seen
-    assert not restarted, "the window first looked after the restart: a longer REBOOT_AFTER_S"
-    assert not visible  # nothing restarted yet
     qtbot.waitUntil(lambda: any(e["kind"] == "device_reset" for e in events), timeout=LIMIT_MS)
     reset_s = next(e for e in events if e["kind"] == "device_reset")["session_time_s"]
     # shown within RECONVERGE_S of the restart: the newest row, read after the tick, is no earlier than the
