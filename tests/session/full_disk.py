@@ -4,6 +4,7 @@ simulated bridge as a live source (paced in real time, like a radio)."""
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import subprocess
 from pathlib import Path
@@ -33,6 +34,19 @@ def fill(folder: Path, room_bytes: int, name: str = "filler") -> None:
     """A file that leaves ``room_bytes`` free in ``folder``'s filesystem."""
     stat = os.statvfs(folder)
     (folder / name).write_bytes(b"\0" * max(0, stat.f_bavail * stat.f_frsize - room_bytes))
+
+
+def use_up(folder: Path, name: str = "filler") -> None:
+    """Fill ``folder``'s filesystem to the last byte now, while a recorder may be writing into it too
+    (the disk fills at a moment the test chooses, not after a number of seconds of data)."""
+    with open(folder / name, "wb", buffering=0) as filler:
+        block = b"\0" * os.statvfs(folder).f_frsize
+        try:
+            while True:
+                filler.write(block)
+        except OSError as error:
+            if error.errno != errno.ENOSPC:
+                raise
 
 
 def grow(folder: Path, size: str) -> None:

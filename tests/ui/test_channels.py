@@ -162,14 +162,15 @@ def test_a_custom_series_from_an_expression_is_listed_plotted_and_checked(window
     view.channels.add("custom.roll_difference_deg")
     (spec, curve), = view.channels.stacked.curves
     qtbot.waitUntil(lambda: curve.xData is not None and len(curve.xData) > 50, timeout=LIMIT_MS)
-    imu, onboard = window.session.view.imu, window.session.view.onboard
-    times = imu.column("time_s")
+    # one snapshot of each table (whole rows): the demo's writer thread appends between two column reads
+    imu, onboard = (table.to_dict() for table in (window.session.view.imu, window.session.view.onboard))
+    times = imu["time_s"]
     t = curve.xData[-40:]
     rows = np.searchsorted(times, t)
     assert np.array_equal(times[rows], t)
-    ahf2 = roll_deg(np.column_stack([imu.column(f"ahf2_q{c}") for c in "wxyz"])[rows])
-    before = np.searchsorted(onboard.column("time_s"), t, side="right") - 1  # the onboard row at or before
-    aboard = roll_deg(np.column_stack([onboard.column(f"q{c}") for c in "wxyz"])[before])
+    ahf2 = roll_deg(np.column_stack([imu[f"ahf2_q{c}"] for c in "wxyz"])[rows])
+    before = np.searchsorted(onboard["time_s"], t, side="right") - 1  # the onboard row at or before
+    aboard = roll_deg(np.column_stack([onboard[f"q{c}"] for c in "wxyz"])[before])
     assert np.allclose(curve.yData[-40:], ahf2 - aboard, atol=1e-3)
     assert json.loads(view.channels.layout_json())["custom"] == {"roll_difference_deg": "ahf2_roll_deg - onboard_roll_deg"}
 

@@ -106,20 +106,27 @@ def test_reconnected_carries_the_time_the_data_came_back(window, qtbot, tmp_path
         click_tab(qtbot, window.controls, window.controls.indexOf(window.event_console))
         assert window.session is not None, window.banner.text()
         view = window.session.view
-        kinds = lambda: [e["kind"] for e in list(view.events)]  # noqa: E731
-        qtbot.waitUntil(lambda: "reconnected" in kinds(), timeout=LIMIT_MS)
+
+        def outage():
+            """The first loss of a port that had delivered data, and the reconnection after it (else None).
+            On a loaded machine the port may vanish after it opened and before its first byte: that
+            loss and its reconnection both stand at session time 0 (the first byte), and say nothing here."""
+            events = list(view.events)
+            lost = next((i for i, e in enumerate(events) if e["kind"] == "disconnected" and e["t_host_ns"]), None)
+            back = None if lost is None else next((e for e in events[lost:] if e["kind"] == "reconnected"), None)
+            return None if back is None else (events[lost], back)
+
+        qtbot.waitUntil(lambda: outage() is not None, timeout=LIMIT_MS)
         qtbot.waitUntil(lambda: window.event_console.table.rowCount() >= len(view.events), timeout=LIMIT_MS)
     finally:
         process.terminate()
         process.wait(timeout=10)
-    events = list(view.events)
-    lost = next(e for e in events if e["kind"] == "disconnected")
-    back = next(e for e in events if e["kind"] == "reconnected")
+    lost, back = outage()
     gap_s = event_session_time_s(view, back) - event_session_time_s(view, lost)
     assert 1.0 < gap_s < 4.0  # the port was gone 2 s; reopening is tried every 0.5 s
     rows = [window.event_console.table.item(r, 1).text() for r in range(window.event_console.table.rowCount())]
-    assert "reconnected" in rows and window.event_console.times()[rows.index("reconnected")] == pytest.approx(
-        event_session_time_s(view, back))
+    shown_s = [t for t, kind in zip(window.event_console.times(), rows) if kind == "reconnected"]
+    assert any(t == pytest.approx(event_session_time_s(view, back)) for t in shown_s), shown_s
 
 
 def reopen(window, qtbot, tmp_path) -> MainWindow:

@@ -1,11 +1,11 @@
-"""The window when the recordings' disk fills up during a live session (a real 64 kB tmpfs): a loud
+"""The window when the recordings' disk fills up during a live session (a real tmpfs, filled when the test says): a loud
 banner says so and why, the plots go on, the status bar stops saying "recording", "Resume recording"
 starts a new file once there is room, and closing the window raises nothing."""
 
 import numpy as np
 from PySide6 import QtCore
 
-from tests.session.full_disk import fill, grow, tiny_tmpfs
+from tests.session.full_disk import fill, grow, tiny_tmpfs, use_up
 from tests.waiting import LIMIT_MS
 
 
@@ -16,7 +16,7 @@ def newest_plotted_time(window) -> float:
 
 
 def test_a_full_disk_shows_a_banner_the_plots_go_on_and_resume_starts_a_new_file(window, qtbot, tmp_path):
-    with tiny_tmpfs(tmp_path / "full", room_bytes=48_000) as folder:  # ~10 s of the demo's link bytes
+    with tiny_tmpfs(tmp_path / "full", size="1m", room_bytes=512_000) as folder:  # minutes of the demo's link bytes
         window.recordings_dir = folder
         window.start_demo()
         session = window.session
@@ -24,6 +24,7 @@ def test_a_full_disk_shows_a_banner_the_plots_go_on_and_resume_starts_a_new_file
         first = session.recording_path
         qtbot.waitUntil(lambda: "● recording" in window.recording_label.text(), timeout=LIMIT_MS)
         assert not window.recording_banner.isVisible()
+        use_up(folder, "filler2")  # the disk is full now, however slowly a loaded machine came this far
 
         qtbot.waitUntil(window.recording_banner.isVisible, timeout=LIMIT_MS)
         text = window.recording_banner.label.text()
@@ -52,7 +53,7 @@ def test_a_full_disk_shows_a_banner_the_plots_go_on_and_resume_starts_a_new_file
 
         window.disconnect()
         assert window.recording_label.text() == "not recording"  # not the stopped session's "● recording"
-        fill(folder, 16_000, "filler2")
+        fill(folder, 16_000, "filler3")
         window.start_demo()
         qtbot.waitUntil(window.recording_banner.isVisible, timeout=LIMIT_MS)
         session = window.session
