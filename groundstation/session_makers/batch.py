@@ -38,7 +38,7 @@ from groundstation.recording import Recording
 from groundstation.session_parts import aiding
 from groundstation.session_parts.catalogue import IMU, estimator_columns, session_catalogue
 from groundstation.session_parts.clock import SessionClock
-from groundstation.session_makers.estimate_run import Break, EstimateRun, SampleColumns, Streamed
+from groundstation.session_makers.estimate_run import Break, EstimateRun, SampleColumns, SparseRows, Streamed
 from groundstation.session_parts.estimators import EstimatorBank
 from groundstation.session_parts.link import LinkStats
 from groundstation.session_makers.pipeline import (
@@ -440,7 +440,9 @@ class _Builder:
             if event.get("name") in bank.estimators:
                 breaks.append(Break(sample, event))
         setup = s.setup
-        return EstimateRun(bank.filters, setup.settings, setup.forced, bank.aiding, gyr, bias, acc, dt, mag, gps, breaks)
+        # The readings handed to the samples as the few rows that have one: held while an export streams
+        return EstimateRun(bank.filters, setup.settings, setup.forced, bank.aiding, gyr, bias, acc, dt,
+                           *(None if rows is None else SparseRows(rows) for rows in (mag, gps)), breaks)
 
     # -- gaps and link ----------------------------------------------------------------------------
 

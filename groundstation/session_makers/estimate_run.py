@@ -43,8 +43,8 @@ class EstimateRun:
     bias: tuple[int, tuple[float, float, float]] | None
     acc_g: np.ndarray | SampleColumns  # (n, 3)
     dt_s: np.ndarray  # (n,)
-    mag_uT: np.ndarray | None  # (n, 3) the reading each sample hands the estimators, NaN for none
-    gps: np.ndarray | None  # (n, 4) likewise
+    mag_uT: np.ndarray | SparseRows | None  # (n, 3) the reading each sample hands the estimators, NaN for none
+    gps: np.ndarray | SparseRows | None  # (n, 4) likewise
     breaks: list[Break]  # in sample order
 
     def __len__(self) -> int:
@@ -102,6 +102,28 @@ class SampleColumns:
         if len(at) and at[-1] - at[0] == len(at) - 1:  # consecutive rows (no gap row among them): a block copy
             return self._table[at[0]:at[-1] + 1, self._columns]
         return self._table[at[:, None], self._columns]
+
+
+class SparseRows:
+    """An (n, k) array whose rows are mostly NaN (the aiding readings handed to the samples: a magnetometer
+    reading every few samples, a GPS fix every twenty), held as the rows that are not, and read a stretch at
+    a time as the array's rows would be (``[start:end]``, a copy)."""
+
+    def __init__(self, rows: np.ndarray):
+        rows = np.asarray(rows, dtype=float)
+        self._shape = rows.shape
+        self._at = np.flatnonzero(~np.isnan(rows).all(axis=1))
+        self._values = rows[self._at]
+
+    def __len__(self) -> int:
+        return self._shape[0]
+
+    def __getitem__(self, rows: slice) -> np.ndarray:
+        start, stop, _ = rows.indices(self._shape[0])
+        out = np.full((max(stop - start, 0), self._shape[1]), np.nan)
+        first, last = np.searchsorted(self._at, (start, stop))
+        out[self._at[first:last] - start] = self._values[first:last]
+        return out
 
 
 class Streamed:
