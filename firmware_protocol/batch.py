@@ -23,6 +23,12 @@ passes over the whole buffer:
 
 Payloads are unpacked by viewing the frames' bytes as a numpy structured dtype built from the spec
 (``payload_dtype``), so raw values are the wire values, bit for bit.
+
+A piece at a time. ``PieceDecoder`` runs these passes over consecutive pieces of whole chunks (``decode_batch``
+is one piece: the whole), carrying between them what ``StreamDecoder`` carries between chunks: the tail the
+scan stopped at, the last frame for the duplicate rule, the ``SequenceRules`` (whose counters are the
+decoder's) and the bytes of the frame they hold, which leads the next piece; ``decode_pieces`` and
+``joined`` give the whole stream's result from the pieces', bit for bit.
 """
 
 from __future__ import annotations

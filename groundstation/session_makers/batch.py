@@ -183,20 +183,22 @@ class _Builder:
     def _clock(self, n: int) -> None:
         """SessionClock over every timestamped frame in order; each frame's session and device time
         (a frame without timestamp: those of the last timestamped frame before it)."""
-        timed_parts, time_parts = [], []
+        is_timed = np.zeros(n, dtype=bool)
+        device = np.zeros(n, dtype=np.int64)
         for columns in self.d.frames.values():
             if columns.device_time_us is not None:
-                timed_parts.append(columns.order)
-                time_parts.append(columns.device_time_us)
-        timed = np.concatenate(timed_parts) if timed_parts else np.zeros(0, dtype=np.int64)
-        order = np.argsort(timed)
-        timed = timed[order]
-        device = np.concatenate(time_parts)[order] if time_parts else np.zeros(0, dtype=np.int64)
-        times, unwrapped, events = SessionClock().place_many(self.t_host[timed], device)
+                is_timed[columns.order] = True
+                device[columns.order] = columns.device_time_us
+        timed = np.flatnonzero(is_timed)
+        times, unwrapped, events = SessionClock().place_many(self.t_host[timed], device[timed])
         discontinuities = [(int(timed[i]), event) for i, event in events]
-        last = np.searchsorted(timed, np.arange(n), side="right") - 1
-        self.time_s = np.where(last >= 0, np.append(times, math.nan)[last], math.nan)
-        self.device_us = np.where(last >= 0, np.append(unwrapped, 0)[last], 0)
+        # Each frame's own times, written in place (memory: no session-long temporaries besides)
+        self.time_s, self.device_us = np.full(n, math.nan), device
+        self.time_s[timed], self.device_us[timed] = times, unwrapped
+        untimed = np.flatnonzero(~is_timed)  # a few (CONFIG, ACK): the last timestamped frame's before them (NaN, 0: none)
+        last = np.searchsorted(timed, untimed, side="right") - 1
+        found = last >= 0
+        self.time_s[untimed[found]], self.device_us[untimed[found]] = times[last[found]], unwrapped[last[found]]
         self.discontinuities = discontinuities
         self.disc_keys = np.array([stage_key(p, DISCONTINUITY) for p, _ in discontinuities])
         for key, (_, event) in zip(self.disc_keys.tolist(), discontinuities):
