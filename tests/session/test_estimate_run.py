@@ -40,6 +40,7 @@ def eventful(tmp_path_factory):
 @pytest.fixture
 def short_stretches(monkeypatch):
     monkeypatch.setattr(estimate_run, "STRETCH_SAMPLES", 37)
+    monkeypatch.setattr(estimate_run, "STREAMED_STRETCH_SAMPLES", 23)
 
 
 def test_short_stretches_give_the_incremental_pipeline_s_tables(eventful, short_stretches):
