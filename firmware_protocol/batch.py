@@ -23,11 +23,18 @@ passes over the whole buffer:
 
 Payloads are unpacked by viewing the frames' bytes as a numpy structured dtype built from the spec
 (``payload_dtype``), so raw values are the wire values, bit for bit.
+
+A piece at a time. ``PieceDecoder`` runs these passes over consecutive pieces of whole chunks (``decode_batch``
+is one piece: the whole), carrying between them what ``StreamDecoder`` carries between chunks: the tail the
+scan stopped at, the last frame for the duplicate rule, the ``SequenceRules`` (whose counters are the
+decoder's) and the bytes of the frame they hold, which leads the next piece; ``decode_pieces`` and
+``joined`` give the whole stream's result from the pieces', bit for bit.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import dataclasses
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,9 +105,15 @@ class BatchDecode:
         return self.stats.frames
 
 
+PIECE_BYTES = 1 << 21  # link bytes decoded at once by ``decode_pieces`` (~2 min of a 100 Hz flight with sensors)
+
+
 def decode_chunks(chunks: Iterable[tuple[int, bytes]], spec: Spec = SPEC,
-                  progress: Callable[[int, int], None] | None = None) -> BatchDecode:
-    """``decode_batch`` of ``(t_host_ns, data)`` chunks as a recording holds them."""
+                  progress: Callable[[int, int], None] | None = None, piece_bytes: int | None = None) -> BatchDecode:
+    """``decode_batch`` of ``(t_host_ns, data)`` chunks as a recording holds them; ``piece_bytes``: decoded
+    that many bytes at a time (``decode_pieces``) and joined, the same result (None: at once)."""
+    if piece_bytes is not None:
+        return joined(decode_pieces(pieces_of(chunks, piece_bytes), spec))
     times, parts = [], []
     for t_host_ns, data in chunks:
         times.append(t_host_ns)
@@ -114,76 +127,180 @@ def decode_batch(data: bytes, chunk_ends=None, chunk_t_host_ns=None, spec: Spec 
     """Decode ``data``, the concatenation of chunks ending at byte offsets ``chunk_ends`` (cumulative,
     exclusive) that arrived at ``chunk_t_host_ns``. Without chunks: one chunk arriving at 0.
     ``progress(done, total)`` is told the frames placed so far."""
-    buf = np.frombuffer(data, dtype=np.uint8)
-    n = len(buf)
-    if chunk_ends is None:
-        chunk_ends, chunk_t_host_ns = np.array([n], dtype=np.int64), np.zeros(1, dtype=np.int64)
-    chunk_ends = np.asarray(chunk_ends, dtype=np.int64)
-    chunk_t_host_ns = np.asarray(chunk_t_host_ns, dtype=np.int64)
-    tables = _Tables(spec)
-    scan = _scan(buf, chunk_ends, tables, spec)
-    starts = scan.starts
-    type_ids = buf[starts + 2].astype(np.intp)
-    seqs = buf[starts + 3]
-    duplicate = _duplicates(data, starts, scan.ends, type_ids, seqs, tables)
-    known = tables.known[type_ids]
-    keep = ~duplicate & known
-    kept = _Kept(buf, starts[keep], type_ids[keep], seqs[keep], tables)
-    duplicates, unknown_types = int(duplicate.sum()), int((~duplicate & ~known).sum())
-    # Intermediates of an hour's frames are ~6 MB each: each goes once used (the decode's peak memory).
-    del type_ids, seqs, duplicate, known, keep
-    chunk_of = np.searchsorted(scan.stops, kept.starts, side="right")  # the chunk whose feed reaches the frame
-    placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, spec, progress)
-    del kept.t32, kept.timestamped
+    return PieceDecoder(spec).decode(data, chunk_ends, chunk_t_host_ns, progress)
 
-    stats = placed.rules.stats
-    stats.bytes_in = n
-    stats.frame_bytes = int((scan.ends - starts).sum())
-    stats.bytes_skipped = int(scan.stops[-1]) - stats.frame_bytes if len(scan.stops) else 0
-    stats.bad_lengths, stats.crc_errors = int(scan.bad_at.size), int(scan.crc_at.size)
-    stats.duplicates, stats.unknown_types = duplicates, unknown_types
-    stats.frames = len(placed.index)
-    stats.frames_lost = int(placed.lost.sum())
 
-    # Counters after each chunk: what lies before the scan's stop then.
-    stops = scan.stops
-    emitted_at = np.sort(kept.starts[placed.emitter])  # a held frame comes out with the frame that confirms it
-    frame_ends = np.concatenate(([0], np.cumsum(scan.ends - starts)))
-    counters = {
-        "frames": np.searchsorted(emitted_at, stops),
-        "bytes_in": chunk_ends.copy(),
-        "crc_errors": np.searchsorted(scan.crc_at, stops),
-        "frames_lost": np.concatenate(([0], np.cumsum(placed.lost)))[np.searchsorted(kept.starts, stops)],
-        "bytes_skipped": stops - frame_ends[np.searchsorted(starts, stops)],
-    }
-    del emitted_at, frame_ends, starts, placed.lost, scan
+def pieces_of(chunks: Iterable[tuple[int, bytes]], piece_bytes: int) -> Iterator[tuple[bytes, np.ndarray, np.ndarray]]:
+    """``(t_host_ns, data)`` chunks grouped into pieces of whole chunks of at least ``piece_bytes`` (but the
+    last): ``(data, chunk_ends, chunk_t_host_ns)`` each, as ``PieceDecoder.decode`` takes them. No chunks: one
+    empty piece."""
+    times: list[int] = []
+    parts: list[bytes] = []
+    size = 0
+    handed = False
+    for t_host_ns, data in chunks:
+        times.append(t_host_ns)
+        parts.append(data)
+        size += len(data)
+        if size >= piece_bytes:
+            yield b"".join(parts), np.cumsum([len(p) for p in parts], dtype=np.int64), np.array(times, dtype=np.int64)
+            times, parts, size, handed = [], [], 0, True
+    if parts or not handed:
+        yield b"".join(parts), np.cumsum([len(p) for p in parts], dtype=np.int64), np.array(times, dtype=np.int64)
 
-    order_of = placed.index  # kept index of each frame returned, in return order
-    returned_types = kept.type_ids[order_of]
+
+def decode_pieces(pieces: Iterable[tuple[bytes, np.ndarray, np.ndarray]], spec: Spec = SPEC) -> Iterator[BatchDecode]:
+    """``PieceDecoder.decode`` of each piece in turn (``pieces_of``; ``Recording.pieces``)."""
+    decoder = PieceDecoder(spec)
+    for data, chunk_ends, chunk_t_host_ns in pieces:
+        yield decoder.decode(data, chunk_ends, chunk_t_host_ns)
+
+
+def joined(pieces: Iterable[BatchDecode]) -> BatchDecode:
+    """The pieces of one stream (``decode_pieces``) as one ``BatchDecode``: that of the whole stream."""
+    pieces = list(pieces)
+    last = pieces[-1]
     frames = {}
-    for frame_type in spec.frames:
-        (order,) = np.nonzero(returned_types == frame_type.id)
-        which = order_of[order]
-        dtype = payload_dtype(frame_type)
-        starts = kept.starts[which]
-        whole = buf[starts + 1] == frame_type.payload_size
-        shorter = np.flatnonzero(~whole)  # an older sender's shorter payloads (rare: a few CONFIG frames)
-        raw = np.zeros(len(which), dtype)
-        if len(shorter) < len(which):  # a whole payload lies within the buffer, so its window exists
-            rows = np.lib.stride_tricks.sliding_window_view(buf, frame_type.payload_size)[starts[whole] + HEADER_BYTES]
-            wholes = np.ascontiguousarray(rows).view(dtype).reshape(-1)
-            if len(shorter):
-                raw[whole] = wholes
-            else:
-                raw = wholes
-        for k in shorter.tolist():
-            raw[k] = tables.read(data, int(starts[k]))
-        chunk = chunk_of[placed.emitter[order]]
-        device = placed.t64[order] if frame_type.has_timestamp else None
-        frames[frame_type.name] = FrameColumns(frame_type, order, kept.seqs[which], raw, device, chunk, chunk_t_host_ns[chunk])
-    rules = placed.rules
-    return BatchDecode(frames, stats, rules.remote_fingerprint, rules.rate_hz, n - int(stops[-1]) if len(stops) else 0,
-                       chunk_t_host_ns, counters)
+    for name, columns in last.frames.items():
+        parts = [p.frames[name] for p in pieces]
+        device = None if columns.device_time_us is None else np.concatenate([c.device_time_us for c in parts])
+        frames[name] = FrameColumns(columns.type, *(np.concatenate([getattr(c, f) for c in parts]) for f in ("order", "seq", "raw")),
+                                    device, *(np.concatenate([getattr(c, f) for c in parts]) for f in ("chunk", "t_host_ns")))
+    counters = {c: np.concatenate([p.chunk_counters[c] for p in pieces]) for c in CHUNK_COUNTERS}
+    return BatchDecode(frames, last.stats, last.remote_fingerprint, last.rate_hz, last.pending_bytes,
+                       np.concatenate([p.chunk_t_host_ns for p in pieces]), counters)
+
+
+@dataclass
+class _Previous:
+    """The last kept frame of the pieces decoded so far: whether the next one continues a fast run."""
+
+    timestamped: bool
+    seq: int
+    t32: int
+
+
+class PieceDecoder:
+    """The decode a piece of the stream at a time: each ``decode`` takes the chunks that follow those of the
+    one before and returns their frames (``order`` and ``chunk`` counted from the stream's start), the
+    counters after each of its chunks, and the counters and state after its last, exactly as a decode of
+    the whole stream would (``StreamDecoder`` likewise fed chunk by chunk). Carried from piece to piece,
+    as ``StreamDecoder`` carries them from chunk to chunk: the undecided tail (``pending``), the last frame
+    for the duplicate rule, ``SequenceRules`` (the counters it keeps in ``stats``) and the frame it holds,
+    whose bytes are kept and which comes out with the piece that confirms it."""
+
+    def __init__(self, spec: Spec = SPEC) -> None:
+        self.spec = spec
+        self.tables = _Tables(spec)
+        self.stats = DecoderStats()
+        self.rules = SequenceRules(self.stats, spec)
+        self.pending = b""
+        self.held = b""  # the bytes of the frame ``rules.held`` is, when it holds one
+        self.last_frame: tuple[int, tuple] | None = None  # (seq, raw values): the duplicate rule's last frame
+        self.previous: _Previous | None = None
+        self.chunks = 0  # chunks decoded so far
+
+    def decode(self, data: bytes, chunk_ends=None, chunk_t_host_ns=None,
+               progress: Callable[[int, int], None] | None = None) -> BatchDecode:
+        """The next piece: ``data``, its chunks ending at ``chunk_ends`` (cumulative within ``data``) and
+        arriving at ``chunk_t_host_ns`` (without chunks: one arriving at 0); ``progress(done, total)`` is
+        told the piece's frames placed so far."""
+        new_bytes = len(data)
+        if chunk_ends is None:
+            chunk_ends, chunk_t_host_ns = np.array([new_bytes], dtype=np.int64), np.zeros(1, dtype=np.int64)
+        chunk_t_host_ns = np.asarray(chunk_t_host_ns, dtype=np.int64)
+        spec, tables, stats = self.spec, self.tables, self.stats
+        # The held frame, then the tail the scan stopped at, then the piece: one buffer, positions within it.
+        held = len(self.held)
+        before = held + len(self.pending)
+        if before:
+            data = self.held + self.pending + bytes(data)
+        buf = np.frombuffer(data, dtype=np.uint8)
+        chunk_ends = before + np.asarray(chunk_ends, dtype=np.int64)
+        scan = _scan(buf[held:], chunk_ends - held, tables, spec)
+        scan.shift(held)
+        starts = scan.starts
+        type_ids = buf[starts + 2].astype(np.intp)
+        seqs = buf[starts + 3]
+        duplicate, self.last_frame = _duplicates(data, starts, type_ids, seqs, tables, self.last_frame)
+        known = tables.known[type_ids]
+        keep = ~duplicate & known
+        kept_starts = starts[keep]
+        if held:  # the held frame leads: kept index 0
+            kept_starts = np.concatenate(([0], kept_starts))
+        kept = _Kept(buf, kept_starts, buf[kept_starts + 2].astype(np.intp), buf[kept_starts + 3], tables)
+        duplicates, unknown_types = int(duplicate.sum()), int((~duplicate & ~known).sum())
+        # Intermediates of an hour's frames are ~6 MB each: each goes once used (the decode's peak memory).
+        del type_ids, seqs, duplicate, known, keep, kept_starts
+        chunk_of = np.searchsorted(scan.stops, kept.starts, side="right")  # the chunk whose feed reaches the frame
+        frames_before, lost_before = stats.frames, stats.frames_lost
+        counters_before = {c: getattr(stats, c) for c in CHUNK_COUNTERS}
+        placed = _sequence(data, kept, chunk_of, chunk_t_host_ns, tables, self.rules, frames_before + lost_before,
+                           self.previous, bool(held), progress)
+        if len(kept) > bool(held):
+            last = len(kept) - 1
+            self.previous = _Previous(bool(kept.timestamped[last]), int(kept.seqs[last]), int(kept.t32[last]))
+        del kept.t32, kept.timestamped
+
+        stops = scan.stops
+        final = int(stops[-1]) if len(stops) else held
+        frame_bytes = int((scan.ends - starts).sum())
+        stats.bytes_in += new_bytes
+        stats.frame_bytes += frame_bytes
+        stats.bytes_skipped += final - held - frame_bytes  # the pending tail was left undecided by the piece before
+        stats.bad_lengths += int(scan.bad_at.size)
+        stats.crc_errors += int(scan.crc_at.size)
+        stats.duplicates += duplicates
+        stats.unknown_types += unknown_types
+        stats.frames += len(placed.index)
+        stats.frames_lost += int(placed.lost.sum())
+
+        # Counters after each chunk: what lies before the scan's stop then.
+        emitted_at = np.sort(kept.starts[placed.emitter])  # a held frame comes out with the frame that confirms it
+        frame_ends = np.concatenate(([0], np.cumsum(scan.ends - starts)))
+        counters = {
+            "frames": frames_before + np.searchsorted(emitted_at, stops),
+            "bytes_in": counters_before["bytes_in"] + chunk_ends - before,
+            "crc_errors": counters_before["crc_errors"] + np.searchsorted(scan.crc_at, stops),
+            "frames_lost": lost_before + np.concatenate(([0], np.cumsum(placed.lost)))[np.searchsorted(kept.starts, stops)],
+            "bytes_skipped": counters_before["bytes_skipped"] + stops - held - frame_ends[np.searchsorted(starts, stops)],
+        }
+        del emitted_at, frame_ends, starts, placed.lost, scan
+
+        self.held = b""
+        if placed.held_at >= 0:  # its bytes wait for the piece that decides on it
+            at = int(kept.starts[placed.held_at])
+            self.held = bytes(data[at : at + _OVERHEAD + data[at + 1]])
+        self.pending = bytes(data[final:])
+
+        order_of = placed.index  # kept index of each frame returned, in return order
+        returned_types = kept.type_ids[order_of]
+        frames = {}
+        for frame_type in spec.frames:
+            (order,) = np.nonzero(returned_types == frame_type.id)
+            which = order_of[order]
+            dtype = payload_dtype(frame_type)
+            starts = kept.starts[which]
+            whole = buf[starts + 1] == frame_type.payload_size
+            shorter = np.flatnonzero(~whole)  # an older sender's shorter payloads (rare: a few CONFIG frames)
+            raw = np.zeros(len(which), dtype)
+            if len(shorter) < len(which):  # a whole payload lies within the buffer, so its window exists
+                rows = np.lib.stride_tricks.sliding_window_view(buf, frame_type.payload_size)[starts[whole] + HEADER_BYTES]
+                wholes = np.ascontiguousarray(rows).view(dtype).reshape(-1)
+                if len(shorter):
+                    raw[whole] = wholes
+                else:
+                    raw = wholes
+            for k in shorter.tolist():
+                raw[k] = tables.read(data, int(starts[k]))
+            chunk = chunk_of[placed.emitter[order]]
+            device = placed.t64[order] if frame_type.has_timestamp else None
+            frames[frame_type.name] = FrameColumns(frame_type, frames_before + order, kept.seqs[which], raw, device,
+                                                   self.chunks + chunk, chunk_t_host_ns[chunk])
+        self.chunks += len(chunk_ends)
+        rules = self.rules
+        return BatchDecode(frames, dataclasses.replace(stats), rules.remote_fingerprint, rules.rate_hz, len(self.pending),
+                           chunk_t_host_ns, counters)
 
 
 class _Tables:
@@ -217,6 +334,11 @@ class _Scan:
     stops: np.ndarray  # (chunks,) where the scan stood after each chunk: every byte before it is decided
     crc_at: np.ndarray  # sorted positions of candidates examined and failed (CRC)
     bad_at: np.ndarray  # ... with an impossible length
+
+    def shift(self, offset: int) -> None:
+        """Positions in a buffer that holds ``offset`` bytes before the scanned ones."""
+        for name in ("starts", "ends", "stops", "crc_at", "bad_at"):
+            setattr(self, name, getattr(self, name) + offset)
 
 
 def _scan(buf: np.ndarray, chunk_ends: np.ndarray, tables: _Tables, spec: Spec) -> _Scan:
@@ -305,23 +427,31 @@ def _inside(positions: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.n
     return (i >= 0) & (positions < ends[np.maximum(i, 0)])
 
 
-def _duplicates(data: bytes, starts, ends, type_ids, seqs, tables: _Tables) -> np.ndarray:
-    """StreamDecoder's rule: same seq and equal unpacked values as the last known-type non-duplicate frame."""
+def _duplicates(data: bytes, starts, type_ids, seqs, tables: _Tables, last: tuple[int, tuple] | None):
+    """StreamDecoder's rule: same seq and equal unpacked values as the last known-type non-duplicate frame
+    (``last``: that of the stream before, (seq, values), or None). Returns which are duplicates, and the
+    last known-type non-duplicate frame after them."""
     duplicate = np.zeros(len(starts), dtype=bool)
-    if len(starts) < 2:
-        return duplicate
     known = tables.known[type_ids]
     # The rule compares with the last frame of a known type that was not a duplicate.
     index = np.flatnonzero(known)
+    if not len(index):
+        return duplicate, last
     ks = seqs[index]
-    for j in (np.flatnonzero(ks[1:] == ks[:-1]) + 1).tolist():
+    candidates = (np.flatnonzero(ks[1:] == ks[:-1]) + 1).tolist()
+    if last is not None and int(ks[0]) == last[0]:
+        candidates.insert(0, 0)
+    for j in candidates:
         i, previous = int(index[j]), j - 1
-        while duplicate[index[previous]]:
+        while previous >= 0 and duplicate[index[previous]]:
             previous -= 1
-        p = int(index[previous])
-        if tables.read(data, int(starts[i])) == tables.read(data, int(starts[p])):
+        earlier = last[1] if previous < 0 else tables.read(data, int(starts[index[previous]]))
+        if tables.read(data, int(starts[i])) == earlier:
             duplicate[i] = True
-    return duplicate
+    kept = index[~duplicate[index]]
+    if len(kept):
+        last = (int(seqs[kept[-1]]), tables.read(data, int(starts[kept[-1]])))
+    return duplicate, last
 
 
 class _Kept:
@@ -349,21 +479,25 @@ class _Placed:
     t64: np.ndarray  # its device time (0 for frames without timestamp)
     emitter: np.ndarray  # kept index of the frame whose processing returned it (a held frame: the confirming one)
     lost: np.ndarray  # (kept,) frames counted lost while processing each kept frame
-    rules: SequenceRules  # holding the state and the counters it keeps
+    held_at: int  # kept index of the frame the rules hold after the last (-1: none)
 
 
-def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tables, spec: Spec, progress) -> _Placed:
+def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tables, rules: SequenceRules, advanced: int,
+              previous: _Previous | None, held_first: bool, progress) -> _Placed:
     """The sequence and time rules over the kept frames: fast runs as arrays, the rest through
-    ``SequenceRules`` as the incremental decoder calls it."""
+    ``SequenceRules`` as the incremental decoder calls it. ``rules``: as the frames before left them;
+    ``advanced``: the frames returned or counted lost before; ``previous``: the kept frame before the
+    first (None: none); ``held_first``: the first kept frame is the one ``rules`` holds (decided already)."""
     n = len(kept)
-    rules = SequenceRules(DecoderStats(), spec)
     ts, seqs, t32 = kept.timestamped, kept.seqs.astype(np.int64), kept.t32
     # Frame j continues a fast run after frame j-1 if both are timestamped, seq follows and the step is short.
-    consecutive = np.zeros(n, dtype=bool)
-    step = np.zeros(n, dtype=np.int64)
-    if n > 1:
-        consecutive[1:] = ts[1:] & ts[:-1] & (seqs[1:] == (seqs[:-1] + 1) & 0xFF)
-        step[1:] = (t32[1:] - t32[:-1]) & 0xFFFFFFFF
+    if previous is None:
+        previous = _Previous(False, 0, 0)
+    before_ts, before_seqs, before_t32 = (np.concatenate(([v], a)) for v, a in
+                                          ((previous.timestamped, ts), (previous.seq, seqs), (previous.t32, t32)))
+    consecutive = ts & before_ts[:-1] & (seqs == (before_seqs[:-1] + 1) & 0xFF)
+    step = (t32 - before_t32[:-1]) & 0xFFFFFFFF
+    del before_ts, before_seqs, before_t32
     breaks_for: dict[int, np.ndarray] = {}
     index = np.empty(n, dtype=np.int64)
     t64 = np.zeros(n, dtype=np.int64)
@@ -371,11 +505,34 @@ def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tabl
     lost = np.zeros(n, dtype=np.int64)
     returned = 0
     lost_total = 0
-    held_at = -1  # kept index of the held frame
+    held_at = 0 if held_first else -1  # kept index of the held frame
     types = tables.types
-    i = 0
+    i = 1 if held_first else 0
     next_progress = 0
-    while i < n:
+    while True:
+        # The fast run from here: frames the incremental decoder's fast path takes.
+        fast_us = rules.fast_us
+        if fast_us and i < n:
+            breaks = breaks_for.get(fast_us)
+            if breaks is None:
+                breaks = breaks_for[fast_us] = np.flatnonzero(~consecutive | (step >= fast_us))
+            b = np.searchsorted(breaks, i)  # frame i - 1 is the reference: the run goes on to the next break
+            end = int(breaks[b]) if b < len(breaks) else n
+            if end > i and seqs[i] == rules.next_seq:
+                steps = step[i:end]
+                run = rules.t64 + np.cumsum(steps)
+                count = end - i
+                index[returned : returned + count] = np.arange(i, end)
+                emitter[returned : returned + count] = index[returned : returned + count]
+                t64[returned : returned + count] = run
+                returned += count
+                moved = np.flatnonzero(steps)
+                # The reference moved in the chunk of the last frame that moved it.
+                host_ns = int(chunk_t_host_ns[chunk_of[i + int(moved[-1])]]) if len(moved) else rules.host_ns
+                rules.ran((int(seqs[end - 1]) + 1) & 0xFF, int(t32[end - 1]), int(run[-1]), host_ns)
+                i = end
+        if i >= n:
+            break
         if progress is not None and i >= next_progress:
             progress(i, n)
             next_progress = i + 200_000
@@ -383,7 +540,7 @@ def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tabl
         seq = int(seqs[i])
         raw = tables.read(data, int(kept.starts[i]))
         t_host_ns = int(chunk_t_host_ns[chunk_of[i]])
-        advances = returned + lost_total
+        advances = advanced + returned + lost_total
         if not ts[i]:
             k = rules.untimed(type_id, seq, raw, advances)
             index[returned], emitter[returned] = i, i
@@ -403,29 +560,6 @@ def _sequence(data: bytes, kept: _Kept, chunk_of, chunk_t_host_ns, tables: _Tabl
         lost[i] = k
         lost_total += k
         i += 1
-        # The fast run that follows: frames the incremental decoder's fast path takes.
-        fast_us = rules.fast_us
-        if not fast_us or i >= n:
-            continue
-        breaks = breaks_for.get(fast_us)
-        if breaks is None:
-            breaks = breaks_for[fast_us] = np.flatnonzero(~consecutive | (step >= fast_us))
-        b = np.searchsorted(breaks, i)
-        end = int(breaks[b]) if b < len(breaks) else n
-        if end == i or seqs[i] != rules.next_seq:
-            continue
-        steps = step[i:end]
-        run = rules.t64 + np.cumsum(steps)
-        count = end - i
-        index[returned : returned + count] = np.arange(i, end)
-        emitter[returned : returned + count] = index[returned : returned + count]
-        t64[returned : returned + count] = run
-        returned += count
-        moved = np.flatnonzero(steps)
-        # The reference moved in the chunk of the last frame that moved it.
-        host_ns = int(chunk_t_host_ns[chunk_of[i + int(moved[-1])]]) if len(moved) else rules.host_ns
-        rules.ran((int(seqs[end - 1]) + 1) & 0xFF, int(t32[end - 1]), int(run[-1]), host_ns)
-        i = end
     if progress is not None:
         progress(n, n)
-    return _Placed(index[:returned], t64[:returned], emitter[:returned], lost, rules)
+    return _Placed(index[:returned], t64[:returned], emitter[:returned], lost, held_at if rules.held is not None else -1)

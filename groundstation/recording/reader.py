@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from firmware_protocol.batch import pieces_of
 from groundstation.recording import samples, search, sniff
 from groundstation.recording.format import (
     CRC,
@@ -107,6 +108,15 @@ class Recording:
         del into, source
         release_pages(self._buffer)
         return data, ends, self.chunk_t_host_ns
+
+    def pieces(self, piece_bytes: int) -> Iterator[tuple[bytes, np.ndarray, np.ndarray]]:
+        """``stream`` a piece at a time: consecutive whole chunks of at least ``piece_bytes`` (but the last)
+        joined, their end offsets in the piece and arrival times (``firmware_protocol.batch.pieces_of``),
+        the file's pages let go after each piece (``release_pages``): what this holds does not grow with
+        the recording."""
+        for piece in pieces_of(self.chunks(), piece_bytes):
+            yield piece
+            release_pages(self._buffer)
 
     def chunks(self, start: int = 0) -> Iterator[tuple[int, bytes]]:
         """(t_host_ns, data) from chunk index ``start`` on."""

@@ -129,7 +129,7 @@ class SessionData:
         if self.estimates is not None and self.estimated:
             if rows is None:
                 raise ValueError("streamed estimates are made a stretch of rows at a time: name the rows")
-            columns = self.estimates.at(rows)
+            columns = self.estimates.at(rows, tuple(f"{name}_q{c}" for name in self.estimates.names for c in "wxyz"))
             streamed = {name: np.column_stack([columns[f"{name}_q{c}"] for c in "wxyz"]) for name in self.estimates.names}
         out = {name: streamed[name] if name in streamed else self.quaternion(name, rows) for name in self.estimated}
         if self.has_onboard():

@@ -31,14 +31,14 @@ from collections.abc import Callable
 import numpy as np
 
 from firmware_protocol import SPEC
-from firmware_protocol.batch import CHUNK_COUNTERS, BatchDecode, decode_batch
+from firmware_protocol.batch import CHUNK_COUNTERS, PIECE_BYTES, BatchDecode, decode_pieces, joined
 from firmware_protocol.decoder import DecoderStats
 from groundstation.estimation import settings_as_json
 from groundstation.recording import Recording
 from groundstation.session_parts import aiding
 from groundstation.session_parts.catalogue import IMU, estimator_columns, session_catalogue
 from groundstation.session_parts.clock import SessionClock
-from groundstation.session_makers.estimate_run import Break, EstimateRun, SampleColumns, Streamed
+from groundstation.session_makers.estimate_run import Break, EstimateRun, SampleColumns, SparseRows, Streamed
 from groundstation.session_parts.estimators import EstimatorBank
 from groundstation.session_parts.link import LinkStats
 from groundstation.session_makers.pipeline import (
@@ -98,24 +98,32 @@ class BatchSession:
 
 
 def batch_replay(recording: Recording, filters=None, forced=None, progress: Callable[[int, int], None] | None = None,
-                 accept_config_changes: bool = False, stream_estimates: bool = False) -> BatchSession:
+                 accept_config_changes: bool = False, stream_estimates: bool = False,
+                 piece_bytes: int | None = None) -> BatchSession:
     """``replay(recording, filters, forced, accept_config_changes=...)`` on the batch path (the project's own
-    protocol only); ``stream_estimates``: ``BatchSession.stream_estimates``."""
+    protocol only); ``stream_estimates``: ``BatchSession.stream_estimates``; ``piece_bytes``: the link's bytes
+    decoded at a time (``firmware_protocol.batch.decode_pieces``: the same session whatever it is; None:
+    ``PIECE_BYTES``)."""
     setup = recorded_setup(recording, filters, forced)
     if setup.protocol != "gs":
         raise ValueError(f"the batch path decodes the project's frames, not {setup.protocol!r}")
     total = 1000
 
-    def decoding(done: int, frames: int) -> None:
-        if progress is not None:
-            progress(int(_DECODE_SHARE * total * done / max(frames, 1)), total)
+    def decoding(pieces):
+        chunks = 0
+        for piece in pieces:
+            chunks += len(piece.chunk_t_host_ns)
+            if progress is not None:
+                progress(int(_DECODE_SHARE * total * chunks / max(recording.chunk_count, 1)), total)
+            yield piece
 
     def estimating(done: int, samples: int) -> None:
         if progress is not None:
             progress(int(total * (_DECODE_SHARE + (1 - _DECODE_SHARE) * done / max(samples, 1))), total)
 
     session = BatchSession(setup, stream_estimates)
-    decoded = decode_batch(*recording.stream(), progress=decoding)
+    # A piece of the link's bytes at a time: the decode's own arrays are a piece's, not the recording's
+    decoded = joined(decoding(decode_pieces(recording.pieces(piece_bytes or PIECE_BYTES))))
     _Builder(session, decoded, SettingsSchedule(recording).changes(), estimating, ConfigGuard(accept_config_changes)).build()
     if progress is not None:
         progress(total, total)
@@ -175,20 +183,22 @@ class _Builder:
     def _clock(self, n: int) -> None:
         """SessionClock over every timestamped frame in order; each frame's session and device time
         (a frame without timestamp: those of the last timestamped frame before it)."""
-        timed_parts, time_parts = [], []
+        is_timed = np.zeros(n, dtype=bool)
+        device = np.zeros(n, dtype=np.int64)
         for columns in self.d.frames.values():
             if columns.device_time_us is not None:
-                timed_parts.append(columns.order)
-                time_parts.append(columns.device_time_us)
-        timed = np.concatenate(timed_parts) if timed_parts else np.zeros(0, dtype=np.int64)
-        order = np.argsort(timed)
-        timed = timed[order]
-        device = np.concatenate(time_parts)[order] if time_parts else np.zeros(0, dtype=np.int64)
-        times, unwrapped, events = SessionClock().place_many(self.t_host[timed], device)
+                is_timed[columns.order] = True
+                device[columns.order] = columns.device_time_us
+        timed = np.flatnonzero(is_timed)
+        times, unwrapped, events = SessionClock().place_many(self.t_host[timed], device[timed])
         discontinuities = [(int(timed[i]), event) for i, event in events]
-        last = np.searchsorted(timed, np.arange(n), side="right") - 1
-        self.time_s = np.where(last >= 0, np.append(times, math.nan)[last], math.nan)
-        self.device_us = np.where(last >= 0, np.append(unwrapped, 0)[last], 0)
+        # Each frame's own times, written in place (memory: no session-long temporaries besides)
+        self.time_s, self.device_us = np.full(n, math.nan), device
+        self.time_s[timed], self.device_us[timed] = times, unwrapped
+        untimed = np.flatnonzero(~is_timed)  # a few (CONFIG, ACK): the last timestamped frame's before them (NaN, 0: none)
+        last = np.searchsorted(timed, untimed, side="right") - 1
+        found = last >= 0
+        self.time_s[untimed[found]], self.device_us[untimed[found]] = times[last[found]], unwrapped[last[found]]
         self.discontinuities = discontinuities
         self.disc_keys = np.array([stage_key(p, DISCONTINUITY) for p, _ in discontinuities])
         for key, (_, event) in zip(self.disc_keys.tolist(), discontinuities):
@@ -337,13 +347,14 @@ class _Builder:
     def _imu_table(self, keys: np.ndarray, sensors, run: EstimateRun, aided: bool) -> np.ndarray:
         """The ``imu`` table made in one array: the samples' sensor columns and a gap row at each restart after
         the first sample, in the pipeline's order, then each estimator's columns written into it a stretch
-        of samples at a time (``EstimateRun``). Streaming (``BatchSession.stream_estimates``), only the aiding
-        estimator's columns are held, if the session has readings it aids (``aided``: the compass heading
-        and the position need its attitude at every sample); the others are left to ``Streamed``. Returns
-        the aiding estimator's quaternions (none if not held)."""
+        of samples at a time (``EstimateRun``). Streaming (``BatchSession.stream_estimates``), no estimator's
+        columns are held: they are left to ``Streamed``. Returns the aiding estimator's quaternions if the
+        session has readings it aids (``aided``: the compass heading and the position need its attitude at
+        every sample; none else), which the readings' stage uses and lets go."""
         s, n = self.s, len(keys)
         bank = s.bank
-        held = s.filters if not s.stream_estimates else tuple(name for name in s.filters if name == bank.aiding and aided)
+        held = s.filters if not s.stream_estimates else ()
+        aiding_q = np.empty((n, 4)) if aided and bank.aiding in s.filters else np.zeros((0, 4))
         diagnostics = bank.diagnostics()
         columns = IMU.column_names + tuple(c.name for name in held for c in estimator_columns(name, diagnostics[name]))
         gaps = [(key, event) for key, (_, event) in zip(self.disc_keys.tolist(), self.discontinuities) if n and keys[0] < key]
@@ -360,20 +371,19 @@ class _Builder:
         # From here the run reads its gyro and accelerometer from the table's columns: not kept twice
         run.gyr_rad_s, run.acc_g = (SampleColumns(table, sample_rows, [index[f"{quantity}_{a}_{unit}"] for a in "xyz"])
                                     for quantity, unit in (("gyr", "rad_s"), ("acc", "g")))
-        for start, end, values in run.stretches(held):
+        for start, end, values in run.stretches(held if not len(aiding_q) or bank.aiding in held else (*held, bank.aiding)):
             rows = _as_slice(sample_rows[start:end])
-            for name, (q, diagnostic_values) in values.items():
-                for column, values_of in estimate_columns(name, q, diagnostic_values).items():
+            for name in held:
+                for column, values_of in estimate_columns(name, *values[name]).items():
                     table[rows, index[column]] = values_of
+            if len(aiding_q):
+                aiding_q[start:end] = values[bank.aiding][0]
             self.progress(end, n)
         s.tables["imu"] = Table.holding(columns, table)
         if s.stream_estimates:
-            streamed = tuple(name for name in s.filters if name not in held)
-            s.streamed = Streamed(run, streamed, sample_rows, tuple(
-                c.name for name in streamed for c in estimator_columns(name, diagnostics[name])))
-        if bank.aiding not in held or not n:
-            return np.zeros((0, 4))
-        return table[sample_rows[:, None], [index[f"{bank.aiding}_q{c}"] for c in "wxyz"]]
+            s.streamed = Streamed(run, s.filters, sample_rows, tuple(
+                c.name for name in s.filters for c in estimator_columns(name, diagnostics[name])))
+        return aiding_q
 
     def _hold(self, columns, keys: np.ndarray) -> None:
         """IMU samples before the first usable CONFIG wait for it (``ConfigWait``, as the pipeline's do);
@@ -432,7 +442,9 @@ class _Builder:
             if event.get("name") in bank.estimators:
                 breaks.append(Break(sample, event))
         setup = s.setup
-        return EstimateRun(bank.filters, setup.settings, setup.forced, bank.aiding, gyr, bias, acc, dt, mag, gps, breaks)
+        # The readings handed to the samples as the few rows that have one: held while an export streams
+        return EstimateRun(bank.filters, setup.settings, setup.forced, bank.aiding, gyr, bias, acc, dt,
+                           *(None if rows is None else SparseRows(rows) for rows in (mag, gps)), breaks)
 
     # -- gaps and link ----------------------------------------------------------------------------
 

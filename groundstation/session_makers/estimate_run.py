@@ -21,6 +21,7 @@ from groundstation.session_parts.estimators import EstimatorBank
 from groundstation.session.product import estimate_columns
 
 STRETCH_SAMPLES = 65_536  # what one stretch holds: 10 estimators' columns over it are ~37 MB
+STREAMED_STRETCH_SAMPLES = 16_384  # ``Streamed``'s: held beside the writer's stretch of rows, so a quarter of that
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,18 +44,19 @@ class EstimateRun:
     bias: tuple[int, tuple[float, float, float]] | None
     acc_g: np.ndarray | SampleColumns  # (n, 3)
     dt_s: np.ndarray  # (n,)
-    mag_uT: np.ndarray | None  # (n, 3) the reading each sample hands the estimators, NaN for none
-    gps: np.ndarray | None  # (n, 4) likewise
+    mag_uT: np.ndarray | SparseRows | None  # (n, 3) the reading each sample hands the estimators, NaN for none
+    gps: np.ndarray | SparseRows | None  # (n, 4) likewise
     breaks: list[Break]  # in sample order
 
     def __len__(self) -> int:
         return len(self.dt_s)
 
-    def stretches(self, names=None) -> Iterator[tuple[int, int, dict]]:
+    def stretches(self, names=None, stretch_samples: int | None = None) -> Iterator[tuple[int, int, dict]]:
         """``(start, end, {name: (q, diagnostics)})`` for consecutive stretches of samples from the first to
-        the last, each estimator of ``names`` (default: all) run over it as the session ran it."""
+        the last, at most ``stretch_samples`` each (default ``STRETCH_SAMPLES``), each estimator of ``names``
+        (default: all) run over it as the session ran it."""
         names = self.filters if names is None else tuple(names)
-        stretch_samples = STRETCH_SAMPLES
+        stretch_samples = stretch_samples or STRETCH_SAMPLES
         bank = EstimatorBank(self.filters, self.settings, self.forced, self.aiding)
         bounds = sorted({0, *(b.sample for b in self.breaks), *range(0, len(self), stretch_samples)})
         pending = iter(self.breaks)
@@ -104,6 +106,28 @@ class SampleColumns:
         return self._table[at[:, None], self._columns]
 
 
+class SparseRows:
+    """An (n, k) array whose rows are mostly NaN (the aiding readings handed to the samples: a magnetometer
+    reading every few samples, a GPS fix every twenty), held as the rows that are not, and read a stretch at
+    a time as the array's rows would be (``[start:end]``, a copy)."""
+
+    def __init__(self, rows: np.ndarray):
+        rows = np.asarray(rows, dtype=float)
+        self._shape = rows.shape
+        self._at = np.flatnonzero(~np.isnan(rows).all(axis=1))
+        self._values = rows[self._at]
+
+    def __len__(self) -> int:
+        return self._shape[0]
+
+    def __getitem__(self, rows: slice) -> np.ndarray:
+        start, stop, _ = rows.indices(self._shape[0])
+        out = np.full((max(stop - start, 0), self._shape[1]), np.nan)
+        first, last = np.searchsorted(self._at, (start, stop))
+        out[self._at[first:last] - start] = self._values[first:last]
+        return out
+
+
 class Streamed:
     """The ``imu`` table's columns of the estimators ``names``, not held: made for the rows an export asks,
     in order (``SessionData.estimates``). ``sample_rows``: the table row of each sample (the others are
@@ -113,27 +137,28 @@ class Streamed:
         self.names = names
         self.columns = columns  # their imu columns, in the catalogue's order (``catalogue.estimator_columns``)
         self._sample_rows = sample_rows
-        self._stretches = run.stretches(names)
+        self._stretches = run.stretches(names, STREAMED_STRETCH_SAMPLES)
         self._held: tuple[int, int, dict] = (0, 0, {})
         self._next_row = 0
 
-    def at(self, rows: np.ndarray) -> dict[str, np.ndarray]:
-        """Every streamed column at table ``rows`` (ascending, after every row asked before: the run only
-        goes forward); NaN on the gap rows."""
+    def at(self, rows: np.ndarray, columns: tuple[str, ...] | None = None) -> dict[str, np.ndarray]:
+        """The streamed ``columns`` (default: every one) at table ``rows`` (ascending, after every row asked
+        before: the run only goes forward); NaN on the gap rows."""
         rows = np.asarray(rows, dtype=np.int64)
         if len(rows) and rows[0] < self._next_row:
             raise ValueError("the streamed estimates go forward only: rows were asked again or out of order")
         sample = np.searchsorted(self._sample_rows, rows)
         is_sample = sample < len(self._sample_rows)
         is_sample[is_sample] = self._sample_rows[sample[is_sample]] == rows[is_sample]
-        out = {c: np.full(len(rows), np.nan) for c in self.columns}
+        out = {c: np.full(len(rows), np.nan) for c in (self.columns if columns is None else columns)}
         wanted = np.flatnonzero(is_sample)
         while len(wanted):
             start, end, values = self._held
             here = wanted[(sample[wanted] >= start) & (sample[wanted] < end)]
             for name, (q, diagnostics) in values.items():
                 for column, values_of in estimate_columns(name, q, diagnostics).items():
-                    out[column][here] = values_of[sample[here] - start]
+                    if column in out:
+                        out[column][here] = values_of[sample[here] - start]
             wanted = wanted[sample[wanted] >= end]
             if len(wanted):
                 self._held = next(self._stretches)
