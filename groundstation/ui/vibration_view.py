@@ -29,6 +29,7 @@ from PySide6 import QtCore, QtWidgets
 from groundstation.analysis.vibration import AXES, SENSORS, UNITS, VibrationError, VibrationSummary, vibration_summary
 from groundstation.session.product import SessionData, build_product
 from groundstation.session.view import Session
+from groundstation.ui.steady_layout import BannerOverlay
 
 if TYPE_CHECKING:
     from groundstation.analysis.whatif import WhatIf
@@ -157,11 +158,12 @@ class VibrationView(QtWidgets.QWidget):
         layout = QtWidgets.QVBoxLayout(self)
         layout.addLayout(controls)
         layout.addLayout(what_if_row)
-        layout.addWidget(self.banner)
         layout.addWidget(self.spectrum_plot, 3)
         layout.addWidget(self.spectrogram_plot, 2)
         layout.addWidget(self.what_if_plots, 2)
         layout.addWidget(self.text)
+        # over the spectrum's top, as the window's banners lie over its plots: a refusal moves nothing
+        self._banner_overlay = BannerOverlay(self.spectrum_plot, (self.banner,))
 
     def set_session(self, session: Session | None) -> None:
         self.session = session

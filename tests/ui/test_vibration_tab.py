@@ -5,6 +5,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PySide6 import QtWidgets
 
 from groundstation.cli import main
 from groundstation.ui.vibration_view import NO_FREQUENCY
@@ -73,9 +74,13 @@ def test_a_range_too_short_is_said_in_the_tab(window, qtbot, shaken):
     tab.whole.setChecked(False)
     tab.start_box.setValue(5.0)
     tab.end_box.setValue(5.1)
+    before = tab.spectrum_plot.geometry()
     tab.compute_button.click()
     assert tab.banner.isVisible() and "too few samples" in tab.banner.text()
     assert tab.summary is None and not tab.text.toPlainText()
+    QtWidgets.QApplication.processEvents()  # a layout would move the plots now
+    assert tab.spectrum_plot.geometry() == before  # the banner lies over the plots' top: nothing jumps (issue 34)
+    assert tab.banner.mapTo(tab, tab.banner.rect().topLeft()).y() == tab.spectrum_plot.y()  # on the spectrum
 
 
 def test_the_tab_says_what_the_suggested_notch_would_do_and_refuses_one_above_nyquist(window, qtbot, shaken):
