@@ -106,7 +106,7 @@ def test_the_estimators_panel_tunes_the_session_selected_and_that_one_only(board
     # Its export (the Sessions tab's Export...) computes HF as the board did: β doubled from the change on.
     with board.session.lock:
         changed_s = board.session.view.imu.tail(1)[0, board.session.view.imu.columns.index("time_s")]
-    qtbot.waitUntil(lambda: len(board.session.view.imu) and board.session.file()[1] > changed_s + 1.0, timeout=LIMIT_MS)
+    qtbot.waitUntil(lambda: len(board.session.view.imu) and board.session.file()[1] > changed_s + 1.5, timeout=LIMIT_MS)
     exported = export_csv(window, qtbot, sessions, 1, tmp_path / "s2.csv")
     with board.session.lock:
         live = board.session.view.imu.to_dict()

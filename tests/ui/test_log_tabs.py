@@ -46,6 +46,7 @@ def test_a_dataflash_log_fills_the_heading_and_position_tabs_and_lists_its_table
 def test_a_sitl_log_plots_its_truth_dashed(window, qtbot):
     live = played_to_the_end(window, qtbot, flightlog(SITL_ULOG))
     truth = curve(live.attitude, "truth_pitch_deg")
+    live.pause_button.setChecked(True)  # a paused view draws every sample (a following one, each pixel column's)
     qtbot.waitUntil(lambda: points(truth) == len(window.session.data.tables["truth"]["time_s"]), timeout=LIMIT_MS)
     assert truth.opts["pen"].style() == QtCore.Qt.DashLine
     assert np.nanmax(np.abs(truth.yData)) > 1.0  # it flew

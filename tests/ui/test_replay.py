@@ -59,17 +59,25 @@ def pitch_deg(q: np.ndarray) -> np.ndarray:
 
 
 def check_plotted_up_to(window, qtbot, data, name: str, t_s: float) -> None:
-    """The plotted pitch of ``name`` is the computed session's, every row up to ``t_s`` and none after."""
+    """The plotted pitch of ``name`` is the computed session's, from its first row to its last up to ``t_s``
+    and none after. A view that is not paused draws the rows that draw each pixel column (``series.per_pixel``,
+    tested against every sample in tests/ui/test_series.py), so the rows drawn are some of those, each at its
+    own value."""
     rows = data.time_s <= t_s
     curve = pitch_curve(window, name)
 
     def sampled():  # the curve's points at the session's rows; the others break the line in a gap (NaN)
         return np.isin(curve.xData, data.time_s) if curve.xData is not None else np.zeros(0, dtype=bool)
 
-    qtbot.waitUntil(lambda: sampled().sum() == rows.sum(), timeout=LIMIT_MS)
+    def drawn_s():
+        return curve.xData[sampled()] if curve.xData is not None else np.empty(0)
+
+    first_s, last_s = data.time_s[rows][[0, -1]]
+    qtbot.waitUntil(lambda: len(drawn_s()) and (drawn_s()[0], drawn_s()[-1]) == (first_s, last_s), timeout=LIMIT_MS)
     assert np.isnan(curve.yData[~sampled()]).all()
-    np.testing.assert_array_equal(curve.xData[sampled()], data.time_s[rows])
-    expected = pitch_deg(data.quaternion(name)[rows])
+    drawn = np.searchsorted(data.time_s, drawn_s())  # each drawn point's row
+    assert np.all(np.diff(drawn) > 0) and drawn[-1] == np.flatnonzero(rows)[-1]
+    expected = pitch_deg(data.quaternion(name)[drawn])
     np.testing.assert_allclose(curve.yData[sampled()], expected, atol=1e-4)  # the plot keeps float32
 
 
@@ -129,6 +137,9 @@ def test_a_flight_log_opens_plays_seeks_pauses_and_takes_a_what_if(window, qtbot
     assert window.link_panel.headline.text().startswith("STOPPED" if data.link else "NO LINK")
     # the whole flight at once (issue 34): paused at its end, in the whole-session window
     assert session.source.paused and not session.running and window.live_view.window_box.currentText() == "whole session"
+    # where the IMU is too slow for host filtering (the quadplane tlog's 4.2 Hz) the host estimators start switched off
+    assert (pitch_curve(window, AIDING_ESTIMATOR).isVisible()) != (headline(session.view)[1].startswith("IMU at"))
+    window.live_view.set_visible("AHF2", True)
     check_plotted_up_to(window, qtbot, data, AIDING_ESTIMATOR, float(data.time_s[-1]))
 
     # the slowest speed: at 8x the 8.9 s ULog played to its end (and Pause started it again) within one event-loop pass
