@@ -48,8 +48,11 @@ def test_a_garbled_port_spec_is_refused_before_any_window_opens():
 def test_evaluate_and_export_of_a_recording_report_real_progress(tmp_path, capsys, monkeypatch):
     """The bars of the batch path's progress (shown at once here instead of after a second), to 100 %."""
     import groundstation.commands.progress as progress
+    import groundstation.session_makers.batch as batch
 
     monkeypatch.setattr(progress, "SHOW_AFTER_S", 0.0)
+    # the decode reports once a piece: pieces of 4 kB make a 5 s recording's bar move as an hour's 2 MB ones do
+    monkeypatch.setattr(batch, "PIECE_BYTES", 4096)
     path = tmp_path / "flight.gsrec"
     assert main(["simulate", "--duration", "5", "--out", str(path)]) == 0
     capsys.readouterr()
