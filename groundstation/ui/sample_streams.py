@@ -65,6 +65,6 @@ def headline(view: ProductView) -> tuple[str, str]:
     stopped_after_s = STOPPED_INTERVALS / imu_hz if STOPPED_INTERVALS / imu_hz > GAP_S else GAP_S  # NaN: GAP_S
     if imu_s is None or onboard_s - imu_s > stopped_after_s:
         return "onboard", "no raw IMU"
-    if (slow_hz := slow_imu_hz(view)) is not None:
-        return "onboard", f"IMU at {slow_hz:.1f} Hz"
+    if too_slow(imu_hz):  # ``slow_imu_hz``'s rule on the rate just read (the redraw asks at every tick)
+        return "onboard", f"IMU at {imu_hz:.1f} Hz"
     return filters[0], ""
