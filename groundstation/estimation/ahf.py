@@ -65,7 +65,7 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import GYRO_OVERRANGE, NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, record, sample
+from groundstation.estimation.base import GYRO_OVERRANGE, NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, record, sample, unmanaged
 from groundstation.estimation.tilt import about_vertical_q, earth_field_reference, unit_field
 
 
@@ -190,6 +190,7 @@ def _field_gradient(q1, q2, q3, q4, mx, my, mz):
 
 @njit(cache=True)
 def ahf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, ahf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 

@@ -133,7 +133,7 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_MAGNETOMETER, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, record, sample
+from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_MAGNETOMETER, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, record, sample, unmanaged
 from groundstation.estimation.tilt import quaternion_product, wrap_pi
 
 
@@ -388,6 +388,7 @@ def _detect_rest(state, p, gx, gy, gz, ax, ay, az, acc_ok, dt_s):
 
 @njit(cache=True)
 def ahf2_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, ahf2_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 

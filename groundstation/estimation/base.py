@@ -105,7 +105,8 @@ from typing import ClassVar, NamedTuple
 
 import numpy as np
 from numba import njit, types
-from numba.extending import register_jitable
+from numba.core import cgutils
+from numba.extending import intrinsic, overload, register_jitable
 
 from groundstation import quaternion
 from groundstation.estimation import compass, tilt
@@ -497,6 +498,33 @@ def field_screen(state, status, gx, gy, gz, dt_s, mx, my, mz):
     return status | MAG_REJECTED, False
 
 
+def unmanaged(array):
+    """``array`` as a compiled kernel's run loop works on it: the same memory, without numba's reference count
+    (a view of an unmanaged array is unmanaged too). Every view a kernel takes of its state (a slice, a
+    reshape: ukf's matrices) and every array it passes to a helper counts a reference up and down, an atomic
+    instruction each (~10 ns); ukf spent a third of its time on them. Safe where the array outlives every
+    use of the result: the caller holds it for the call, and nothing taken from it is kept or returned.
+    Plain Python (tests, the interpreted kernel): the array itself."""
+    return array
+
+
+@intrinsic
+def _without_meminfo(typingctx, array):
+    def codegen(context, builder, signature, args):
+        view = context.make_array(signature.args[0])(context, builder, value=args[0])
+        view.meminfo = cgutils.get_null_value(view.meminfo.type)
+        view.parent = cgutils.get_null_value(view.parent.type)
+        return view._getvalue()
+
+    return array(array), codegen
+
+
+@overload(unmanaged)
+def _unmanaged_compiled(array):
+    if isinstance(array, types.Array):
+        return lambda array: _without_meminfo(array)
+
+
 @register_jitable
 def sample(gyr, acc, dt, mag, k):
     """Row k of ``run``'s arrays as a kernel's inputs after (state, params); ``mag`` (0, 3) for none."""
@@ -587,8 +615,8 @@ class CompiledEstimator(Estimator):
     """An estimator whose per-sample arithmetic is a compiled ``kernel`` (module docstring).
 
     Subclasses set ``kernel`` (``staticmethod`` of an ``@njit(cache=True)`` function with
-    ``KERNEL_SIGNATURE``), ``run_kernel`` (likewise, ``RUN_SIGNATURE``: the loop ``for k: record(...,
-    kernel(state, params, *sample(..., k)), ...)``, written out in each kernel's module because a
+    ``KERNEL_SIGNATURE``), ``run_kernel`` (likewise, ``RUN_SIGNATURE``: ``state, params = unmanaged(state),
+    unmanaged(params)``, then the loop ``for k: record(..., kernel(state, params, *sample(..., k)), ...)``, written out in each kernel's module because a
     kernel passed as an argument cannot be cached, and a kernel passed from Python costs ~0.5 ms a
     call to convert) and ``uses_magnetometer``, and implement ``_parameters()`` (their own
     parameters, after the guard's) and ``_initial_state()`` (their diagnostics after status, then their

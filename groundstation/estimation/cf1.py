@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 from numba import njit
 
-from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, unmanaged
 from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 
@@ -72,6 +72,7 @@ def cf1_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
 
 @njit(cache=True)
 def cf1_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, cf1_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 

@@ -31,7 +31,7 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, integrate_rate, record, sample
+from groundstation.estimation.base import NO_UPDATE, P_MAGNETOMETER, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, integrate_rate, record, sample, unmanaged
 from groundstation.estimation.tilt import about_vertical, earth_field_reference, unit_field
 
 
@@ -114,6 +114,7 @@ def _field_error(q1, q2, q3, q4, ex, ey, ez, mx, my, mz, vx, vy, vz):
 
 @njit(cache=True)
 def ecf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, ecf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 

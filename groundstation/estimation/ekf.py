@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, unmanaged
 
 _P0 = 0.01  # initial variance of each quaternion component (std 0.1 ≈ 11°): the gravity init is rough
 
@@ -146,6 +146,7 @@ def ekf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
 
 @njit(cache=True)
 def ekf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, ekf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 

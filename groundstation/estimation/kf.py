@@ -25,7 +25,7 @@ from typing import NamedTuple
 from numba import njit
 from numba.extending import register_jitable
 
-from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample
+from groundstation.estimation.base import NO_UPDATE, P_OWN, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, unmanaged
 from groundstation.estimation.tilt import acc_pitch_roll, euler_of, quaternion_of, wrap_pi
 
 _DEG2 = (math.pi / 180.0) ** 2
@@ -96,6 +96,7 @@ def kf_kernel(state, p, gx, gy, gz, ax, ay, az, dt_s, mx, my, mz):
 
 @njit(cache=True)
 def kf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, kf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 

@@ -61,7 +61,7 @@ from numba import njit
 from numba.extending import register_jitable
 
 from groundstation.spectrum import amplitude_spectrum
-from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, integrate_rate, record, sample
+from groundstation.estimation.base import INITIALISED, NO_UPDATE, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, field_screen, guard, integrate_rate, record, sample, unmanaged
 from groundstation.estimation.compass import field_tilt_rad, heading_offset_rad
 from groundstation.estimation.tilt import euler_of, quaternion_product, unit_field, wrap_pi
 
@@ -169,6 +169,7 @@ def _tilt_toward(q, dx, dy, dz, k):
 
 @njit(cache=True)
 def mcf_run(state, p, gyr, acc, dt, mag, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, mcf_kernel(state, p, *sample(gyr, acc, dt, mag, k)), status_out, q_out, diag_out)
 

@@ -69,7 +69,7 @@ from groundstation import quaternion
 from groundstation.estimation import sigma_points as sp
 from groundstation.estimation import small_linalg as sl
 from groundstation.estimation.base import (
-    INITIALISED, MAG_REJECTED, NO_UPDATE, P_ACC_MIN2, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, sample_fix,
+    INITIALISED, MAG_REJECTED, NO_UPDATE, P_ACC_MIN2, P_OWN, REINITIALISED, STATE_DIAG, CommonSettings, CompiledEstimator, guard, integrate_rate, record, sample, sample_fix, unmanaged,
 )
 from groundstation.estimation.tilt import acc_pitch_roll, wrap_pi
 from groundstation.units import STANDARD_GRAVITY_M_S2 as G
@@ -448,6 +448,7 @@ def _settle(state, p, ok, x, cov, status, gx, gy, gz, dt_s, heading_rad):
 
 @njit(cache=True)
 def ukf_run(state, p, gyr, acc, dt, mag, gps, q_out, status_out, diag_out):
+    state, p = unmanaged(state), unmanaged(p)
     for k in range(dt.shape[0]):  # base.CompiledEstimator
         record(state, k, ukf_kernel(state, p, *sample(gyr, acc, dt, mag, k), *sample_fix(gps, k)), status_out, q_out, diag_out)
 

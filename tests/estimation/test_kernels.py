@@ -6,6 +6,7 @@ import ast
 import importlib
 import math
 import os
+import sys
 import time
 from pathlib import Path
 
@@ -13,11 +14,12 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
+from numba import njit
 
 from estimation_samples import flight_like_samples
 from groundstation.estimation import ESTIMATORS, base, create
 from groundstation.estimation import vqf as vqf_module
-from groundstation.estimation.base import CompiledEstimator, drop_stale_cache
+from groundstation.estimation.base import CompiledEstimator, drop_stale_cache, unmanaged
 
 COMPILED = [name for name, cls in ESTIMATORS.items() if issubclass(cls, CompiledEstimator)]
 MAGNETIC = {"hfm", "ecfm"}
@@ -207,6 +209,25 @@ def test_compiled_per_sample_code_calls_math_not_numpy_functions():
     found = [f"{path.name} {hit}" for path in sources for hit in numpy_functions_in_compiled_code(path.read_text())]
     assert found == []
     assert numpy_functions_in_compiled_code("@register_jitable\ndef f(x):\n    return np.arctan2(x, 1.0)\n") == ["f: np.arctan2"]
+
+
+@njit(cache=False)
+def _write_through_views(array):
+    """Writes through a slice and a reshape of ``unmanaged(array)``, as a kernel writes its state."""
+    view = unmanaged(array)
+    view[0:4].reshape((2, 2))[1, 0] = 7.0
+    return view[2]
+
+
+def test_an_unmanaged_array_is_the_same_memory_and_counts_no_reference():
+    """The run loops' ``unmanaged`` state (no atomic reference counting per view): what a view writes lands
+    in the caller's array, the caller's reference count is as before, and in Python it is the array itself."""
+    state = np.zeros(6)
+    before = sys.getrefcount(state)
+    assert _write_through_views(state) == 7.0
+    assert state.tolist() == [0.0, 0.0, 7.0, 0.0, 0.0, 0.0]
+    assert sys.getrefcount(state) == before
+    assert base.unmanaged(state) is state
 
 
 def vqf_stepped(gyr, acc, dt, mag):
