@@ -113,8 +113,7 @@ def _work(work, size):
 @register_jitable
 def _take(work, offset, rows, cols):
     """A (rows, cols) view of ``work`` at ``offset``, and the offset after it."""
-    end = offset + rows * cols
-    return work[offset:end].reshape((rows, cols)), end
+    return sl.matrix_view(work, offset, rows, cols), offset + rows * cols
 
 
 @register_jitable

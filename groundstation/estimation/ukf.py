@@ -209,7 +209,7 @@ def _norm(w, x, y, z):
 @register_jitable
 def _matrix(state, start, rows, cols):
     """A (rows, cols) view of the state from ``start``."""
-    return state[start : start + rows * cols].reshape((rows, cols))
+    return sl.matrix_view(state, start, rows, cols)
 
 
 @register_jitable
@@ -296,7 +296,7 @@ def _gravity_measurement(state, p, q_pred, gx, gy, gz, ax, ay, az, dt_s):
 def _sigma_set(p):
     """The filter's set: ``(count, wm, wc, sqrt_wc, z)``."""
     count = int(p[_COUNT])
-    return count, p[_WM : _WM + count], p[_WC : _WC + count], p[_SQRT_WC : _SQRT_WC + count - 1], p[_Z : _Z + _N * count].reshape((_N, count))
+    return count, p[_WM : _WM + count], p[_WC : _WC + count], p[_SQRT_WC : _SQRT_WC + count - 1], sl.matrix_view(p, _Z, _N, count)
 
 
 @register_jitable

@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from numba import njit
 
 from groundstation import quaternion as quat
 from groundstation.estimation import base, create
@@ -211,6 +212,24 @@ def test_small_linalg_against_numpy_on_random_matrices(shape):
         up = sl.cholupdate(low, v, 0.3)[1]
         np.testing.assert_allclose(up, np.linalg.cholesky(p + 0.3 * np.outer(v, v)), rtol=1e-9, atol=1e-12 * np.abs(p).max())
     assert not sl.cholesky(np.array([[1.0, 2.0], [2.0, 1.0]]))[0]  # indefinite
+
+
+@njit(cache=False)
+def _compiled_matrix_view(flat, start, rows, cols):
+    view = sl.matrix_view(flat, start, rows, cols)
+    view[rows - 1, 0] = -1.0  # writes land in flat
+    return view.copy()
+
+
+def test_matrix_view_compiled_is_numpys_reshape_of_the_same_memory():
+    flat = np.arange(20.0)
+    for start, rows, cols in ((0, 4, 4), (3, 2, 5), (7, 4, 3), (19, 1, 1)):
+        expected = flat[start : start + rows * cols].reshape((rows, cols)).copy()
+        expected[rows - 1, 0] = -1.0
+        got = _compiled_matrix_view(flat, start, rows, cols)
+        assert got.shape == (rows, cols) and np.array_equal(got, expected)
+        assert flat[start + (rows - 1) * cols] == -1.0
+        assert np.array_equal(sl.matrix_view(flat, start, rows, cols), expected)  # interpreted: numpy's view
 
 
 @pytest.mark.parametrize("name", ["ukf", "sssrukf"])
