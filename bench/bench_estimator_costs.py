@@ -1,6 +1,12 @@
 """Every estimator's cost per sample in ``run``, beside imufusion and VQF's C++ batch, in one run.
 
     PYTHONPATH=. python bench/bench_estimator_costs.py [--rounds R] [--samples N] [--no-broad]
+    PYTHONPATH=. python bench/bench_estimator_costs.py --recording REC [--baseline TREE] [--rounds R]
+
+``--recording``: section 1 only, on a recording's own samples: each live estimator's ``run`` as an export
+calls it (``EstimateRun.stretches``: every stretch of the session, the readings its samples were handed),
+CPU µs per sample, in a fresh process per round; ``--baseline``: the same in another checkout of the project
+(its own numba cache), the two trees' processes interleaved round by round, medians of R.
 
 1. CPU µs per sample of each estimator's ``run`` (the batch path: opening a recording) on flight-like
    samples at 100 Hz whose times jitter by 0.2 % (as the recordings'), a magnetometer reading on every
@@ -161,6 +167,66 @@ def costs(samples: int, rounds: int) -> dict[str, float]:
     return {name: statistics.median(v) for name, v in times.items()}
 
 
+def worker_recording(path: str) -> dict:
+    """CPU s of each live estimator's ``run`` over a recording, called as an export calls it: the session's
+    estimates streamed (``load_session(stream_estimates=True)``) and read forward, every row."""
+    from groundstation.estimation import ESTIMATORS, live_estimators
+    from groundstation.session_makers.load import load_session
+
+    names = live_estimators()
+    spent = dict.fromkeys(names, 0.0)
+    samples = dict.fromkeys(names, 0)
+
+    def timed(cls):
+        run = cls.run
+
+        def run_timed(self, gyr, *args):
+            t0 = time.process_time()
+            out = run(self, gyr, *args)
+            spent[self.name] += time.process_time() - t0
+            samples[self.name] += len(gyr)
+            return out
+
+        return run, run_timed
+
+    originals = {}
+    for name in names:
+        cls = ESTIMATORS[name]
+        originals[cls], cls.run = timed(cls)
+    data = load_session(path, names, stream_estimates=True)
+    for name in names:  # the compiled ones were loaded from the cache with the session; vqf's screen too
+        ESTIMATORS[name].runs_compiled()
+    rows = len(data.tables["imu"]["time_s"])
+    for start in range(0, rows, 65_536):
+        data.estimates.at(np.arange(start, min(start + 65_536, rows)))
+    return {name: spent[name] / samples[name] * 1e6 for name in names}
+
+
+def recording_costs(path: str, trees: list[Path], rounds: int) -> dict[Path, dict[str, float]]:
+    """``worker_recording`` in a fresh process per tree and round, the trees interleaved; medians."""
+    runs = {tree: [] for tree in trees}
+    for _ in range(rounds):
+        for tree in trees:
+            env = dict(os.environ, PYTHONPATH=str(tree))
+            cmd = [sys.executable, __file__, "--worker-recording", path]
+            runs[tree].append(json.loads(subprocess.run(cmd, env=env, capture_output=True, text=True, check=True, cwd=tree).stdout))
+    return {tree: {name: statistics.median(r[name] for r in rs) for name in rs[0]} for tree, rs in runs.items()}
+
+
+def print_recording_costs(path: str, trees: list[Path], rounds: int) -> None:
+    med = recording_costs(path, trees, rounds)
+    print(f"## run on {path}: CPU µs per sample as an export calls it (medians of {rounds} interleaved rounds)\n")
+    print("| estimator | " + " | ".join(str(t) for t in trees) + (" | ratio |" if len(trees) > 1 else ""))
+    print("|---|" + "---:|" * (len(trees) + (len(trees) > 1)))
+    names = list(med[trees[0]])
+    for name in [*names, "all"]:
+        values = [sum(m.values()) if name == "all" else m[name] for m in (med[t] for t in trees)]
+        ratio = f" | {values[0] / values[1]:.2f}" if len(trees) > 1 else ""
+        print(f"| {name} | " + " | ".join(f"{v:.3f}" for v in values) + ratio + " |")
+    this = med[trees[0]]
+    print(f"\nSSSRUKF / UKF run time ({trees[0]}): {this['sssrukf'] / this['ukf']:.0%} (seed 001: 42 %)")
+
+
 def worker_compile() -> dict:
     """Process time (CPU s) of the imports and of each estimator's first creation and run."""
     t0 = time.process_time()
@@ -213,12 +279,23 @@ def main() -> None:
     parser.add_argument("--samples", type=int, default=30_000)
     parser.add_argument("--no-broad", action="store_true")
     parser.add_argument("--compile-only", action="store_true", help="section 2 alone")
+    parser.add_argument("--recording", help="section 1 only, on this recording's samples as an export runs them")
+    parser.add_argument("--baseline", type=Path, help="with --recording: another checkout measured alongside")
     parser.add_argument("--worker-compile", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--worker-recording", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker_compile:
         print(json.dumps(worker_compile()))
         return
+    if args.worker_recording:
+        print(json.dumps(worker_recording(args.worker_recording)))
+        return
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, load average {os.getloadavg()[0]:.1f} at the start\n")
+    if args.recording:
+        trees = [ROOT] + ([args.baseline.resolve()] if args.baseline else [])
+        print_recording_costs(args.recording, trees, args.rounds)
+        print(f"\nload average {os.getloadavg()[0]:.1f} at the end")
+        return
     fresh, cached = compile_times()
     if args.compile_only:
         print_compile_times(fresh, cached)
