@@ -83,9 +83,9 @@ def _add(*costs):
     return tuple(sum(c[i] for c in costs) for i in range(3))
 
 
-def ukf_step_costs(square_root: bool, n: int = 4, m: int = 2) -> dict[str, tuple]:
+def ukf_step_costs(square_root: bool, n: int = 4, m: int = 3) -> dict[str, tuple]:
     """Per step of one sample of ukf (dense, symmetric set, 2n + 1 points) or sssrukf (square root,
-    spherical simplex, n + 2 points) with m angle measurements: (flops, divisions, square roots, libm
+    spherical simplex, n + 2 points) with m linear measurements (gravity's direction, ukf.py): (flops, divisions, square roots, libm
     calls), counted from the loops of sigma_points.py and small_linalg.py (adds and multiplies; a
     compare is not counted)."""
     count = n + 2 if square_root else 2 * n + 1
@@ -104,7 +104,7 @@ def ukf_step_costs(square_root: bool, n: int = 4, m: int = 2) -> dict[str, tuple
     steps["time update"] = (*time, no_libm)
     steps["factor P⁻ (ukf: Cholesky; sssrukf: carried)"] = (*(0, 0, 0), no_libm) if square_root else (*_cholesky(n), no_libm)
     steps["sigma points again"] = (*points, no_libm)
-    steps["angles of the points (asin, atan2)"] = (count * (7 + 5 + 10), count, 0, 2 * count)
+    steps["gravity's direction of the points (down_in_body)"] = (count * (7 + 4 + 4 + 7), 3 * count, 0, 0)
     outputs = (3 * m * count + n * count + m, 0, 0)
     p_xy = (3 * count * n * m, 0, 0)
     corrected = (2 * n * m + n, 0, 0)
@@ -114,12 +114,12 @@ def ukf_step_costs(square_root: bool, n: int = 4, m: int = 2) -> dict[str, tuple
     else:  # Pyy, Pxy, K = Pxy Pyy⁻¹ by Cholesky, P - K Pxyᵀ
         update = _add(outputs, (3 * count * m * (m + 1) // 2 + m, 0, 0), p_xy, _cholesky(m), _solve_right(m, n), corrected,
                       ((2 * m + 2) * n * (n + 1) // 2, 0, 0))
-    steps["measurement update"] = (*update, m)  # the innovation wrapped (fmod)
+    steps["measurement update"] = (*update, 0)  # linear rows: no innovation wrapped
     return steps
 
 
 def print_step_costs() -> None:
-    print("\n## ukf and sssrukf: operations per sample by step (n = 4, a tilt update: m = 2)\n")
+    print("\n## ukf and sssrukf: operations per sample by step (n = 4, a gravity update: m = 3; a fix with heading adds a fourth row)\n")
     print("| step | ukf flops / div / sqrt / libm | sssrukf flops / div / sqrt / libm |")
     print("|---|---:|---:|")
     dense, root = ukf_step_costs(False), ukf_step_costs(True)
