@@ -2,11 +2,11 @@
 
 openpyxl writes each sheet's header row, frozen panes, column widths and every other part of the
 workbook (styles, the Session sheet, the chart); the data rows of the big tables never become Python
-objects: ``rows_xml`` builds their ``<row>`` XML a stretch at a time with pyarrow's string kernels
-(numbers as their shortest round-trip text, NaN/inf as no cell), and ``save`` puts it in each sheet's
-``<sheetData>`` as it writes the zip. The cells are those openpyxl wrote value by value (tests read
-them back with openpyxl and LibreOffice); a 1 h export's 7.3 M cells take about a tenth of
-openpyxl's CPU time (bench/bench_excel.out.md).
+objects: ``rows_xml`` builds their ``<row>`` XML a stretch at a time (numbers as pyarrow's shortest
+round-trip text, NaN/inf as no cell, the XML around them by one compiled pass), and ``save`` puts it in
+each sheet's ``<sheetData>`` as it writes the zip, deflated by ISA-L. The cells are those openpyxl wrote
+value by value (tests read them back with openpyxl and LibreOffice); a 1 h export's 7.3 M cells take
+about a twentieth of openpyxl's CPU time (bench/bench_excel.out.md).
 
 Excel holds at most 1,048,576 rows per sheet and openpyxl does not check it in write-only mode, so
 ``write_table`` continues on ``TITLE (2)``, ``TITLE (3)``, ... by itself.
