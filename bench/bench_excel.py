@@ -142,11 +142,13 @@ def export_process(checkout: Path, recording: Path, out: Path, options: list[str
     """``python -m groundstation export`` run from ``checkout`` (its code first on the path): (CPU s, peak MB)."""
     command = [sys.executable, "-m", "groundstation", "export", str(recording), "--out", str(out), "--overwrite", *options]
     environment = dict(os.environ, PYTHONPATH=os.pathsep.join([str(checkout), os.environ.get("PYTHONPATH", "")]))
-    child = subprocess.Popen(command, cwd=checkout, env=environment, stdout=subprocess.DEVNULL)
-    _, status, usage = os.wait4(child.pid, 0)
-    child.returncode = os.waitstatus_to_exitcode(status)
-    if child.returncode != 0:
-        raise SystemExit(f"{checkout}: {' '.join(command)} failed ({child.returncode})")
+    with tempfile.TemporaryFile("w+") as said:  # its progress bar and any error
+        child = subprocess.Popen(command, cwd=checkout, env=environment, stdout=subprocess.DEVNULL, stderr=said)
+        _, status, usage = os.wait4(child.pid, 0)  # the child's own rusage: Popen.wait would reap it without
+        child.returncode = os.waitstatus_to_exitcode(status)
+        if child.returncode != 0:
+            said.seek(0)
+            raise SystemExit(f"{checkout}: {' '.join(command)} failed ({child.returncode}):\n{said.read()[-2000:]}")
     return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
 
 
