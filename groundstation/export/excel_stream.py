@@ -6,7 +6,7 @@ objects: ``rows_xml`` builds their ``<row>`` XML a stretch at a time (numbers as
 round-trip text, NaN/inf as no cell, the XML around them by one compiled pass), and ``save`` puts it in
 each sheet's ``<sheetData>`` as it writes the zip, deflated by ISA-L. The cells are those openpyxl wrote
 value by value (tests read them back with openpyxl and LibreOffice); a 1 h export's 7.3 M cells take
-about a twentieth of openpyxl's CPU time (bench/bench_excel.out.md).
+about a tenth of openpyxl's CPU time (bench/bench_excel.out.md).
 
 Excel holds at most 1,048,576 rows per sheet and openpyxl does not check it in write-only mode, so
 ``write_table`` continues on ``TITLE (2)``, ``TITLE (3)``, ... by itself.
@@ -172,22 +172,23 @@ def rows_xml(sheet: ColumnSheet, columns: list[Column | None], start: int, stop:
         pieces += [f'<c r="{get_column_letter(index)}', f'"{attributes}><v>']
     encoded = [piece.encode() for piece in pieces]
     piece_at = np.cumsum([0, *map(len, encoded)])
+    parts = [string_parts(text) for text in texts]
     text_at = np.zeros((len(texts), count + 1), dtype=np.int64)
     base = 0
-    for i, text in enumerate(texts):
-        offsets = np.frombuffer(text.buffers()[1], dtype=np.int32, count=count + 1, offset=text.offset * 4)
-        text_at[i] = offsets - offsets[0] + base
-        base += int(offsets[-1] - offsets[0])
-    data = np.concatenate([np.zeros(0, np.uint8), *(string_bytes(text) for text in texts)])
+    for i, (offsets, characters) in enumerate(parts):
+        text_at[i] = offsets + base
+        base += len(characters)
+    data = np.concatenate([np.zeros(0, np.uint8), *(characters for _, characters in parts)])
     return _joined(start - first + 2, np.frombuffer(b"".join(encoded), np.uint8), piece_at, data, text_at,
                    np.array(valid, dtype=np.bool_).reshape(len(texts), count))
 
 
-def string_bytes(text: pa.Array) -> np.ndarray:
-    """The characters of a pyarrow string array, end to end."""
+def string_parts(text: pa.Array) -> tuple[np.ndarray, np.ndarray]:
+    """A pyarrow string array's offsets (from 0) and its characters, end to end."""
     offsets = np.frombuffer(text.buffers()[1], dtype=np.int32, count=len(text) + 1, offset=text.offset * 4)
     data = text.buffers()[2]
-    return np.frombuffer(data, np.uint8)[offsets[0]:offsets[-1]] if data is not None else np.zeros(0, np.uint8)
+    characters = np.frombuffer(data, np.uint8)[offsets[0]:offsets[-1]] if data is not None else np.zeros(0, np.uint8)
+    return offsets - offsets[0], characters
 
 
 ROW_OPEN, ROW_MIDDLE, CELL_CLOSE, ROW_CLOSE = (np.frombuffer(s, np.uint8) for s in (b'<row r="', b'">', b"</v></c>", b"</row>"))
