@@ -3,6 +3,12 @@ same run bare openpyxl write-only writing the same cells, bare XlsxWriter (``con
 the same cells, the CSV export and the Parquet export.
 
     python bench/bench_excel.py [--minutes M] [--filters ahf,hf]
+    python bench/bench_excel.py --recording R.gsrec --baseline /work/main [--repeats 3]
+
+The second form is the issue's row as a user meets it: the whole ``groundstation export R --out X.xlsx``
+process (CPU s = user + system, peak RSS, from the child's rusage), this checkout's and the baseline
+checkout's interleaved run by run, with the default estimators, ``ahf,hf`` and the app's live set; the
+minimum and the median of the repeats (the machine is shared: CPU seconds rise with its load).
 
 The session is simulated, recorded and decoded once; each writer then runs in a forked child that
 shares it. In the child the kernel's peak-RSS mark is reset at the start (/proc/self/clear_refs, Linux),
@@ -17,6 +23,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from importlib.util import find_spec
@@ -125,11 +134,52 @@ def measure(label: str, write) -> dict:
     return json.loads(text)
 
 
+FILTER_SETS = {"default": [], "ahf,hf": ["--filters", "ahf,hf"],
+               "live set": ["--filters", "ahf2,vqf,ahf,hf,ecf,hfm,ecfm,mcf,ukf,sssrukf"]}
+
+
+def export_process(checkout: Path, recording: Path, out: Path, options: list[str]) -> tuple[float, float]:
+    """``python -m groundstation export`` run from ``checkout`` (its code first on the path): (CPU s, peak MB)."""
+    command = [sys.executable, "-m", "groundstation", "export", str(recording), "--out", str(out), "--overwrite", *options]
+    environment = dict(os.environ, PYTHONPATH=os.pathsep.join([str(checkout), os.environ.get("PYTHONPATH", "")]))
+    with tempfile.TemporaryFile("w+") as said:  # its progress bar and any error
+        child = subprocess.Popen(command, cwd=checkout, env=environment, stdout=subprocess.DEVNULL, stderr=said)
+        _, status, usage = os.wait4(child.pid, 0)  # the child's own rusage: Popen.wait would reap it without
+        child.returncode = os.waitstatus_to_exitcode(status)
+        if child.returncode != 0:
+            said.seek(0)
+            raise SystemExit(f"{checkout}: {' '.join(command)} failed ({child.returncode}):\n{said.read()[-2000:]}")
+    return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
+
+
+def whole_process(recording: Path, baseline: Path, repeats: int) -> None:
+    here = Path(__file__).resolve().parent.parent
+    runs = {(name, tree): [] for name in FILTER_SETS for tree in ("this", "baseline")}
+    with tempfile.TemporaryDirectory(prefix="bench_excel.") as folder:
+        for _ in range(repeats):
+            for name, options in FILTER_SETS.items():
+                for tree, checkout in (("baseline", baseline), ("this", here)):
+                    runs[name, tree].append(export_process(checkout, recording, Path(folder) / f"{tree}.xlsx", options))
+    print(f"{recording.name}: whole `groundstation export` process to .xlsx, {repeats} runs each, interleaved\n")
+    print("| estimators | checkout | CPU s min | CPU s median | CPU s all | peak RSS (MB) |")
+    print("|---|---|---:|---:|---|---:|")
+    for (name, tree), figures in runs.items():
+        cpu = [c for c, _ in figures]
+        print(f"| {name} | {tree if tree == 'this' else baseline} | {min(cpu):.1f} | {statistics.median(cpu):.1f} | "
+              f"{', '.join(f'{c:.1f}' for c in cpu)} | {max(m for _, m in figures):.0f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=float, default=60.0, help="simulated minutes (default 60)")
     parser.add_argument("--filters", default="ahf,hf", help="host estimators (default ahf,hf)")
+    parser.add_argument("--recording", type=Path, help="whole-process runs of the export of this recording")
+    parser.add_argument("--baseline", type=Path, help="with --recording: the checkout to compare with")
+    parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
+    if args.recording is not None:
+        whole_process(args.recording, args.baseline, args.repeats)
+        return
     with tempfile.TemporaryDirectory(prefix="bench_excel.") as folder:
         folder = Path(folder)
         started = time.perf_counter()
