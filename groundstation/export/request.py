@@ -146,7 +146,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
 
     export_format = FORMATS[request.format]
     data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes,
-                stream_estimates=export_format.streamed)
+                stream_estimates=export_format.streamed, exact=True)
     decoding(1, 1)
     # asked for by name, an estimator without its aiding is exported, and said to be little use so
     asked = () if request.filters is None else data.filters
