@@ -339,15 +339,14 @@ class _Builder:
         self.time_s = self.device_us = self.t_host = self.chunk = None
         mag, gps = readings.for_estimators()
         run = self._estimate_run(keys, gyr, acc, dt, mag, gps, t_host)
-        del mag, gps
-
-        def sensors():  # the table's columns before the estimators', made one at a time (``IMU``)
-            yield from (time_s, device_us, (t_host - s.t0_host_ns) * 1e-9, *acc.T, *gyr.T, temperature_c)
-
-        aiding_q = self._imu_table(keys, sensors(), run, readings.any)
+        # The table's columns before the estimators' (``IMU``), each let go once written (``_imu_table``): the gyro
+        # and the times are not held beside the table while the estimators run
+        sensors = [time_s, device_us, (t_host - s.t0_host_ns) * 1e-9, *acc.T, *gyr.T, temperature_c]
+        del mag, gps, gyr, device_us, t_host, temperature_c
+        aiding_q = self._imu_table(keys, sensors, run, readings.any)
         readings.stage(acc, dt, aiding_q, time_s)
 
-    def _imu_table(self, keys: np.ndarray, sensors, run: EstimateRun, aided: bool) -> np.ndarray:
+    def _imu_table(self, keys: np.ndarray, sensors: list, run: EstimateRun, aided: bool) -> np.ndarray:
         """The ``imu`` table made in one array: the samples' sensor columns and a gap row at each restart after
         the first sample, in the pipeline's order; the estimators' columns in another, in the product's form
         (``BatchSession.held_estimates``), written a stretch of samples at a time (``EstimateRun``). Streaming
@@ -369,9 +368,8 @@ class _Builder:
         held_values = np.empty((len(table), len(estimates)), np.result_type(*map(held_dtype, estimates)) if estimates else float,
                                order="F")
         every_sample = _as_slice(sample_rows)
-        for j, values in enumerate(sensors):
-            table[every_sample, j] = values
-            del values
+        for j in range(len(sensors)):
+            table[every_sample, j], sensors[j] = sensors[j], None
         for row, (_, event) in zip(gap_at + np.arange(len(gaps)), gaps):
             table[row] = gap_row(event, len(columns))
             held_values[row] = np.nan
