@@ -132,7 +132,7 @@ def met(data):
 def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, int, int], None] | None = None,
                cancel=None) -> ExportResult:
     """Computes ``request.source`` with ``load`` (``session_makers.load.load_session``: the caller's, so that the
-    exports import no maker of sessions) and writes ``request.out`` with its format's writer; ``progress(stage,
+    exports import no maker of sessions; exact: the estimators' columns as computed, float64) and writes ``request.out`` with its format's writer; ``progress(stage,
     done, total)`` with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises
     ExportCancelled, nothing written."""
     from groundstation.estimation import unmet_warnings

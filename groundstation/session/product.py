@@ -2,7 +2,8 @@
 or the dataset reader. One shape, filled by one builder (``build_product``):
 
 - ``tables``: every table as columns, exactly as ``catalogue`` describes them (``imu`` with every
-  estimator's quaternion and diagnostics, ``onboard``, one per frame or message type, ``position``);
+  estimator's quaternion and diagnostics, ``onboard``, one per frame or message type, ``position``), each in
+  its form (``held_dtype``: the host estimators' columns float32, sized for showing, unless made exact);
 - ``events``, ``link`` (the decoder's counters), ``config``, the estimators' settings at start and end;
 - ``parameters``: an autopilot's parameters, name -> value as last set (their changes are events), and
   ``parameter_defaults`` where the log says them (a MAVLink link does not);
