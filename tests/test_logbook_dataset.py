@@ -34,7 +34,7 @@ def run(tmp_path_factory):
                     {"start_utc": "2024-05-01T12:00:00Z"})
     out = tmp_path_factory.mktemp("out") / "dataset"
     evaluate_folder(root, out, FILTERS, workers=2)
-    alone = {log_id(path, root): load_session(path, FILTERS) for path in sorted(root.iterdir())}
+    alone = {log_id(path, root): load_session(path, FILTERS, exact=True) for path in sorted(root.iterdir())}
     return out / "tables", alone
 
 

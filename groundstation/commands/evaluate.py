@@ -66,7 +66,8 @@ def run(args: argparse.Namespace) -> int:
     say_compiling(args.file, names)
     bar = ProgressBar("computing")  # shown after a second: a long recording or log
     try:
-        data = load_session(args.file, names, overrides, bar, args.accept_config_changes, imu=args.imu)
+        # exact: its figures are the estimates' own (``evaluate_trial``'s numbers), not those of the form sized for showing
+        data = load_session(args.file, names, overrides, bar, args.accept_config_changes, imu=args.imu, exact=True)
     finally:
         bar.done()
     # an estimator asked for by name whose aiding the file lacks (ukf without GPS) is scored, and said to be so

@@ -43,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     say_compiling(args.file, filters)
     progress = ProgressBar(f"computing {Path(args.file).name}")
     try:
-        data = load_session(args.file, filters, overrides, progress)
+        data = load_session(args.file, filters, overrides, progress, exact=True)
     finally:
         progress.done()
     for warning in data.warnings:

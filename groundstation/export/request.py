@@ -132,7 +132,7 @@ def met(data):
 def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, int, int], None] | None = None,
                cancel=None) -> ExportResult:
     """Computes ``request.source`` with ``load`` (``session_makers.load.load_session``: the caller's, so that the
-    exports import no maker of sessions) and writes ``request.out`` with its format's writer; ``progress(stage,
+    exports import no maker of sessions; exact: the estimators' columns as computed, float64) and writes ``request.out`` with its format's writer; ``progress(stage,
     done, total)`` with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises
     ExportCancelled, nothing written."""
     from groundstation.estimation import unmet_warnings
@@ -146,7 +146,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
 
     export_format = FORMATS[request.format]
     data = load(request.source, request.filters, request.overrides, decoding, request.accept_config_changes,
-                stream_estimates=export_format.streamed)
+                stream_estimates=export_format.streamed, exact=True)
     decoding(1, 1)
     # asked for by name, an estimator without its aiding is exported, and said to be little use so
     asked = () if request.filters is None else data.filters

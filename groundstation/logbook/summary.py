@@ -79,7 +79,7 @@ def _rows(path: Path, out: Path, filters, page: bool, fields: dict) -> list[dict
     from groundstation.export.report_findings import findings
     from groundstation.session_makers.load import load_session
 
-    data = load_session(path, filters)
+    data = load_session(path, filters, exact=True)  # its tables, reports and scores: the estimators' values as computed
     said = {"vehicle": vehicle(data), "firmware": firmware(data)}
     fields.update({k: v for k, v in said.items() if v != NOT_RECORDED}, samples=len(data),
                   duration_s=data.duration_s(), imu_rate_hz=data.imu_rate_hz(), link_loss_pct=data.link_loss_pct(),

@@ -41,6 +41,13 @@ def rows_of(columns: list[np.ndarray]) -> np.ndarray | None:
     return base
 
 
+def _floats(values) -> np.ndarray:
+    """A column as float64, but the product's float32 ones (``product.held_dtype``) as they are: read a row range
+    at a time into float64 (``RevealedTable._rows``), never copied whole."""
+    values = np.asarray(values)
+    return values if values.dtype == np.float32 else values.astype(float, copy=False)
+
+
 class RevealedTable:
     """One table of a computed session, up to the clock: ``len``, ``tail``, ``column``, ``array`` and
     ``to_dict`` as a ``Table`` gives them. A row shows once the clock reaches ``reveal_at`` (its time;
@@ -49,7 +56,7 @@ class RevealedTable:
 
     def __init__(self, columns: dict[str, np.ndarray], reveal_at: np.ndarray | None = None):
         self.columns = tuple(columns)
-        self._values = [np.asarray(v, dtype=float) for v in columns.values()]
+        self._values = [_floats(v) for v in columns.values()]
         self._whole = rows_of(self._values)
         times = self._values[self.columns.index("time_s")] if reveal_at is None else np.asarray(reveal_at, dtype=float)
         self._reveal_at = np.maximum.accumulate(np.where(np.isnan(times), -np.inf, times)) if len(times) else times

@@ -2,7 +2,8 @@
 or the dataset reader. One shape, filled by one builder (``build_product``):
 
 - ``tables``: every table as columns, exactly as ``catalogue`` describes them (``imu`` with every
-  estimator's quaternion and diagnostics, ``onboard``, one per frame or message type, ``position``);
+  estimator's quaternion and diagnostics, ``onboard``, one per frame or message type, ``position``), each in
+  its form (``held_dtype``: the host estimators' columns float32, sized for showing, unless made exact);
 - ``events``, ``link`` (the decoder's counters), ``config``, the estimators' settings at start and end;
 - ``parameters``: an autopilot's parameters, name -> value as last set (their changes are events), and
   ``parameter_defaults`` where the log says them (a MAVLink link does not);
@@ -16,6 +17,8 @@ is the layer the readers and the makers share.
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import dataclasses
 
 import numpy as np
@@ -23,7 +26,7 @@ import numpy as np
 from groundstation.autopilot.streams import IMU_RATE, slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation.evaluation import scores, uses_magnetometer
-from groundstation.session_parts.catalogue import Catalogue
+from groundstation.session_parts.catalogue import Catalogue, Column
 from groundstation.session_parts.figures import loss_pct, rate_hz, span_s
 
 AIDING_TABLES = {"mag": "mag_raw", "gps": "gps"}  # an aiding an estimator needs (``Estimator.needs``): the table whose rows give it
@@ -149,6 +152,26 @@ class SessionData:
             raise UserError(str(error)) from None
 
 
+# True while a session is made for a reader that writes the estimators' values (an export, a report): every
+# column held float64. A context of its own per thread: the app's loads and exports run in worker threads.
+_EXACT = contextvars.ContextVar("exact_estimates", default=False)
+
+
+@contextlib.contextmanager
+def exact_estimates(exact: bool = True):
+    """Within, sessions are made with every column in float64 (``held_dtype``): ``load_session(exact=True)``."""
+    token = _EXACT.set(exact)
+    try:
+        yield
+    finally:
+        _EXACT.reset(token)
+
+
+def held_dtype(column: Column) -> np.dtype:
+    """The dtype a product holds ``column`` in: the catalogue's form (``Column.held``), float64 when exact."""
+    return np.dtype(float if _EXACT.get() else column.held)
+
+
 def event_time_s(event: dict) -> float:
     """An event's session time: the clock's own when the event carries it, else seconds from the first byte."""
     return float(event.get("session_time_s", event["t_s"]))
@@ -157,8 +180,9 @@ def event_time_s(event: dict) -> float:
 def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[str, np.ndarray]], filters,
                   **rest) -> SessionData:
     """The one way a ``SessionData`` is made: every table the catalogue names, with exactly its columns
-    in its order (NaN for a column the maker has no values for; an empty table for one it never
-    filled; none for the ``imu`` columns of streamed estimators, ``rest["estimates"]``); ``rest``: the
+    in its order, in its form (``held_dtype``: the host estimators' float32 unless exact) (NaN for a column the
+    maker has no values for; an empty table for one it never filled; none for the ``imu`` columns of streamed
+    estimators, ``rest["estimates"]``); ``rest``: the
     other fields. ValueError for a table the catalogue does not describe or columns of different lengths
     (a maker's bug, not bad input)."""
     unknown = sorted(set(tables) - set(catalogue.tables))
@@ -170,8 +194,8 @@ def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[s
         columns = tables.get(info.name, {})
         rows = len(columns["time_s"]) if "time_s" in columns else 0
         nan = np.full(rows, np.nan)
-        filled[info.name] = {c: np.asarray(columns.get(c, nan), dtype=float) for c in info.column_names
-                             if info.name != "imu" or c not in streamed}
+        filled[info.name] = {c.name: np.asarray(columns.get(c.name, nan), dtype=held_dtype(c)) for c in info.columns
+                             if info.name != "imu" or c.name not in streamed}
         lengths = {len(v) for v in filled[info.name].values()}
         if len(lengths) > 1:
             raise ValueError(f"table {info.name}: columns of different lengths {sorted(lengths)}")

@@ -47,7 +47,7 @@ from groundstation.session_makers.pipeline import (
     period_s, sample_dt_s, sensor_of, stage_key, unexpected_frame_event,
 )
 from groundstation.session_makers.replay import CONFIG_ANSWERS, RecordedSetup, SettingsSchedule, apply_event, recorded_setup
-from groundstation.session.product import estimate_columns
+from groundstation.session.product import estimate_columns, held_dtype
 from groundstation.session_parts.table import Table
 
 # Shares of the whole job reported through ``progress``: reading and decoding, then the estimators.
@@ -64,6 +64,9 @@ class BatchSession:
         # for an export a stretch at a time (``estimate_run.Streamed``)
         self.stream_estimates = stream_estimates
         self.streamed: Streamed | None = None
+        # The estimators' imu columns when held (not streamed): apart from the ``imu`` Table, in the product's form
+        # (``product.held_dtype``), so an hour's are made at their held size, never float64 first
+        self.held_estimates: dict[str, np.ndarray] = {}
         self.filters = self.bank.filters
         self.catalogue = session_catalogue(self.bank.diagnostics(), SPEC)
         self.tables = {info.name: Table(info.column_names) for info in self.catalogue}
@@ -336,38 +339,42 @@ class _Builder:
         self.time_s = self.device_us = self.t_host = self.chunk = None
         mag, gps = readings.for_estimators()
         run = self._estimate_run(keys, gyr, acc, dt, mag, gps, t_host)
-        del mag, gps
-
-        def sensors():  # the table's columns before the estimators', made one at a time (``IMU``)
-            yield from (time_s, device_us, (t_host - s.t0_host_ns) * 1e-9, *acc.T, *gyr.T, temperature_c)
-
-        aiding_q = self._imu_table(keys, sensors(), run, readings.any)
+        # The table's columns before the estimators' (``IMU``), each let go once written (``_imu_table``): the gyro
+        # and the times are not held beside the table while the estimators run
+        sensors = [time_s, device_us, (t_host - s.t0_host_ns) * 1e-9, *acc.T, *gyr.T, temperature_c]
+        del mag, gps, gyr, device_us, t_host, temperature_c
+        aiding_q = self._imu_table(keys, sensors, run, readings.any)
         readings.stage(acc, dt, aiding_q, time_s)
 
-    def _imu_table(self, keys: np.ndarray, sensors, run: EstimateRun, aided: bool) -> np.ndarray:
+    def _imu_table(self, keys: np.ndarray, sensors: list, run: EstimateRun, aided: bool) -> np.ndarray:
         """The ``imu`` table made in one array: the samples' sensor columns and a gap row at each restart after
-        the first sample, in the pipeline's order, then each estimator's columns written into it a stretch
-        of samples at a time (``EstimateRun``). Streaming (``BatchSession.stream_estimates``), no estimator's
-        columns are held: they are left to ``Streamed``. Returns the aiding estimator's quaternions if the
-        session has readings it aids (``aided``: the compass heading and the position need its attitude at
-        every sample; none else), which the readings' stage uses and lets go."""
+        the first sample, in the pipeline's order; the estimators' columns in another, in the product's form
+        (``BatchSession.held_estimates``), written a stretch of samples at a time (``EstimateRun``). Streaming
+        (``BatchSession.stream_estimates``), no estimator's columns are held: they are left to ``Streamed``.
+        Returns the aiding estimator's quaternions if the session has readings it aids (``aided``: the compass
+        heading and the position need its attitude at every sample; none else), which the readings' stage uses
+        and lets go."""
         s, n = self.s, len(keys)
         bank = s.bank
         held = s.filters if not s.stream_estimates else ()
         aiding_q = np.empty((n, 4)) if aided and bank.aiding in s.filters else np.zeros((0, 4))
         diagnostics = bank.diagnostics()
-        columns = IMU.column_names + tuple(c.name for name in held for c in estimator_columns(name, diagnostics[name]))
+        columns = IMU.column_names
+        estimates = tuple(c for name in held for c in estimator_columns(name, diagnostics[name]))
         gaps = [(key, event) for key, (_, event) in zip(self.disc_keys.tolist(), self.discontinuities) if n and keys[0] < key]
         gap_at = np.searchsorted(keys, [key for key, _ in gaps], side="right")  # each gap row after the samples before it
         sample_rows = np.arange(n) + np.searchsorted(gap_at, np.arange(n), side="right")
         table = np.empty((n + len(gaps), len(columns)), order="F")  # each column written and read whole
+        held_values = np.empty((len(table), len(estimates)), np.result_type(*map(held_dtype, estimates)) if estimates else float,
+                               order="F")
         every_sample = _as_slice(sample_rows)
-        for j, values in enumerate(sensors):
-            table[every_sample, j] = values
-            del values
+        for j in range(len(sensors)):
+            table[every_sample, j], sensors[j] = sensors[j], None
         for row, (_, event) in zip(gap_at + np.arange(len(gaps)), gaps):
             table[row] = gap_row(event, len(columns))
+            held_values[row] = np.nan
         index = {column: j for j, column in enumerate(columns)}
+        held_index = {column.name: j for j, column in enumerate(estimates)}
         # From here the run reads its gyro and accelerometer from the table's columns: not kept twice
         run.gyr_rad_s, run.acc_g = (SampleColumns(table, sample_rows, [index[f"{quantity}_{a}_{unit}"] for a in "xyz"])
                                     for quantity, unit in (("gyr", "rad_s"), ("acc", "g")))
@@ -375,11 +382,13 @@ class _Builder:
             rows = _as_slice(sample_rows[start:end])
             for name in held:
                 for column, values_of in estimate_columns(name, *values[name]).items():
-                    table[rows, index[column]] = values_of
+                    held_values[rows, held_index[column]] = values_of
             if len(aiding_q):
                 aiding_q[start:end] = values[bank.aiding][0]
             self.progress(end, n)
         s.tables["imu"] = Table.holding(columns, table)
+        held_values.flags.writeable = False
+        s.held_estimates = {column.name: held_values[:, j] for j, column in enumerate(estimates)}
         if s.stream_estimates:
             s.streamed = Streamed(run, s.filters, sample_rows, tuple(
                 c.name for name in s.filters for c in estimator_columns(name, diagnostics[name])))

@@ -20,8 +20,10 @@ import numpy as np
 from groundstation.session_parts.estimators import EstimatorBank
 from groundstation.session.product import estimate_columns
 
-STRETCH_SAMPLES = 65_536  # what one stretch holds: 10 estimators' columns over it are ~37 MB
-STREAMED_STRETCH_SAMPLES = 16_384  # ``Streamed``'s: held beside the writer's stretch of rows, so a quarter of that
+# What one stretch holds: 10 estimators' columns over it are ~9 MB (65,536 samples made the 1 h open's peak 20 MB
+# higher for no less CPU: bench/bench_export_memory.out.md)
+STRETCH_SAMPLES = 16_384
+STREAMED_STRETCH_SAMPLES = 16_384  # ``Streamed``'s: held beside the writer's stretch of rows
 
 
 @dataclasses.dataclass(frozen=True)

@@ -28,13 +28,15 @@ from groundstation.session_parts.catalogue import Catalogue, session_catalogue
 from groundstation.session_parts.clock import DISCONTINUITIES
 from groundstation.session_parts.estimators import slow_interpreted
 from groundstation.session_makers.pipeline import Pipeline
-from groundstation.session.product import ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns
+from groundstation.session.product import (
+    ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns, exact_estimates,
+)
 from groundstation.session_makers.replay import recorded_filters, replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
 
 def load_session(path, filters=None, forced=None, progress=None, accept_config_changes: bool = False,
-                 imu: str = IMU_STREAMS[0], stream_estimates: bool = False) -> SessionData:
+                 imu: str = IMU_STREAMS[0], stream_estimates: bool = False, exact: bool = False) -> SessionData:
     """Decode, import or read ``path`` by its format (``formats``) and run the estimators (``filters``; None:
     ``estimators_for``); UserError with a
     clear message on bad input. A file of no known format is tried as a recording, whose reader says
@@ -43,8 +45,11 @@ def load_session(path, filters=None, forced=None, progress=None, accept_config_c
     ``imu``: the stream the estimators run on (``IMU_STREAMS``): "fast", a flight log's full-rate IMU.
     ``stream_estimates``: a recording's estimators are not run whole but a stretch at a time for whoever reads
     ``SessionData.attitudes(rows)`` forward (an export: its memory then does not grow with the session's
-    length); other files are computed whole in any case."""
-    data = _loaded(path, filters, forced, progress, accept_config_changes, imu, stream_estimates)
+    length); other files are computed whole in any case. ``exact``: the host estimators' columns are held in
+    float64, as computed (a reader that writes them: an export, a report), not in the form sized for showing
+    (``catalogue.ESTIMATES_HELD``)."""
+    with exact_estimates(exact):
+        data = _loaded(path, filters, forced, progress, accept_config_changes, imu, stream_estimates)
     attach_sections(data)  # an autopilot's: what its controller asked for and had, battery, GPS, outputs
     return data
 
@@ -105,8 +110,9 @@ def from_trial(trial: Trial, filters, settings_used, metadata: dict, origin_s: f
 
 def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> SessionData:
     """A recording's product: what the pipeline (or the batch path) computed, as it computed it."""
-    streamed = pipeline.streamed if isinstance(pipeline, BatchSession) else None
-    data = pipeline_product(recording.metadata, pipeline, list(recording.damage), streamed)
+    batch = isinstance(pipeline, BatchSession)
+    data = pipeline_product(recording.metadata, pipeline, list(recording.damage), pipeline.streamed if batch else None,
+                            pipeline.held_estimates if batch else None)
     if recording.record_counts["sample_blocks"]:
         truth = recording.sample_columns([*TRUE_Q, "moving", "board_epoch", "board_clock_us", "time_s"])
         if "true_qw" in truth:
@@ -114,13 +120,17 @@ def from_pipeline(recording: Recording, pipeline: Pipeline | BatchSession) -> Se
     return data
 
 
-def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: list, estimates=None) -> SessionData:
+def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: list, estimates=None,
+                     held: dict[str, np.ndarray] | None = None) -> SessionData:
     """A decoded session's product (a recording's, a ``.tlog``'s): the pipeline's tables, link, events and
-    settings (``estimates``: the streamed ones, ``SessionData.estimates``); an autopilot simulator's
-    SIMSTATE as its truth (``attach_simstate_truth``)."""
+    settings (``estimates``: the streamed ones, ``SessionData.estimates``; ``held``: ``imu`` columns the batch
+    path holds apart from its table, ``BatchSession.held_estimates``); an autopilot simulator's SIMSTATE as its
+    truth (``attach_simstate_truth``)."""
     t0_ns = pipeline.t0_host_ns or 0
+    tables = {name: table.to_dict() for name, table in pipeline.tables.items()}
+    tables["imu"].update(held or {})
     data = build_product(
-        metadata, pipeline.catalogue, {name: table.to_dict() for name, table in pipeline.tables.items()},
+        metadata, pipeline.catalogue, tables,
         pipeline.filters, protocol=metadata.get("protocol", "gs"),
         link=LinkSummary(pipeline.decoder.stats.as_dict(), pipeline.link.per_second.to_dict()), config=pipeline.config,
         # An event from before the first byte (the replay's notes on the recording itself) is at its start.

@@ -34,6 +34,10 @@ _UNIT_SHOWN = {"1": "", "enum": "enum", "bits": "bits", "index": "index", "uT": 
 EXPORT_PREFIX = {"mag_raw": "mag", "position": "fused"}
 # Frames whose tables belong to the link's health rather than to the sensors (the workbook's Link sheet).
 LINK_TABLES = ("status", "radio_status", "sys_status")  # the last two: a MAVLink session's (session_makers/mavlink_front.py)
+# How a session's product holds the host estimators' columns (every other column: float64): sized for showing, a
+# float32 quaternion is within 6e-8 of its float64, far under a pixel; an hour of the app's ten estimators' 95
+# columns at 100 Hz is 137 MB so, 274 MB in float64. An export computes its own in float64 (``held_dtype``).
+ESTIMATES_HELD = "float32"
 # Frames decoded into a computed table instead of a table of their own.
 COMPUTED_FROM = {"IMU_RAW": "imu", "ATTITUDE": "onboard"}
 
@@ -45,6 +49,7 @@ class Column:
     label: str  # for a person, without the unit
     decimals: int | None = None  # digits worth showing (None: an integer count)
     description: str = ""
+    held: str = "float64"  # the form a session's product holds it in (``ESTIMATES_HELD``, ``session.product.held_dtype``)
 
     @property
     def header(self) -> str:
@@ -176,12 +181,12 @@ def diagnostic_column(name: str, diagnostic: str) -> Column:
     else:
         suffix, unit = next(((s, u) for s, u in _SUFFIX_UNIT if diagnostic.endswith(s)), ("", "1"))
         text = diagnostic.removesuffix(suffix).replace("_", " ")
-    return Column(f"{name}_{diagnostic}", unit, f"{name} {text}", 4)
+    return Column(f"{name}_{diagnostic}", unit, f"{name} {text}", 4, held=ESTIMATES_HELD)
 
 
 def estimator_columns(name: str, diagnostics: tuple[str, ...]) -> tuple[Column, ...]:
     """An estimator's columns in the ``imu`` table: its quaternion (body -> NED) and diagnostics."""
-    quaternion = tuple(Column(f"{name}_q{c}", "1", f"{name} q{c}", 6) for c in "wxyz")
+    quaternion = tuple(Column(f"{name}_q{c}", "1", f"{name} q{c}", 6, held=ESTIMATES_HELD) for c in "wxyz")
     return quaternion + tuple(diagnostic_column(name, d) for d in diagnostics)
 
 

@@ -36,7 +36,7 @@ class ReportJob:
 
     def _run(self) -> None:
         try:
-            data = self._load(self.source, *self._setup)
+            data = self._load(self.source, *self._setup, exact=True)
             self.message = f"Flight report of {self.source.name} written to {write_report(data, self.out, self.source.name, overwrite=True)}"
         except UserError as error:
             self.error = str(error)

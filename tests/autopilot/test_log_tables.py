@@ -40,7 +40,7 @@ def shared(name: str) -> Path:
 
 @pytest.fixture(scope="module")
 def copter():
-    return load_session(shared(COPTER))
+    return load_session(shared(COPTER), exact=True)  # its aiding estimator's attitudes as computed (the live stage's input)
 
 
 @pytest.fixture(scope="module")

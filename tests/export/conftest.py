@@ -54,7 +54,7 @@ def sim_recording(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="session")
 def sim_session(sim_recording):
-    return load_session(sim_recording)
+    return load_session(sim_recording, exact=True)  # as every export loads it (``run_export``)
 
 
 @pytest.fixture(scope="session")
@@ -66,7 +66,7 @@ def trial_session(tmp_path_factory):
     frame = pd.read_csv(TRIAL)
     start = frame.time_s[frame.moving == 1].min() - 5
     frame[(frame.time_s >= start) & (frame.time_s < start + 20)].to_csv(path, index=False)
-    return load_session(path, ["ahf", "hf"])
+    return load_session(path, ["ahf", "hf"], exact=True)
 
 
 JS_READERS = Path(__file__).resolve().parents[1] / "js"
@@ -116,7 +116,7 @@ def exported_log(tmp_path_factory):
             log = DATASETS / "flightlogs" / name
             if not log.exists():
                 pytest.skip(f"{log} not found")
-            session = load_session(log, ["ahf"])
+            session = load_session(log, ["ahf"], exact=True)
             path = tmp_path_factory.mktemp("exported") / f"{log.stem}.mcap"
             write_mcap(session, path)
             done[name] = session, path

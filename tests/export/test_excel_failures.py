@@ -105,7 +105,7 @@ def test_a_file_size_limit_gets_a_message_and_leaves_nothing(sim_recording, tmp_
         from groundstation.errors import UserError
         from groundstation.export.excel import write_workbook
         from groundstation.session_makers.load import load_session
-        data = load_session({str(sim_recording)!r})
+        data = load_session({str(sim_recording)!r}, exact=True)
         tempfile.tempdir = {str(temporaries)!r}
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a failing write, not a killed process
         resource.setrlimit(resource.RLIMIT_FSIZE, (64 * 1024, 64 * 1024))

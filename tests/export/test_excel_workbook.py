@@ -184,7 +184,7 @@ def test_charts_of_pitch_and_roll_read_a_decimated_range(sim_session, tmp_path, 
 
 def test_a_session_without_raw_imu_samples(tmp_path):
     """"estimated" mode: the aircraft sends its attitude only; no estimator runs on the host."""
-    data = load_session(simulated_recording(tmp_path / "estimated.gsrec", duration_s=5, mode="estimated"))
+    data = load_session(simulated_recording(tmp_path / "estimated.gsrec", duration_s=5, mode="estimated"), exact=True)
     assert data.sample_table == "onboard" and sensor_columns(data) == {}
     path = tmp_path / "estimated.xlsx"
     write_workbook(data, path)

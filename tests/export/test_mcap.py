@@ -126,7 +126,7 @@ def test_cli_exports_a_flight_log_and_refuses_cleanly(tmp_path, capsys):
     done = run_in_process(capsys, "export", log, "--out", out)
     assert done.returncode == 0, done.stderr
     topics = read_mcap(out)
-    session = load_session(log)
+    session = load_session(log, exact=True)
     onboard = session.tables["onboard"]["time_s"]
     assert len(topics["/onboard"]) == len(onboard) > 0
     times = np.array([t for t, _ in topics["/onboard"]])
@@ -142,7 +142,7 @@ def test_an_autopilot_logs_parameters(tmp_path):
     log = DATASETS / "flightlogs" / "px4_fmuv5_quad_hop.ulg"
     if not log.exists():
         pytest.skip("flight logs not found")
-    session = load_session(log, ["ahf"])
+    session = load_session(log, ["ahf"], exact=True)
     assert session.parameters
     write_mcap(session, tmp_path / "hop.mcap")
     (_, values), = read_mcap(tmp_path / "hop.mcap")["/parameters"]

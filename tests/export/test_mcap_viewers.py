@@ -71,7 +71,7 @@ def test_every_channel_of_a_shared_log_in_foxglove_and_lichtblick(log, read_mcap
 @pytest.fixture(scope="module")
 def minute_session(tmp_path_factory):
     """60 s of the simulated hover."""
-    return load_session(simulated_recording(tmp_path_factory.mktemp("minute") / "minute.gsrec", duration_s=60.0))
+    return load_session(simulated_recording(tmp_path_factory.mktemp("minute") / "minute.gsrec", duration_s=60.0), exact=True)
 
 
 def test_messages_in_log_time_order_and_a_seek_opens_few_chunks(minute_session, tmp_path):

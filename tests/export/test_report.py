@@ -133,7 +133,7 @@ def test_the_report_says_what_the_suggested_notch_would_do(vibrating_flight):
 
     path, out = vibrating_flight
     text = out.read_text(encoding="utf-8")
-    data = load_session(path)
+    data = load_session(path, exact=True)
     summary = vibration_summary(data)
     change = what_if(data, "notch", summary.notch["frequency_hz"], summary.notch["bandwidth_hz"])
     assert "<h3>What the suggested notch would do</h3>" in text

@@ -68,7 +68,7 @@ def test_long_legends_overlap_neither_each_other_nor_the_plot(metrics):
 def flight(tmp_path_factory):
     path = tmp_path_factory.mktemp("legends") / "flight.gsrec"
     assert main(["simulate", "--scenario", "flight", "--duration", "20", "--seed", "2", "--out", str(path)]) == 0
-    return load_session(path, filters=("ahf2", "ahf", "hf", "ecf", "vqf"))
+    return load_session(path, filters=("ahf2", "ahf", "hf", "ecf", "vqf"), exact=True)
 
 
 def test_an_estimator_keeps_its_colour_in_every_figure_of_the_report(flight):
@@ -94,7 +94,7 @@ def test_the_onboard_estimate_is_the_apps_wine_dashed(tmp_path):
 def test_a_flight_logs_report_shows_its_controller_battery_gps_and_outputs(tmp_path):
     from tests.autopilot.mavlink_helpers import flightlog
 
-    data = load_session(flightlog("arducopter_cubeorange_2023-07-06_10-12-18.bin"), filters=("ahf2",))
+    data = load_session(flightlog("arducopter_cubeorange_2023-07-06_10-12-18.bin"), filters=("ahf2",), exact=True)
     page = report_html(data, "copter.bin")
     assert "<h2>Controller, battery, GPS and outputs</h2>" in page
     titles = re.findall(r'aria-label="([^"]+)"', page)

@@ -48,7 +48,7 @@ def test_short_stretches_give_the_incremental_pipeline_s_tables(eventful, short_
 
 
 def test_streamed_columns_are_the_whole_run_s_on_every_row_asked(eventful, short_stretches):
-    whole = load_session(eventful, FILTERS)
+    whole = load_session(eventful, FILTERS, exact=True)  # float64, as the streamed ones are made
     streamed = load_session(eventful, FILTERS, stream_estimates=True)
     assert streamed.estimates.names == FILTERS  # every one, the aiding one too: its attitudes for the heading went with the readings
     assert not set(streamed.estimates.columns) & set(streamed.tables["imu"])  # not held
@@ -77,7 +77,7 @@ def test_the_streamed_run_goes_forward_only(eventful):
 def test_a_parquet_export_streams_and_writes_the_whole_session_s_bytes(eventful, short_stretches, tmp_path):
     out = tmp_path / "streamed.parquet"
     run_export(export_request(eventful, out, filters=list(FILTERS)), load_session)
-    whole = load_session(eventful, FILTERS)
+    whole = load_session(eventful, FILTERS, exact=True)
     write_parquet(export_stretches(whole, np.arange(len(whole))), tmp_path / "whole.parquet")
     assert out.read_bytes() == (tmp_path / "whole.parquet").read_bytes()
     assert pq.read_table(out).num_rows == len(whole)
@@ -88,7 +88,7 @@ def test_without_readings_to_aid_every_estimator_streams(tmp_path):
     write_recording(path, simulated_chunks(3.0), {"filters": ["ahf", "hf"]})
     streamed = load_session(path, ("ahf", "hf"), stream_estimates=True)
     assert streamed.estimates.names == ("ahf", "hf")
-    whole = load_session(path, ("ahf", "hf"))
+    whole = load_session(path, ("ahf", "hf"), exact=True)
     rows = np.arange(len(whole))
     for name, q in streamed.attitudes(rows).items():
         assert np.array_equal(q, whole.quaternion(name), equal_nan=True), name
