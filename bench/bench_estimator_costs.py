@@ -177,9 +177,7 @@ def worker_recording(path: str) -> dict:
     spent = dict.fromkeys(names, 0.0)
     samples = dict.fromkeys(names, 0)
 
-    def timed(cls):
-        run = cls.run
-
+    def timed(run):
         def run_timed(self, gyr, *args):
             t0 = time.process_time()
             out = run(self, gyr, *args)
@@ -187,12 +185,12 @@ def worker_recording(path: str) -> dict:
             samples[self.name] += len(gyr)
             return out
 
-        return run, run_timed
+        return run_timed
 
-    originals = {}
-    for name in names:
-        cls = ESTIMATORS[name]
-        originals[cls], cls.run = timed(cls)
+    # each class that defines the run the estimators use, once (a subclass's inherited run is its base's)
+    owners = {next(c for c in ESTIMATORS[name].__mro__ if "run" in vars(c)) for name in names}
+    for owner in owners:
+        owner.run = timed(vars(owner)["run"])
     data = load_session(path, names, stream_estimates=True)
     for name in names:  # the compiled ones were loaded from the cache with the session; vqf's screen too
         ESTIMATORS[name].runs_compiled()
