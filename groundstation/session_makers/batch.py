@@ -345,7 +345,6 @@ class _Builder:
             yield from (time_s, device_us, (t_host - s.t0_host_ns) * 1e-9, *acc.T, *gyr.T, temperature_c)
 
         aiding_q = self._imu_table(keys, sensors(), run, readings.any)
-        del sensors, gyr, device_us, t_host, temperature_c  # in the table now; the readings' stage needs none of them
         readings.stage(acc, dt, aiding_q, time_s)
 
     def _imu_table(self, keys: np.ndarray, sensors, run: EstimateRun, aided: bool) -> np.ndarray:
