@@ -157,18 +157,29 @@ def decode_pieces(pieces: Iterable[tuple[bytes, np.ndarray, np.ndarray]], spec: 
 
 
 def joined(pieces: Iterable[BatchDecode]) -> BatchDecode:
-    """The pieces of one stream (``decode_pieces``) as one ``BatchDecode``: that of the whole stream."""
+    """The pieces of one stream (``decode_pieces``) as one ``BatchDecode``: that of the whole stream. The pieces
+    are emptied as they are joined, a column at a time (memory: the whole decode and one column's pieces, not
+    every piece beside the whole)."""
     pieces = list(pieces)
     last = pieces[-1]
     frames = {}
-    for name, columns in last.frames.items():
-        parts = [p.frames[name] for p in pieces]
-        device = None if columns.device_time_us is None else np.concatenate([c.device_time_us for c in parts])
-        frames[name] = FrameColumns(columns.type, *(np.concatenate([getattr(c, f) for c in parts]) for f in ("order", "seq", "raw")),
-                                    device, *(np.concatenate([getattr(c, f) for c in parts]) for f in ("chunk", "t_host_ns")))
-    counters = {c: np.concatenate([p.chunk_counters[c] for p in pieces]) for c in CHUNK_COUNTERS}
-    return BatchDecode(frames, last.stats, last.remote_fingerprint, last.rate_hz, last.pending_bytes,
-                       np.concatenate([p.chunk_t_host_ns for p in pieces]), counters)
+    for name in list(last.frames):
+        parts = [p.frames.pop(name) for p in pieces]
+        fields = {}
+        for field in ("order", "seq", "raw", "device_time_us", "chunk", "t_host_ns"):
+            if getattr(parts[0], field) is None:  # a type without device time
+                fields[field] = None
+                continue
+            fields[field] = np.concatenate([getattr(c, field) for c in parts])
+            for c in parts:
+                setattr(c, field, None)
+        frames[name] = FrameColumns(parts[0].type, **fields)
+        del parts
+    counters = {}
+    for c in CHUNK_COUNTERS:
+        counters[c] = np.concatenate([p.chunk_counters.pop(c) for p in pieces])
+    chunk_t_host_ns = np.concatenate([p.chunk_t_host_ns for p in pieces])
+    return BatchDecode(frames, last.stats, last.remote_fingerprint, last.rate_hz, last.pending_bytes, chunk_t_host_ns, counters)
 
 
 @dataclass

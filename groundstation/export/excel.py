@@ -20,12 +20,8 @@ from groundstation.export.excel_parameters import write_parameters_sheet
 from groundstation.export.excel_session import session_rows, write_session_sheet
 from groundstation.export.excel_stream import EXCEL_MAX_ROWS, as_os_error, check_width, discard, save, table_rows, write_table
 from groundstation.export.excel_vibration import write_vibration_sheet
-from groundstation.export.files import atomic_output
+from groundstation.export.files import ExportCancelled, atomic_output
 from groundstation.session.product import SessionData
-
-
-class ExportCancelled(Exception):
-    """The caller cancelled the export; nothing was written."""
 
 
 def cancel_check(cancel) -> Callable[[], bool]:

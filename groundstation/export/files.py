@@ -15,6 +15,10 @@ from pathlib import Path
 from groundstation.errors import UserError
 
 
+class ExportCancelled(Exception):
+    """The caller cancelled the export; nothing was written."""
+
+
 @contextlib.contextmanager
 def atomic_output(path, overwrite: bool = False, reserve: bool = True):
     """Yields a temporary path in the destination folder; renames it to ``path`` on success.

@@ -136,7 +136,7 @@ def run_export(request: ExportRequest, load: Callable, progress: Callable[[str, 
     done, total)`` with stage "decoding" then "writing"; ``cancel`` (a ``threading.Event``) raises
     ExportCancelled, nothing written."""
     from groundstation.estimation import unmet_warnings
-    from groundstation.export.excel import ExportCancelled
+    from groundstation.export.files import ExportCancelled  # not excel's module: openpyxl and pandas are ~70 MB
     report = progress or (lambda stage, done, total: None)
 
     def decoding(done: int, total: int) -> None:

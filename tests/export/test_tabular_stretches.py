@@ -1,5 +1,8 @@
 """CSV and Parquet written a stretch of rows at a time: the same bytes as the whole table written at once."""
 
+import subprocess
+import sys
+
 import numpy as np
 import pyarrow as pa
 import pyarrow.csv as pacsv
@@ -7,7 +10,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from groundstation.export.columns import export_columns, export_stretches, select_rows
-from groundstation.export.tabular import write_csv, write_parquet
+from groundstation.export.tabular import arrow_array, write_csv, write_parquet
 
 STRETCH = 400  # rows: the 20 s session (~900 rows at 50 Hz) in a few stretches, the last one short
 
@@ -46,3 +49,32 @@ def test_csv_by_stretches_is_the_whole_table_written_at_once(sim_session, rows, 
     assert (tmp_path / "stretches.csv").read_bytes() == (tmp_path / "whole.csv").read_bytes()
     back = pacsv.read_csv(tmp_path / "stretches.csv")
     assert back.num_rows == len(rows) and back.column_names == list(export_columns(sim_session, rows))
+
+
+@pytest.mark.parametrize("suffix", ["parquet", "csv"])
+def test_an_export_loads_no_library_it_does_not_use(sim_recording, tmp_path, suffix):
+    """``groundstation export X.parquet`` / ``X.csv`` in a fresh process: pandas (pyarrow's ``pa.array`` imports it
+    to look for pandas objects, ~40 MB) and openpyxl (the workbook's, ~27 MB) are never loaded."""
+    script = (
+        "import sys\n"
+        "from groundstation.export.request import export_request, run_export\n"
+        "from groundstation.session_makers.load import load_session\n"
+        f"run_export(export_request({str(sim_recording)!r}, {str(tmp_path / ('x.' + suffix))!r}, filters=['ahf']), load_session)\n"
+        "print(sorted({m.split('.')[0] for m in sys.modules} & {'pandas', 'openpyxl'}))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert done.stdout.strip().splitlines()[-1] == "[]"
+
+
+def test_arrow_arrays_are_pyarrows_own():
+    rng = np.random.default_rng(7)
+    floats = rng.normal(size=(1000, 4))
+    floats[rng.random(floats.shape) < 0.3] = np.nan
+    columns = [floats[:, 1], floats[:, 2].copy(), np.full(9, np.nan), np.array([]), np.array([-0.0, 1.5]),
+               rng.integers(-5, 5, 100), rng.integers(0, 9, 100).astype(np.uint16), rng.random(77) < 0.5]
+    for values in columns:  # a strided column, whole, every value NaN, none, -0.0, ints, unsigned, booleans
+        for as_null in (True, False):
+            mine, theirs = arrow_array(values, as_null), pa.array(values, from_pandas=as_null and values.dtype.kind == "f")
+            assert mine.type == theirs.type and mine.is_null().equals(theirs.is_null()), (values.dtype, as_null)  # NaN != NaN: no equals
+            assert np.asarray(mine.to_numpy(zero_copy_only=False)).tobytes() == np.asarray(theirs.to_numpy(zero_copy_only=False)).tobytes()

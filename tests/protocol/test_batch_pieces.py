@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from firmware_protocol import SPEC, encode, make_frame
-from firmware_protocol.batch import CHUNK_COUNTERS, PIECE_BYTES, decode_chunks, decode_pieces, pieces_of
+from firmware_protocol.batch import CHUNK_COUNTERS, PIECE_BYTES, decode_chunks, decode_pieces, joined, pieces_of
 
 from tests.simulated import simulated_chunks
 
@@ -129,3 +129,25 @@ def test_empty_and_tiny_streams():
 def test_damaged_streams_in_any_pieces(frames, fates, noises, rng, max_chunk, piece_bytes):
     stream = damaged_stream(numbered(frames, rng.randrange(256)), fates, noises, rng)
     assert_pieces_same(chunked(stream, rng, max_chunk), (1, piece_bytes))
+
+
+def test_the_pieces_are_let_go_as_they_are_joined():
+    """``joined`` holds the whole decode and one column's pieces beside it, not every piece beside the whole
+    (twice the decode): the pieces' arrays go as each column is joined. tracemalloc counts numpy's arrays."""
+    import tracemalloc
+
+    chunks = simulated_chunks(20.0, **SENSORS)
+    tracemalloc.start()
+    try:
+        pieces = list(decode_pieces(pieces_of(chunks, 16_384)))
+        before = tracemalloc.get_traced_memory()[0]
+        tracemalloc.reset_peak()
+        got = joined(pieces)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    whole = sum(a.nbytes for c in got.frames.values() for a in (c.order, c.seq, c.raw, c.device_time_us, c.chunk, c.t_host_ns)
+                if a is not None) + got.chunk_t_host_ns.nbytes + sum(a.nbytes for a in got.chunk_counters.values())
+    assert len(pieces) > 5
+    assert peak - before < whole / 4, (peak - before, whole)
+    assert_same_decode(got, decode_chunks(chunks))
