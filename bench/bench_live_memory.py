@@ -42,6 +42,7 @@ from pathlib import Path
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
+import pyqtgraph as pg  # noqa: E402
 from PySide6 import QtCore, QtWidgets  # noqa: E402
 
 from bench_ui import rss_mb  # noqa: E402
@@ -149,6 +150,7 @@ def window_child(minutes: list[float]) -> None:
     """The app's window on the demo's session, unpaced; a line of figures at each checkpoint."""
     getattr(app_module, "keep_large_blocks_out_of_the_heap", lambda: None)()  # as ``ui.app.run`` (none before issue 35)
     app = QtWidgets.QApplication([])
+    pg.setConfigOptions(antialias=False)  # as ``ui.app.run``
     folder = tempfile.mkdtemp()
 
     class UnpacedSessions(Sessions):
