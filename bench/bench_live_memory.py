@@ -151,32 +151,32 @@ def window_child(minutes: list[float]) -> None:
     getattr(app_module, "keep_large_blocks_out_of_the_heap", lambda: None)()  # as ``ui.app.run`` (none before issue 35)
     app = QtWidgets.QApplication([])
     pg.setConfigOptions(antialias=False)  # as ``ui.app.run``
-    folder = tempfile.mkdtemp()
+    with tempfile.TemporaryDirectory() as folder:  # the recordings and settings, removed at the end
 
-    class UnpacedSessions(Sessions):
-        def open(self, spec, *, settings=None, recordings_dir=None, **defaults):
-            pipeline = Pipeline(live_estimators(), settings, keep_rows=LIVE_KEEP_ROWS, compile_in_background=True)
-            return LiveSession(UnpacedSim(60.0 * max(minutes) + 5.0), pipeline, recordings_dir=Path(folder))
+        class UnpacedSessions(Sessions):
+            def open(self, spec, *, settings=None, recordings_dir=None, **defaults):
+                pipeline = Pipeline(live_estimators(), settings, keep_rows=LIVE_KEEP_ROWS, compile_in_background=True)
+                return LiveSession(UnpacedSim(60.0 * max(minutes) + 5.0), pipeline, recordings_dir=Path(folder))
 
-    settings = QtCore.QSettings(f"{folder}/settings.ini", QtCore.QSettings.IniFormat)
-    window = MainWindow(settings, UnpacedSessions())
-    window.show()
-    window.start_demo()
-    session, checkpoints, started = window.session, sorted(minutes), time.monotonic()
-    while checkpoints and session.running:
-        app.processEvents()
-        time.sleep(0.005)
-        done_min = len(session.pipeline.imu) / 100.0 / 60.0
-        if done_min >= checkpoints[0]:
-            with session.lock:
-                in_use, free = heap_mb()
-                view = window.live_view
-                print(json.dumps({"kind": os.environ.get("TREE", "?"), "minutes": round(done_min, 2),
-                                  "rss_mb": plain_rss_mb(), "heap_mb": in_use, "free_mb": free, "tables_mb": table_mb(session.pipeline),
-                                  "plots_mb": sum(s.nbytes() for s in [*view.series.values(), *view.channels.series.values()]) / 1e6,
-                                  "wall_s": time.monotonic() - started}), flush=True)
-            checkpoints.pop(0)
-    window.close()
+        settings = QtCore.QSettings(f"{folder}/settings.ini", QtCore.QSettings.IniFormat)
+        window = MainWindow(settings, UnpacedSessions())
+        window.show()
+        window.start_demo()
+        session, checkpoints, started = window.session, sorted(minutes), time.monotonic()
+        while checkpoints and session.running:
+            app.processEvents()
+            time.sleep(0.005)
+            done_min = len(session.pipeline.imu) / 100.0 / 60.0
+            if done_min >= checkpoints[0]:
+                with session.lock:
+                    in_use, free = heap_mb()
+                    view = window.live_view
+                    print(json.dumps({"kind": os.environ.get("TREE", "?"), "minutes": round(done_min, 2),
+                                      "rss_mb": plain_rss_mb(), "heap_mb": in_use, "free_mb": free, "tables_mb": table_mb(session.pipeline),
+                                      "plots_mb": sum(s.nbytes() for s in [*view.series.values(), *view.channels.series.values()]) / 1e6,
+                                      "wall_s": time.monotonic() - started}), flush=True)
+                checkpoints.pop(0)
+        window.close()
 
 
 def window_runs(minutes: str, trees: list[Path]) -> None:
