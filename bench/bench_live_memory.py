@@ -163,11 +163,11 @@ def window_child(minutes: list[float]) -> None:
         window.show()
         window.start_demo()
         session, checkpoints, started = window.session, sorted(minutes), time.monotonic()
-        while checkpoints and session.running:
+        while checkpoints:
             app.processEvents()
             time.sleep(0.005)
             done_min = len(session.pipeline.imu) / 100.0 / 60.0
-            if done_min >= checkpoints[0]:
+            if done_min >= checkpoints[0] or not session.running:  # a run ended early: its last figures
                 with session.lock:
                     in_use, free = heap_mb()
                     view = window.live_view
@@ -175,7 +175,7 @@ def window_child(minutes: list[float]) -> None:
                                       "rss_mb": plain_rss_mb(), "heap_mb": in_use, "free_mb": free, "tables_mb": table_mb(session.pipeline),
                                       "plots_mb": sum(s.nbytes() for s in [*view.series.values(), *view.channels.series.values()]) / 1e6,
                                       "wall_s": time.monotonic() - started}), flush=True)
-                checkpoints.pop(0)
+                checkpoints = [] if not session.running else checkpoints[1:]
         window.close()
 
 
