@@ -3,7 +3,7 @@ of its own) against ``groundstation record --port sim:`` headless, the same simu
 100 Hz, magnetometer, barometer and GPS) and the same estimators (the app's ten live ones, ``record``'s
 default), for ``--minutes`` each, one after the other, interleaved, ``--repeats`` times.
 
-    python bench/bench_live_cpu.py [--minutes 2] [--repeats 2] [--tree PATH ...] [--commands app,record]   # from the worktree root
+    python bench/bench_live_cpu.py [--minutes 2] [--repeats 2] [--tree PATH ...] [--commands app,record] [--together] [--display :N]   # from the worktree root
 
 Figures of the whole process (every thread) from ``/proc/PID``: CPU seconds (user + system, its waited
 children too) and RSS, at the first minute and at the end; "steady" is the CPU from the first minute to
@@ -12,14 +12,17 @@ since the process started; the RSS at 10 minutes too when the runs are longer (t
 minutes of rows: ``session_parts.table.LIVE_KEEP_ROWS``). The app runs with fresh settings (the window's defaults: the Attitude tab,
 the 30 s window), Qt on the X server (``QT_QPA_PLATFORM=xcb``, software rendering as on a machine
 without a GPU); recordings go to a temporary folder. ``--tree`` runs each command from another
-checkout as well (the code before a change, say), interleaved with this one's. Prints Markdown: the
-medians, and the app's over ``record``'s.
+checkout as well (the code before a change, say), interleaved with this one's; ``--together`` runs the
+trees' same command at the same time instead (both under the same load: long runs, where the load changes
+between one and the next). ``--display :N``: the Xvfb on that display number (else the first free one).
+Prints Markdown: the medians, and the app's over ``record``'s.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+from concurrent.futures import ThreadPoolExecutor
 import statistics
 import subprocess
 import sys
@@ -47,12 +50,15 @@ def rss_mb(pid: int) -> float:
 
 
 class Xvfb:
-    """An X server of its own, on the first free display (``-displayfd``)."""
+    """An X server of its own, on ``display`` (":N") or the first free display (``-displayfd``)."""
+
+    def __init__(self, display: str | None = None):
+        self.display = display
 
     def __enter__(self) -> str:
         read, write = os.pipe()
-        self.process = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0", "1280x800x24", "-nolisten", "tcp"],
-                                        pass_fds=(write,), stderr=subprocess.DEVNULL)
+        self.process = subprocess.Popen(["Xvfb", *([self.display] if self.display else []), "-displayfd", str(write), "-screen", "0",
+                                         "1280x800x24", "-nolisten", "tcp"], pass_fds=(write,), stderr=subprocess.DEVNULL)
         os.close(write)
         with os.fdopen(read) as pipe:
             number = pipe.readline().strip()
@@ -106,6 +112,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=2, help="interleaved runs of each (default 2)")
     parser.add_argument("--tree", type=Path, action="append", default=[], help="another checkout to run as well")
     parser.add_argument("--commands", default=",".join(COMMANDS), help="which of them (default: app,record)")
+    parser.add_argument("--together", action="store_true", help="each command of every tree at the same time")
+    parser.add_argument("--display", default=None, help="the Xvfb's display, :N (default: the first free one)")
     args = parser.parse_args()
     kinds = args.commands.split(",")
     seconds = max(args.minutes, 1.5) * 60
@@ -117,11 +125,12 @@ def main() -> None:
         with tempfile.TemporaryDirectory() as folder:
             subprocess.run([sys.executable, "-m", "groundstation", "record", "--port", "sim:", "--duration", "3", "--recordings", folder],
                            cwd=tree, env={**os.environ, "PYTHONPATH": str(tree)}, check=True, capture_output=True)
-    with Xvfb() as display:
+    # Each step: the runs made at once (every tree's with --together, else one).
+    steps = ([[(tree, kind) for tree in trees] for kind in kinds] if args.together else [[(tree, kind)] for tree in trees for kind in kinds])
+    with Xvfb(args.display) as display, ThreadPoolExecutor(len(trees)) as pool:
         for repeat in range(args.repeats):
-            for tree in trees:
-                for kind in kinds:
-                    figures = run(tree, kind, seconds, display)
+            for step in steps:
+                for (tree, kind), figures in zip(step, pool.map(lambda run_of: run(*run_of, seconds, display), step)):
                     results[tree, kind].append(figures)
                     print(f"  run {repeat + 1} {tree.name} {kind}: steady {figures['steady_pct']:.1f} %, whole {figures['whole_pct']:.1f} %, "
                           f"RSS {figures['rss_first_mb']:.0f} -> {mb(figures.get('rss_ten_mb'))} (10 min) -> {figures['rss_end_mb']:.0f} MB", flush=True)

@@ -4,6 +4,7 @@ baseline (the bounds off: every table row kept, the plot history never merged).
 
     python bench/bench_live_memory.py [--minutes 10,60] [--filters ahf]
     python bench/bench_live_memory.py --where S
+    python bench/bench_live_memory.py --window [--minutes 5,10,20,30] [--tree PATH ...]
 
 ``--where S``: where the memory goes first: S simulated seconds through the pipeline with the app's
 estimators under ``tracemalloc`` (the Python heap by file), and each table's bytes per minute.
@@ -15,11 +16,19 @@ whose pipeline runs ``--filters``, while the main thread keeps a ``LiveView`` (o
 (``bench_ui.rss_mb``). The app's ten estimators (``--filters app``) make the imu table 102 columns wide
 instead of 20 and run slower than real time on this machine; the bound is in rows, so the bounded RSS is
 flat either way and the baseline's slope scales with the width.
+
+``--window`` (issue 35: the app's RSS still grew from 10 to 20 minutes): the app's own window (``MainWindow``,
+offscreen, its redraw timer running, the heap set up as ``ui.app.run`` does) on the demo's session with the
+app's ten estimators, its source unpaced (about 10x real time here: the window draws fewer frames per simulated
+minute than the app, the same rows); one process per tree (this checkout, and each ``--tree``: the code
+before a change, say), all at once. RSS as the system counts it (no trim: as the app's), the C heap in use
+and held free (glibc's ``mallinfo2``), the session's tables and the plot buffers.
 """
 
 from __future__ import annotations
 
 import argparse
+import ctypes
 import json
 import os
 import queue
@@ -33,10 +42,12 @@ from pathlib import Path
 
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
-from PySide6 import QtWidgets  # noqa: E402
+import pyqtgraph as pg  # noqa: E402
+from PySide6 import QtCore, QtWidgets  # noqa: E402
 
 from bench_ui import rss_mb  # noqa: E402
 from groundstation.estimation import live_estimators  # noqa: E402
+from groundstation.session_makers.factory import Sessions  # noqa: E402
 from groundstation.session_makers.live import LiveSession  # noqa: E402
 from groundstation.session_makers.pipeline import Pipeline  # noqa: E402
 from groundstation.session_parts.table import LIVE_KEEP_ROWS  # noqa: E402
@@ -45,7 +56,9 @@ from groundstation.sources.base import Chunk, SourceClosed  # noqa: E402
 from groundstation.sources.sim import parse_scenario  # noqa: E402
 from groundstation.sources.spec import parse_spec  # noqa: E402
 from groundstation.ui import series as series_module  # noqa: E402
+from groundstation.ui import app as app_module  # noqa: E402
 from groundstation.ui.live_view import LiveView  # noqa: E402
+from groundstation.ui.main_window import MainWindow  # noqa: E402
 
 STEP_S = 0.5  # simulated seconds of frames per read
 
@@ -116,6 +129,70 @@ def child(kind: str, minutes: list[float], filters: tuple[str, ...]) -> None:
     view.close()
 
 
+class MallInfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in "arena ordblks smblks hblks hblkhd usmblks fsmblks uordblks fordblks keepcost".split()]
+
+
+def heap_mb() -> tuple[float, float]:
+    """(in use, held free) of glibc's heap, MB: every arena and the blocks mapped on their own."""
+    libc = ctypes.CDLL("libc.so.6")
+    libc.mallinfo2.restype = MallInfo2
+    info = libc.mallinfo2()
+    return (info.uordblks + info.hblkhd) / 1e6, info.fordblks / 1e6
+
+
+def plain_rss_mb() -> float:
+    with open("/proc/self/status") as status:
+        return next(int(line.split()[1]) for line in status if line.startswith("VmRSS")) / 1024
+
+
+def window_child(minutes: list[float]) -> None:
+    """The app's window on the demo's session, unpaced; a line of figures at each checkpoint."""
+    getattr(app_module, "keep_large_blocks_out_of_the_heap", lambda: None)()  # as ``ui.app.run`` (none before issue 35)
+    app = QtWidgets.QApplication([])
+    pg.setConfigOptions(antialias=False)  # as ``ui.app.run``
+    with tempfile.TemporaryDirectory() as folder:  # the recordings and settings, removed at the end
+
+        class UnpacedSessions(Sessions):
+            def open(self, spec, *, settings=None, recordings_dir=None, **defaults):
+                pipeline = Pipeline(live_estimators(), settings, keep_rows=LIVE_KEEP_ROWS, compile_in_background=True)
+                return LiveSession(UnpacedSim(60.0 * max(minutes) + 5.0), pipeline, recordings_dir=Path(folder))
+
+        settings = QtCore.QSettings(f"{folder}/settings.ini", QtCore.QSettings.IniFormat)
+        window = MainWindow(settings, UnpacedSessions())
+        window.show()
+        window.start_demo()
+        session, checkpoints, started = window.session, sorted(minutes), time.monotonic()
+        while checkpoints:
+            app.processEvents()
+            time.sleep(0.005)
+            done_min = len(session.pipeline.imu) / 100.0 / 60.0
+            if done_min >= checkpoints[0] or not session.running:  # a run ended early: its last figures
+                with session.lock:
+                    in_use, free = heap_mb()
+                    view = window.live_view
+                    print(json.dumps({"kind": os.environ.get("TREE", "?"), "minutes": round(done_min, 2),
+                                      "rss_mb": plain_rss_mb(), "heap_mb": in_use, "free_mb": free, "tables_mb": table_mb(session.pipeline),
+                                      "plots_mb": sum(s.nbytes() for s in [*view.series.values(), *view.channels.series.values()]) / 1e6,
+                                      "wall_s": time.monotonic() - started}), flush=True)
+                checkpoints = [] if not session.running else checkpoints[1:]
+        window.close()
+
+
+def window_runs(minutes: str, trees: list[Path]) -> None:
+    print(f"the app's window, unpaced demo; checkpoints at {minutes} simulated minutes")
+    runs = [subprocess.Popen([sys.executable, __file__, "--child", "window", "--minutes", minutes], stdout=subprocess.PIPE, text=True,
+                             env={**os.environ, "PYTHONPATH": str(tree), "TREE": tree.name}) for tree in trees]
+    rows = [json.loads(line) for run in runs for line in run.stdout if line.startswith("{")]
+    for run in runs:
+        run.wait()
+    print("| tree | simulated minutes | RSS | C heap in use | held free | tables | plot buffers | wall |")
+    print("|---|---|---|---|---|---|---|---|")
+    for row in sorted(rows, key=lambda r: (r["kind"], r["minutes"])):
+        print(f"| {row['kind']} | {row['minutes']:.1f} | {row['rss_mb']:.1f} MB | {row['heap_mb']:.1f} MB | {row['free_mb']:.1f} MB "
+              f"| {row['tables_mb']:.1f} MB | {row['plots_mb']:.1f} MB | {row['wall_s']:.0f} s |")
+
+
 def where(seconds: float) -> None:
     """The Python heap by file after ``seconds`` of the app's session, and each table's share."""
     source = UnpacedSim(seconds)
@@ -143,12 +220,20 @@ def main() -> None:
     parser.add_argument("--minutes", default="10,60", help="checkpoints, simulated minutes (default: 10,60)")
     parser.add_argument("--filters", default="ahf", help="the pipeline's estimators, or 'app' for the app's (default: ahf)")
     parser.add_argument("--where", type=float, default=None, metavar="S", help="where the memory goes (tracemalloc), S seconds")
+    parser.add_argument("--window", action="store_true", help="the app's window on the unpaced demo (issue 35)")
+    parser.add_argument("--tree", type=Path, action="append", default=[], help="--window: another checkout to run as well")
     parser.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.where:
         where(args.where)
         return
     minutes = [float(m) for m in args.minutes.split(",")]
+    if args.child == "window":
+        window_child(minutes)
+        return
+    if args.window:
+        window_runs(args.minutes, [Path(__file__).resolve().parents[1], *(t.resolve() for t in args.tree)])
+        return
     filters = live_estimators() if args.filters == "app" else tuple(args.filters.split(","))
     if args.child:
         child(args.child, minutes, filters)

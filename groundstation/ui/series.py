@@ -11,6 +11,11 @@ so all bins keep one width and a series holds at most
 ``RECENT_S`` of samples and 2 x ``HISTORY_BINS`` points per quantity however long the flight, and a
 4-hour flight still has a bin every 7 s or less: at least two per pixel of a whole-session plot
 1000 pixels wide, whose peak downsampling draws each pixel's minimum and maximum, so it looks the same.
+
+A live session's series reaches its size by its tenth minute and keeps it (issue 35): once the series' pace is
+known the recent buffer grows at once to ``RECENT_S`` at that pace (and ``RECENT_MARGIN``), the history's
+buffer is made for its bound and merged in place; buffers grow without writing their new rows (untouched
+pages take no memory until samples fill them).
 """
 
 from __future__ import annotations
@@ -30,6 +35,8 @@ MIN_PACE_ROWS = 3  # fewer intervals known: no gap yet (the first of a 2 Hz seri
 RECENT_S = 660.0  # kept at full resolution: the 10-minute window and a margin
 BIN_ROWS = 10  # older samples: min and max of each 10 (0.1 s at 100 Hz)
 HISTORY_BINS = 4096  # more, and the history's bins are merged in pairs
+RECENT_MARGIN = 1.05  # the recent buffer holds this much more than RECENT_S: its oldest 5 % binned at a time
+HISTORY_ROWS = 3 * HISTORY_BINS  # the history's buffer: its 2 x HISTORY_BINS points and a binning's more
 
 Derive = Callable[[np.ndarray, tuple[str, ...]], dict[str, np.ndarray]]
 
@@ -37,27 +44,38 @@ Derive = Callable[[np.ndarray, tuple[str, ...]], dict[str, np.ndarray]]
 class Columns:
     """A time column (float64) and named float32 columns, appended at the end, dropped at the front."""
 
-    def __init__(self):
+    def __init__(self, rows: int = INITIAL_ROWS):
         self.count = 0
-        self.time_s = np.empty(INITIAL_ROWS)
+        self.time_s = np.empty(rows)
         self.values: dict[str, np.ndarray] = {}
 
     @property
     def capacity(self) -> int:
         return len(self.time_s)
 
-    def append(self, time_s: np.ndarray, values: dict[str, np.ndarray]) -> None:
+    def append(self, time_s: np.ndarray, values: dict[str, np.ndarray], room: int = 0) -> None:
+        """Add rows at the end; a buffer that must grow grows by half, or to ``room`` rows if more."""
         end = self.count + len(time_s)
         if end > self.capacity:
-            size = max(self.capacity * 3 // 2, end)
-            self.time_s = np.resize(self.time_s, size)
-            self.values = {k: np.resize(v, size) for k, v in self.values.items()}
+            size = max(self.capacity * 3 // 2, end, room)
+            self.time_s = self._grown(self.time_s, size)
+            self.values = {k: self._grown(v, size) for k, v in self.values.items()}
         self.time_s[self.count : end] = time_s
         for name, column in values.items():
             if name not in self.values:
-                self.values[name] = np.full(self.capacity, np.nan, dtype=np.float32)
+                self.add(name)
             self.values[name][self.count : end] = column
         self.count = end
+
+    def add(self, name: str) -> None:
+        """A quantity of its own buffer, not in the rows so far (NaN)."""
+        self.values[name] = np.empty(self.capacity, dtype=np.float32)
+        self.values[name][: self.count] = np.nan
+
+    def _grown(self, column: np.ndarray, size: int) -> np.ndarray:
+        grown = np.empty(size, dtype=column.dtype)  # the rows after ``count`` unwritten: no memory until filled
+        grown[: self.count] = column[: self.count]
+        return grown
 
     def drop_front(self, rows: int) -> None:
         for column in (self.time_s, *self.values.values()):
@@ -116,7 +134,7 @@ class Series:
         self.taken = 0  # table rows taken so far
         self.recent = Columns()
         self.bin_rows = BIN_ROWS  # samples per bin of the history: doubles as its bins are merged
-        self.history = Columns()  # two rows per bin of older samples: (first time, min), (last time, max)
+        self.history = Columns(HISTORY_ROWS)  # two rows per bin of older samples: (first time, min), (last time, max)
         self.gaps: list[tuple[float, float]] = []  # (last sample before, first sample after), seconds
         self._intervals = np.empty(0)  # the newest intervals between samples (s): the series' own pace
 
@@ -132,7 +150,8 @@ class Series:
         edges = time_s if self.end_s is None else np.concatenate(([self.end_s], time_s))
         steps = np.diff(edges)
         self._intervals = np.concatenate([self._intervals, steps[np.isfinite(steps)]])[-max(PACE_ROWS, len(steps)):]
-        gap_s = max(GAP_S, GAP_INTERVALS * float(np.median(self._intervals))) if len(self._intervals) >= MIN_PACE_ROWS else np.inf
+        pace_s = float(np.median(self._intervals)) if len(self._intervals) >= MIN_PACE_ROWS else np.nan
+        gap_s = np.inf if np.isnan(pace_s) else max(GAP_S, GAP_INTERVALS * pace_s)
         before = np.flatnonzero(steps > gap_s)  # the gaps: between edges[i] and edges[i + 1]
         self.gaps += [(float(edges[i]), float(edges[i + 1])) for i in before]
         values = self._derive(rows, self.table.columns)
@@ -143,7 +162,9 @@ class Series:
             values = {name: np.insert(column.astype(np.float32), at, np.nan) for name, column in values.items()}
         if self.recent.count + len(time_s) > self.recent.capacity:
             self._bin_old_rows()
-        self.recent.append(time_s, values)
+        self.recent.append(time_s, values, room=int(RECENT_MARGIN * RECENT_S / pace_s) if pace_s > 0 else 0)
+        for name in values.keys() - self.history.values.keys():  # its history's buffers from the start too
+            self.history.add(name)
         self.taken += new
         return new
 
@@ -162,9 +183,10 @@ class Series:
             whole = h.count // 4 * 4  # whole pairs of bins (two points each); an odd last bin stays as it is
             times, merged = min_max_bins(h.time_s[:whole:2], h.time_s[1:whole:2], {n: c[:whole:2] for n, c in h.values.items()},
                                          {n: c[1:whole:2] for n, c in h.values.items()}, 2)
-            self.history = Columns()
-            self.history.append(np.concatenate([times, h.time_s[whole : h.count]]),
-                                {n: np.concatenate([merged[n], c[whole : h.count]]) for n, c in h.values.items()})
+            rest = {n: c[whole : h.count] for n, c in h.values.items()}
+            rest_s = h.time_s[whole : h.count]
+            h.count = 0  # written again from the front, in the same buffers (the merged bins are new arrays)
+            h.append(np.concatenate([times, rest_s]), {n: np.concatenate([merged[n], rest[n]]) for n in merged})
             self.bin_rows = 2 * size
 
     def newest_s(self, lock) -> float | None:

@@ -4,7 +4,7 @@ import threading
 
 import numpy as np
 
-from groundstation.session_parts.table import Table
+from groundstation.session_parts.table import LIVE_CHUNK_ROWS, LIVE_KEEP_ROWS, Table
 from groundstation.ui.series import HISTORY_BINS, RECENT_S, Series, per_pixel
 
 
@@ -142,3 +142,21 @@ def test_per_pixel_keeps_what_every_sample_draws_in_each_pixel_column():
         assert t[column == c][0] == t[keep][kept_column == c][0] and t[column == c][-1] == t[keep][kept_column == c][-1]
         assert np.count_nonzero(np.isnan(kept)) == np.count_nonzero(np.isnan(every))
     assert len(keep) <= 4 * (len(np.unique(column)) + 2 * 40) and len(keep) < len(t) / 10
+
+
+def test_a_series_holds_no_more_after_its_ten_minutes():
+    """A plot series of a live session (issue 35: the app's RSS grew from 10 to 20 minutes): once 10 minutes
+    (the longest window) have passed, 20 minutes hold the same bytes: its recent buffer is sized for
+    ``RECENT_S`` at the series' pace and its history for its bound (they grew by half at 10.4 minutes, and at
+    each merge of the history)."""
+    table = Table(("time_s", "v"), keep_rows=LIVE_KEEP_ROWS, chunk_rows=LIVE_CHUNK_ROWS)
+    series = Series(table, lambda rows, columns: {"v": rows[:, 1], "w": -rows[:, 1]})
+    lock = threading.Lock()
+    held = []
+    for second in range(20 * 60):
+        for i in range(100):
+            table.append((second + i / 100.0, np.sin(second + i / 100.0)))
+        series.take(lock)
+        if second >= 10 * 60:
+            held.append(series.nbytes())
+    assert series.history.count > 0 and min(held) == max(held)
