@@ -34,6 +34,7 @@ from firmware_protocol import SPEC
 from firmware_protocol.batch import CHUNK_COUNTERS, PIECE_BYTES, BatchDecode, decode_pieces, joined
 from firmware_protocol.decoder import DecoderStats
 from groundstation.estimation import settings_as_json
+from groundstation.heap import give_back_freed_memory
 from groundstation.recording import Recording
 from groundstation.session_parts import aiding
 from groundstation.session_parts.catalogue import IMU, estimator_columns, session_catalogue
@@ -481,29 +482,6 @@ class _Builder:
         for c in np.flatnonzero(new).tolist():
             stats = DecoderStats(**{name: int(values[c]) for name, values in counters.items()})
             link.on_chunk(int(times[c]), stats, 0)
-
-
-def give_back_freed_memory() -> None:
-    """Hands the C allocator's free pages back to the system (glibc's ``malloc_trim``; elsewhere nothing). The
-    batch path frees many arrays of a megabyte or less (the decode's pieces, the frames' columns) among objects
-    that live on, and glibc keeps such memory as the process's: after the decode of 4 h, 240 MB of it, which a
-    trim of a few milliseconds gives back (bench/bench_export_memory.out.md)."""
-    if _LIBC is not None:
-        _LIBC.malloc_trim(0)
-
-
-def _glibc():
-    import ctypes
-    import ctypes.util
-
-    try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        return libc if hasattr(libc, "malloc_trim") else None
-    except OSError:
-        return None
-
-
-_LIBC = _glibc()
 
 
 def _as_slice(rows: np.ndarray) -> np.ndarray | slice:

@@ -7,6 +7,7 @@ import signal
 import sys
 
 from groundstation.errors import UserError
+from groundstation.heap import keep_large_blocks_out_of_the_heap
 
 ORGANIZATION = APPLICATION = "groundstation"
 
@@ -90,28 +91,6 @@ def close_on_signals(window) -> None:
 
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: QtCore.QTimer.singleShot(0, window.close))
-
-
-M_MMAP_THRESHOLD = -3  # mallopt's parameter (glibc's malloc.h)
-MMAP_THRESHOLD_BYTES = 128 * 1024  # glibc's own default, held
-
-
-def keep_large_blocks_out_of_the_heap() -> None:
-    """Hold glibc's mmap threshold at its default (issue 35). Blocks of 128 kB and more are mapped on their own
-    and given back to the system when freed; but freeing one raises the threshold to its size for good (up to
-    32 MB), and the live window frees such blocks all the time (the tables forget their oldest rows, the
-    plot buffers grow): from then on every block under that size came from the heap, whose holes glibc keeps,
-    and the app's RSS grew for 20 minutes after its data stopped growing. A threshold set turns the raising off.
-    Elsewhere (another C library, no mallopt) nothing is done."""
-    if not sys.platform.startswith("linux"):
-        return
-    import ctypes
-
-    try:
-        mallopt = ctypes.CDLL("libc.so.6").mallopt
-    except (OSError, AttributeError):
-        return
-    mallopt(M_MMAP_THRESHOLD, MMAP_THRESHOLD_BYTES)
 
 
 def run(port: str | None, baud: int | None, recording: str | None, sessions) -> int:

@@ -1,4 +1,4 @@
-"""The app's heap over a long live session (issue 35): large blocks stay out of glibc's heap."""
+"""glibc's heap (groundstation.heap, issue 35): after a large block is freed, the next ones still stay out of it."""
 
 import ctypes
 import subprocess
@@ -9,7 +9,7 @@ import pytest
 PROBE = """
 import ctypes
 import numpy as np
-from groundstation.ui.app import keep_large_blocks_out_of_the_heap
+from groundstation.heap import keep_large_blocks_out_of_the_heap
 
 class MallInfo2(ctypes.Structure):
     _fields_ = [(name, ctypes.c_size_t) for name in "arena ordblks smblks hblks hblkhd usmblks fsmblks uordblks fordblks keepcost".split()]
