@@ -157,7 +157,7 @@ def event_time_s(event: dict) -> float:
 def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[str, np.ndarray]], filters,
                   **rest) -> SessionData:
     """The one way a ``SessionData`` is made: every table the catalogue names, with exactly its columns
-    in its order (NaN for a column the maker has no values for; an empty table for one it never
+    in its order, each in its form (``Column.held``) (NaN for a column the maker has no values for; an empty table for one it never
     filled; none for the ``imu`` columns of streamed estimators, ``rest["estimates"]``); ``rest``: the
     other fields. ValueError for a table the catalogue does not describe or columns of different lengths
     (a maker's bug, not bad input)."""
@@ -170,8 +170,8 @@ def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[s
         columns = tables.get(info.name, {})
         rows = len(columns["time_s"]) if "time_s" in columns else 0
         nan = np.full(rows, np.nan)
-        filled[info.name] = {c: np.asarray(columns.get(c, nan), dtype=float) for c in info.column_names
-                             if info.name != "imu" or c not in streamed}
+        filled[info.name] = {c.name: np.asarray(columns.get(c.name, nan), dtype=c.held) for c in info.columns
+                             if info.name != "imu" or c.name not in streamed}
         lengths = {len(v) for v in filled[info.name].values()}
         if len(lengths) > 1:
             raise ValueError(f"table {info.name}: columns of different lengths {sorted(lengths)}")

@@ -30,7 +30,7 @@ import numpy as np
 from groundstation import formats, quaternion
 from groundstation.analysis.vibration import CONTINUOUS_SHARE, coverage, stretches
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, utc_text
-from groundstation.autopilot.logtables import FAST, fast_name
+from groundstation.autopilot.logtables import FAST, fast_name, held_dtypes
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation import aiding_estimator, create
@@ -266,10 +266,11 @@ def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]], messa
 
 
 def _message_tables(log: FlightLog) -> tuple[list[tuple], list[str]]:
-    """(``TableInfo``, ``Series``) of every other message type the log holds, and a warning for each column
-    renamed to keep it apart (``message_table``)."""
+    """(``TableInfo``, ``Series``) of every other message type the log holds, each column held in its table's
+    dtype (``logtables.logged_dtype``), and a warning for each column renamed to keep it apart (``message_table``)."""
     renamed = []
-    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {}), renamed), stream)
+    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {}), renamed,
+                           held_dtypes(stream)), stream)
             for name, stream in log.tables.items()], renamed
 
 
