@@ -155,11 +155,11 @@ class DataflashTables:
 def _isbd_samples(records) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One sensor's ISBD records as samples: times (µs), (n, 3) values in SI units, and each one's batch ``N``."""
     mul, count, first_us, rate_hz = (np.array([r[0][i] for r in records], dtype=float)[:, None] for i in range(4))
-    batch = np.array([r[1] for r in records], dtype=float)[:, None]
+    batch = np.array([r[1] for r in records], dtype=np.uint16)[:, None]  # ISBH's and ISBD's ``N``: logged as ``H``
     k = np.array([r[2] for r in records], dtype=float)[:, None] * ISBD_SAMPLES + np.arange(ISBD_SAMPLES)[None, :]
     xyz = np.stack([np.array([r[3 + a] for r in records], dtype=float) for a in range(3)], axis=-1)  # (records, 32, 3)
     keep = k < count
-    return (first_us + k * 1e6 / rate_hz)[keep], (xyz / mul[:, :, None])[keep], np.broadcast_to(batch, k.shape)[keep]
+    return (first_us + k * 1e6 / rate_hz)[keep], (xyz / mul[:, :, None])[keep], logged_column(np.broadcast_to(batch, k.shape)[keep])
 
 
 class _Layout:
