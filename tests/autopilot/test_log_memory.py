@@ -13,6 +13,7 @@ from pymavlink import DFReader
 from pyulog import ULog
 
 from groundstation import quaternion
+from groundstation.autopilot.tlog import session_packets
 from groundstation.errors import UserError
 from groundstation.session_makers.load import load_session
 from tests.shared_datasets import shared_dataset
@@ -20,6 +21,7 @@ from tests.shared_datasets import shared_dataset
 from mavlink_helpers import write_dataflash
 
 PLANE_BIN = "flightlogs/arduplane_omnibusf4_ground_pilot_0004.bin"  # ATT, XKF*, GPS, MAG, PARM; no IMU: no estimators
+QUADPLANE_TLOG = "flightlogs/arduplane_quadplane_sitl.tlog"  # MAVLink 1, short packets: the most places a byte
 HOP_ULG = "flightlogs/px4_fmuv5_quad_hop.ulg"  # 9 s, 0.4 MB: every topic, float32 and integer fields
 FLOAT32_EXACT = ("bool", "int8", "uint8", "int16", "uint16", "float16", "float32")  # every value of these: a float32
 PEAK_PER_FILE_BYTE = 3.0  # the goal of issue 35: the open's peak at most three times the file
@@ -131,3 +133,18 @@ def test_a_dataflash_field_logged_in_float32_or_16_bits_is_held_so(plane):
             assert plane.tables[name][column.name].dtype == expected, f"{name}.{column.label} ({fmt.format[at]})"
             checked += 1
     assert checked > 300
+
+
+def test_a_tlogs_packets_and_their_walk_take_little_beside_the_file():
+    """The places and times of a .tlog's packets, and walking them as the session feeds them, allocate at most
+    1.5 times the file beside its bytes (a Python int per place, 36 bytes, took 3.4-4x: the open's peak)."""
+    data = shared_dataset(QUADPLANE_TLOG).read_bytes()
+    session_packets(data)  # what is imported and compiled on first use is not the reading
+    tracemalloc.start()
+    try:
+        for _ in session_packets(data).packets:
+            pass
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= 1.5 * len(data), f"{peak / len(data):.2f}x the file"
