@@ -9,7 +9,9 @@ gets ``_log`` appended; two names made one by the lower case (``caseTopic``, ``c
 apart (``names.kept_apart``: the later gets ``__2``, and a warning says so). Columns: every numeric field
 but the time (``CLOCKS``, ``timestamp``), DataFlash values as pymavlink's ``DFReader`` gives them (its
 format scaling applied: ``c`` /100, ``L`` 1e-7) with the unit FMTU gives; ULog array elements as
-``name_<i>`` (kept apart from a field of that name).
+``name_<i>`` (kept apart from a field of that name). Each column in the form the log has it where float32 holds
+every value exactly (``logged_dtype``: a float32 or 8/16-bit integer field, unscaled), else in float64: a table is
+about the size of its records in the file, and each value, widened, is the one pyulog or DFReader gives.
 
 The full-rate IMU (``FAST``: tables ``gyro_fast_<imu>`` with ``gyr_{x,y,z}_rad_s`` and ``accel_fast_<imu>``
 with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time, and ``batch``: the batch it came in, so that
