@@ -9,7 +9,8 @@ counting the bytes it hashes. Medians of the repeats. The baseline beside each f
 (``Path.read_bytes``): what the recording reader did before. Crafted files: false record markers
 (CRC bytes hashed against the file size) and a sparse 2 GiB file of zeros. Flight logs: the
 ``.tlog``/``.bin``/``.ulg`` readers on /work/shared/datasets/flightlogs, and opening each as a session
-(``open``: ``load_session``, what File > Open does) beside pymavlink's own parse of a ``.tlog``
+(``open``: ``load_session``, what File > Open does; ``open-noest``: the same without estimators, so without
+the host estimators' columns) beside pymavlink's own parse of a ``.tlog``
 (``pymavlink``: ``mavutil`` + ``recv_match()`` to the end); these two are run once before they are measured
 (modules imported on first use, compiled kernels loaded), and their CPU is the median of the repeats
 interleaved. ``--flightlogs-only`` measures only the flight logs; ``--tree PATH`` (repeatable) runs every
@@ -39,9 +40,10 @@ READERS = {
     "recording+stream": "lambda path: open_recording(path).stream()",
     "flightlog": "lambda path: read_log(path)",
     "open": "lambda path: load_session(path)",
+    "open-noest": "lambda path: load_session(path, ())",
     "pymavlink": "parse_all",
 }
-WARMED = ("open", "pymavlink")  # run once first: what they import and compile on first use is not the reading
+WARMED = ("open", "open-noest", "pymavlink")  # run once first: what they import and compile on first use is not the reading
 
 MEASURE = """
 import json, sys, time, tracemalloc, zlib

@@ -9,7 +9,9 @@ gets ``_log`` appended; two names made one by the lower case (``caseTopic``, ``c
 apart (``names.kept_apart``: the later gets ``__2``, and a warning says so). Columns: every numeric field
 but the time (``CLOCKS``, ``timestamp``), DataFlash values as pymavlink's ``DFReader`` gives them (its
 format scaling applied: ``c`` /100, ``L`` 1e-7) with the unit FMTU gives; ULog array elements as
-``name_<i>`` (kept apart from a field of that name).
+``name_<i>`` (kept apart from a field of that name). Each column in the form the log has it where float32 holds
+every value exactly (``logged_dtype``: a float32 or 8/16-bit integer field, unscaled), else in float64: a table is
+about the size of its records in the file, and each value, widened, is the one pyulog or DFReader gives.
 
 The full-rate IMU (``FAST``: tables ``gyro_fast_<imu>`` with ``gyr_{x,y,z}_rad_s`` and ``accel_fast_<imu>``
 with ``acc_{x,y,z}_m_s2``, body FRD, every sample at its own time, and ``batch``: the batch it came in, so that
@@ -50,6 +52,27 @@ CLOCKS = (("TimeUS", 1), ("T", 1000), ("TimeMS", 1000))
 RESERVED = ("imu", "onboard", "mag_raw", "baro", "gps", "position", "truth")  # a log session's own tables
 DATAFLASH_SKIPPED = ("FMT", "FMTU", "UNIT", "MULT")  # the log's description of itself, not data
 NUMERIC = set("bBhHiIfdgcCeELMqQ")  # DataFlash format characters of numbers (not strings nor ``a`` arrays)
+
+
+# Logged dtypes whose every value float32 holds exactly: a table keeps such a column in float32 (widened to
+# float64, each value is the one the log's reader gives); any other (32- and 64-bit integers, float64), and a
+# value scaled to a physical unit, in float64.
+EXACT_IN_FLOAT32 = frozenset(np.dtype(t) for t in ("?", "i1", "u1", "i2", "u2", "f2", "f4"))
+
+
+def logged_dtype(dtype) -> np.dtype:
+    """The dtype a table holds a column logged as ``dtype`` in: float32 where that holds it exactly, else float64."""
+    return np.dtype(np.float32 if np.dtype(dtype) in EXACT_IN_FLOAT32 else np.float64)
+
+
+def logged_column(values: np.ndarray) -> np.ndarray:
+    """A new contiguous array of the logged ``values`` in ``logged_dtype`` (no view: a view holds what it is cut from)."""
+    return np.array(values, dtype=logged_dtype(values.dtype))
+
+
+def held_dtypes(series: Series) -> dict[str, str]:
+    """A table's columns -> the dtype its session holds each in (``catalogue.Column.held``): the table's own."""
+    return {name: values.dtype.name for name, values in series.columns.items()}
 
 
 def fast_name(kind: str, instance: int) -> str:
@@ -101,7 +124,7 @@ class DataflashTables:
         if missing := [name for name in names if name not in layout.names]:
             raise ValueError(f"its {msg_type} messages have no {', '.join(missing)}")
         time_us, values = layout.values(layout.records(data, np.frombuffer(starts, dtype=np.int64)), names)
-        return np.column_stack([time_us, values])
+        return np.column_stack([time_us, *values])
 
     def tables(self, data: np.ndarray) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
         """The tables, their units, and a warning per type renamed to keep it apart (``kept_apart``); ``data``:
@@ -126,7 +149,7 @@ class DataflashTables:
                 time_us, values = layout.values(records[rows])
                 source = msg_type if instance is None else f"{msg_type}[{instance}]"
                 parts.append((starts[rows][0], table_name(msg_type, instance),
-                              in_order(time_us, dict(zip(layout.names, values.T)), source), layout.units))
+                              in_order(time_us, dict(zip(layout.names, values)), source), layout.units))
         made += [part[1:] for part in sorted(parts, key=lambda part: part[0])]
         return named_tables(made, "DataFlash message")
 
@@ -134,11 +157,11 @@ class DataflashTables:
 def _isbd_samples(records) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One sensor's ISBD records as samples: times (µs), (n, 3) values in SI units, and each one's batch ``N``."""
     mul, count, first_us, rate_hz = (np.array([r[0][i] for r in records], dtype=float)[:, None] for i in range(4))
-    batch = np.array([r[1] for r in records], dtype=float)[:, None]
+    batch = np.array([r[1] for r in records], dtype=np.uint16)[:, None]  # ISBH's and ISBD's ``N``: logged as ``H``
     k = np.array([r[2] for r in records], dtype=float)[:, None] * ISBD_SAMPLES + np.arange(ISBD_SAMPLES)[None, :]
     xyz = np.stack([np.array([r[3 + a] for r in records], dtype=float) for a in range(3)], axis=-1)  # (records, 32, 3)
     keep = k < count
-    return (first_us + k * 1e6 / rate_hz)[keep], (xyz / mul[:, :, None])[keep], np.broadcast_to(batch, k.shape)[keep]
+    return (first_us + k * 1e6 / rate_hz)[keep], (xyz / mul[:, :, None])[keep], logged_column(np.broadcast_to(batch, k.shape)[keep])
 
 
 class _Layout:
@@ -166,16 +189,22 @@ class _Layout:
         bodies = np.lib.stride_tricks.sliding_window_view(data, self.length - 3)[starts + 3]  # one copy: the records' bytes
         return bodies.view(self.dtype).reshape(len(starts))
 
-    def values(self, records: np.ndarray, fields=None) -> tuple[np.ndarray, np.ndarray]:
-        """The time in µs (rows,) and the kept fields (rows, kept) of ``records`` (or those ``fields`` of them),
-        scaled as DFReader scales them, the time apart (a table's columns hold on to what they are cut from)."""
+    def values(self, records: np.ndarray, fields=None) -> tuple[np.ndarray, list[np.ndarray]]:
+        """The time in µs (rows,) and a column per kept field of ``records`` (or those ``fields`` of them), each
+        its own array (a column cut from a shared one holds on to it): the values DFReader gives, a field it does
+        not scale in its ``logged_dtype``, a scaled one in float64."""
         at = [0, *(1 + self.names.index(name) for name in fields)] if fields is not None else range(len(self.take))
         time_us = records[self.take[0]] * self.scale[0] / self.divisor[0]
-        values = np.empty((len(records), len(at) - 1))
-        for i, field in enumerate(at[1:]):
-            values[:, i] = records[self.take[field]]
-            values[:, i] *= self.scale[field]
-            values[:, i] /= self.divisor[field]
+        values = []
+        for field in at[1:]:
+            raw = records[self.take[field]]
+            if self.scale[field] == 1.0 and self.divisor[field] == 1.0:
+                values.append(logged_column(raw))
+            else:
+                column = raw.astype(float)
+                column *= self.scale[field]
+                column /= self.divisor[field]
+                values.append(column)
         return time_us, values
 
 
@@ -192,22 +221,23 @@ def record_dtype(msg_struct: str) -> np.dtype:
 
 
 def ulog_tables(data_list) -> tuple[dict[str, Series], dict[str, dict[str, str]], list[str]]:
-    """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked) as a table, and
-    the fifo topics' full-rate tables; their units; a warning per topic renamed to keep it apart."""
+    """Every topic instance of a ULog (``pyulog``'s ``data_list``, timestamps already checked; each one's columns
+    taken from it) as a table, and the fifo topics' full-rate tables; their units; a warning per topic renamed to
+    keep it apart."""
     fast, made, renamed = [], [], []  # (table name, series, units); warnings of fields kept apart
     for data in data_list:
-        fields = [name for name, values in data.data.items() if name != "timestamp" and values.dtype.kind in "biuf"]
-        if not len(data.data["timestamp"]) or not fields:
+        topic, data.data = data.data, {}  # pyulog's buffer of the topic goes with this round, not with the log
+        fields = [name for name, values in topic.items() if name != "timestamp" and values.dtype.kind in "biuf"]
+        if not len(topic["timestamp"]) or not fields:
             continue
         flat, said = kept_apart([_flat(f) for f in fields], [f"{data.name}.{f}" for f in fields], "ULog field")
         # copies, the time too: a view of a field holds on to pyulog's buffer of the topic's every record and field
-        columns = {name: np.array(data.data[field], dtype=float) for name, field in zip(flat, fields)}
+        columns = {name: logged_column(topic[field]) for name, field in zip(flat, fields)}
         renamed += said
-        made.append((table_name(data.name, data.multi_id or None), in_order(data.data["timestamp"].copy(), columns, data.name), {}))
+        made.append((table_name(data.name, data.multi_id or None), in_order(topic["timestamp"].copy(), columns, data.name), {}))
         if data.name in FIFO_TOPICS:
             kind = FIFO_TOPICS[data.name]
-            fast.append((fast_name(kind, data.multi_id), fifo_series(data.data, kind),
-                         dict.fromkeys(FAST[kind][1], FAST[kind][2])))
+            fast.append((fast_name(kind, data.multi_id), fifo_series(topic, kind), dict.fromkeys(FAST[kind][1], FAST[kind][2])))
     tables, units, warnings = named_tables(fast + made, "ULog topic")
     return tables, units, renamed + warnings
 
@@ -235,12 +265,14 @@ def fifo_series(data: dict, kind: str) -> Series:
 
 def in_order(time_us, columns: dict, source: str) -> Series:
     """A table's rows sorted by time (stable: rows sharing a time, a burst of parameters, keep theirs);
-    rows already in order (a log's usual) are taken as they are, float columns without a copy."""
+    rows already in order (a log's usual) are taken as they are, float columns (float32 or float64: their
+    ``logged_dtype``) without a copy; other columns in float64."""
     time_us = np.asarray(time_us)
+    columns = {n: v if v.dtype.kind == "f" else v.astype(float) for n, v in ((n, np.asarray(v)) for n, v in columns.items())}
     if len(time_us) < 2 or (time_us[1:] >= time_us[:-1]).all():
-        return Series(time_us, {n: np.asarray(v, dtype=float) for n, v in columns.items()}, source)
+        return Series(time_us, columns, source)
     order = np.argsort(time_us, kind="stable")
-    return Series(time_us[order], {n: np.asarray(v, dtype=float)[order] for n, v in columns.items()}, source)
+    return Series(time_us[order], {n: v[order] for n, v in columns.items()}, source)
 
 
 _INDEX = re.compile(r"\[(\d+)\]")

@@ -72,8 +72,16 @@ def read_ulog(path, progress=None) -> FlightLog:
                 data.data = {name: values[~wild] for name, values in data.data.items()}
             if data.multi_id == 0:
                 topics[data.name] = data.data
-    log.tables, log.units, log.warnings = ulog_tables(ulog.data_list)
     log.notes += chatter.lines
+    _streams(log, topics, ulog)
+    del topics  # the streams are made: each topic's buffer goes once its table is (``ulog_tables``)
+    log.tables, log.units, log.warnings = ulog_tables(ulog.data_list)
+    return log
+
+
+def _streams(log: FlightLog, topics: dict, ulog: ULog) -> None:
+    """The log's ``imu``, ``onboard``, ``truth``, ``mag``, ``baro``, ``gps``, its UTC offset, events and parameters
+    from ``topics`` (the first instance of each: pyulog's columns by field)."""
     if (sc := topics.get("sensor_combined")) is not None:
         values = [*(sc[f"gyro_rad[{i}]"] for i in range(3)), *(sc[f"accelerometer_m_s2[{i}]"] / STANDARD_GRAVITY_M_S2 for i in range(3))]
         log.imu = series(sc["timestamp"], dict(zip(IMU_COLUMNS, values)), "sensor_combined")
@@ -96,7 +104,6 @@ def read_ulog(path, progress=None) -> FlightLog:
     if ulog.has_default_parameters:  # PX4 1.12 on: the system default of each parameter not at it (Flight Review's)
         logged = ulog.get_default_parameters(SYSTEM_DEFAULTS)
         log.parameter_defaults = {name: float(logged.get(name, value)) for name, value in ulog.initial_parameters.items()}
-    return log
 
 
 def _baro(topics):

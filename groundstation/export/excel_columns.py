@@ -82,7 +82,8 @@ def table_block(data: SessionData, info, window, rate_hz) -> Block:
     block = [Column(f"{label} time (s)", columns["time_s"][rows], SECONDS, 14)]
     for column in info.columns[1:]:
         header = f"{label} {column.header}" if not column.label.startswith(label) else column.header
-        block.append(Column(header, columns[column.name][rows], number_format(column), max(12, len(header) + 2)))
+        # as float64: a column held narrower (``catalogue.Column.held``, a log's float32) is written as the value it is
+        block.append(Column(header, np.asarray(columns[column.name][rows], dtype=float), number_format(column), max(12, len(header) + 2)))
     return block
 
 

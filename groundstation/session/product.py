@@ -180,9 +180,9 @@ def event_time_s(event: dict) -> float:
 def build_product(metadata: dict, catalogue: Catalogue, tables: dict[str, dict[str, np.ndarray]], filters,
                   **rest) -> SessionData:
     """The one way a ``SessionData`` is made: every table the catalogue names, with exactly its columns
-    in its order, in its form (``held_dtype``: the host estimators' float32 unless exact) (NaN for a column the
-    maker has no values for; an empty table for one it never filled; none for the ``imu`` columns of streamed
-    estimators, ``rest["estimates"]``); ``rest``: the
+    in its order, each in its form (``held_dtype``: ``Column.held``, float64 for every column when made exact) (NaN
+    for a column the maker has no values for; an empty table for one it never filled; none for the ``imu`` columns
+    of streamed estimators, ``rest["estimates"]``); ``rest``: the
     other fields. ValueError for a table the catalogue does not describe or columns of different lengths
     (a maker's bug, not bad input)."""
     unknown = sorted(set(tables) - set(catalogue.tables))

@@ -30,7 +30,7 @@ import numpy as np
 from groundstation import formats, quaternion
 from groundstation.analysis.vibration import CONTINUOUS_SHARE, coverage, stretches
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, utc_text
-from groundstation.autopilot.logtables import FAST, fast_name
+from groundstation.autopilot.logtables import FAST, fast_name, held_dtypes
 from groundstation.autopilot.streams import slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation import aiding_estimator, create
@@ -266,10 +266,11 @@ def log_catalogue(log: FlightLog, diagnostics: dict[str, tuple[str, ...]], messa
 
 
 def _message_tables(log: FlightLog) -> tuple[list[tuple], list[str]]:
-    """(``TableInfo``, ``Series``) of every other message type the log holds, and a warning for each column
-    renamed to keep it apart (``message_table``)."""
+    """(``TableInfo``, ``Series``) of every other message type the log holds, each column held in its table's
+    dtype (``logtables.logged_dtype``), and a warning for each column renamed to keep it apart (``message_table``)."""
     renamed = []
-    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {}), renamed), stream)
+    return [(message_table(name, f"{stream.source} ({log.format})", list(stream.columns), log.units.get(name, {}), renamed,
+                           held_dtypes(stream)), stream)
             for name, stream in log.tables.items()], renamed
 
 
@@ -313,12 +314,23 @@ def describe(log: FlightLog, t0_us: int) -> dict:
 
 
 def interpolated(t_rows_us: np.ndarray, stream: Series | None) -> np.ndarray | None:
-    """Quaternions of ``stream`` at ``t_rows_us`` (normalised linear between neighbours; NaN across gaps)."""
+    """Quaternions of ``stream`` at ``t_rows_us`` (normalised linear between neighbours; NaN across gaps),
+    ``INTERPOLATED_ROWS`` rows at a time: each row's value is its own, and what the arithmetic holds stays small
+    beside the result (whole, it was six times the result's size)."""
     if stream is None:
         return None
     q = stream.stack(Q_COLUMNS)
     t = stream.time_us
     out = np.full((len(t_rows_us), 4), np.nan)
+    for start in range(0, len(t_rows_us), INTERPOLATED_ROWS):
+        _interpolate(t_rows_us[start:start + INTERPOLATED_ROWS], t, q, out[start:start + INTERPOLATED_ROWS])
+    return out
+
+
+INTERPOLATED_ROWS = 4096
+
+
+def _interpolate(t_rows_us: np.ndarray, t: np.ndarray, q: np.ndarray, out: np.ndarray) -> None:
     after = np.searchsorted(t, t_rows_us)  # first sample at or after the row
     exact = (after < len(t)) & (t[np.minimum(after, len(t) - 1)] == t_rows_us)
     out[exact] = q[after[exact]]
@@ -333,4 +345,3 @@ def interpolated(t_rows_us: np.ndarray, stream: Series | None) -> np.ndarray | N
     q1 = np.where((np.sum(q0 * q1, axis=1) < 0)[:, None], -q1, q1)  # the shorter way round
     blend = (1 - a) * q0 + a * q1
     out[rows] = blend / np.linalg.norm(blend, axis=1, keepdims=True)
-    return out

@@ -49,7 +49,7 @@ class Column:
     label: str  # for a person, without the unit
     decimals: int | None = None  # digits worth showing (None: an integer count)
     description: str = ""
-    held: str = "float64"  # the form a session's product holds it in (``ESTIMATES_HELD``, ``session.product.held_dtype``)
+    held: str = "float64"  # the dtype a product holds it in (``session.product.held_dtype``): ``ESTIMATES_HELD``, a log's ``logtables.logged_dtype``
 
     @property
     def header(self) -> str:
@@ -116,12 +116,15 @@ def frame_table(frame_type: FrameType) -> TableInfo:
 _UNIT_SLUG = re.compile(r"[^A-Za-z0-9]+")  # "m/s" -> "m_s", "cdeg" stays
 
 
-def message_table(name: str, label: str, fields, units: dict[str, str], renamed: list[str] | None = None) -> TableInfo:
+def message_table(name: str, label: str, fields, units: dict[str, str], renamed: list[str] | None = None,
+                  held: dict[str, str] | None = None) -> TableInfo:
     """The table of a message of another protocol (an autopilot's MAVLink message, live or logged):
     ``time_s``, then one column per field named ``<field>_<unit>`` with the unit its definition gives
     (``m/s`` -> ``_m_s``, ``%`` -> ``_pct``; none -> the bare field name). Two fields that would share a
-    name (``Alt`` in m and ``Alt_m``) are kept apart (``names.kept_apart``); ``renamed`` is told the warnings."""
-    columns = [_message_column(field, units.get(field) or "") for field in fields]
+    name (``Alt`` in m and ``Alt_m``) are kept apart (``names.kept_apart``); ``renamed`` is told the warnings.
+    ``held``: field -> the dtype the product holds it in (``Column.held``; float64 for a field not named)."""
+    held = held or {}
+    columns = [_message_column(field, units.get(field) or "", held.get(field, "float64")) for field in fields]
     names, warnings = kept_apart([c.name for c in columns], [f"{name}.{field}" for field in fields], "column")
     if renamed is not None:
         renamed += warnings
@@ -130,9 +133,9 @@ def message_table(name: str, label: str, fields, units: dict[str, str], renamed:
 
 
 @functools.cache  # the same fields in every instance of a topic or message type, in every log
-def _message_column(field: str, unit: str) -> Column:
+def _message_column(field: str, unit: str, held: str) -> Column:
     slug = _UNIT_SLUG.sub("_", unit.replace("%", "pct").replace("µ", "u").replace("μ", "u")).strip("_")
-    return Column(f"{field}_{slug}" if slug else field, unit or "1", field, 3)
+    return Column(f"{field}_{slug}" if slug else field, unit or "1", field, 3, held=held)
 
 
 def _columns(*specs: tuple) -> tuple[Column, ...]:

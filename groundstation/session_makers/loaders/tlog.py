@@ -37,6 +37,8 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
             progress(i, total)
     if progress is not None:
         progress(total, total)
+    notes, compressed = log.notes(), log.compressed
+    del data, log  # the file's bytes and places go before the product is made of the pipeline's tables
     if pipeline.front.vehicle.sender is None:
         raise UserError(f"{path}: no autopilot found (no heartbeat naming ArduPilot or PX4, no IMU or attitude message)")
     metadata = {"source": f"{formats.FORMATS['tlog'].description} {path.name}", "protocol": "mavlink",
@@ -44,8 +46,7 @@ def load(path, filters=None, forced=None, progress=None) -> SessionData:
     if pipeline.t0_host_ns is not None:  # the receive clock is UTC: the session's start on it
         metadata["start_utc"] = utc_text(pipeline.t0_host_ns // 1000)
         metadata["start_utc_source"] = (".tlog receive time of the first packet, then the autopilot's clock (the "
-                                        "receive times are compressed)" if log.compressed else ".tlog receive time")
-    notes = log.notes()
+                                        "receive times are compressed)" if compressed else ".tlog receive time")
     if notes:
         metadata["notes"] = "; ".join(notes)
     return pipeline_product(metadata, pipeline, notes)
