@@ -5,7 +5,7 @@ this project's units and frames, with no Qt and no session machinery.
   health, vehicle status, battery, or a generic row of any other message).
 - ``mapping.MessageMapper``: one pymavlink message -> records, per-autopilot units, sequence loss counts.
 - ``decoder.MavlinkDecoder``: raw link bytes (MAVLink 1 and 2) -> records: ``feed(bytes) -> list``.
-- ``streams``: the only uplink we send (stream-rate requests) and the IMU-rate check.
+- ``streams``: the only uplink we send (stream-rate requests); ``imu_rate``: whether an IMU is fast enough to filter.
 - ``tlog``: the standard ``.tlog`` file (8-byte big-endian µs timestamp + raw message).
 - ``flightlog``: what a flight log is read into (``FlightLog``: arrays on the autopilot's clock); the
   readers ``tlog``, ``dataflash`` and ``ulog`` fill it.

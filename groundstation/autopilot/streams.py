@@ -6,25 +6,21 @@ RAW_SENSORS = RAW_IMU, SCALED_PRESSURE, ... and EXTRA1 = ATTITUDE) and ``MAV_CMD
 per message (PX4 and current ArduPilot). The ground station sends as system 255, component 190
 (MAV_COMP_ID_MISSIONPLANNER), as GCSs do.
 
-``ImuRateMonitor`` says when the IMU arrives too slowly for host filtering to mean anything (many
-telemetry links send RAW_IMU at 2–10 Hz; the host filters integrate the gyro between samples).
+The requester asks again while the IMU arrives too slowly for host filtering to mean anything (many
+telemetry links send RAW_IMU at 2–10 Hz; the host filters integrate the gyro between samples): the rule is
+``imu_rate``'s.
 """
 
 from __future__ import annotations
 
-from collections import deque
-
-import numpy as np
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from groundstation.autopilot.imu_rate import MIN_FILTER_RATE_HZ, ImuRateMonitor
 from groundstation.autopilot.records import ImuSample, VehicleStatus
 from groundstation.autopilot.vehicle import AUTOPILOTS, Vehicle
-from groundstation.session_parts.figures import rate_hz
 
 GCS_SYSTEM, GCS_COMPONENT = 255, 190
-MIN_FILTER_RATE_HZ = 20.0  # below: the gyro is integrated over > 50 ms steps; host estimates are display only
 REQUESTED_RATE_HZ = 50.0  # what a session asks an autopilot for unless the user asks otherwise
-IMU_RATE = "imu_rate"  # the ``about`` of a live slow-IMU warning event: a product names the whole session's rate instead
 MAX_REQUEST_RATE_HZ = 400.0  # the fastest IMU loop ArduPilot and PX4 stream; REQUEST_DATA_STREAM takes whole Hz
 STREAMED_MESSAGES = (mavlink.MAVLINK_MSG_ID_RAW_IMU, mavlink.MAVLINK_MSG_ID_HIGHRES_IMU,
                      mavlink.MAVLINK_MSG_ID_ATTITUDE, mavlink.MAVLINK_MSG_ID_ATTITUDE_QUATERNION)  # fmt: skip
@@ -98,43 +94,3 @@ class StreamRequester:
             return b""
         self._asked_ns = t_host_ns
         return stream_requests(*self.vehicle.sender, rate_hz, self._encoder)
-
-
-class ImuRateMonitor:
-    """IMU rate from the autopilot's own timestamps (median interval of the last ``window`` samples)."""
-
-    def __init__(self, window: int = 50):
-        self._times_us: deque[int] = deque(maxlen=window)
-        self._rate_hz: float | None = None  # of the samples held (None: to be taken again)
-
-    def add(self, time_us: int) -> None:
-        if not self._times_us or time_us > self._times_us[-1]:
-            self._times_us.append(time_us)
-            self._rate_hz = None
-
-    @property
-    def rate_hz(self) -> float:
-        """Asked after every chunk the front-end is fed: the median is taken again only when a sample came."""
-        if len(self._times_us) < 3:
-            return float("nan")
-        if self._rate_hz is None:
-            self._rate_hz = rate_hz(np.array(self._times_us, dtype=float) / 1e6)
-        return self._rate_hz
-
-    @property
-    def too_slow(self) -> bool:
-        return too_slow(self.rate_hz)
-
-
-def too_slow(rate_hz: float) -> bool:
-    """Whether an IMU at ``rate_hz`` is too slow for host filtering: the one rule the requester, the warnings
-    and the window (the onboard estimate as the attitude, no fused position) follow; NaN (no rate yet): not."""
-    return rate_hz < MIN_FILTER_RATE_HZ
-
-
-def slow_imu_note(rate_hz: float) -> str | None:
-    """The message the window, the importer and evaluate show; None when the rate is fine."""
-    if not too_slow(rate_hz):
-        return None
-    return (f"IMU at {rate_hz:.1f} Hz: too slow for host filtering (needs >= {MIN_FILTER_RATE_HZ:.0f} Hz); "
-            "the host estimates are shown but mean little; compare with the onboard attitude instead")

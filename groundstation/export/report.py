@@ -28,7 +28,7 @@ from groundstation.analysis.vibration import UNITS, VibrationError, VibrationSum
 from groundstation.analysis.whatif import LAG_AT_HZ, what_if
 from groundstation.autopilot.agreement import onboard_agreement
 from groundstation.autopilot.messages import ALARM_SEVERITIES, MESSAGE_KIND, PARAMETER_KIND
-from groundstation.autopilot.streams import IMU_RATE
+from groundstation.autopilot.imu_rate import IMU_RATE
 from groundstation.autopilot.modes import STATUS_KIND, event_time_s, mode_spans
 from groundstation.autopilot.sections import pages_of
 from groundstation.errors import UserError

@@ -23,7 +23,7 @@ import dataclasses
 
 import numpy as np
 
-from groundstation.autopilot.streams import IMU_RATE, slow_imu_note
+from groundstation.autopilot.imu_rate import IMU_RATE, slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation.evaluation import scores, uses_magnetometer
 from groundstation.session_parts.catalogue import Catalogue, Column

@@ -31,7 +31,7 @@ from groundstation import formats, quaternion
 from groundstation.analysis.vibration import CONTINUOUS_SHARE, coverage, stretches
 from groundstation.autopilot.flightlog import GPS_COLUMNS, IMU_COLUMNS, MAG_COLUMNS, Q_COLUMNS, FlightLog, Series, utc_text
 from groundstation.autopilot.logtables import FAST, fast_name, held_dtypes
-from groundstation.autopilot.streams import slow_imu_note
+from groundstation.autopilot.imu_rate import slow_imu_note
 from groundstation.errors import UserError
 from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.evaluation import sample_periods_s

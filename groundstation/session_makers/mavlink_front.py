@@ -50,7 +50,8 @@ from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.imu_choice import ImuChoice
 from groundstation.autopilot.messages import StatusTexts, message_event, parameter_change
 from groundstation.autopilot.modes import status_event
-from groundstation.autopilot.streams import IMU_RATE, REQUESTED_RATE_HZ, StreamRequester, slow_imu_note
+from groundstation.autopilot.imu_rate import IMU_RATE, slow_imu_note
+from groundstation.autopilot.streams import REQUESTED_RATE_HZ, StreamRequester
 from groundstation.autopilot.vehicle import Vehicle
 from groundstation.session_parts.catalogue import Catalogue, message_table
 

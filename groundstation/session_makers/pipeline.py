@@ -539,7 +539,7 @@ class Pipeline:
         self.link.restart()
 
     def _warn(self, t_host_ns: int, message: str, about: str | None = None) -> None:
-        """A warning event; ``about``: what it is about, when a product says it its own way (``streams.IMU_RATE``)."""
+        """A warning event; ``about``: what it is about, when a product says it its own way (``imu_rate.IMU_RATE``)."""
         self.events.append({"t_host_ns": t_host_ns, "kind": "warning", "message": message} | ({"about": about} if about else {}))
 
 

@@ -22,7 +22,7 @@ import numpy as np
 import pyqtgraph as pg
 from PySide6 import QtCore, QtWidgets
 
-from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ
+from groundstation.autopilot.imu_rate import MIN_FILTER_RATE_HZ
 from groundstation.ui.navigation import fix_name, newest_row
 from groundstation.ui.plots import Curve, Plot, StackedPlots, refit
 from groundstation.ui.series import Series

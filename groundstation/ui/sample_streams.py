@@ -2,7 +2,7 @@
 
 A session's samples come as raw IMU (``imu``: the host estimators) and as the aircraft's own estimate
 (``onboard``). The firmware's "estimated" mode sends only the latter, and an autopilot on a slow link
-(RAW_IMU at 2-4 Hz) sends the IMU too slowly for host filtering (``autopilot.streams.too_slow``):
+(RAW_IMU at 2-4 Hz) sends the IMU too slowly for host filtering (``autopilot.imu_rate.too_slow``):
 then the onboard estimate is the one to show as the attitude (issue 24, defects 3 and 5), the main curve of
 the plots (issue 34), whose time they follow, and no fused position is shown. The link's lateness is measured against the same streams' own rate (defect 6).
 """
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from groundstation.autopilot.streams import too_slow
+from groundstation.autopilot.imu_rate import too_slow
 from groundstation.session_parts.figures import rate_hz
 from groundstation.session.view import ProductView
 from groundstation.ui.series import GAP_S

@@ -15,7 +15,8 @@ from groundstation import quaternion
 from groundstation.autopilot import records as rec
 from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.session_makers.flight_log_session import read_log
-from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ, StreamRequester
+from groundstation.autopilot.imu_rate import MIN_FILTER_RATE_HZ
+from groundstation.autopilot.streams import StreamRequester
 from groundstation.autopilot.tlog import packets_of_chunks, write_tlog
 from groundstation.sim.mavlink_aircraft import ACC_NOISE_G, GYR_NOISE_RAD_S, MavlinkAircraft
 from groundstation.sim.stream import Scenario

@@ -18,7 +18,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation import quaternion
 from groundstation.autopilot.decoder import new_parser
-from groundstation.autopilot.streams import slow_imu_note
+from groundstation.autopilot.imu_rate import slow_imu_note
 from groundstation.commands.bridge_sim import add_arguments
 from groundstation.estimation.evaluation import inclination_error_rad
 from groundstation.recording import open_recording

@@ -6,7 +6,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from groundstation.autopilot.decoder import MavlinkDecoder
 from groundstation.autopilot.records import ImuSample, VehicleStatus
-from groundstation.autopilot.streams import MIN_FILTER_RATE_HZ, StreamRequester, slow_imu_note
+from groundstation.autopilot.imu_rate import MIN_FILTER_RATE_HZ, slow_imu_note
+from groundstation.autopilot.streams import StreamRequester
 from groundstation.session_parts.figures import rate_hz as figures_rate_hz
 
 ARDUPILOT = VehicleStatus(1, 1, 0, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 2, "STABILIZE", False, 3, 0)
@@ -66,11 +67,11 @@ def test_the_users_request_goes_to_the_vehicle_and_sets_the_rate_for_later():
 def test_the_imu_rate_is_computed_once_per_new_sample_not_each_time_it_is_asked(monkeypatch):
     """Issue 35: the front-end asks the rate after every chunk it is fed (a .tlog: every packet); the median
     was taken each time (27 % of opening a .tlog). It is taken again only when a sample has come since."""
-    from groundstation.autopilot import streams
+    from groundstation.autopilot import imu_rate
 
     taken = []
-    monkeypatch.setattr(streams, "rate_hz", lambda times: taken.append(len(times)) or figures_rate_hz(times))
-    monitor = streams.ImuRateMonitor()
+    monkeypatch.setattr(imu_rate, "rate_hz", lambda times: taken.append(len(times)) or figures_rate_hz(times))
+    monitor = imu_rate.ImuRateMonitor()
     for i in range(10):
         monitor.add(i * 20_000)
     rates = [monitor.rate_hz for _ in range(100)]

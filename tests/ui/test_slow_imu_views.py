@@ -1,5 +1,5 @@
 """Issue 34, the tour's defects 1 and 2: where the IMU is too slow for the host estimators
-(``autopilot.streams.MIN_FILTER_RATE_HZ``, as the attitude panel decides it), the aircraft's own estimate is the
+(``autopilot.imu_rate.MIN_FILTER_RATE_HZ``, as the attitude panel decides it), the aircraft's own estimate is the
 main attitude curve and the host estimators start switched off (the user may tick them), and the Position tab
 shows the GPS track, not a fused position integrated from that IMU, and says why."""
 
