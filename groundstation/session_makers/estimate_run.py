@@ -75,11 +75,13 @@ class EstimateRun:
             out = {}
             gyr = self.gyr_rad_s[start:end]
             unbiased = self._unbiased(gyr, start, end)
+            # the stretch's inputs read once for every estimator (each a copy: ``SampleColumns``, ``SparseRows``)
+            acc, dt = self.acc_g[start:end], self.dt_s[start:end]
+            mag = None if self.mag_uT is None else self.mag_uT[start:end]
+            gps = None if self.gps is None else self.gps[start:end]
             for name in names:
                 estimator = bank.estimators[name]
-                q, diagnostics = estimator.run(gyr if estimator.estimates_gyro_bias else unbiased, self.acc_g[start:end], self.dt_s[start:end],
-                                               None if self.mag_uT is None else self.mag_uT[start:end],
-                                               None if self.gps is None else self.gps[start:end])
+                q, diagnostics = estimator.run(gyr if estimator.estimates_gyro_bias else unbiased, acc, dt, mag, gps)
                 bank.last_q[name] = tuple(q[-1].tolist())
                 out[name] = (q, diagnostics)
             yield start, end, out
