@@ -36,9 +36,9 @@ from groundstation.errors import UserError
 from groundstation.estimation import aiding_estimator, create
 from groundstation.estimation.evaluation import sample_periods_s
 from groundstation.session_parts import aiding
-from groundstation.session_parts.catalogue import POSITION, TRUTH, Catalogue, message_table, session_catalogue
+from groundstation.session_parts.catalogue import POSITION, TRUTH, Catalogue, estimator_columns, message_table, session_catalogue
 from groundstation.session_makers.pipeline import DEFAULT_FILTERS
-from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns
+from groundstation.session.product import ONBOARD, SessionData, build_product, estimate_columns, held_dtype
 from groundstation.formats import IMU_STREAMS
 from groundstation.units import STANDARD_GRAVITY_M_S2
 
@@ -110,32 +110,34 @@ def log_session(log: FlightLog, filters, forced: dict, share=None, imu: str = IM
     readings = _Readings(log, t_us)
     mag, gps = aiding.handed_to_samples(readings.stream, len(t_us), readings.mag_body, readings.gps_values)
     dt_s = sample_periods_s(t_us / 1e6)
-    names, runs, settings = list(dict.fromkeys(filters)), {}, {}
+    names, diagnostics, settings, estimates = list(dict.fromkeys(filters)), {}, {}, {}
+    aiding_name, aiding_q = aiding_estimator(tuple(names)), None
     try:
         for i, name in enumerate(names, start=1):
             estimator = create(name, forced.get(name))
-            runs[name] = estimator.run(gyr, acc, dt_s, mag, gps)
+            q, diagnostics_of = estimator.run(gyr, acc, dt_s, mag, gps)
+            # its columns in their held form at once (``held_dtype``): one estimator's float64 run at a time, not all
+            diagnostics[name] = tuple(diagnostics_of)
+            values = estimate_columns(name, q, diagnostics_of)
+            estimates.update({c.name: np.asarray(values[c.name], dtype=held_dtype(c)) for c in estimator_columns(name, diagnostics[name])})
+            aiding_q = q if name == aiding_name else aiding_q
             settings[name] = dataclasses.asdict(estimator.settings)  # frozen: what it ran with
             if share is not None:
                 share(READ_SHARE + (1.0 - READ_SHARE) * i / len(names))
     except ValueError as error:
         raise UserError(str(error)) from None
-    imu_table = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns}
-    for name, (q, diagnostics) in runs.items():
-        imu_table.update(estimate_columns(name, q, diagnostics))
+    imu_table = {"time_s": (t_us - t_us[0]) / 1e6, "device_time_us": t_us.astype(float), **log.imu.columns, **estimates}
     tables = {"imu": imu_table, **reading_tables(log, t_us[0], messages)}
-    aiding_name = aiding_estimator(tuple(runs))
     heading, at, rows = aiding.heading_and_position(readings.stream, readings.mag_body, readings.pressure_pa,
-                                                    readings.gps_values, runs[aiding_name][0] if aiding_name else None,
-                                                    acc, dt_s)  # fmt: skip
+                                                    readings.gps_values, aiding_q, acc, dt_s)
     if log.mag is not None:
         tables["mag_raw"]["heading_deg"] = heading
     if len(at):
         tables["position"] = {"time_s": tables["imu"]["time_s"][at], **dict(zip(POSITION.column_names[1:], rows.T))}
     if log.onboard is not None:
         tables[ONBOARD] = onboard_columns(t_us, t_us[0], interpolated(t_us, log.onboard))
-    catalogue = log_catalogue(log, {name: tuple(d) for name, (_, d) in runs.items()}, messages)
-    return build_product(describe(log, t_us[0]), catalogue, tables, tuple(runs), protocol=AUTOPILOT_PROTOCOL,
+    catalogue = log_catalogue(log, diagnostics, messages)
+    return build_product(describe(log, t_us[0]), catalogue, tables, tuple(names), protocol=AUTOPILOT_PROTOCOL,
                          true_q=interpolated(t_us, log.truth), true_frame="NED", magnetometer=mag is not None,
                          settings_at_start=settings, settings_at_end=settings, damage=list(log.damage),
                          events=log_events(log, t_us[0]), parameters=dict(log.parameters), parameter_defaults=dict(log.parameter_defaults))
