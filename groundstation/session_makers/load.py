@@ -29,7 +29,7 @@ from groundstation.session_parts.clock import DISCONTINUITIES
 from groundstation.session_parts.estimators import slow_interpreted
 from groundstation.session_makers.pipeline import Pipeline
 from groundstation.session.product import (
-    ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns, exact_estimates,
+    ONBOARD, LinkSummary, SessionData, aligned, build_product, estimate_columns, exact_estimates, held_dtype,
 )
 from groundstation.session_makers.replay import recorded_filters, replay
 from groundstation.units import STANDARD_GRAVITY_M_S2
@@ -127,7 +127,9 @@ def pipeline_product(metadata: dict, pipeline: Pipeline | BatchSession, damage: 
     path holds apart from its table, ``BatchSession.held_estimates``); an autopilot simulator's SIMSTATE as its
     truth (``attach_simstate_truth``)."""
     t0_ns = pipeline.t0_host_ns or 0
-    tables = {name: table.to_dict() for name, table in pipeline.tables.items()}
+    # A table at a time, each let go as its columns are made: never the pipeline's rows and the product's whole.
+    tables = {name: table.hand_over({c.name: held_dtype(c) for c in pipeline.catalogue[name].columns})
+              for name, table in pipeline.tables.items()}
     tables["imu"].update(held or {})
     data = build_product(
         metadata, pipeline.catalogue, tables,

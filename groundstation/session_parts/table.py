@@ -124,6 +124,20 @@ class Table:
         i = self.columns.index(name)
         return np.concatenate([part[:, i] for part in self._parts()])
 
+    def hand_over(self, dtypes: dict[str, np.dtype]) -> dict[str, np.ndarray]:
+        """Every column, and the rows let go: the table's maker is done with it (a product is made of it). Views
+        of the one block when the rows are in one (a table made whole: no copy), else each column copied into its
+        dtype (``dtypes``, by name) from the blocks themselves: a table's rows are held twice at most while its
+        columns are made, not once more as a whole array and its float64 columns beside their float32 form
+        (``to_dict``). ``len`` still counts every row appended; ``forgotten`` says they all went."""
+        self._seal()  # the growing chunk becomes a block without a copy: nothing appends to it again
+        blocks = self._state[0]
+        self._state, self.forgotten = ((), array("d")), self._sealed_rows
+        if len(blocks) == 1 and not blocks[0].flags.writeable:
+            return {name: blocks[0][:, i] for i, name in enumerate(self.columns)}
+        return {name: np.concatenate([block[:, i] for block in blocks] or [np.zeros(0)], dtype=dtypes[name])
+                for i, name in enumerate(self.columns)}
+
     def to_dict(self) -> dict[str, np.ndarray]:
         """Every column: views of the one block when the rows are in one (a table made whole: read-only, no
         copy), else of a copy of them."""

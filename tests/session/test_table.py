@@ -68,6 +68,26 @@ def test_a_table_made_whole_holds_its_rows_without_a_copy():
     assert table.column("time_s").tolist() == [0, 6, 12, 18, 24, 9]
 
 
+def test_a_table_handed_over_gives_its_columns_in_their_dtypes_and_lets_its_rows_go():
+    """``hand_over``: the rows as ``to_dict`` gives them, each column copied into its dtype across the blocks and the
+    growing chunk (a table made whole: views), the table holding none of them after; ``len`` still counts them."""
+    rng = np.random.default_rng(35)
+    rows = rng.normal(size=(23, 3))
+    dtypes = {"time_s": np.dtype(float), "a": np.dtype(np.float32), "b": np.dtype(float)}
+    table = Table(COLUMNS, chunk_rows=10)
+    for row in rows:
+        table.append(row)
+    expected = table.to_dict()
+    columns = table.hand_over(dtypes)
+    for name, column in columns.items():
+        assert column.dtype == dtypes[name] and column.flags.c_contiguous
+        np.testing.assert_array_equal(column, expected[name].astype(dtypes[name]))
+    assert len(table) == 23 and table.forgotten == 23 and not len(table.array())
+    assert all(not len(column) for column in Table(COLUMNS).hand_over(dtypes).values())
+    whole = Table.holding(COLUMNS, rows)
+    assert all(np.shares_memory(column, rows) for column in whole.hand_over(dtypes).values())
+
+
 def traced_bytes(rows: int, width: int = 12) -> tuple[int, int]:
     """Memory held by a table of ``rows`` appended rows, and Python objects created for it."""
     gc.collect()
