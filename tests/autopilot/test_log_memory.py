@@ -187,10 +187,5 @@ def test_a_ulog_opens_with_one_estimators_float64_run_alive_at_a_time():
     bench/bench_readers.out.md)."""
     path = shared_dataset("flightlogs/px4_sitl_quad_groundtruth.ulg")
     load_session(path)  # what is imported and compiled on first use is not the reading
-    tracemalloc.start()
-    try:
-        load_session(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
+    peak = open_peak(path)
     assert peak <= 6.5 * path.stat().st_size, f"{peak / path.stat().st_size:.2f}x the file"
