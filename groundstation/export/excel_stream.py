@@ -33,6 +33,7 @@ from openpyxl.worksheet._write_only import WriteOnlyWorksheet
 from openpyxl.writer.excel import ExcelWriter
 
 from groundstation.errors import UserError
+from groundstation.export.tabular import arrow_array
 from groundstation.text import clean
 
 try:  # openpyxl writes its sheets through lxml when lxml is installed, and lxml reports I/O errors its own way
@@ -166,7 +167,7 @@ def rows_xml(sheet: ColumnSheet, columns: list[Column | None], start: int, stop:
         missing[:len(part)] = ~np.isfinite(part) if kind == "f" else False
         values = np.zeros(count, dtype=shown.dtype)
         values[:len(part)] = shown
-        texts.append(arrow_array(values, missing).cast(pa.string()))
+        texts.append(arrow_array(values, missing=missing).cast(pa.string()))
         valid.append(~missing)
         attributes = (f' s="{cell.style_id}"' if cell.has_style else "") + (' t="b"' if kind == "b" else "")
         pieces += [f'<c r="{get_column_letter(index)}', f'"{attributes}><v>']
@@ -249,14 +250,6 @@ def _joined(first_number, pieces, piece_at, text, text_at, valid):
                 at = _put(out, at, CELL_CLOSE, 0, len(CELL_CLOSE))
         at = _put(out, at, ROW_CLOSE, 0, len(ROW_CLOSE))
     return out
-
-
-def arrow_array(values: np.ndarray, missing: np.ndarray | None = None) -> pa.Array:
-    """``pa.array(values, mask=missing)`` for a numpy array of numbers, from its buffers: ``pa.array`` imports
-    pandas to look for its types (half a CPU second, the export's only use of pandas)."""
-    values = np.ascontiguousarray(values)
-    valid = None if missing is None else pa.py_buffer(np.packbits(~missing, bitorder="little"))
-    return pa.Array.from_buffers(pa.from_numpy_dtype(values.dtype), len(values), [valid, pa.py_buffer(values)])
 
 
 def sheet_deflate():
