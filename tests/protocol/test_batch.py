@@ -221,16 +221,25 @@ def test_raw_values_are_the_wire_values_bit_for_bit():
         np.testing.assert_array_equal(result.frames["GPS"].scaled(field.name), expected)
 
 
-def test_simulated_sessions_with_reboots_clock_jumps_and_a_bad_link():
-    """The simulator's board mishaps and link damage, at 100 Hz with every sensor: the same frames,
-    device times and counters (restarts, implausible frames and losses included)."""
-    sensors = dict(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)
-    reboot = assert_same(simulated_chunks(8.0, reboot_after_s=3.0, usb_batch_ms=4.0, **sensors))
+SENSORS = dict(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)
+
+
+def assert_mishaps_decoded(assert_decoded, duration_s: float) -> None:
+    """The simulator's board mishaps and link damage over ``duration_s`` at 100 Hz with every sensor, each through
+    ``assert_decoded(chunks)`` (which compares two decodes and returns one): a reboot, a clock jump, a bad link
+    with a reboot, each seen in the decoder's counters."""
+    reboot = assert_decoded(simulated_chunks(duration_s, reboot_after_s=3.0, usb_batch_ms=4.0, **SENSORS))
     assert reboot.stats.restarts == 1
-    jump = assert_same(simulated_chunks(8.0, clock_jump_after_s=4.0, latency_ms=3.0, jitter_ms=2.0, **sensors))
+    jump = assert_decoded(simulated_chunks(duration_s, clock_jump_after_s=duration_s / 2, latency_ms=3.0, jitter_ms=2.0, **SENSORS))
     assert jump.stats.restarts == 1
-    bad = assert_same(simulated_chunks(8.0, loss=0.05, burst_loss=0.05, ber=2e-4, truncate=0.01, reboot_after_s=5.0, **sensors))
+    bad = assert_decoded(simulated_chunks(duration_s, loss=0.05, burst_loss=0.05, ber=2e-4, truncate=0.01,
+                                          reboot_after_s=duration_s - 3.0, **SENSORS))
     assert bad.stats.crc_errors > 0 and bad.stats.frames_lost > 0
+
+
+def test_simulated_sessions_with_reboots_clock_jumps_and_a_bad_link():
+    """The same frames, device times and counters (restarts, implausible frames and losses included)."""
+    assert_mishaps_decoded(assert_same, 8.0)
 
 
 def test_both_decoders_hand_the_same_frames_to_the_one_set_of_sequence_rules(monkeypatch):

@@ -20,9 +20,7 @@ from firmware_protocol.batch import CHUNK_COUNTERS, PIECE_BYTES, decode_chunks, 
 from tests.simulated import simulated_chunks
 
 from .strategies import any_frame
-from .test_batch import FATES, chunked, damaged_stream, imu, numbered
-
-SENSORS = dict(mag_rate_hz=50, baro_rate_hz=25, gps_rate_hz=5)
+from .test_batch import FATES, SENSORS, assert_mishaps_decoded, chunked, damaged_stream, imu, numbered
 
 
 def assert_same_decode(got, whole) -> None:
@@ -91,12 +89,7 @@ def test_one_frame_a_piece_across_reboots_gaps_garbage_and_duplicates():
 
 
 def test_simulated_sessions_with_reboots_clock_jumps_and_a_bad_link():
-    reboot = assert_pieces_same(simulated_chunks(6.0, reboot_after_s=3.0, usb_batch_ms=4.0, **SENSORS))
-    assert reboot.stats.restarts == 1
-    jump = assert_pieces_same(simulated_chunks(6.0, clock_jump_after_s=3.0, latency_ms=3.0, jitter_ms=2.0, **SENSORS))
-    assert jump.stats.restarts == 1
-    bad = assert_pieces_same(simulated_chunks(6.0, loss=0.05, burst_loss=0.05, ber=2e-4, truncate=0.01, reboot_after_s=4.0, **SENSORS))
-    assert bad.stats.crc_errors > 0 and bad.stats.frames_lost > 0
+    assert_mishaps_decoded(assert_pieces_same, 6.0)
 
 
 def test_a_held_frame_decided_several_pieces_later():
